@@ -1,0 +1,35 @@
+# Two entry points for a fresh Debian 12 machine: `make demo` and `make test`.
+# Everything runs under Debian's Python (/usr/bin/python3), the interpreter YADE uses.
+PY      := /usr/bin/python3
+YADE    := yade
+OUT     ?= out
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+export PYTHONPATH := $(CURDIR)
+export MPLBACKEND := Agg
+
+.PHONY: deps demo test pore-demo bench studies clean
+
+# Install what is missing (needs root; apt-get update first as Debian requires).
+deps:
+	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y --no-install-recommends $$missing; \
+	fi
+
+# The main job: Tarumi & Hakuno quick sand, case 1, with its figures.
+demo: deps
+	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --out $(OUT)/quicksand-case1
+
+pore-demo: deps
+	$(PY) yade_scripts/pore_demo.py --out $(OUT)/pore-demo
+
+test: deps
+	$(PY) -m pytest -q tests
+
+bench: deps
+	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
+
+clean:
+	rm -rf $(OUT) .pytest_cache

@@ -1,0 +1,408 @@
+"""Pore polygons between discs (seed 000 §3.1, SPEC §2.2). Pure NumPy/SciPy, no YADE.
+
+Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and radii ``r`` (N,) [m].
+
+* A *link* joins two discs i, j when r_i + r_j + eps_m + l_m >= R_ij (eq 28). Candidates are the
+  Delaunay edges of the centres, so links never cross and the link graph is planar.
+* A *pore* is a bounded face of the link graph. It is stored as the set of Delaunay triangles that
+  lie in it (triangles joined across non-link edges). The unbounded outer face is not a pore.
+* Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
+  are neglected, as in the paper. Summing over triangles gives the same polygon area and interior
+  angles as the paper's clockwise walk, and also subtracts a rattler that sits inside a pore.
+* The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
+  disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
+  a uniform pressure gives exactly zero net force.
+
+Degenerate pores: a face whose void area is <= ``a_min`` when the pores are built is *closed*: it is
+not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
+Fewer than three discs or collinear centres give a network with no pores.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import Delaunay, QhullError
+
+WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT = 0, 1, 2, 3
+WALL_NAMES = {WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
+OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
+
+
+def check_finite_array(name, a, shape=None):
+    """Return ``a`` as float64, raising ValueError naming ``name`` on bad shape or NaN/inf."""
+    a = np.asarray(a, dtype=float)
+    if shape is not None and (a.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, a.shape))):
+        raise ValueError(f"{name}: expected shape {shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        bad = np.flatnonzero(~np.isfinite(a.ravel()))[0]
+        raise ValueError(f"{name}: non-finite value {a.ravel()[bad]} at flat index {bad}")
+    return a
+
+
+def check_nonnegative(name, value):
+    """Raise ValueError naming ``name`` unless ``value`` is a finite number >= 0."""
+    if not np.isfinite(value) or value < 0:
+        raise ValueError(f"{name} must be finite and >= 0, got {value}")
+
+
+def check_discs(xz, r):
+    """Validate disc centres (N, 2) [m] and radii (N,) [m] > 0; return float arrays."""
+    xz = check_finite_array("xz", xz, (None, 2))
+    r = check_finite_array("r", r, (xz.shape[0],))
+    if np.any(r <= 0):
+        i = int(np.flatnonzero(r <= 0)[0])
+        raise ValueError(f"r must be > 0, got r[{i}] = {r[i]}")
+    return xz, r
+
+
+@dataclass
+class PoreNetwork:
+    """Topology of the pores; fixed between rebuilds (positions move, the graph does not).
+
+    Attributes (N discs, T pore triangles, L links, Np pores, Nt throats):
+      n_discs, n_pores
+      tri            (T, 3) disc indices of the triangles inside pores, counter-clockwise at build
+      tri_pore       (T,) pore of each triangle
+      tri_he         (T, 3) link-or-edge index of the corner's outgoing edges, see ``_corner_edges``
+      edges          (E, 2) Delaunay edges (i < j) used by pore triangles
+      corner_out     (T, 3, 2) for corner k: (edge to next vertex, edge to previous vertex) as
+                     signed edge ids: e >= 0 means i->j of edges[e], ~e means j->i
+      links          (L, 2) linked disc pairs (eq 28), i < j
+      link_pores     (L, 2) pore on the left and on the right of i->j (OUTER = outer face or closed)
+      throat_conns   (Nt, 2) pore pairs sharing a link (eq 38-41), throat_link (Nt,) its link
+      pore_surface   (Np,) bool: the pore has a non-wall edge on the outer face (free surface)
+      pore_touches   dict wall name -> (Np,) bool: the pore has a disc of that wall as a vertex
+      pore_vertices  (Np,) list of sorted disc-index arrays (the pore's vertex set, rattlers included)
+      he_next        next half-edge (paper's clockwise turn) of each link half-edge, see pore_polygon
+      a_min          area below which a face is closed [m^2]
+      n_closed       faces closed at build as degenerate
+    """
+
+    n_discs: int
+    tri: np.ndarray
+    tri_pore: np.ndarray
+    edges: np.ndarray
+    corner_out: np.ndarray
+    links: np.ndarray
+    link_pores: np.ndarray
+    throat_conns: np.ndarray
+    throat_link: np.ndarray
+    pore_surface: np.ndarray
+    pore_touches: dict
+    pore_vertices: list
+    he_org: np.ndarray
+    he_dst: np.ndarray
+    he_left: np.ndarray
+    he_next: np.ndarray
+    a_min: float
+    n_closed: int = 0
+    eps_m: float = 0.0
+    l_m: float = 0.0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def n_pores(self):
+        return len(self.pore_surface)
+
+
+@dataclass
+class PoreMeasures:
+    """Per-step geometry of the pores at the current positions.
+
+    polygon_area (Np,) [m^2], sector_area (Np,) [m^2], void_area A (Np,) [m^2] (eq 29),
+    link_length R (L,) [m], link_contact (L,) bool: r_k + r_l + eps_m >= R (eq 43b, k = k2),
+    corner_angle (T, 3) [rad] interior angle of each triangle corner.
+    """
+
+    polygon_area: np.ndarray
+    sector_area: np.ndarray
+    void_area: np.ndarray
+    link_length: np.ndarray
+    link_contact: np.ndarray
+    corner_angle: np.ndarray
+
+
+def _empty_network(n, a_min, eps_m, l_m, reason):
+    z2 = np.zeros((0, 2), dtype=np.int64)
+    zi = np.zeros(0, dtype=np.int64)
+    return PoreNetwork(
+        n_discs=n, tri=np.zeros((0, 3), dtype=np.int64), tri_pore=zi, edges=z2,
+        corner_out=np.zeros((0, 3, 2), dtype=np.int64), links=z2, link_pores=z2,
+        throat_conns=z2, throat_link=zi, pore_surface=np.zeros(0, bool),
+        pore_touches={name: np.zeros(0, bool) for name in WALL_NAMES.values()}, pore_vertices=[],
+        he_org=zi, he_dst=zi, he_left=zi, he_next=zi, a_min=a_min, eps_m=eps_m, l_m=l_m,
+        info={"empty_reason": reason},
+    )
+
+
+def _signed_area(p):
+    """Signed areas (T,) of triangles with corner coordinates p (T, 3, 2); > 0 counter-clockwise."""
+    return 0.5 * ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+
+
+def _delaunay(xz):
+    """Counter-clockwise Delaunay triangles and their neighbours, or None if there are none."""
+    if len(xz) < 3:
+        return None
+    try:
+        d = Delaunay(xz)
+    except QhullError:
+        return None
+    tri = d.simplices.astype(np.int64)
+    nb = d.neighbors.astype(np.int64)
+    p = xz[tri]
+    cw = _signed_area(p) < 0
+    tri[cw] = tri[cw][:, [0, 2, 1]]
+    nb[cw] = nb[cw][:, [0, 2, 1]]
+    return tri, nb
+
+
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4):
+    """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
+
+    ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
+    An edge between two wall discs is a wall element, not a free surface.
+    Returns a PoreNetwork; positions may then move and ``measure`` gives the new areas.
+    """
+    xz, r = check_discs(xz, r)
+    check_nonnegative("eps_m", eps_m)
+    check_nonnegative("l_m", l_m)
+    check_nonnegative("degenerate_fraction", degenerate_fraction)
+    n = len(r)
+    walls = np.zeros(n, np.int64) if walls is None else np.asarray(walls, np.int64)
+    if walls.shape != (n,):
+        raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
+    a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
+    dl = _delaunay(xz)
+    if dl is None:
+        return _empty_network(n, a_min, eps_m, l_m, "fewer than 3 discs or collinear centres")
+    tri, nb = dl
+    t_count = len(tri)
+
+    # Half-edges of the triangulation: corner k of triangle t owns the edge opposite it,
+    # a = tri[t, k+1] -> b = tri[t, k+2], with t on its left and nb[t, k] on its right.
+    a = tri[:, [1, 2, 0]].ravel()
+    b = tri[:, [2, 0, 1]].ravel()
+    right_tri = nb.ravel()
+    d = xz[b] - xz[a]
+    length = np.hypot(d[:, 0], d[:, 1])
+    is_link = r[a] + r[b] + eps_m + l_m >= length  # eq 28
+
+    # Pores: triangles joined across non-link edges; a non-link hull edge joins the outer face.
+    left_tri = np.repeat(np.arange(t_count), 3)
+    joins = ~is_link
+    other = np.where(right_tri >= 0, right_tri, t_count)
+    graph = coo_matrix((np.ones(joins.sum()), (left_tri[joins], other[joins])), shape=(t_count + 1, t_count + 1))
+    _, comp = connected_components(graph, directed=False)
+    outer_comp = comp[t_count]
+    face = comp[:t_count]
+
+    # Void area per face at build (eq 29) to close degenerate faces.
+    bounded = face != outer_comp
+    labels, face_id = np.unique(face[bounded], return_inverse=True)
+    tri_in = tri[bounded]
+    sig_area, sectors = _triangle_void(xz, r, tri_in)
+    void = np.bincount(face_id, sig_area - sectors, minlength=len(labels))
+    is_open = void > a_min
+    keep = is_open[face_id]
+    pore_of_face = np.full(len(labels), OUTER)
+    pore_of_face[is_open] = np.arange(is_open.sum())
+    tri_pore_all = np.full(t_count, OUTER)
+    tri_pore_all[np.flatnonzero(bounded)] = pore_of_face[face_id]
+    n_pores = int(is_open.sum())
+
+    # Links: one record per undirected link, pores on the left and right of i->j (i < j).
+    lk = np.flatnonzero(is_link)
+    la, lb = a[lk], b[lk]
+    left_p = tri_pore_all[left_tri[lk]]
+    right_p = np.where(right_tri[lk] >= 0, tri_pore_all[np.maximum(right_tri[lk], 0)], OUTER)
+    key = np.minimum(la, lb) * n + np.maximum(la, lb)
+    ukey, first = np.unique(key, return_index=True)
+    links = np.column_stack([ukey // n, ukey % n])
+    flip = la[first] > lb[first]
+    link_pores = np.column_stack([np.where(flip, right_p[first], left_p[first]),
+                                  np.where(flip, left_p[first], right_p[first])])
+
+    # Throats between two distinct pores, and the free surface.
+    lp0, lp1 = link_pores[:, 0], link_pores[:, 1]
+    is_throat = (lp0 >= 0) & (lp1 >= 0) & (lp0 != lp1)
+    wall_edge = (walls[links[:, 0]] != WALL_NONE) & (walls[links[:, 1]] != WALL_NONE)
+    outer_link = ((lp0 == OUTER) ^ (lp1 == OUTER)) & ~wall_edge
+    # a link next to a closed face is not on the free surface: only the true outer face counts
+    outer_side_is_outer = _side_is_outer_face(lk[first], left_tri, right_tri, bounded, flip, lp0 == OUTER)
+    surface_pores = np.where(lp0 == OUTER, lp1, lp0)[outer_link & outer_side_is_outer]
+    pore_surface = np.zeros(n_pores, bool)
+    pore_surface[surface_pores[surface_pores >= 0]] = True
+
+    # Pore vertex sets and wall contacts.
+    tri_k = tri[tri_pore_all >= 0]
+    tp = tri_pore_all[tri_pore_all >= 0]
+    pv = np.unique(np.column_stack([np.repeat(tp, 3), tri_k.ravel()]), axis=0)
+    splits = np.searchsorted(pv[:, 0], np.arange(1, n_pores))
+    pore_vertices = np.split(pv[:, 1], splits)
+    pore_touches = {}
+    for code, name in WALL_NAMES.items():
+        touches = np.zeros(n_pores, bool)
+        touches[pv[walls[pv[:, 1]] == code, 0]] = True
+        pore_touches[name] = touches
+
+    # Triangles kept for per-step measures and the edges they use.
+    corner_a = tri_k
+    corner_b = tri_k[:, [1, 2, 0]]
+    corner_c = tri_k[:, [2, 0, 1]]
+    ekey = np.concatenate([np.minimum(corner_a, corner_b).ravel() * n + np.maximum(corner_a, corner_b).ravel(),
+                           np.minimum(corner_a, corner_c).ravel() * n + np.maximum(corner_a, corner_c).ravel()])
+    uek, einv = np.unique(ekey, return_inverse=True)
+    edges = np.column_stack([uek // n, uek % n])
+    m = corner_a.size
+    e_next = einv[:m].reshape(-1, 3)
+    e_prev = einv[m:].reshape(-1, 3)
+    s_next = np.where(corner_a < corner_b, e_next, ~e_next)
+    s_prev = np.where(corner_a < corner_c, e_prev, ~e_prev)
+    corner_out = np.stack([s_next, s_prev], axis=-1)
+
+    he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
+    net = PoreNetwork(
+        n_discs=n, tri=tri_k, tri_pore=tp, edges=edges, corner_out=corner_out, links=links,
+        link_pores=link_pores, throat_conns=link_pores[is_throat], throat_link=np.flatnonzero(is_throat),
+        pore_surface=pore_surface, pore_touches=pore_touches, pore_vertices=pore_vertices,
+        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next, a_min=a_min,
+        n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m),
+    )
+    return net
+
+
+def _side_is_outer_face(link_he, left_tri, right_tri, bounded, flip, left_is_outer_label):
+    """For links with one OUTER side: is that side the true outer face (not a closed pore)?"""
+    lt = left_tri[link_he]
+    rt = right_tri[link_he]
+    left_bounded = bounded[lt]
+    right_bounded = np.where(rt >= 0, bounded[np.maximum(rt, 0)], False)
+    # (left, right) of i->j: swap when the stored half-edge ran j->i
+    l_b = np.where(flip, right_bounded, left_bounded)
+    r_b = np.where(flip, left_bounded, right_bounded)
+    return np.where(left_is_outer_label, ~l_b, ~r_b)
+
+
+def _triangle_void(xz, r, tri):
+    """Signed triangle areas and sector areas sum(theta r^2 / 2) at their corners (eq 29)."""
+    p = xz[tri]
+    e1 = p[:, [1, 2, 0]] - p
+    e2 = p[:, [2, 0, 1]] - p
+    theta = np.arctan2(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0], np.einsum("tkc,tkc->tk", e1, e2))
+    return _signed_area(p), 0.5 * np.sum(theta * r[tri] ** 2, axis=1)
+
+
+def _link_half_edges(xz, links, link_pores):
+    """Half-edges of the link graph and the paper's walk: next = clockwise turn at the end disc."""
+    org = np.concatenate([links[:, 0], links[:, 1]])
+    dst = np.concatenate([links[:, 1], links[:, 0]])
+    left = np.concatenate([link_pores[:, 0], link_pores[:, 1]])
+    if len(org) == 0:
+        return org, dst, left, org.copy()
+    d = xz[dst] - xz[org]
+    ang = np.arctan2(d[:, 1], d[:, 0])
+    order = np.lexsort((ang, org))
+    pos = np.empty_like(order)
+    pos[order] = np.arange(len(order))
+    sorted_org = org[order]
+    group_start = np.searchsorted(sorted_org, sorted_org, side="left")
+    group_end = np.searchsorted(sorted_org, sorted_org, side="right") - 1
+    s = np.arange(len(order))
+    prev_pos = np.where(s == group_start, group_end, s - 1)
+    n_l = len(links)
+    twin = np.concatenate([np.arange(n_l, 2 * n_l), np.arange(n_l)])
+    nxt = order[prev_pos[pos[twin]]]
+    return org, dst, left, nxt
+
+
+def pore_polygon(net, p):
+    """Ordered vertex discs of pore ``p``, one list per boundary cycle, counter-clockwise.
+
+    The walk is the paper's: from a link, at each disc turn to the next link clockwise. A pore
+    with an island of linked discs inside it has more than one cycle; the longest comes first.
+    """
+    todo = set(np.flatnonzero(net.he_left == p).tolist())
+    cycles = []
+    while todo:
+        h0 = todo.pop()
+        cycle, h = [int(net.he_org[h0])], int(net.he_next[h0])
+        while h != h0:
+            todo.discard(h)
+            cycle.append(int(net.he_org[h]))
+            h = int(net.he_next[h])
+        cycles.append(cycle)
+    return sorted(cycles, key=len, reverse=True)
+
+
+def _edge_angles(xz, edges):
+    d = xz[edges[:, 1]] - xz[edges[:, 0]]
+    return np.arctan2(d[:, 1], d[:, 0])
+
+
+def measure(net, xz, r):
+    """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43)."""
+    phi = _edge_angles(xz, net.edges)
+    # direction of a signed edge id: e -> phi[e], ~e -> phi[~e] + pi
+    co = net.corner_out
+    ang = phi[np.where(co >= 0, co, ~co)] + np.pi * (co < 0)
+    theta = np.mod(ang[..., 1] - ang[..., 0] + np.pi, 2 * np.pi) - np.pi  # signed interior angle
+    p = xz[net.tri]
+    area = _signed_area(p)
+    sector = 0.5 * np.sum(theta * r[net.tri] ** 2, axis=1)
+    n_p = net.n_pores
+    poly = np.bincount(net.tri_pore, area, minlength=n_p)
+    sect = np.bincount(net.tri_pore, sector, minlength=n_p)
+    dl = xz[net.links[:, 1]] - xz[net.links[:, 0]]
+    length = np.hypot(dl[:, 0], dl[:, 1])
+    contact = r[net.links[:, 0]] + r[net.links[:, 1]] + net.eps_m >= length  # eq 43b
+    return PoreMeasures(poly, sect, poly - sect, length, contact, theta)
+
+
+def interior_angles(net, meas):
+    """Interior angle of each pore at each of its vertex discs [rad] (eq 29): dict pore -> array.
+
+    Ordered as ``net.pore_vertices[p]``; a rattler inside a pore has 2 pi.
+    """
+    n = net.n_discs
+    key = np.repeat(net.tri_pore, 3) * n + net.tri.ravel()
+    ukey, inv = np.unique(key, return_inverse=True)
+    total = np.bincount(inv, meas.corner_angle.ravel())
+    splits = np.searchsorted(ukey // n, np.arange(1, net.n_pores))
+    return dict(enumerate(np.split(total, splits)))
+
+
+def pressure_forces(net, xz, r, U, link_length=None):
+    """Force of the pore pressures U (Np,) [N/m] on every disc (N, 2) [N per m thickness] (eq 33).
+
+    Summing eq 33 over the pores around disc a gives, per link a-b with unit vector u = (b - a)/R,
+    F_a += r_a (U_right - U_left) perp(u), perp(u) = (-u_z, u_x), and the same for b with r_b.
+    The outer face and closed faces have U = 0. No torque (pressure acts through the centre).
+    """
+    F = np.zeros((net.n_discs, 2))
+    if len(net.links) == 0:
+        return F
+    Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
+    dU = Uo[net.link_pores[:, 1]] - Uo[net.link_pores[:, 0]]
+    i, j = net.links[:, 0], net.links[:, 1]
+    d = xz[j] - xz[i]
+    R = np.hypot(d[:, 0], d[:, 1]) if link_length is None else link_length
+    s = dU / R
+    px, pz = -d[:, 1] * s, d[:, 0] * s
+    n = net.n_discs
+    F[:, 0] = np.bincount(i, r[i] * px, minlength=n) + np.bincount(j, r[j] * px, minlength=n)
+    F[:, 1] = np.bincount(i, r[i] * pz, minlength=n) + np.bincount(j, r[j] * pz, minlength=n)
+    return F
+
+
+def pore_centroids(net, xz):
+    """Area-weighted centroid of each pore polygon (Np, 2) [m]."""
+    p = xz[net.tri]
+    area = _signed_area(p)
+    c = p.mean(axis=1)
+    w = np.bincount(net.tri_pore, area, minlength=net.n_pores)
+    cx = np.bincount(net.tri_pore, area * c[:, 0], minlength=net.n_pores)
+    cz = np.bincount(net.tri_pore, area * c[:, 1], minlength=net.n_pores)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.column_stack([cx / w, cz / w])

@@ -1,0 +1,284 @@
+"""Pore water between discs (seed 000 §3.2-3.4, SPEC §2.3). Pure NumPy, no YADE.
+
+Per unit thickness: water areas W and void areas A in m^2, excess pressures U and the water
+modulus E_w in N/m, permeabilities k in 1/s, flows q in m^2/s.
+
+* U = E_w (W - A) / W                                   (eq 32)
+* between pores i, j sharing a link: i_ij = (U_i - U_j)/E_w, A_ij = W_i W_j / (A_i + A_j),
+  q_ij = k A_ij i_ij with k = k1 across a gap, k2 across a contact        (eq 38-41, 43)
+* W_i <- W_i - sum_j q_ij dt - boundary outflow dt + inflow dt           (eq 42)
+* free surface (a pore with a non-wall edge on the outer face): q = k1 W U / E_w to U = 0 outside
+* drained side walls: q = k3 W U / E_w for pores touching a side wall; undrained: nothing
+* quick-sand inflow: q_w into every pore that has a bottom-wall disc as a vertex (§5.1)
+* optional smoothing A = (A_prev + A_new)/2, q = (q_prev + q_new)/2    (eq 45-46)
+
+Pinched pores: a pore whose current void area is <= ``net.a_min`` keeps its water but exchanges
+none (its throats and boundary outflow are shut) until it reopens; its U follows eq 32.
+
+Stability: the update is explicit. Linearising eq 32 (dU/dW = E_w A / W^2) gives
+dU/dt = -M U with M = C^-1 G, conductances g = k A_ij / E_w and capacities c = W^2 / (E_w A).
+Gershgorin bounds its eigenvalues by lambda = max_i (2 sum_j g_ij + g_boundary,i) / c_i, and
+forward Euler is stable for dt <= 2 / lambda. For two equal pores this is exact: dt <= 2 / k.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from engines.pore_geometry import OUTER, check_nonnegative
+
+
+class DarcyStabilityError(ValueError):
+    """The water time step exceeds the explicit Darcy limit."""
+
+
+@dataclass
+class WaterSettings:
+    """Constants of the pore water; field names match the scene file's [water] table."""
+
+    E_w: float            # water modulus per unit thickness [N/m]
+    k1: float             # permeability across a gap link [1/s] (eq 43a)
+    k2: float             # permeability across a contact link [1/s] (eq 43b)
+    k3: float = 0.0       # drained side-wall permeability [1/s]
+    q_w: float = 0.0      # inflow into each bottom pore [m^2/s]
+    sides: str = "undrained"  # "undrained" or "drained"
+    smoothing: bool = False   # eq 45-46
+    substep: bool = False     # sub-step instead of refusing a dt above the Darcy limit
+
+    def __post_init__(self):
+        if not np.isfinite(self.E_w) or self.E_w <= 0:
+            raise ValueError(f"E_w must be > 0, got {self.E_w}")
+        for name in ("k1", "k2", "k3", "q_w"):
+            check_nonnegative(name, getattr(self, name))
+        if self.sides not in ("undrained", "drained"):
+            raise ValueError(f"sides must be 'undrained' or 'drained', got {self.sides!r}")
+
+
+@dataclass
+class WaterBalance:
+    """Cumulative water budget [m^2] since the start."""
+
+    initial: float = 0.0
+    inflow: float = 0.0
+    surface_outflow: float = 0.0
+    side_outflow: float = 0.0
+    remesh_change: float = 0.0   # W recomputed from inherited U and new A at re-meshing (eq 32)
+
+    def expected(self):
+        return self.initial + self.inflow - self.surface_outflow - self.side_outflow + self.remesh_change
+
+
+@dataclass
+class FlowState:
+    """Per-step flows: throat q (Nt,), surface and side outflow and inflow per pore (Np,) [m^2/s]."""
+
+    throat_q: np.ndarray
+    surface_q: np.ndarray
+    side_q: np.ndarray
+    inflow_q: np.ndarray
+    net_out: np.ndarray = field(default=None)
+
+
+def pressure(W, A, E_w):
+    """Excess pore pressure U = E_w (W - A) / W [N/m] (eq 32)."""
+    return E_w * (W - A) / W
+
+
+def water_from_pressure(U, A, E_w):
+    """Water area W = A E_w / (E_w - U) [m^2] that gives pressure U in area A (eq 32 inverted)."""
+    return A * E_w / (E_w - U)
+
+
+class PoreWater:
+    """Water state of a pore network: W per pore, advanced by Darcy exchange (eq 32-46)."""
+
+    def __init__(self, net, A, settings, W=None):
+        """Water on ``net`` with void areas A [m^2]; W defaults to A (after packing, U = 0)."""
+        self.settings = settings
+        self.net = net
+        A = np.asarray(A, float)
+        self.W = A.copy() if W is None else np.array(W, float)
+        if self.W.shape != A.shape or np.any(self.W <= 0):
+            raise ValueError(f"W must be {A.shape} positive water areas, got shape {self.W.shape}")
+        self.A_prev = A.copy()
+        self.q_prev = None
+        self.balance = WaterBalance(initial=float(self.W.sum()))
+        self.last_flow = None
+        self.remesh_counts = {}
+
+    # -- state -----------------------------------------------------------------------------------
+    def pressure(self, A):
+        return pressure(self.W, A, self.settings.E_w)
+
+    def total_water(self):
+        return float(self.W.sum())
+
+    def balance_error(self):
+        """Relative water balance error |sum W - expected| / initial water."""
+        return abs(self.total_water() - self.balance.expected()) / max(self.balance.initial, 1e-300)
+
+    # -- flows -------------------------------------------------------------------------------------
+    def _boundary_masks(self):
+        net, s = self.net, self.settings
+        side = net.pore_touches["left"] | net.pore_touches["right"]
+        drained = side if s.sides == "drained" else np.zeros_like(side)
+        return net.pore_surface, drained, net.pore_touches["bottom"]
+
+    def flows(self, A, link_contact):
+        """Throat and boundary flows [m^2/s] for void areas A and link states (eq 38-43)."""
+        s, net = self.settings, self.net
+        W = self.W
+        U = pressure(W, A, s.E_w)
+        open_ = A > net.a_min
+        i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
+        k = np.where(link_contact[net.throat_link], s.k2, s.k1)  # eq 43
+        with np.errstate(divide="ignore", invalid="ignore"):
+            A_ij = W[i] * W[j] / (A[i] + A[j])  # eq 40 (the OCR's W' is W_i)
+        i_ij = (U[i] - U[j]) / s.E_w  # eq 39
+        q = np.where(open_[i] & open_[j], k * A_ij * i_ij, 0.0)  # eq 41
+        surface, drained, bottom = self._boundary_masks()
+        q_s = np.where(surface & open_, s.k1 * W * U / s.E_w, 0.0)
+        q_d = np.where(drained & open_, s.k3 * W * U / s.E_w, 0.0)
+        q_in = np.where(bottom, s.q_w, 0.0)
+        return FlowState(q, q_s, q_d, q_in)
+
+    def darcy_limit(self, A, link_contact):
+        """Largest stable explicit water step [s] for the current state (Gershgorin bound)."""
+        s, net = self.settings, self.net
+        W = self.W
+        open_ = A > net.a_min
+        i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
+        k = np.where(link_contact[net.throat_link], s.k2, s.k1)
+        both = open_[i] & open_[j]
+        g = np.where(both, k * W[i] * W[j] / np.where(both, A[i] + A[j], 1.0), 0.0) / s.E_w
+        n = net.n_pores
+        g_sum = np.bincount(i, g, minlength=n) + np.bincount(j, g, minlength=n)
+        surface, drained, _ = self._boundary_masks()
+        g_b = (s.k1 * surface + s.k3 * drained) * W / s.E_w * open_
+        c = np.where(open_, W**2 / (s.E_w * np.where(open_, A, 1.0)), np.inf)
+        lam = np.max((2 * g_sum + g_b) / c, initial=0.0)
+        return np.inf if lam == 0 else 2.0 / lam
+
+    def advance(self, dt, A, link_contact):
+        """Advance the water by dt [s] at void areas A (Np,) and link states (L,) (eq 42).
+
+        Raises DarcyStabilityError if dt exceeds the explicit limit, unless settings.substep.
+        Returns the FlowState used.
+        """
+        if not dt > 0:
+            raise ValueError(f"dt must be > 0, got {dt}")
+        A = np.asarray(A, float)
+        if self.settings.smoothing:  # eq 45
+            A_used = 0.5 * (self.A_prev + A)
+            self.A_prev = A
+            A = A_used
+        limit = self.darcy_limit(A, link_contact)
+        n_sub = 1
+        if dt > limit:
+            if not self.settings.substep:
+                raise DarcyStabilityError(
+                    f"water step dt = {dt:.3e} s exceeds the explicit Darcy limit {limit:.3e} s "
+                    f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or set substep")
+            n_sub = int(np.ceil(dt / limit))
+        h = dt / n_sub
+        for _ in range(n_sub):
+            fl = self._step(h, A, link_contact)
+        return fl
+
+    def _step(self, h, A, link_contact):
+        fl = self.flows(A, link_contact)
+        if self.settings.smoothing and self.q_prev is not None:  # eq 46
+            q_new = fl.throat_q
+            fl.throat_q = 0.5 * (self.q_prev + q_new)
+            self.q_prev = q_new
+        elif self.settings.smoothing:
+            self.q_prev = fl.throat_q
+        net = self.net
+        n = net.n_pores
+        i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
+        out = np.bincount(i, fl.throat_q, minlength=n) - np.bincount(j, fl.throat_q, minlength=n)
+        fl.net_out = out + fl.surface_q + fl.side_q - fl.inflow_q
+        W_new = self.W - fl.net_out * h  # eq 42
+        if np.any(W_new <= 0):
+            p = int(np.flatnonzero(W_new <= 0)[0])
+            raise DarcyStabilityError(f"water area of pore {p} fell to {W_new[p]:.3e} m^2 in a step of {h:.3e} s")
+        self.W = W_new
+        b = self.balance
+        b.inflow += fl.inflow_q.sum() * h
+        b.surface_outflow += fl.surface_q.sum() * h
+        b.side_outflow += fl.side_q.sum() * h
+        self.last_flow = fl
+        return fl
+
+    # -- re-meshing --------------------------------------------------------------------------------
+    def remesh(self, new_net, A_new, A_old, centroids_new=None):
+        """Move the water onto a rebuilt network, keeping pressures continuous (§3.4(2)).
+
+        A new pore takes (a) the U of the old pore with the same vertex set; else (b) the mean U
+        of the old pores whose vertex set contains or is contained in its own (a split or merge);
+        else (c) the mean U of its already assigned neighbouring pores (the outer face counts as
+        U = 0 for a surface pore), repeated until nothing changes; else (d) U = 0.
+        W is then recomputed from U and the new A (eq 32). Old pores pinched at A <= a_min do not
+        pass on their pressure. Returns the counts per rule.
+        """
+        U_old = pressure(self.W, A_old, self.settings.E_w)
+        U_new, counts = inherit_pressures(self.net, U_old, A_old > self.net.a_min, new_net)
+        A_new = np.asarray(A_new, float)
+        W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
+        self.balance.remesh_change += float(W_new.sum() - self.W.sum())
+        self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
+        self.remesh_counts = counts
+        return counts
+
+
+def _vertex_signature(vertex_sets):
+    return [tuple(v.tolist()) for v in vertex_sets]
+
+
+def inherit_pressures(old_net, U_old, old_valid, new_net):
+    """Pressures for the pores of ``new_net`` from those of ``old_net`` by rules (a)-(d) of §3.4(2).
+
+    Returns (U_new (Np_new,), counts dict rule -> number of pores).
+    """
+    n_new = new_net.n_pores
+    U = np.full(n_new, np.nan)
+    rule = np.full(n_new, "", dtype=object)
+    old_sig = {sig: p for p, sig in enumerate(_vertex_signature(old_net.pore_vertices)) if old_valid[p]}
+    new_sig = _vertex_signature(new_net.pore_vertices)
+    for p, sig in enumerate(new_sig):  # (a) the same vertex set
+        q = old_sig.get(sig)
+        if q is not None:
+            U[p], rule[p] = U_old[q], "a"
+    todo = np.flatnonzero(np.isnan(U))
+    if len(todo):  # (b) split or merge: old vertex set contains or is contained in the new one
+        by_vertex = {}
+        for q, verts in enumerate(old_net.pore_vertices):
+            if old_valid[q]:
+                for v in verts:
+                    by_vertex.setdefault(int(v), []).append(q)
+        old_sets = [set(v.tolist()) for v in old_net.pore_vertices]
+        for p in todo:
+            mine = set(new_sig[p])
+            cands = {q for v in mine for q in by_vertex.get(v, ())}
+            near = [q for q in cands if old_sets[q] <= mine or mine <= old_sets[q]]
+            if near:
+                U[p], rule[p] = float(np.mean(U_old[near])), "b"
+    # (c) mean of assigned neighbours, the outer face at U = 0 for surface pores
+    i, j = new_net.throat_conns[:, 0], new_net.throat_conns[:, 1]
+    while True:
+        unset = np.isnan(U)
+        if not unset.any():
+            break
+        known = np.where(unset, 0.0, U)
+        has = (~unset).astype(float)
+        s = np.bincount(i, known[j], n_new) + np.bincount(j, known[i], n_new)
+        c = np.bincount(i, has[j], n_new) + np.bincount(j, has[i], n_new)
+        c_tot = c + new_net.pore_surface
+        assign = unset & (c_tot > 0) & (c > 0)
+        if not assign.any():
+            break
+        U[assign] = s[assign] / c_tot[assign]
+        rule[assign] = "c"
+    left = np.isnan(U)  # (d)
+    U[left], rule[left] = 0.0, "d"
+    counts = {k: int(np.sum(rule == k)) for k in "abcd"}
+    return U, counts

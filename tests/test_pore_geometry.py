@@ -1,0 +1,194 @@
+"""Pore geometry (SPEC §2.2): exact areas, Euler's formula, independent walk, forces (eq 33)."""
+import numpy as np
+import pytest
+
+from engines import pore_geometry as pg
+from packing.layouts import hex_lattice, random_discs, square_lattice
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.05])
+def test_hex_lattice_void_area_exact(gap):
+    r, a = 1.0, 2.0 + gap  # spacing a, gap below l_m
+    xz = hex_lattice(7, 6, a)
+    net = pg.build_pores(xz, np.full(len(xz), r), l_m=0.1)
+    m = pg.measure(net, xz, np.full(len(xz), r))
+    exact = np.sqrt(3) / 4 * a**2 - np.pi * r**2 / 2  # triangle minus three 60-degree sectors
+    assert net.n_pores == 2 * 6 * 5  # 2 (nx - 1) (nz - 1) triangles
+    np.testing.assert_allclose(m.void_area, exact, rtol=1e-12)
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.05])
+def test_square_lattice_void_area_exact(gap):
+    r, a = 1.0, 2.0 + gap
+    xz = square_lattice(6, 5, a)
+    rr = np.full(len(xz), r)
+    net = pg.build_pores(xz, rr, l_m=0.1)  # diagonals (2.83 a) are not links
+    m = pg.measure(net, xz, rr)
+    assert net.n_pores == 5 * 4
+    np.testing.assert_allclose(m.void_area, a**2 - np.pi * r**2, rtol=1e-12)
+    assert all(len(c) == 1 and len(c[0]) == 4 for c in (pg.pore_polygon(net, p) for p in range(net.n_pores)))
+
+
+def test_link_state_contact_versus_gap():
+    xz = np.array([[0.0, 0.0], [1.99, 0.0], [1.0, 1.9]])  # overlap, gap 0.05 < l_m, gap 0.1 < l_m
+    r = np.ones(3)
+    net = pg.build_pores(xz, r, l_m=0.2)
+    m = pg.measure(net, xz, r)
+    state = {tuple(l): c for l, c in zip(net.links.tolist(), m.link_contact)}
+    assert state[(0, 1)] and not state[(0, 2)] and not state[(1, 2)]
+    assert net.n_pores == 1 and net.pore_surface.all()
+
+
+def test_euler_formula_random_packing():
+    rng = np.random.default_rng(1)
+    xz, r = random_discs(300, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    # bounded faces = E - V + C (components of the link graph, isolated discs included)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(r)
+    g = coo_matrix((np.ones(len(net.links)), (net.links[:, 0], net.links[:, 1])), shape=(n, n))
+    c, _ = connected_components(g, directed=False)
+    assert net.n_pores + net.n_closed == len(net.links) - n + c
+    assert net.n_pores > 100
+
+
+def _shoelace(xz, cycle):
+    p = xz[cycle]
+    return 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+
+
+def test_areas_against_independent_walk():
+    """Polygon area from triangles equals the shoelace area of the paper's clockwise walk, and
+    void + disc area inside the linked region = the region's area; full discs inside sum to pi r^2."""
+    rng = np.random.default_rng(2)
+    xz, r = random_discs(200, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    m = pg.measure(net, xz, r)
+    # an island inside a pore is walked clockwise: its shoelace area is negative and subtracts
+    walk = np.array([sum(_shoelace(xz, c) for c in pg.pore_polygon(net, p)) for p in range(net.n_pores)])
+    np.testing.assert_allclose(walk, m.polygon_area, rtol=1e-10, atol=1e-15)
+    region = walk.sum()
+    np.testing.assert_allclose(m.void_area.sum() + m.sector_area.sum(), region, rtol=1e-12)
+    # discs whose every surrounding face is a pore lie wholly inside the region: 2 pi of angles
+    angles = pg.interior_angles(net, m)
+    total = np.zeros(len(r))
+    for p, verts in enumerate(net.pore_vertices):
+        np.add.at(total, verts, angles[p])
+    inner = np.isclose(total, 2 * np.pi, rtol=1e-9)
+    assert inner.sum() > 50
+    assert np.all(total <= 2 * np.pi + 1e-9)
+
+
+def test_uniform_pressure_gives_zero_force_on_inner_discs():
+    rng = np.random.default_rng(3)
+    xz, r = random_discs(200, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    F = pg.pressure_forces(net, xz, r, np.full(net.n_pores, 123.0))
+    outer_disc = np.zeros(len(r), bool)
+    on_outer = (net.link_pores == pg.OUTER).any(axis=1)
+    outer_disc[net.links[on_outer].ravel()] = True
+    inner = ~outer_disc
+    assert inner.sum() > 50
+    assert np.abs(F[inner]).max() < 1e-12 * 123.0 * r.max()
+
+
+def test_eq33_single_arc():
+    """A right-angle corner: the arc from alpha1 = 0 to alpha2 = pi/2 gets F = U r (-1, -1)."""
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [0.0, 3.0]])
+    r = np.ones(3)
+    net = pg.build_pores(xz, r, l_m=5.0)
+    U = 7.0
+    F = pg.pressure_forces(net, xz, r, [U])
+    np.testing.assert_allclose(F[0], [-U, -U], rtol=1e-12)  # eq 33 with alpha1 = 0, alpha2 = 90 deg
+
+
+def test_linear_pressure_archimedes():
+    """U = G z at the pore centroids. On a regular hexagonal packing the net force on an inner
+    disc is exactly -G times its hexagonal cell area 2 sqrt(3) r^2: the pore-averaged pressure
+    acts on the disc plus its share of the void. Against Archimedes (-G pi r^2) this is the
+    stated discretisation error 2 sqrt(3)/pi - 1 = 10.3 %."""
+    r, G = 1.0, 50.0
+    xz = hex_lattice(9, 9, 2.0)
+    rr = np.full(len(xz), r)
+    net = pg.build_pores(xz, rr, l_m=0.1)
+    U = G * pg.pore_centroids(net, xz)[:, 1]
+    F = pg.pressure_forces(net, xz, rr, U)
+    centre = np.argmin(np.hypot(*(xz - xz.mean(axis=0)).T))
+    np.testing.assert_allclose(F[centre], [0.0, -G * 2 * np.sqrt(3) * r**2], atol=1e-9)
+    assert abs(F[centre, 1] / (-G * np.pi * r**2) - 1) < 0.11
+    # any direction: gradient along x
+    U = G * pg.pore_centroids(net, xz)[:, 0]
+    F = pg.pressure_forces(net, xz, rr, U)
+    np.testing.assert_allclose(F[centre], [-G * 2 * np.sqrt(3) * r**2, 0.0], atol=1e-9)
+
+
+def test_walls_and_surface():
+    """A box of wall discs open at the top: bottom pores touch the bottom wall, only top pores
+    are on the free surface, and wall-wall edges are not surface."""
+    xz, r, walls = _box_with_particles()
+    net = pg.build_pores(xz, r, l_m=1.2, walls=walls)
+    cz = pg.pore_centroids(net, xz)[:, 1]
+    assert net.pore_touches["bottom"].any() and net.pore_touches["left"].any()
+    assert net.pore_surface.any()
+    assert cz[net.pore_surface].min() > cz[net.pore_touches["bottom"]].max()
+    assert not (net.pore_surface & net.pore_touches["bottom"]).any()
+
+
+def _box_with_particles():
+    a = 2.0
+    xz = hex_lattice(6, 5, a, origin=(1.5 * a, a * np.sqrt(3) / 2))
+    r = np.ones(len(xz))
+    bottom = np.column_stack([np.arange(0, 9) * a, np.zeros(9)])
+    left = np.column_stack([np.zeros(5), np.arange(1, 6) * a])
+    right = np.column_stack([np.full(5, 8 * a), np.arange(1, 6) * a])
+    walls = np.concatenate([np.zeros(len(xz), int), np.full(9, pg.WALL_BOTTOM),
+                            np.full(5, pg.WALL_LEFT), np.full(5, pg.WALL_RIGHT)])
+    allxz = np.vstack([xz, bottom, left, right])
+    return allxz, np.ones(len(allxz)), walls
+
+
+@pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
+                                np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
+def test_degenerate_inputs_give_no_pores(xz):
+    r = np.full(len(xz), 0.5)
+    net = pg.build_pores(xz, r, l_m=0.1)
+    m = pg.measure(net, xz, r)
+    assert net.n_pores == 0 and m.void_area.size == 0
+    assert np.all(pg.pressure_forces(net, xz, r, np.zeros(0)) == 0)
+
+
+def test_rattler_without_links_is_subtracted_not_crashing():
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)], [1.0, 1 / np.sqrt(3)]])
+    r = np.array([1.0, 1.0, 1.0, 0.1])  # the small disc at the centroid is linked to nobody
+    net = pg.build_pores(xz, r, l_m=0.01)
+    m = pg.measure(net, xz, r)
+    assert net.n_pores == 1
+    assert not np.isin(3, net.links).any()
+    np.testing.assert_allclose(m.void_area[0], np.sqrt(3) - np.pi / 2 - np.pi * 0.01, rtol=1e-12)
+    F = pg.pressure_forces(net, xz, r, [10.0])
+    assert np.all(np.isfinite(F)) and np.all(F[3] == 0)
+
+
+def test_degenerate_pore_is_closed():
+    # three touching discs around a vanishing pore: void area ~ 0 -> closed, not a pore
+    r = np.ones(3)
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05]])  # almost collinear, heavily overlapping
+    net = pg.build_pores(xz, r, l_m=0.1)
+    assert net.n_pores == 0 and net.n_closed == 1
+
+
+@pytest.mark.parametrize("kw,field", [
+    (dict(xz=np.array([[0.0, np.nan]])), "xz"),
+    (dict(r=np.array([-1.0])), "r"),
+    (dict(eps_m=-1e-3), "eps_m"),
+    (dict(l_m=-1e-3), "l_m"),
+    (dict(xz=np.zeros((2, 3))), "xz"),
+])
+def test_bad_input_names_the_field(kw, field):
+    args = dict(xz=np.array([[0.0, 0.0]]), r=np.array([1.0]), eps_m=0.0, l_m=0.0)
+    args.update(kw)
+    if "xz" in kw and len(args["xz"]) != len(args["r"]):
+        args["r"] = np.ones(len(args["xz"]))
+    with pytest.raises(ValueError, match=field):
+        pg.build_pores(**args)

@@ -1,0 +1,161 @@
+"""Pore water (SPEC §2.3): eq 38 equalisation, conservation, boundary balance, stability, re-meshing."""
+import numpy as np
+import pytest
+
+from engines import pore_geometry as pg
+from engines.pore_water import DarcyStabilityError, PoreWater, WaterSettings, inherit_pressures, pressure
+from packing.layouts import random_discs
+
+
+def _two_pores(diagonal_linked=True):
+    """Rhombus of four wall discs: two triangular pores sharing the short diagonal (a gap link)."""
+    xz = np.array([[-1.2, 0.0], [1.2, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    r = np.full(4, 0.5)
+    l_m = 1.5 if diagonal_linked else 0.7
+    net = pg.build_pores(xz, r, l_m=l_m, walls=np.full(4, pg.WALL_LEFT))
+    return xz, r, net
+
+
+def test_two_pores_equalise_in_one_step_at_k_dt_1():
+    xz, r, net = _two_pores()
+    assert net.n_pores == 2 and len(net.throat_conns) == 1
+    m = pg.measure(net, xz, r)
+    assert not m.link_contact[net.throat_link[0]]  # gap: k = k1
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5)
+    w = PoreWater(net, m.void_area, s, W=m.void_area * np.array([1.1, 0.95]))
+    total = w.total_water()
+    w.advance(1.0 / s.k1, m.void_area, m.link_contact)  # k dt = 1: eq 38 exactly
+    U = w.pressure(m.void_area)
+    assert abs(U[0] - U[1]) < 1e-12 * s.E_w
+    assert abs(w.total_water() - total) < 1e-15 * total
+
+
+def test_stability_limit_pair_is_two_over_k():
+    xz, r, net = _two_pores()
+    m = pg.measure(net, xz, r)
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5)
+    w = PoreWater(net, m.void_area, s)
+    # equal areas by symmetry, W = A: the pair's exact limit is 2/k
+    np.testing.assert_allclose(w.darcy_limit(m.void_area, m.link_contact), 2.0 / s.k1, rtol=1e-12)
+    with pytest.raises(DarcyStabilityError, match="Darcy limit"):
+        w.advance(2.01 / s.k1, m.void_area, m.link_contact)
+    # asked to sub-step, it does, and stays bounded
+    w2 = PoreWater(net, m.void_area, WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, substep=True),
+                   W=m.void_area * np.array([1.1, 0.95]))
+    for _ in range(20):
+        w2.advance(10.0 / s.k1, m.void_area, m.link_contact)
+    U = w2.pressure(m.void_area)
+    assert abs(U[0] - U[1]) < 1e-6
+
+
+def _random_network(seed=5, n=400, walls=None):
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(n, rng)
+    return xz, r, pg.build_pores(xz, r, l_m=0.7 * r.mean(), walls=walls)
+
+
+def test_water_conserved_without_boundaries():
+    xz, r, net = _random_network()
+    net.pore_surface[:] = False  # a closed network: no boundary exchange
+    m = pg.measure(net, xz, r)
+    s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0)
+    rng = np.random.default_rng(0)
+    w = PoreWater(net, m.void_area, s, W=m.void_area * (1 + 0.2 * rng.random(net.n_pores)))
+    total = w.total_water()
+    for _ in range(500):
+        w.advance(1e-4, m.void_area, m.link_contact)
+    assert abs(w.total_water() - total) <= 1e-12 * total
+    U = w.pressure(m.void_area)
+    assert U.std() < 0.5 * (s.E_w * 0.2)  # pressures have spread out
+
+
+def test_boundary_fluxes_balance_the_water():
+    """Inflow at the bottom, outflow at the free surface and drained sides: the budget closes."""
+    rng = np.random.default_rng(6)
+    xz, r = random_discs(400, rng)
+    walls = np.zeros(len(r), int)
+    walls[xz[:, 1] < xz[:, 1].min() + 1.0] = pg.WALL_BOTTOM
+    walls[xz[:, 0] < xz[:, 0].min() + 1.0] = pg.WALL_LEFT
+    walls[xz[:, 0] > xz[:, 0].max() - 1.0] = pg.WALL_RIGHT
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean(), walls=walls)
+    m = pg.measure(net, xz, r)
+    s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=100.0, q_w=0.05, sides="drained")
+    w = PoreWater(net, m.void_area, s)
+    for _ in range(300):
+        w.advance(1e-4, m.void_area, m.link_contact)
+    b = w.balance
+    assert b.inflow > 0 and b.surface_outflow > 0 and b.side_outflow > 0
+    assert w.balance_error() < 1e-12
+    # bottom pressure rises first and stays below E_w (eq 32)
+    U = w.pressure(m.void_area)
+    assert U[net.pore_touches["bottom"]].mean() > U[net.pore_surface].mean() > 0
+    assert U.max() < s.E_w
+
+
+def test_pinched_pore_exchanges_nothing():
+    xz, r, net = _two_pores()
+    m = pg.measure(net, xz, r)
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=1000.0, k1=50.0, k2=0.5),
+                  W=m.void_area * np.array([1.1, 0.95]))
+    A = m.void_area.copy()
+    A[0] = 0.5 * net.a_min  # squeezed shut
+    W0 = w.W.copy()
+    w.advance(1e-3, A, m.link_contact)
+    np.testing.assert_array_equal(w.W, W0)
+    assert np.all(np.isfinite(w.pressure(A)))
+
+
+def test_remesh_rule_a_same_network_keeps_pressures():
+    xz, r, net = _random_network()
+    m = pg.measure(net, xz, r)
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0),
+                  W=m.void_area * (1 + 0.1 * np.random.default_rng(1).random(net.n_pores)))
+    U0 = w.pressure(m.void_area)
+    net2 = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    counts = w.remesh(net2, m.void_area, m.void_area)
+    assert counts == {"a": net.n_pores, "b": 0, "c": 0, "d": 0}
+    np.testing.assert_allclose(w.pressure(m.void_area), U0, rtol=1e-12)
+    assert w.balance_error() < 1e-12
+
+
+def test_remesh_rule_b_split_and_merge():
+    xz, r, one = _two_pores(diagonal_linked=False)
+    _, _, two = _two_pores(diagonal_linked=True)
+    assert one.n_pores == 1 and two.n_pores == 2
+    U, counts = inherit_pressures(one, np.array([40.0]), np.array([True]), two)  # split
+    assert counts["b"] == 2
+    np.testing.assert_allclose(U, [40.0, 40.0])
+    U, counts = inherit_pressures(two, np.array([10.0, 30.0]), np.array([True, True]), one)  # merge
+    assert counts["b"] == 1
+    np.testing.assert_allclose(U, [20.0])
+
+
+def test_remesh_rules_c_and_d():
+    xz, r, net = _random_network(n=100)
+    n = net.n_pores
+    U_old = np.linspace(1.0, 2.0, n)
+    valid = np.ones(n, bool)
+    p = int(np.flatnonzero(~net.pore_surface)[0])
+    valid[p] = False  # its old pressure is not usable (pinched): rule (c) from its neighbours
+    U, counts = inherit_pressures(net, U_old, valid, net)
+    assert counts["c"] == 1 and counts["a"] == n - 1
+    i, j = net.throat_conns.T
+    nb = np.concatenate([j[i == p], i[j == p]])
+    np.testing.assert_allclose(U[p], U_old[nb].mean())
+    # no usable old pore at all and nothing assigned around: (d) U = 0 everywhere
+    U, counts = inherit_pressures(net, U_old, np.zeros(n, bool), net)
+    assert counts["d"] == n and np.all(U == 0)
+
+
+@pytest.mark.parametrize("kw,field", [(dict(E_w=0.0), "E_w"), (dict(k1=-1.0), "k1"), (dict(k2=np.nan), "k2"),
+                                      (dict(q_w=-1.0), "q_w"), (dict(sides="leaky"), "sides")])
+def test_bad_settings_name_the_field(kw, field):
+    args = dict(E_w=240.0, k1=200.0, k2=2.0)
+    args.update(kw)
+    with pytest.raises(ValueError, match=field):
+        WaterSettings(**args)
+
+
+def test_pressure_eq32():
+    assert pressure(2.0, 1.0, 240.0) == 120.0
+    assert pressure(1.0, 1.0, 240.0) == 0.0
