@@ -7,8 +7,10 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 * A *pore* is a bounded face of the link graph. It is stored as the set of Delaunay triangles that
   lie in it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
-  are neglected, as in the paper. Summing over triangles gives the same polygon area and interior
-  angles as the paper's clockwise walk, and also subtracts a rattler that sits inside a pore.
+  are neglected, as in the paper. Each step, the polygon area is the shoelace sum and theta the
+  interior angle (eq 29) over the pore's boundary links, walked as in the paper (turn clockwise at
+  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The triangles
+  give the same areas independently (``void_area_by_triangles``), which the tests check.
 * The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
@@ -60,41 +62,52 @@ def check_discs(xz, r):
 class PoreNetwork:
     """Topology of the pores; fixed between rebuilds (positions move, the graph does not).
 
-    Attributes (N discs, T pore triangles, L links, Np pores, Nt throats):
+    Attributes (N discs, L links, Np pores, Nt throats, K pore corners):
       n_discs, n_pores
-      tri            (T, 3) disc indices of the triangles inside pores, counter-clockwise at build
-      tri_pore       (T,) pore of each triangle
-      tri_he         (T, 3) link-or-edge index of the corner's outgoing edges, see ``_corner_edges``
-      edges          (E, 2) Delaunay edges (i < j) used by pore triangles
-      corner_out     (T, 3, 2) for corner k: (edge to next vertex, edge to previous vertex) as
-                     signed edge ids: e >= 0 means i->j of edges[e], ~e means j->i
+      tri, tri_pore  Delaunay triangles inside pores (counter-clockwise at build) and their pore
       links          (L, 2) linked disc pairs (eq 28), i < j
       link_pores     (L, 2) pore on the left and on the right of i->j (OUTER = outer face or closed)
       throat_conns   (Nt, 2) pore pairs sharing a link (eq 38-41), throat_link (Nt,) its link
       pore_surface   (Np,) bool: the pore has a non-wall edge on the outer face (free surface)
       pore_touches   dict wall name -> (Np,) bool: the pore has a disc of that wall as a vertex
-      pore_vertices  (Np,) list of sorted disc-index arrays (the pore's vertex set, rattlers included)
-      he_next        next half-edge (paper's clockwise turn) of each link half-edge, see pore_polygon
-      a_min          area below which a face is closed [m^2]
-      n_closed       faces closed at build as degenerate
+      pore_vertex_ptr, pore_vertex_idx   the vertex set of each pore (rattlers included) in CSR
+                     form: sorted discs of pore p are idx[ptr[p]:ptr[p + 1]]
+      pore_signature (Np,) uint64 hash of each vertex set (equal sets, equal signatures)
+      he_org, he_dst, he_left, he_next   half-edges of the links: h < L runs i->j of link h,
+                     h >= L runs j->i of link h - L; he_left is the pore on its left; he_next the
+                     next half-edge of that pore's boundary (the paper's clockwise turn)
+      corner_*       per boundary half-edge h of a pore (K of them): the pore, the disc dst(h) at
+                     the corner, the links of h and next(h), the shoelace sign, r^2 of the disc,
+                     and the build-time angle (eq 29) and raw link-angle difference
+      rattler_area   (Np,) area of the unlinked discs inside each pore [m^2]
+      a_min          area below which a face is closed [m^2]; n_closed faces closed at build
     """
 
     n_discs: int
     tri: np.ndarray
     tri_pore: np.ndarray
-    edges: np.ndarray
-    corner_out: np.ndarray
     links: np.ndarray
     link_pores: np.ndarray
     throat_conns: np.ndarray
     throat_link: np.ndarray
     pore_surface: np.ndarray
     pore_touches: dict
-    pore_vertices: list
+    pore_vertex_ptr: np.ndarray
+    pore_vertex_idx: np.ndarray
+    pore_signature: np.ndarray
     he_org: np.ndarray
     he_dst: np.ndarray
     he_left: np.ndarray
     he_next: np.ndarray
+    corner_pore: np.ndarray
+    corner_disc: np.ndarray
+    corner_link: np.ndarray
+    corner_next_link: np.ndarray
+    corner_sign: np.ndarray
+    corner_r2: np.ndarray
+    corner_theta0: np.ndarray
+    corner_raw0: np.ndarray
+    rattler_area: np.ndarray
     a_min: float
     n_closed: int = 0
     eps_m: float = 0.0
@@ -105,6 +118,10 @@ class PoreNetwork:
     def n_pores(self):
         return len(self.pore_surface)
 
+    def vertices_of(self, p):
+        """Sorted disc indices of the vertex set of pore p."""
+        return self.pore_vertex_idx[self.pore_vertex_ptr[p]:self.pore_vertex_ptr[p + 1]]
+
 
 @dataclass
 class PoreMeasures:
@@ -112,7 +129,8 @@ class PoreMeasures:
 
     polygon_area (Np,) [m^2], sector_area (Np,) [m^2], void_area A (Np,) [m^2] (eq 29),
     link_length R (L,) [m], link_contact (L,) bool: r_k + r_l + eps_m >= R (eq 43b, k = k2),
-    corner_angle (T, 3) [rad] interior angle of each triangle corner.
+    corner_angle (K,) [rad] interior angle of each pore corner (eq 29),
+    link_vector (L, 2) [m] centre of j minus centre of i for each link (i, j).
     """
 
     polygon_area: np.ndarray
@@ -121,18 +139,21 @@ class PoreMeasures:
     link_length: np.ndarray
     link_contact: np.ndarray
     corner_angle: np.ndarray
+    link_vector: np.ndarray
 
 
 def _empty_network(n, a_min, eps_m, l_m, reason):
     z2 = np.zeros((0, 2), dtype=np.int64)
     zi = np.zeros(0, dtype=np.int64)
+    zf = np.zeros(0)
     return PoreNetwork(
-        n_discs=n, tri=np.zeros((0, 3), dtype=np.int64), tri_pore=zi, edges=z2,
-        corner_out=np.zeros((0, 3, 2), dtype=np.int64), links=z2, link_pores=z2,
+        n_discs=n, tri=np.zeros((0, 3), dtype=np.int64), tri_pore=zi, links=z2, link_pores=z2,
         throat_conns=z2, throat_link=zi, pore_surface=np.zeros(0, bool),
-        pore_touches={name: np.zeros(0, bool) for name in WALL_NAMES.values()}, pore_vertices=[],
-        he_org=zi, he_dst=zi, he_left=zi, he_next=zi, a_min=a_min, eps_m=eps_m, l_m=l_m,
-        info={"empty_reason": reason},
+        pore_touches={name: np.zeros(0, bool) for name in WALL_NAMES.values()},
+        pore_vertex_ptr=np.zeros(1, np.int64), pore_vertex_idx=zi, pore_signature=np.zeros(0, np.uint64),
+        he_org=zi, he_dst=zi, he_left=zi, he_next=zi, corner_pore=zi, corner_disc=zi, corner_link=zi,
+        corner_next_link=zi, corner_sign=zf, corner_r2=zf, corner_theta0=zf, corner_raw0=zf,
+        rattler_area=zf, a_min=a_min, eps_m=eps_m, l_m=l_m, info={"empty_reason": reason},
     )
 
 
@@ -238,39 +259,61 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
     # Pore vertex sets and wall contacts.
     tri_k = tri[tri_pore_all >= 0]
     tp = tri_pore_all[tri_pore_all >= 0]
-    pv = np.unique(np.column_stack([np.repeat(tp, 3), tri_k.ravel()]), axis=0)
-    splits = np.searchsorted(pv[:, 0], np.arange(1, n_pores))
-    pore_vertices = np.split(pv[:, 1], splits)
+    pv_key = np.unique(np.repeat(tp, 3) * n + tri_k.ravel())
+    pv = np.column_stack([pv_key // n, pv_key % n])
+    ptr = np.searchsorted(pv[:, 0], np.arange(n_pores + 1))
+    signature = np.zeros(n_pores, np.uint64)
+    np.add.at(signature, pv[:, 0], _mix64(pv[:, 1]))
     pore_touches = {}
     for code, name in WALL_NAMES.items():
         touches = np.zeros(n_pores, bool)
         touches[pv[walls[pv[:, 1]] == code, 0]] = True
         pore_touches[name] = touches
 
-    # Triangles kept for per-step measures and the edges they use.
-    corner_a = tri_k
-    corner_b = tri_k[:, [1, 2, 0]]
-    corner_c = tri_k[:, [2, 0, 1]]
-    ekey = np.concatenate([np.minimum(corner_a, corner_b).ravel() * n + np.maximum(corner_a, corner_b).ravel(),
-                           np.minimum(corner_a, corner_c).ravel() * n + np.maximum(corner_a, corner_c).ravel()])
-    uek, einv = np.unique(ekey, return_inverse=True)
-    edges = np.column_stack([uek // n, uek % n])
-    m = corner_a.size
-    e_next = einv[:m].reshape(-1, 3)
-    e_prev = einv[m:].reshape(-1, 3)
-    s_next = np.where(corner_a < corner_b, e_next, ~e_next)
-    s_prev = np.where(corner_a < corner_c, e_prev, ~e_prev)
-    corner_out = np.stack([s_next, s_prev], axis=-1)
-
+    # Boundary corners of the pores: the paper's walk over the link half-edges.
     he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
-    net = PoreNetwork(
-        n_discs=n, tri=tri_k, tri_pore=tp, edges=edges, corner_out=corner_out, links=links,
-        link_pores=link_pores, throat_conns=link_pores[is_throat], throat_link=np.flatnonzero(is_throat),
-        pore_surface=pore_surface, pore_touches=pore_touches, pore_vertices=pore_vertices,
-        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next, a_min=a_min,
-        n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m),
+    n_l = len(links)
+    h = np.flatnonzero(he_left >= 0)
+    he_link = np.concatenate([np.arange(n_l), np.arange(n_l)])
+    phi = _link_angles(xz, links)
+    raw0 = phi[he_link[h]] - phi[he_link[he_next[h]]]  # the corner angle up to a multiple of pi
+    twin = np.concatenate([np.arange(n_l, 2 * n_l), np.arange(n_l)])
+    phi_he = phi[he_link] + np.pi * (np.arange(2 * n_l) >= n_l)
+    theta0 = np.mod(phi_he[twin[h]] - phi_he[he_next[h]], 2 * np.pi)  # eq 29, in [0, 2 pi)
+    theta0[he_next[h] == twin[h]] = 2 * np.pi  # the end of a dangling link: all around the disc
+
+    # Unlinked discs (rattlers) inside a pore are void-free: subtract them whole.
+    linked = np.zeros(n, bool)
+    linked[links.ravel()] = True
+    rat = pv[~linked[pv[:, 1]]]
+    rattler_area = np.bincount(rat[:, 0], np.pi * r[rat[:, 1]] ** 2, minlength=n_pores)
+
+    return PoreNetwork(
+        n_discs=n, tri=tri_k, tri_pore=tp, links=links, link_pores=link_pores,
+        throat_conns=link_pores[is_throat], throat_link=np.flatnonzero(is_throat),
+        pore_surface=pore_surface, pore_touches=pore_touches,
+        pore_vertex_ptr=ptr, pore_vertex_idx=pv[:, 1], pore_signature=signature,
+        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next,
+        corner_pore=he_left[h], corner_disc=he_dst[h], corner_link=he_link[h],
+        corner_next_link=he_link[he_next[h]], corner_sign=np.where(h < n_l, 1.0, -1.0),
+        corner_r2=r[he_dst[h]] ** 2, corner_theta0=theta0, corner_raw0=raw0, rattler_area=rattler_area,
+        a_min=a_min, n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m),
     )
-    return net
+
+
+def _mix64(v):
+    """splitmix64 of integers: a well-spread 64-bit key per disc; a pore's set signature is the
+    wrapping sum of its discs' keys, so a collision between different sets has odds ~2^-64."""
+    z = v.astype(np.uint64) + np.uint64(0x9E3779B97F4A7C15)
+    with np.errstate(over="ignore"):
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def _link_angles(xz, links):
+    d = xz[links[:, 1]] - xz[links[:, 0]]
+    return np.arctan2(d[:, 1], d[:, 0])
 
 
 def _side_is_outer_face(link_he, left_tri, right_tri, bounded, flip, left_is_outer_label):
@@ -336,63 +379,66 @@ def pore_polygon(net, p):
     return sorted(cycles, key=len, reverse=True)
 
 
-def _edge_angles(xz, edges):
-    d = xz[edges[:, 1]] - xz[edges[:, 0]]
-    return np.arctan2(d[:, 1], d[:, 0])
-
-
 def measure(net, xz, r):
-    """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43)."""
-    phi = _edge_angles(xz, net.edges)
-    # direction of a signed edge id: e -> phi[e], ~e -> phi[~e] + pi
-    co = net.corner_out
-    ang = phi[np.where(co >= 0, co, ~co)] + np.pi * (co < 0)
-    theta = np.mod(ang[..., 1] - ang[..., 0] + np.pi, 2 * np.pi) - np.pi  # signed interior angle
-    p = xz[net.tri]
-    area = _signed_area(p)
-    sector = 0.5 * np.sum(theta * r[net.tri] ** 2, axis=1)
+    """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43).
+
+    Polygon area: shoelace over each pore's boundary links. Interior angle at each corner (eq 29):
+    the build-time angle plus the change of the link directions since, taken in (-pi, pi], so a
+    link direction crossing the +-pi cut does not matter (valid while no corner turns by pi
+    between rebuilds).
+    """
+    i, j = net.links[:, 0], net.links[:, 1]
+    x, z = np.ascontiguousarray(xz[:, 0]), np.ascontiguousarray(xz[:, 1])
+    xi, zi = x[i], z[i]
+    dx, dz = x[j] - xi, z[j] - zi
+    length = np.sqrt(dx * dx + dz * dz)
+    phi = np.arctan2(dz, dx)
+    cross = xi * dz - dx * zi  # x_i z_j - x_j z_i
     n_p = net.n_pores
-    poly = np.bincount(net.tri_pore, area, minlength=n_p)
-    sect = np.bincount(net.tri_pore, sector, minlength=n_p)
-    dl = xz[net.links[:, 1]] - xz[net.links[:, 0]]
-    length = np.hypot(dl[:, 0], dl[:, 1])
-    contact = r[net.links[:, 0]] + r[net.links[:, 1]] + net.eps_m >= length  # eq 43b
-    return PoreMeasures(poly, sect, poly - sect, length, contact, theta)
+    poly = 0.5 * np.bincount(net.corner_pore, net.corner_sign * cross[net.corner_link], minlength=n_p)
+    change = phi[net.corner_link] - phi[net.corner_next_link] - net.corner_raw0
+    theta = net.corner_theta0 + np.mod(change + np.pi, 2 * np.pi) - np.pi  # eq 29
+    sect = 0.5 * np.bincount(net.corner_pore, theta * net.corner_r2, minlength=n_p) + net.rattler_area
+    contact = r[i] + r[j] + net.eps_m >= length  # eq 43b
+    return PoreMeasures(poly, sect, poly - sect, length, contact, theta, np.column_stack([dx, dz]))
+
+
+def void_area_by_triangles(net, xz, r):
+    """Void area per pore from its Delaunay triangles (slow independent reference of ``measure``)."""
+    area, sectors = _triangle_void(xz, r, net.tri)
+    return np.bincount(net.tri_pore, area - sectors, minlength=net.n_pores)
 
 
 def interior_angles(net, meas):
-    """Interior angle of each pore at each of its vertex discs [rad] (eq 29): dict pore -> array.
+    """Interior angle of each pore at each of its linked vertex discs [rad] (eq 29).
 
-    Ordered as ``net.pore_vertices[p]``; a rattler inside a pore has 2 pi.
+    Returns {pore: {disc: angle}}; a disc met twice on the walk (a pinch) gets the sum.
     """
-    n = net.n_discs
-    key = np.repeat(net.tri_pore, 3) * n + net.tri.ravel()
-    ukey, inv = np.unique(key, return_inverse=True)
-    total = np.bincount(inv, meas.corner_angle.ravel())
-    splits = np.searchsorted(ukey // n, np.arange(1, net.n_pores))
-    return dict(enumerate(np.split(total, splits)))
+    out = {p: {} for p in range(net.n_pores)}
+    for p, v, t in zip(net.corner_pore.tolist(), net.corner_disc.tolist(), meas.corner_angle.tolist()):
+        out[p][v] = out[p].get(v, 0.0) + t
+    return out
 
 
-def pressure_forces(net, xz, r, U, link_length=None):
+def pressure_forces(net, r, U, meas):
     """Force of the pore pressures U (Np,) [N/m] on every disc (N, 2) [N per m thickness] (eq 33).
 
     Summing eq 33 over the pores around disc a gives, per link a-b with unit vector u = (b - a)/R,
     F_a += r_a (U_right - U_left) perp(u), perp(u) = (-u_z, u_x), and the same for b with r_b.
     The outer face and closed faces have U = 0. No torque (pressure acts through the centre).
+    ``meas`` is the PoreMeasures of the current positions.
     """
-    F = np.zeros((net.n_discs, 2))
+    n = net.n_discs
+    F = np.zeros((n, 2))
     if len(net.links) == 0:
         return F
     Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
-    dU = Uo[net.link_pores[:, 1]] - Uo[net.link_pores[:, 0]]
     i, j = net.links[:, 0], net.links[:, 1]
-    d = xz[j] - xz[i]
-    R = np.hypot(d[:, 0], d[:, 1]) if link_length is None else link_length
-    s = dU / R
-    px, pz = -d[:, 1] * s, d[:, 0] * s
-    n = net.n_discs
-    F[:, 0] = np.bincount(i, r[i] * px, minlength=n) + np.bincount(j, r[j] * px, minlength=n)
-    F[:, 1] = np.bincount(i, r[i] * pz, minlength=n) + np.bincount(j, r[j] * pz, minlength=n)
+    s = (Uo[net.link_pores[:, 1]] - Uo[net.link_pores[:, 0]]) / meas.link_length
+    px, pz = -meas.link_vector[:, 1] * s, meas.link_vector[:, 0] * s
+    ri, rj = r[i], r[j]
+    F[:, 0] = np.bincount(i, ri * px, minlength=n) + np.bincount(j, rj * px, minlength=n)
+    F[:, 1] = np.bincount(i, ri * pz, minlength=n) + np.bincount(j, rj * pz, minlength=n)
     return F
 
 

@@ -69,13 +69,18 @@ class WaterBalance:
 
 @dataclass
 class FlowState:
-    """Per-step flows: throat q (Nt,), surface and side outflow and inflow per pore (Np,) [m^2/s]."""
+    """Flows of one water step: throat q (Nt,), and per pore (Np,) the surface and side outflow
+    and the inflow [m^2/s]; the conductances behind them (g = k A_ij / E_w per throat, g_b per pore
+    to the outside) and the capacities c = dW/dU = W^2 / (E_w A) [m^2 per N/m] of open pores."""
 
     throat_q: np.ndarray
     surface_q: np.ndarray
     side_q: np.ndarray
     inflow_q: np.ndarray
-    net_out: np.ndarray = field(default=None)
+    g: np.ndarray
+    g_b: np.ndarray
+    capacity: np.ndarray
+    net_out: np.ndarray = None
 
 
 def pressure(W, A, E_w):
@@ -130,33 +135,29 @@ class PoreWater:
         U = pressure(W, A, s.E_w)
         open_ = A > net.a_min
         i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
+        both = open_[i] & open_[j]
         k = np.where(link_contact[net.throat_link], s.k2, s.k1)  # eq 43
-        with np.errstate(divide="ignore", invalid="ignore"):
-            A_ij = W[i] * W[j] / (A[i] + A[j])  # eq 40 (the OCR's W' is W_i)
-        i_ij = (U[i] - U[j]) / s.E_w  # eq 39
-        q = np.where(open_[i] & open_[j], k * A_ij * i_ij, 0.0)  # eq 41
+        A_ij = W[i] * W[j] / np.where(both, A[i] + A[j], 1.0)  # eq 40 (the OCR's W' is W_i)
+        g = np.where(both, k * A_ij / s.E_w, 0.0)
+        q = g * (U[i] - U[j])  # eq 41 with i_ij = (U_i - U_j)/E_w (eq 39)
         surface, drained, bottom = self._boundary_masks()
-        q_s = np.where(surface & open_, s.k1 * W * U / s.E_w, 0.0)
-        q_d = np.where(drained & open_, s.k3 * W * U / s.E_w, 0.0)
-        q_in = np.where(bottom, s.q_w, 0.0)
-        return FlowState(q, q_s, q_d, q_in)
+        per_k = open_ * W / s.E_w  # outside at U = 0: A_ij -> W_i
+        g_s, g_d = s.k1 * surface * per_k, s.k3 * drained * per_k
+        q_s, q_d = g_s * U, g_d * U
+        q_in = s.q_w * bottom
+        capacity = np.where(open_, W**2 / (s.E_w * np.where(open_, A, 1.0)), np.inf)
+        return FlowState(q, q_s, q_d, q_in, g, g_s + g_d, capacity)
+
+    def _limit(self, fl):
+        n = self.net.n_pores
+        i, j = self.net.throat_conns[:, 0], self.net.throat_conns[:, 1]
+        g_sum = np.bincount(i, fl.g, minlength=n) + np.bincount(j, fl.g, minlength=n)
+        lam = np.max((2 * g_sum + fl.g_b) / fl.capacity, initial=0.0)
+        return np.inf if lam == 0 else 2.0 / lam
 
     def darcy_limit(self, A, link_contact):
         """Largest stable explicit water step [s] for the current state (Gershgorin bound)."""
-        s, net = self.settings, self.net
-        W = self.W
-        open_ = A > net.a_min
-        i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
-        k = np.where(link_contact[net.throat_link], s.k2, s.k1)
-        both = open_[i] & open_[j]
-        g = np.where(both, k * W[i] * W[j] / np.where(both, A[i] + A[j], 1.0), 0.0) / s.E_w
-        n = net.n_pores
-        g_sum = np.bincount(i, g, minlength=n) + np.bincount(j, g, minlength=n)
-        surface, drained, _ = self._boundary_masks()
-        g_b = (s.k1 * surface + s.k3 * drained) * W / s.E_w * open_
-        c = np.where(open_, W**2 / (s.E_w * np.where(open_, A, 1.0)), np.inf)
-        lam = np.max((2 * g_sum + g_b) / c, initial=0.0)
-        return np.inf if lam == 0 else 2.0 / lam
+        return self._limit(self.flows(A, link_contact))
 
     def advance(self, dt, A, link_contact):
         """Advance the water by dt [s] at void areas A (Np,) and link states (L,) (eq 42).
@@ -171,7 +172,8 @@ class PoreWater:
             A_used = 0.5 * (self.A_prev + A)
             self.A_prev = A
             A = A_used
-        limit = self.darcy_limit(A, link_contact)
+        fl = self.flows(A, link_contact)
+        limit = self._limit(fl)
         n_sub = 1
         if dt > limit:
             if not self.settings.substep:
@@ -180,18 +182,16 @@ class PoreWater:
                     f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or set substep")
             n_sub = int(np.ceil(dt / limit))
         h = dt / n_sub
-        for _ in range(n_sub):
-            fl = self._step(h, A, link_contact)
+        for sub in range(n_sub):
+            fl = self._step(h, fl if sub == 0 else self.flows(A, link_contact))
         return fl
 
-    def _step(self, h, A, link_contact):
-        fl = self.flows(A, link_contact)
-        if self.settings.smoothing and self.q_prev is not None:  # eq 46
+    def _step(self, h, fl):
+        if self.settings.smoothing:  # eq 46
             q_new = fl.throat_q
-            fl.throat_q = 0.5 * (self.q_prev + q_new)
+            if self.q_prev is not None:
+                fl.throat_q = 0.5 * (self.q_prev + q_new)
             self.q_prev = q_new
-        elif self.settings.smoothing:
-            self.q_prev = fl.throat_q
         net = self.net
         n = net.n_pores
         i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
@@ -230,10 +230,6 @@ class PoreWater:
         return counts
 
 
-def _vertex_signature(vertex_sets):
-    return [tuple(v.tolist()) for v in vertex_sets]
-
-
 def inherit_pressures(old_net, U_old, old_valid, new_net):
     """Pressures for the pores of ``new_net`` from those of ``old_net`` by rules (a)-(d) of §3.4(2).
 
@@ -242,24 +238,24 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.full(n_new, "", dtype=object)
-    old_sig = {sig: p for p, sig in enumerate(_vertex_signature(old_net.pore_vertices)) if old_valid[p]}
-    new_sig = _vertex_signature(new_net.pore_vertices)
-    for p, sig in enumerate(new_sig):  # (a) the same vertex set
-        q = old_sig.get(sig)
-        if q is not None:
-            U[p], rule[p] = U_old[q], "a"
+    # (a) the same vertex set: equal signatures (pore_geometry._mix64)
+    valid = np.flatnonzero(old_valid)
+    order = valid[np.argsort(old_net.pore_signature[valid], kind="stable")]
+    sorted_sig = old_net.pore_signature[order]
+    pos = np.minimum(np.searchsorted(sorted_sig, new_net.pore_signature), max(len(order) - 1, 0))
+    if len(order):
+        same = sorted_sig[pos] == new_net.pore_signature
+        U[same], rule[same] = U_old[order[pos[same]]], "a"
     todo = np.flatnonzero(np.isnan(U))
     if len(todo):  # (b) split or merge: old vertex set contains or is contained in the new one
         by_vertex = {}
-        for q, verts in enumerate(old_net.pore_vertices):
-            if old_valid[q]:
-                for v in verts:
-                    by_vertex.setdefault(int(v), []).append(q)
-        old_sets = [set(v.tolist()) for v in old_net.pore_vertices]
+        for q in valid:
+            for v in old_net.vertices_of(q).tolist():
+                by_vertex.setdefault(v, []).append(q)
         for p in todo:
-            mine = set(new_sig[p])
+            mine = set(new_net.vertices_of(p).tolist())
             cands = {q for v in mine for q in by_vertex.get(v, ())}
-            near = [q for q in cands if old_sets[q] <= mine or mine <= old_sets[q]]
+            near = [q for q in cands if _subset_or_superset(set(old_net.vertices_of(q).tolist()), mine)]
             if near:
                 U[p], rule[p] = float(np.mean(U_old[near])), "b"
     # (c) mean of assigned neighbours, the outer face at U = 0 for surface pores
@@ -282,3 +278,7 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
     U[left], rule[left] = 0.0, "d"
     counts = {k: int(np.sum(rule == k)) for k in "abcd"}
     return U, counts
+
+
+def _subset_or_superset(a, b):
+    return a <= b or b <= a

@@ -71,20 +71,32 @@ def test_areas_against_independent_walk():
     region = walk.sum()
     np.testing.assert_allclose(m.void_area.sum() + m.sector_area.sum(), region, rtol=1e-12)
     # discs whose every surrounding face is a pore lie wholly inside the region: 2 pi of angles
-    angles = pg.interior_angles(net, m)
     total = np.zeros(len(r))
-    for p, verts in enumerate(net.pore_vertices):
-        np.add.at(total, verts, angles[p])
+    for corners in pg.interior_angles(net, m).values():
+        for v, angle in corners.items():
+            total[v] += angle
     inner = np.isclose(total, 2 * np.pi, rtol=1e-9)
     assert inner.sum() > 50
     assert np.all(total <= 2 * np.pi + 1e-9)
+
+
+def test_measure_matches_triangles_after_motion():
+    """Per-step areas (walk + eq 29) equal the triangle reference, also after the discs moved
+    between rebuilds; link directions crossing the +-pi cut do not matter."""
+    rng = np.random.default_rng(4)
+    xz, r = random_discs(300, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    for _ in range(5):
+        xz = xz + 0.02 * r.mean() * rng.standard_normal(xz.shape)
+        m = pg.measure(net, xz, r)
+        np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
 
 
 def test_uniform_pressure_gives_zero_force_on_inner_discs():
     rng = np.random.default_rng(3)
     xz, r = random_discs(200, rng)
     net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
-    F = pg.pressure_forces(net, xz, r, np.full(net.n_pores, 123.0))
+    F = pg.pressure_forces(net, r, np.full(net.n_pores, 123.0), pg.measure(net, xz, r))
     outer_disc = np.zeros(len(r), bool)
     on_outer = (net.link_pores == pg.OUTER).any(axis=1)
     outer_disc[net.links[on_outer].ravel()] = True
@@ -99,7 +111,7 @@ def test_eq33_single_arc():
     r = np.ones(3)
     net = pg.build_pores(xz, r, l_m=5.0)
     U = 7.0
-    F = pg.pressure_forces(net, xz, r, [U])
+    F = pg.pressure_forces(net, r, [U], pg.measure(net, xz, r))
     np.testing.assert_allclose(F[0], [-U, -U], rtol=1e-12)  # eq 33 with alpha1 = 0, alpha2 = 90 deg
 
 
@@ -113,13 +125,13 @@ def test_linear_pressure_archimedes():
     rr = np.full(len(xz), r)
     net = pg.build_pores(xz, rr, l_m=0.1)
     U = G * pg.pore_centroids(net, xz)[:, 1]
-    F = pg.pressure_forces(net, xz, rr, U)
+    F = pg.pressure_forces(net, rr, U, pg.measure(net, xz, rr))
     centre = np.argmin(np.hypot(*(xz - xz.mean(axis=0)).T))
     np.testing.assert_allclose(F[centre], [0.0, -G * 2 * np.sqrt(3) * r**2], atol=1e-9)
     assert abs(F[centre, 1] / (-G * np.pi * r**2) - 1) < 0.11
     # any direction: gradient along x
     U = G * pg.pore_centroids(net, xz)[:, 0]
-    F = pg.pressure_forces(net, xz, rr, U)
+    F = pg.pressure_forces(net, rr, U, pg.measure(net, xz, rr))
     np.testing.assert_allclose(F[centre], [-G * 2 * np.sqrt(3) * r**2, 0.0], atol=1e-9)
 
 
@@ -155,7 +167,7 @@ def test_degenerate_inputs_give_no_pores(xz):
     net = pg.build_pores(xz, r, l_m=0.1)
     m = pg.measure(net, xz, r)
     assert net.n_pores == 0 and m.void_area.size == 0
-    assert np.all(pg.pressure_forces(net, xz, r, np.zeros(0)) == 0)
+    assert np.all(pg.pressure_forces(net, r, np.zeros(0), m) == 0)
 
 
 def test_rattler_without_links_is_subtracted_not_crashing():
@@ -166,7 +178,7 @@ def test_rattler_without_links_is_subtracted_not_crashing():
     assert net.n_pores == 1
     assert not np.isin(3, net.links).any()
     np.testing.assert_allclose(m.void_area[0], np.sqrt(3) - np.pi / 2 - np.pi * 0.01, rtol=1e-12)
-    F = pg.pressure_forces(net, xz, r, [10.0])
+    F = pg.pressure_forces(net, r, [10.0], pg.measure(net, xz, r))
     assert np.all(np.isfinite(F)) and np.all(F[3] == 0)
 
 

@@ -1,0 +1,78 @@
+"""Cost of the pore core: rebuild (links, pores, re-meshing) and one water step (areas + flow + forces).
+
+    /usr/bin/python3 benchmarks/pores.py --json out/bench-pores.json [--sizes 239 2000 10000]
+
+Packings are jittered polydisperse hexagonal packings (packing.layouts.random_discs) with the
+quick-sand constants; a small random displacement between steps keeps the work honest.
+Writes {"results": [{"n_discs": N, "rebuild_ms": x, "step_ms": y, ...}, ...]}.
+"""
+import argparse
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from engines import pore_geometry as pg  # noqa: E402
+from engines.pore_water import PoreWater, WaterSettings  # noqa: E402
+from packing.layouts import random_discs  # noqa: E402
+
+
+def best_of(fn, repeat):
+    """Smallest wall time of ``repeat`` calls [s] (the least disturbed by the machine)."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def bench(n, rng, repeat_step=50, repeat_rebuild=5):
+    r_mean = 0.45e-3
+    xz, r = random_discs(n, rng, r_mean=r_mean)
+    l_m = 1.3e-4
+    walls = np.where(xz[:, 1] < xz[:, 1].min() + r_mean, pg.WALL_BOTTOM, pg.WALL_NONE)
+    settings = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4)
+    net = pg.build_pores(xz, r, l_m=l_m, walls=walls)
+    m = pg.measure(net, xz, r)
+    water = PoreWater(net, m.void_area, settings)
+
+    def step():
+        m = pg.measure(net, xz, r)
+        water.advance(1e-6, m.void_area, m.link_contact)
+        return pg.pressure_forces(net, r, water.pressure(m.void_area), m)
+
+    def rebuild():
+        new = pg.build_pores(xz, r, l_m=l_m, walls=walls)
+        A_old = pg.measure(water.net, xz, r).void_area
+        water.remesh(new, pg.measure(new, xz, r).void_area, A_old)
+
+    step()
+    t_step = best_of(step, repeat_step)
+    t_rebuild = best_of(rebuild, repeat_rebuild)
+    return {"n_discs": int(len(r)), "n_pores": int(net.n_pores), "n_links": int(len(net.links)),
+            "rebuild_ms": 1e3 * t_rebuild, "step_ms": 1e3 * t_step}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--json", required=True, help="output JSON path")
+    ap.add_argument("--sizes", type=int, nargs="+", default=[239, 2000, 10000])
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    rng = np.random.default_rng(args.seed)
+    results = [bench(n, rng) for n in args.sizes]
+    print(f"{'discs':>8} {'pores':>8} {'links':>8} {'rebuild ms':>11} {'step ms':>9}")
+    for res in results:
+        print(f"{res['n_discs']:8d} {res['n_pores']:8d} {res['n_links']:8d} {res['rebuild_ms']:11.2f} {res['step_ms']:9.3f}")
+    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+    with open(args.json, "w") as f:
+        json.dump({"results": results}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
