@@ -173,7 +173,8 @@ def transmission_weights(void_ratio_below, settings):
     e_m2, e_m1, e_i, e_p1, e_p2 = (e_pad[k:k + n] for k in range(5))
     s = settings
     slope = (s.p_max_ratio - s.p_min_ratio) / (1 / s.e_min - 1 / s.e_max)
-    centre = slope * (1 / (2 * e_i) - 1 / (e_m1 + e_p1)) + (s.p_max_ratio + s.p_min_ratio) / 2  # eq 6
+    mid = (s.p_max_ratio + s.p_min_ratio) / 2
+    centre = slope * (1 / (2 * e_i) - 1 / (e_m1 + e_p1)) + mid  # eq 6: P_i / P
     rest = 1 - centre
     left, right = e_p1 / (e_m1 + e_p1), e_m1 / (e_m1 + e_p1)  # eq 7: s_± ∝ 1/e_{i±1}
     f_left, g_left = _side_shares(e_m1, e_m2, s.alpha)
@@ -219,11 +220,11 @@ def load_balance_error(load):
     return float(np.max(np.abs(totals - totals[0])) / totals[0])
 
 
-def compressed_void_ratio(initial_void_ratio, stress, curves):
-    """Void ratio after one-dimensional compression from p0 to p0 + `stress` (Fig. 11).
+def void_ratio_reduction(initial_void_ratio, stress, curves):
+    """Decrease of void ratio e0 − e on compression from p0 to p0 + `stress` (Fig. 11) [-].
 
-    Bilinear interpolation of the table in (e0, log p). `stress` [Pa] >= 0, same shape as
-    `initial_void_ratio`; both must stay inside the table.
+    Bilinear interpolation of the table's e0 − e in (e0, log p). `stress` [Pa] >= 0, same shape
+    as `initial_void_ratio`; both must stay inside the table.
     """
     e0 = np.asarray(initial_void_ratio, dtype=float)
     pressure = curves.pressure[0] + np.asarray(stress, dtype=float)
@@ -235,7 +236,8 @@ def compressed_void_ratio(initial_void_ratio, stress, curves):
     require(np.all((pressure >= curves.pressure[0]) & (pressure <= curves.pressure[-1])),
             "stress", f"range [{np.min(stress)}, {np.max(stress)}] Pa",
             f"within [0, {curves.pressure[-1] - curves.pressure[0]}] Pa (the curves' range)")
-    table = RegularGridInterpolator((levels, np.log(curves.pressure)), curves.void_ratio)
+    reduction = levels[:, None] - curves.void_ratio
+    table = RegularGridInterpolator((levels, np.log(curves.pressure)), reduction)
     return table(np.stack([e0.ravel(), np.log(pressure).ravel()], axis=-1)).reshape(e0.shape)
 
 
@@ -249,7 +251,7 @@ def analyse_layer(void_ratio, element_size, surface_stress, settings):
             "a positive length in m")
     e0 = np.asarray(void_ratio, dtype=float)
     stress = transmit_load(e0, surface_stress, settings)
-    e = compressed_void_ratio(e0, stress, settings.curves)
-    compression = element_size * (e0 - e) / (1 + e0)
-    return LayerResponse(stress, e, compression, compression.sum(axis=0),
+    reduction = void_ratio_reduction(e0, stress, settings.curves)
+    compression = element_size * reduction / (1 + e0)
+    return LayerResponse(stress, e0 - reduction, compression, compression.sum(axis=0),
                          load_balance_error(stress))

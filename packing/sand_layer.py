@@ -17,7 +17,9 @@ Default sand (the paper's Fig. 1 values are not printed)
     authors measured for their sand) and ≈ 6 % of elements fall outside [0.3, 3.0] (the paper:
     "about 5.5 %"). The curve then has D10 ≈ 0.19 mm, D60 ≈ 0.47 mm, Uc ≈ 2.5: a poorly graded
     medium sand. The element void ratio is very sensitive to σ (σ = 0.55 puts 24 % of elements
-    below e = 0.3), so change D50 and σ together.
+    below e = 0.3), so change D50 and σ together. The calibration is for the paper's discrete
+    draws: continuous draws reach the coarse tail, whose few big grains fill some elements
+    (≈ 16 % of elements then fall below e = 0.3 and are redrawn).
 
 Grain shape
     Spheres: the solid volume of a grain of diameter D is πD³/6 (the paper weighs grains as
@@ -27,6 +29,9 @@ Drawing grain sizes
     "discrete" (the paper's): two-digit uniform random numbers 00…99 select one of the 100
     levels R = 0.005, 0.015, …, 0.995 of the number-based cumulative curve, and the grain has
     the diameter D(R). "continuous": D is drawn from the number-based log-normal itself.
+    The 100 levels stop at D(0.995) = 0.64 mm, above which eq 1 puts 21 % of the mass; so by
+    mass the drawn sand is a little finer than eq 1 (D³-weighted median 0.38 mm instead of
+    0.40 mm; see the script's Fig. 1).
 
 Truncation
     The paper drops the ≈ 5.5 % of element void ratios below 0.3 or above 3.0 and draws the
