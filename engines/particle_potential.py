@@ -135,6 +135,10 @@ class Model:
         if np.shape(self.reference) != (n, 2) or np.shape(self.kinds) != (n,) or np.shape(self.on_axis) != (n,):
             raise ValueError(f"reference must be (N, 2) and kinds, on_axis (N,), got shapes "
                              f"{np.shape(self.reference)}, {np.shape(self.kinds)}, {np.shape(self.on_axis)}")
+        gap, _ = cKDTree(self.reference).query(self.reference, k=2)
+        if n > 1 and np.min(gap[:, 1]) <= 0:
+            raise ValueError(f"reference: particle spacing must be > 0, got {np.min(gap[:, 1])!r} "
+                             f"(particle {int(np.argmin(gap[:, 1]))} coincides with another)")
 
     @property
     def free(self):
@@ -171,15 +175,18 @@ def _pair_terms(positions, pairs, pot):
     return l, (pairs.weight * pair_force(l, pot) / l)[:, None] * d
 
 
-def total_energy(positions, forces, free, pairs, pot):
+def total_energy(positions, forces, free, pairs, pot, origin=0.0):
     """Total potential energy U of eq 6 [J/m].
 
     Args:
         positions: (N, 2) [m]; forces: (N, 2) loads plus weights M g [N/m], doing work only on the
-        free coordinates; free: (N, 2) mask; pairs: `Pairs`; pot: `Potential`.
+        free coordinates; free: (N, 2) mask; pairs: `Pairs`; pot: `Potential`;
+        origin: positions (N, 2) [m] from which the work of the forces is counted. It shifts U by
+            a constant only; measuring from a nearby state avoids the round-off of F·x with large x.
     """
     l = np.linalg.norm(positions[pairs.j] - positions[pairs.i], axis=1)
-    return np.sum(pairs.weight * pair_energy(l, pot)) - np.sum((forces * positions)[free])  # eq 6
+    work = np.sum((forces * (positions - origin))[free])
+    return np.sum(pairs.weight * pair_energy(l, pot)) - work  # eq 6
 
 
 def energy_gradient(positions, forces, pairs, pot):
@@ -212,14 +219,17 @@ class SolverSettings:
     Attributes:
         max_step: trust box [m]: no coordinate may move more than this in one increment. A
             solution on the box edge means the nearby minimum was lost: reported as yield.
-        gtol: largest allowed |∂U/∂X| at a converged state, relative to A_m / 1 m [-].
+            Choose increments whose elastic moves stay well below it (a third or less), or
+            the box, not the model, decides the yield point.
+        gtol: largest allowed |∂U/∂X| at a converged state, relative to A_m / 1 m [-]. The
+            minimiser aims at gtol / 100; round-off in U may stop it anywhere below gtol.
         maxiter: iteration limit of the minimiser per increment.
         softening_ratio: yield when the tangent slope dσ/dε of an increment falls below this
             fraction of the first increment's slope (slope collapse or softening) [-].
     """
 
-    max_step: float = 0.1
-    gtol: float = 1e-6
+    max_step: float = 0.05
+    gtol: float = 1e-5
     maxiter: int = 5000
     softening_ratio: float = 0.05
 
@@ -269,13 +279,13 @@ def solve_increment(model, start, forces, prescribed, settings):
 
     def objective(x):
         positions[free] = x
-        energy = total_energy(positions, forces, free, pairs, pot)
+        energy = total_energy(positions, forces, free, pairs, pot, origin=start)
         return energy / pot.A_m, energy_gradient(positions, forces, pairs, pot)[free] / scale
 
     x0 = start[free]
     bounds = np.column_stack([x0 - settings.max_step, x0 + settings.max_step])
     res = minimize(objective, x0, jac=True, method="L-BFGS-B", bounds=bounds,
-                   options=dict(gtol=settings.gtol, ftol=0.0, maxiter=settings.maxiter, maxcor=30))
+                   options=dict(gtol=settings.gtol / 100, ftol=0.0, maxiter=settings.maxiter, maxcor=30))
     positions[free] = res.x
     grad = energy_gradient(positions, forces, pairs, pot)[free]
     max_move = float(np.max(np.abs(res.x - x0), initial=0.0))
@@ -318,6 +328,11 @@ class Path:
     stress: np.ndarray
     yielded: bool
     reason: str
+
+    def last_stable(self):
+        """Index of the last increment that converged and is not yield (None if there is none)."""
+        return next((k for k in reversed(range(len(self.increments)))
+                     if self.increments[k].converged and not self.increments[k].yielded), None)
 
     def peak(self):
         """(strain, stress) of the converged increment with the largest |stress|; for a yielded

@@ -25,15 +25,19 @@ import argparse
 import json
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from engines.particle_potential import (  # noqa: E402
-    Kind, Model, Potential, SolverSettings, Step, TONNE_FORCE, pa_to_tf_m2, pair_stiffness_at_well,
-    run_path, tf_m2_to_pa)
+    Kind, Model, Potential, SolverSettings, Step, TONNE_FORCE, find_pairs, pa_to_tf_m2,
+    pair_stiffness_at_well, run_path, tf_m2_to_pa)
 
 SPACING = 1.0      # m
 HALF_COLUMNS = 3   # columns x = 0..3, axis at x = 3
@@ -129,55 +133,180 @@ def run_all(alpha, C=2.0, Am=1.0, load_max=22.0, dload=0.25, disp_max=0.9, ddisp
             search_max=80.0, paper_literal=False, settings=SolverSettings()):
     """All §4 runs for one parameter set. Loads in t/m², displacements in m, A_m in tf·m/m.
 
-    Returns a dict of `Path`s and specimens: 'load' (top load to load_max), 'compression' and
-    'tension' (load control until yield or ±search_max), 'displacement' (forced to disp_max).
+    Returns a dict: the specimens 'loaded' and 'pushed', and the `Path`s 'load' (top load to
+    load_max), 'compression' and 'tension' (load control until yield, at most ±search_max),
+    'collapse' (compression continued through the first snaps with a 2× larger trust box until no
+    equilibrium is found: post-yield, for comparison with the paper's 26 t/m² only; a larger box
+    lets the minimiser's first step leave the current well, so this number is box-dependent) and 'displacement' (forced top
+    displacement to disp_max).
     """
     pot = Potential(A_m=Am * TONNE_FORCE, alpha=alpha, C=C, DL=DL)
     loaded = build_specimen(pot, moving_top=False, paper_literal=paper_literal)
     pushed = build_specimen(pot, moving_top=True, paper_literal=paper_literal)
+    wide = replace(settings, max_step=2 * settings.max_step)
     return {
         "loaded": loaded,
         "pushed": pushed,
         "load": load_path(loaded, tf_m2_to_pa(ramp(load_max, dload)), settings),
         "compression": load_path(loaded, tf_m2_to_pa(ramp(search_max, dload)), settings),
         "tension": load_path(loaded, tf_m2_to_pa(ramp(-search_max, dload)), settings),
+        "collapse": load_path(loaded, tf_m2_to_pa(ramp(search_max, dload)), wide),
         "displacement": displacement_path(pushed, ramp(disp_max, ddisp), settings),
     }
 
 
-def summarise(runs, alpha, C, Am, load_max, paper_literal):
-    """Numbers of the run in t/m² (JSON-ready)."""
-    comp, load = runs["compression"], runs["load"]
-    e_first = pa_to_tf_m2(comp.stress[0] / comp.strain[0])
-    peak = comp.peak()
-    yielded = comp.yielded
-    k = pair_stiffness_at_well(SPACING, runs["loaded"].model.potential)
-    spec = runs["loaded"]
-    final = load.increments[-1]
-    applied = -final.forces[spec.top, 1].sum()
-    tension_peak = runs["tension"].peak()
-    disp = runs["displacement"]
+def _yield_point(path):
+    """(stress t/m², strain) at yield, or (None, None) when the path did not yield."""
+    if not path.yielded:
+        return None, None
+    strain, stress = path.peak()
+    return float(pa_to_tf_m2(stress)), strain
+
+
+def summarise(runs, params):
+    """JSON-ready numbers in t/m² (stresses), t per m depth (forces) and - (strains)."""
+    comp, load, disp = runs["compression"], runs["load"], runs["displacement"]
+    loaded, pushed = runs["loaded"], runs["pushed"]
+    k = pair_stiffness_at_well(SPACING, loaded.model.potential)
+    yield_stress, yield_strain = _yield_point(comp)
+    tension_stress, tension_strain = _yield_point(runs["tension"])
+    collapse_stress, collapse_strain = _yield_point(runs["collapse"])
+    iload, idisp = load.last_stable(), disp.last_stable()
+    final = load.increments[iload]
+    applied = -final.forces[loaded.top, 1].sum()
     return {
-        "A_m_tf_m": Am, "alpha": alpha, "C": C, "DL_m": DL, "paper_literal": paper_literal,
-        "E_apparent_t_m2": float(e_first),
-        "E_secant_at_load_max_t_m2": float(pa_to_tf_m2(load.stress[-1] / load.strain[-1])),
+        **params,
+        "E_apparent_t_m2": float(pa_to_tf_m2(comp.stress[0] / comp.strain[0])),
+        "E_apparent_displacement_control_t_m2": float(pa_to_tf_m2(disp.stress[0] / disp.strain[0])),
+        "E_secant_at_load_t_m2": float(pa_to_tf_m2(load.stress[iload] / load.strain[iload])),
+        "pair_stiffness_t_per_m": float(k / TONNE_FORCE),
         "E_lattice_plane_stress_t_m2": float(pa_to_tf_m2(1.5 * k)),
         "E_lattice_uniaxial_strain_t_m2": float(pa_to_tf_m2(2.0 * k)),
-        "pair_stiffness_t_per_m": float(k / TONNE_FORCE),
-        "yield_stress_t_m2": float(pa_to_tf_m2(peak[1])) if yielded else None,
-        "yield_strain": peak[0] if yielded else None,
-        "compression_reason": comp.reason,
-        "compression_max_stress_t_m2": float(pa_to_tf_m2(peak[1])),
-        "tension_yield_stress_t_m2": float(pa_to_tf_m2(tension_peak[1])) if runs["tension"].yielded else None,
-        "tension_yield_strain": tension_peak[0] if runs["tension"].yielded else None,
-        "tension_reason": runs["tension"].reason,
-        "load_max_t_m2": load_max,
-        "strain_at_load_max": float(load.strain[-1]),
-        "bottom_reaction_at_load_max_t_m2": float(pa_to_tf_m2(bottom_stress(spec, final))),
+        "yield_stress_t_m2": yield_stress,
+        "yield_strain": yield_strain,
+        "yield_reason": comp.reason,
+        "tension_yield_stress_t_m2": tension_stress,
+        "tension_yield_strain": tension_strain,
+        "collapse_stress_t_m2": collapse_stress,
+        "collapse_strain": collapse_strain,
+        "load_reached_t_m2": float(pa_to_tf_m2(load.stress[iload])),
+        "strain_at_load": float(load.strain[iload]),
+        "bottom_reaction_at_load_t_m2": float(pa_to_tf_m2(bottom_stress(loaded, final))),
         "reaction_balance_error_t": float((final.reactions[:, 1].sum() - applied) / TONNE_FORCE),
         "reaction_balance_relative": float(abs(final.reactions[:, 1].sum() - applied) / applied),
-        "forced_displacement_m": float(top_settlement(runs["pushed"], disp.increments[-1].positions)),
-        "top_reaction_at_disp_max_t_m2": float(pa_to_tf_m2(disp.stress[-1])),
-        "bottom_reaction_at_disp_max_t_m2": float(pa_to_tf_m2(bottom_stress(runs["pushed"], disp.increments[-1]))),
+        "displacement_reached_m": float(top_settlement(pushed, disp.increments[idisp].positions)),
+        "top_reaction_at_displacement_t_m2": float(pa_to_tf_m2(disp.stress[idisp])),
+        "bottom_reaction_at_displacement_t_m2": float(pa_to_tf_m2(bottom_stress(pushed, disp.increments[idisp]))),
         "displacement_reason": disp.reason,
     }
+
+
+def plot_stress_strain(runs, summary, path):
+    """Fig. 8: stress–strain curves (compression and tension by load, compression by displacement)."""
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    for key, label in [("compression", "top load, compression"), ("tension", "top load, tension"),
+                       ("collapse", "top load, through snaps (post-yield)"),
+                       ("displacement", "forced top displacement")]:
+        p = runs[key]
+        ax.plot(100 * np.r_[0, p.strain], np.r_[0, pa_to_tf_m2(p.stress)], marker=".", ms=2, label=label,
+                ls=":" if key == "collapse" else "-")
+    if summary["yield_stress_t_m2"] is not None:
+        ax.plot(100 * summary["yield_strain"], summary["yield_stress_t_m2"], "rx", ms=10, label="yield")
+    eps = np.linspace(-0.1, 0.1, 3)
+    ax.plot(100 * eps, summary["E_apparent_t_m2"] * eps, "k--", lw=0.8,
+            label=f"E = {summary['E_apparent_t_m2']:.0f} t/m²")
+    ax.set(xlabel="strain (mean top settlement / 12 m) [%]", ylabel="stress [t/m²] (compression > 0)",
+           title=f"A_m = {summary['A_m_tf_m']}, α = {summary['alpha']}, C = {summary['C']}")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_top_vs_bottom(runs, path):
+    """Fig. 9: applied or top stress against the mean bottom reaction."""
+    fig, ax = plt.subplots(figsize=(4.5, 4.5))
+    for key, spec_key, label in [("compression", "loaded", "top load"),
+                                 ("displacement", "pushed", "forced displacement")]:
+        p, spec = runs[key], runs[spec_key]
+        ok = [k for k, inc in enumerate(p.increments) if inc.converged]
+        bottom = [bottom_stress(spec, p.increments[k]) for k in ok]
+        ax.plot(pa_to_tf_m2(p.stress[ok]), pa_to_tf_m2(np.array(bottom)), "o", ms=3, label=label)
+    top = ax.get_xlim()
+    ax.plot(top, top, "k--", lw=0.8, label="45°")
+    ax.set(xlabel="top stress [t/m²]", ylabel="bottom reaction [t/m²]", aspect="equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_deformed(spec, inc, title, path):
+    """Fig. 6–7: deformed lattice (mirrored to the full width) with bottom and top reactions
+    drawn as bars in t/m² (reaction over tributary width)."""
+    ref, pos = spec.model.reference, inc.positions
+    axis_x = HALF_COLUMNS * SPACING
+    pairs = find_pairs(ref, spec.model)
+    fig, ax = plt.subplots(figsize=(5, 8))
+    for sign in (1, -1):
+        mirror = lambda p: np.column_stack([axis_x + sign * (p[:, 0] - axis_x), p[:, 1]])
+        r, q = mirror(ref), mirror(pos)
+        ax.plot(r[:, 0], r[:, 1], "o", color="0.8", ms=3)
+        ax.plot(*np.stack([q[pairs.i], q[pairs.j]]).transpose(2, 0, 1), color="C0", lw=0.5)
+        ax.plot(q[:, 0], q[:, 1], "o", color="C0", ms=3)
+        for rows, out in [(spec.bottom, -1), (spec.top, 1)]:
+            stress = pa_to_tf_m2(-out * inc.reactions[rows, 1] / spec.top_width)  # compression > 0
+            for (x, z), s in zip(q[rows], stress):
+                if s != 0:
+                    ax.plot([x, x], [z + out * 0.2, z + out * (0.2 + s / 40)], color="C3", lw=3)
+                    if sign == 1:
+                        ax.annotate(f"{s:.1f}", (x, z + out * (0.45 + s / 40)), ha="center",
+                                    va="center", fontsize=6, color="C3")
+    ax.set(aspect="equal", xlabel="x [m]", ylabel="z [m]", title=title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--alpha", type=float, required=True, help="potential parameter α [-]")
+    ap.add_argument("--C", type=float, default=2.0, help="potential exponent C [-]")
+    ap.add_argument("--Am", type=float, default=1.0, help="potential amplitude A_m [tf·m per m depth]")
+    ap.add_argument("--load-max", type=float, default=22.0, help="top load of Fig. 6 [t/m²]")
+    ap.add_argument("--dload", type=float, default=0.25, help="load increment [t/m²]")
+    ap.add_argument("--disp-max", type=float, default=0.9, help="forced top displacement of Fig. 7 [m]")
+    ap.add_argument("--ddisp", type=float, default=0.01, help="displacement increment [m]")
+    ap.add_argument("--paper-literal", action="store_true",
+                    help="full-weight axis pairs and σ × 1 m on every top particle (see module doc)")
+    ap.add_argument("--out", required=True, help="output directory")
+    return ap.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    os.makedirs(args.out, exist_ok=True)
+    runs = run_all(args.alpha, C=args.C, Am=args.Am, load_max=args.load_max, dload=args.dload,
+                   disp_max=args.disp_max, ddisp=args.ddisp, paper_literal=args.paper_literal)
+    params = {"A_m_tf_m": args.Am, "alpha": args.alpha, "C": args.C, "DL_m": DL,
+              "spacing_m": SPACING, "height_m": HEIGHT, "half_width_m": runs["loaded"].half_width,
+              "dload_t_m2": args.dload, "ddisp_m": args.ddisp, "paper_literal": args.paper_literal,
+              "trust_box_m": SolverSettings().max_step}
+    summary = summarise(runs, params)
+    with open(os.path.join(args.out, "summary.json"), "w") as fh:
+        json.dump(summary, fh, indent=2)
+    plot_stress_strain(runs, summary, os.path.join(args.out, "fig8_stress_strain.png"))
+    plot_top_vs_bottom(runs, os.path.join(args.out, "fig9_top_vs_bottom.png"))
+    load, disp = runs["load"], runs["displacement"]
+    plot_deformed(runs["loaded"], load.increments[load.last_stable()],
+                  f"top load {summary['load_reached_t_m2']:.1f} t/m²", os.path.join(args.out, "fig6_top_load.png"))
+    plot_deformed(runs["pushed"], disp.increments[disp.last_stable()],
+                  f"forced top displacement {100 * summary['displacement_reached_m']:.0f} cm",
+                  os.path.join(args.out, "fig7_forced_displacement.png"))
+    print(json.dumps(summary, indent=2))
+
+
+if __name__ == "__main__":
+    main()
