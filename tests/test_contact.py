@@ -1,0 +1,124 @@
+"""Contact law (eq 1-13, 26-27) and velocity adjustment at separation (eq 18-24), NumPy path."""
+import numpy as np
+import pytest
+
+from engines.contact import ContactLaw, ContactSettings, SeparationEvent, critical_time_step, separation_adjustment
+
+
+def _press(spring, path, kn=1e6, f_max=2.0, eps_m=0.0):
+    """Disc 0 (mobile, r = 1 mm) moved along x into disc 1 (fixed) by the overlaps in ``path``;
+    returns the normal force on disc 1 at each step (compression > 0)."""
+    r = np.array([1e-3, 1e-3])
+    law = ContactLaw(ContactSettings(spring=spring, kn=kn, eta_n=0.0, ks=0.0, eta_s=0.0, f_max=f_max, eps_m=eps_m),
+                     r, mobile=np.array([True, False]))
+    x_prev, forces = None, []
+    for overlap in path:
+        xz = np.array([[-(2e-3 + eps_m - overlap), 0.0], [0.0, 0.0]])
+        du = np.zeros_like(xz) if x_prev is None else xz - x_prev
+        F, M, _ = law.forces(xz, du, np.zeros(2), 1e-6)
+        forces.append(F[1, 0])
+        x_prev = xz
+    return np.array(forces)
+
+
+def _load_unload(peak=4e-6, n=400):
+    up = np.linspace(0, peak, n)
+    return np.concatenate([up, up[::-1]]), up
+
+
+def test_linear_spring_is_kn_times_overlap():
+    path, _ = _load_unload()
+    np.testing.assert_allclose(_press("a", path), 1e6 * path, rtol=1e-9, atol=1e-12)
+
+
+def test_spring_c_plateau_and_same_path_on_unloading():
+    path, up = _load_unload()
+    f = _press("c", path)
+    np.testing.assert_allclose(f, np.minimum(1e6 * path, 2.0), rtol=1e-9, atol=1e-12)
+    assert f.max() == pytest.approx(2.0)
+    np.testing.assert_allclose(f[: len(up)], f[len(up):][::-1], atol=1e-9)  # retraces
+
+
+def test_spring_d_plateau_and_residual_overlap():
+    path, up = _load_unload()
+    f = _press("d", path)
+    assert f.max() == pytest.approx(2.0)
+    # unloading from the cap follows kn: zero force once the overlap has dropped by f_max/kn
+    residual = path.max() - 2.0 / 1e6
+    unload = path[len(up):]
+    np.testing.assert_allclose(f[len(up):], np.maximum(2.0 - 1e6 * (path.max() - unload), 0), atol=1e-9)
+    assert np.all(f[len(up):][unload < residual - 1e-12] == 0)  # still overlapping, no force
+    # c and d differ only after the cap was reached
+    np.testing.assert_allclose(_press("c", up[:150]), _press("d", up[:150]), atol=1e-12)
+
+
+def test_eps_m_lets_force_act_across_a_gap():
+    path = np.linspace(0, 1e-6, 50)
+    f = _press("b", path, eps_m=5e-6)  # overlap counted from r_i + r_j + eps_m
+    np.testing.assert_allclose(f, 1e6 * path, rtol=1e-9, atol=1e-12)
+
+
+def test_coulomb_and_action_reaction():
+    """Tangential sliding is capped at mu e_n (eq 11); forces are equal and opposite and the
+    moments are -r f_s on both discs (eq 13)."""
+    r = np.array([1e-3, 2e-3])
+    s = ContactSettings(spring="a", kn=1e6, eta_n=0.0, ks=1e8, eta_s=0.0, mu=0.5)
+    law = ContactLaw(s, r, mobile=np.array([True, True]))
+    xz = np.array([[0.0, 0.0], [3e-3 - 1e-6, 0.0]])  # overlap 1 um along x
+    law.forces(xz, np.zeros((2, 2)), np.zeros(2), 1e-6)
+    du = np.array([[0.0, 5e-8], [0.0, 0.0]])  # disc 0 slides up: ks du = 5 N > mu e_n
+    F, M, _ = law.forces(xz + du, du, np.zeros(2), 1e-6)
+    np.testing.assert_allclose(F[0], -F[1], atol=1e-15)
+    d = (xz + du)[1] - (xz + du)[0]
+    n = d / np.hypot(*d)
+    t = np.array([-n[1], n[0]])
+    e_n = 1e6 * 1e-6  # eq 3a: the sliding increment is tangential, e_n is unchanged
+    assert -F[0] @ n == pytest.approx(e_n, rel=1e-5)
+    assert abs(F[0] @ t) == pytest.approx(0.5 * e_n, rel=1e-5)  # capped at mu e_n
+    np.testing.assert_allclose(M / r, M[0] / r[0])  # both -r f_s
+
+
+def test_no_tension_and_release():
+    path = np.concatenate([np.linspace(0, 2e-6, 50), np.linspace(2e-6, -1e-6, 80)])
+    f = _press("a", path)
+    assert np.all(f >= -1e-12) and np.all(f[path < 0] == 0)
+
+
+def test_critical_time_step_eq52():
+    assert critical_time_step(np.array([4.0, 1.0]), 1e6) == pytest.approx(2e-3)
+
+
+def test_separation_pattern_a_restitution():
+    """A free disc leaving a wall: afterwards -Vn''/Vn = e exactly (eq 19, 22-23)."""
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=2.0)  # it hit the wall at 2 m/s
+    vel = np.array([[-1.5, 0.3], [0.0, 0.0]])  # leaving at 1.5 m/s, tangential 0.3 kept
+    fix = separation_adjustment([ev], np.array([0, 5]), vel, np.array([1.0, np.inf]), np.array([True, False]), 0.001)
+    v = fix[0]
+    assert -(v[0] - 0.0) / 2.0 == pytest.approx(0.001 * -1 * -1)  # -Vn''_ij / Vn_ij = e
+    assert v[1] == 0.3
+
+
+def test_separation_pattern_d_conserves_momentum():
+    ev = SeparationEvent(0, 1, np.array([0.0, 1.0]), vn_collision=1.0)
+    vel = np.array([[0.1, -0.8], [0.0, 0.6]])
+    m = np.array([2.0, 3.0])
+    fix = separation_adjustment([ev], np.array([0, 0]), vel, m, np.array([True, True]), 0.01)
+    p_before = m @ vel
+    p_after = m[0] * fix[0] + m[1] * fix[1]
+    np.testing.assert_allclose(p_after, p_before, atol=1e-12)
+    vn_rel = fix[0] @ [0, 1] - fix[1] @ [0, 1]  # approach velocity after
+    assert vn_rel == pytest.approx(-0.01 * 1.0)
+
+
+def test_slow_separation_is_not_adjusted():
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=2.0)
+    vel = np.array([[-0.001, 0.0], [0.0, 0.0]])  # already slower than e Vn
+    fix = separation_adjustment([ev], np.array([0, 5]), vel, np.array([1.0, np.inf]), np.array([True, False]), 0.001)
+    np.testing.assert_allclose(fix[0], vel[0])
+
+
+@pytest.mark.parametrize("kw,field", [(dict(spring="e"), "spring"), (dict(kn=0.0), "kn"), (dict(mu=-1.0), "mu"),
+                                      (dict(eps_m=-1e-4), "eps_m"), (dict(f_max=0.0), "f_max")])
+def test_bad_contact_settings(kw, field):
+    with pytest.raises(ValueError, match=field):
+        ContactSettings(**kw)

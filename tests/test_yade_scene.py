@@ -1,0 +1,96 @@
+"""The YADE path on the quick-sand scene: rest, inflow, water balance, dry scenes, outputs."""
+import json
+import os
+
+import numpy as np
+import pytest
+import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
+
+from engines import pore_water
+from engines import scene as scenes
+from engines.pore_dem import PoreDEM
+from engines.yade_coupling import YadeCoupling, simulate
+from engines.yade_run import run_scene
+from packing.deposition import cut_and_resettle, deposit, scene_packing
+
+
+@pytest.fixture(scope="module")
+def packing():
+    return scene_packing(scenes.preset("quicksand_case1"))
+
+
+def test_bodies_have_per_unit_thickness_mass(packing):
+    from yade import O
+    sc = scenes.preset("quicksand_case1")
+    YadeCoupling(sc, packing)
+    i = int(np.flatnonzero(packing.mobile)[0])
+    m = sc.material.rho * packing.density_factor[i] * np.pi * packing.r[i] ** 2
+    assert O.bodies[i].state.mass == pytest.approx(m, rel=1e-12)
+    assert O.bodies[i].state.inertia[1] == pytest.approx(0.5 * m * packing.r[i] ** 2, rel=1e-12)
+
+
+def test_without_inflow_the_deposit_stays_at_rest(packing):
+    sc = scenes.preset("quicksand_case1", {"water": {"q_w": 0.0}})
+    traj = simulate(sc, packing, 3000, 1000)
+    t, xz, U, water, err = traj.arrays()
+    # the denser top discs (marked after deposition) settle by ~1e-3 r in the first ms, then stop;
+    # with inflow the same discs move by ~0.35 r in this time (next test)
+    moved = np.abs(xz[-1] - packing.xz).max() / packing.r.mean()
+    creep = np.abs(xz[-1] - xz[-2]).max() / packing.r.mean()
+    assert moved < 5e-3 and creep < 1e-3, (moved, creep)  # inflow: ~0.15 r per ms
+    assert np.nanmax(np.abs(U)) < 1e-3 * sc.water.E_w
+    assert err[-1] < 1e-12
+
+
+def test_with_inflow_the_bottom_block_rises_first(packing):
+    sc = scenes.preset("quicksand_case1")
+    traj = simulate(sc, packing, 2000, 500)
+    t, xz, U, water, err = traj.arrays()
+    assert U[-1, 0] > 50.0 and U[-1, 0] > 20 * abs(U[-1, 1])
+    assert np.all(U[:, 0] < sc.water.E_w)  # eq 32 bounds it
+    assert water[-1] > water[0] and err.max() < 1e-11
+
+
+def test_a_dry_scene_runs_no_water_code(packing, monkeypatch):
+    def forbidden(*a, **k):
+        raise AssertionError("water code ran in a dry scene")
+    monkeypatch.setattr(pore_water.PoreWater, "advance", forbidden)
+    monkeypatch.setattr(pore_water.PoreWater, "__init__", forbidden)
+    sc = scenes.preset("quicksand_case1", {"water": {"enabled": False}})
+    traj = simulate(sc, packing, 500, 500)
+    assert np.all(np.isnan(traj.arrays()[2]))
+
+
+def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, monkeypatch):
+    sc = scenes.preset("quicksand_case1", {"output": {"snapshot_times": [0.0, 0.001], "history_interval": 50}})
+    summary = run_scene(sc, packing, str(tmp_path / "ok"), duration=0.001)
+    for name in ("history.csv", "summary.json", "pressure_blocks.png", "snapshots.png", "history_panels.png"):
+        assert os.path.exists(tmp_path / "ok" / name), name
+    assert summary["steps"] == 1000 and summary["n_pores"] > 0
+    assert json.load(open(tmp_path / "ok" / "summary.json"))["parameters"]["water"]["k1"] == 200.0
+    # a run that crashes half way (here: at its first pore rebuild): history so far and a checkpoint remain
+    def crash(self, xz):
+        raise RuntimeError("simulated crash")
+    monkeypatch.setattr(PoreDEM, "rebuild", crash)
+    bad = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 300}, "output": {"history_interval": 50}})
+    with pytest.raises(RuntimeError, match="simulated crash"):
+        run_scene(bad, packing, str(tmp_path / "bad"), duration=0.002)
+    rows = open(tmp_path / "bad" / "history.csv").read().strip().splitlines()
+    assert len(rows) == 1 + 6 and os.path.exists(tmp_path / "bad" / "checkpoint.npz")
+    assert "failed" in json.load(open(tmp_path / "bad" / "summary.json"))["status"]
+
+
+def test_deposit_and_cut(packing):
+    sc = scenes.preset("quicksand_case1", {"packing": {"source": "deposit", "n_particles": 12, "n_bottom": 8,
+                                                       "n_side": 6, "settle_time": 0.05, "seed": 7}})
+    pk = deposit(sc)
+    mob = pk.mobile
+    assert mob.sum() == 12 and (~mob).sum() == 8 + 2 * 5
+    walls = pk.xz[~mob]
+    assert np.all(pk.xz[mob, 0] > walls[:, 0].min()) and np.all(pk.xz[mob, 0] < walls[:, 0].max())
+    assert np.all(pk.xz[mob, 1] > 0) and np.all(pk.density_factor[~mob] == 1)
+    assert np.any(pk.density_factor[mob] == 5.0)
+    sub = cut_and_resettle(sc, packing, x0=2e-3, width=5e-3)
+    n_cut = int((packing.mobile & (packing.xz[:, 0] >= 2e-3) & (packing.xz[:, 0] < 7e-3)).sum())
+    assert sub.mobile.sum() == n_cut
+    assert sub.xz[sub.mobile, 1].min() > 0
