@@ -7,7 +7,7 @@ DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps demo test pore-demo bench studies clean
+.PHONY: deps demo test bench packings clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -22,14 +22,14 @@ deps:
 demo: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --out $(OUT)/quicksand-case1
 
-pore-demo: deps
-	$(PY) yade_scripts/pore_demo.py --out $(OUT)/pore-demo
-
 test: deps
 	$(PY) -m pytest -q tests
 
 bench: deps
 	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
+
+packings: deps
+	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
 
 clean:
 	rm -rf $(OUT) .pytest_cache
