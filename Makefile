@@ -15,7 +15,7 @@ deps:
 	if [ -n "$$missing" ]; then \
 	  echo "installing:$$missing"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
-	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y --no-install-recommends $$missing; \
+	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y $$missing; \
 	fi
 
 # The main job: Tarumi & Hakuno quick sand, case 1, with its figures.
@@ -25,8 +25,11 @@ demo: deps
 test: deps
 	$(PY) -m pytest -q tests
 
+# Cost studies (minutes): pore core sizes, YADE path against YADE alone, water sub-cycling.
 bench: deps
 	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
+	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
+	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
