@@ -2,8 +2,9 @@
 
 A scene is data, not code. The paper's cases are presets in ``yade_scripts/scenes/*.toml``; a
 preset may ``extends = "other.toml"`` and override any field. Every field, its unit and its
-default is listed in SCHEMA below (and in yade_scripts/scenes/README.md). Unknown tables or
-fields, wrong types and out-of-range values raise SceneError naming the field.
+default is listed in SCHEMA below; ``/usr/bin/python3 -m engines.scene`` prints it as the table
+in yade_scripts/scenes/README.md. Unknown tables or fields, wrong types and out-of-range values
+raise SceneError naming the field.
 """
 import math
 import os
@@ -246,3 +247,23 @@ def load(path, overrides=None):
 def preset(name, overrides=None):
     """Load ``yade_scripts/scenes/<name>.toml``."""
     return load(os.path.join(SCENE_DIR, name + ".toml"), overrides)
+
+
+def schema_markdown():
+    """The schema as a Markdown table (yade_scripts/scenes/README.md)."""
+    lines = ["| table | field | type | default | range or choices | meaning |", "|---|---|---|---|---|---|"]
+    for table, fields in SCHEMA.items():
+        for name, (typ, default, check, doc) in fields.items():
+            shown = "required" if default is REQUIRED else repr(default)
+            if check is None:
+                rng = ""
+            elif isinstance(check[0], str):
+                rng = ", ".join(check)
+            else:
+                rng = "> 0" if check is POS else f"[{check[0]}, {check[1]}]"
+            lines.append(f"| {table} | {name} | {typ.__name__} | {shown} | {rng} | {doc} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(schema_markdown())
