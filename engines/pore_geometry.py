@@ -226,7 +226,6 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
     sig_area, sectors = _triangle_void(xz, r, tri_in)
     void = np.bincount(face_id, sig_area - sectors, minlength=len(labels))
     is_open = void > a_min
-    keep = is_open[face_id]
     pore_of_face = np.full(len(labels), OUTER)
     pore_of_face[is_open] = np.arange(is_open.sum())
     tri_pore_all = np.full(t_count, OUTER)

@@ -20,11 +20,11 @@ dU/dt = -M U with M = C^-1 G, conductances g = k A_ij / E_w and capacities c = W
 Gershgorin bounds its eigenvalues by lambda = max_i (2 sum_j g_ij + g_boundary,i) / c_i, and
 forward Euler is stable for dt <= 2 / lambda. For two equal pores this is exact: dt <= 2 / k.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from engines.pore_geometry import OUTER, check_nonnegative
+from engines.pore_geometry import check_nonnegative
 
 
 class DarcyStabilityError(ValueError):
@@ -107,7 +107,6 @@ class PoreWater:
         self.A_prev = A.copy()
         self.q_prev = None
         self.balance = WaterBalance(initial=float(self.W.sum()))
-        self.last_flow = None
         self.remesh_counts = {}
 
     # -- state -----------------------------------------------------------------------------------
@@ -206,7 +205,6 @@ class PoreWater:
         b.inflow += fl.inflow_q.sum() * h
         b.surface_outflow += fl.surface_q.sum() * h
         b.side_outflow += fl.side_q.sum() * h
-        self.last_flow = fl
         return fl
 
     # -- re-meshing --------------------------------------------------------------------------------

@@ -112,3 +112,22 @@ def plot_snapshots(snaps, path, title):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_packing(packing, path, title):
+    """A packing: particles light, walls dark, denser particles outlined (Fig. 15, 18)."""
+    fig, ax = plt.subplots(figsize=(8, 6))
+    xz, r = packing.xz * 1e3, packing.r * 1e3
+    circles = [Circle(p, rr) for p, rr in zip(xz, r)]
+    colours = [GROUP_COLOURS[g] for g in packing.group]
+    widths = np.where(packing.density_factor > 1, 1.2, 0.3)
+    ax.add_collection(PatchCollection(circles, facecolor=colours, edgecolor="k", linewidths=widths))
+    ax.set_aspect("equal")
+    ax.set_xlim(xz[:, 0].min() - r.max(), xz[:, 0].max() + r.max())
+    ax.set_ylim(xz[:, 1].min() - r.max(), xz[:, 1].max() + r.max())
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_title(f"{title}: {int(packing.mobile.sum())} particles, {int((~packing.mobile).sum())} wall discs")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -150,7 +150,6 @@ def test_walls_and_surface():
 def _box_with_particles():
     a = 2.0
     xz = hex_lattice(6, 5, a, origin=(1.5 * a, a * np.sqrt(3) / 2))
-    r = np.ones(len(xz))
     bottom = np.column_stack([np.arange(0, 9) * a, np.zeros(9)])
     left = np.column_stack([np.zeros(5), np.arange(1, 6) * a])
     right = np.column_stack([np.full(5, 8 * a), np.arange(1, 6) * a])

@@ -1,4 +1,5 @@
-"""Deposit a scene's packing in YADE and save it as CSV (x, z, r, group, density_factor), with Fig. 14.
+"""Deposit a scene's packing in YADE and save it as CSV (x, z, r, group, density_factor), with the
+size distribution (Fig. 14) and a drawing of the packing (Fig. 15) beside it.
 
     yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE]
 """
@@ -12,6 +13,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 from engines import scene as scenes  # noqa: E402
 from packing.deposition import deposit  # noqa: E402
 from packing.psd import plot_distribution  # noqa: E402
+from postproc.plots import plot_packing  # noqa: E402
 
 
 def main(argv):
@@ -26,8 +28,9 @@ def main(argv):
     pk = deposit(sc)
     pk.save(out)
     p = sc.packing
-    plot_distribution(2 * pk.r[pk.mobile], p.mean_diameter, p.std_diameter, p.d_min, p.d_max,
-                      os.path.splitext(out)[0] + "_fig14_diameters.png")
+    stem = os.path.splitext(out)[0]
+    plot_distribution(2 * pk.r[pk.mobile], p.mean_diameter, p.std_diameter, p.d_min, p.d_max, stem + "_fig14_diameters.png")
+    plot_packing(pk, stem + "_fig15_packing.png", sc.scene.name)
     print(f"deposited {int(pk.mobile.sum())} particles + {int((~pk.mobile).sum())} wall discs -> {out}")
 
 
