@@ -22,7 +22,9 @@ deps:
 demo: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --out $(OUT)/quicksand-case1
 
+# The YADE <-> reference cross-check (exits non-zero on a failed case), then the unit tests.
 test: deps
+	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	$(PY) -m pytest -q tests
 
 # Cost studies (minutes): pore core sizes, YADE path against YADE alone, water sub-cycling.

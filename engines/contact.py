@@ -214,22 +214,31 @@ def separation_adjustment(events, touch_count, vel, mass, mobile, e):
                 v[a] -= (vn_a - new_a) * n
                 v[b] += (vn_b - new_b) * n
             done |= {a, b}
-    for rounds in range(2):  # round 0: partners not free ((a), (b)); round 1: (c)
-        for a in sorted(free - done):
-            evs = by_disc[a]
-            partners_free = any((ev.j if ev.i == a else ev.i) in free - done for ev in evs)
-            if rounds == 0 and partners_free:
+    def adjust(a, evs):  # eq 22-23 against the given separations; (b): the smallest Rk_a
+        best = None
+        for ev in evs:
+            vn_a, vn_b, b, n = normal_parts(ev, a)
+            if vn_a == 0 or not -(vn_a + vn_b) > e * ev.vn_collision > 0:
                 continue
-            best = None
-            for ev in evs:
-                vn_a, vn_b, b, n = normal_parts(ev, a)
-                if vn_a == 0 or not -(vn_a + vn_b) > e * ev.vn_collision > 0:
-                    continue
-                rk = (-e * ev.vn_collision - vn_b) / vn_a  # eq 22
-                if best is None or rk < best[0]:
-                    best = (rk, vn_a, n)
-            if best is not None:
-                rk, vn_a, n = best
-                v[a] -= (1 - rk) * vn_a * n  # eq 23
-            done.add(a)
+            rk = (-e * ev.vn_collision - vn_b) / vn_a  # eq 22
+            if best is None or rk < best[0]:
+                best = (rk, vn_a, n)
+        if best is not None:
+            rk, vn_a, n = best
+            v[a] -= (1 - rk) * vn_a * n  # eq 23
+        done.add(a)
+
+    def partner(ev, a):
+        return ev.j if ev.i == a else ev.i
+
+    pending = sorted(free - done)
+    for a in pending:  # (a), (b): every partner is a wall or still touches others
+        if all(partner(ev, a) not in free for ev in by_disc[a]):
+            adjust(a, by_disc[a])
+    for a in sorted(free - done):  # (c) first the partner j, against the discs that are not free
+        fixed = [ev for ev in by_disc[a] if partner(ev, a) not in free]
+        if fixed:
+            adjust(a, fixed)
+    for a in sorted(free - done):  # (c) then i, against the adjusted j
+        adjust(a, by_disc[a])
     return {k: v[k] for k in done if mobile[k]}

@@ -10,7 +10,9 @@ modulus E_w in N/m, permeabilities k in 1/s, flows q in m^2/s.
 * free surface (a pore with a non-wall edge on the outer face): q = k1 W U / E_w to U = 0 outside
 * drained side walls: q = k3 W U / E_w for pores touching a side wall; undrained: nothing
 * quick-sand inflow: q_w into every pore that has a bottom-wall disc as a vertex (§5.1)
-* optional smoothing A = (A_prev + A_new)/2, q = (q_prev + q_new)/2    (eq 45-46)
+* optional smoothing (eq 45-46): the areas and the pore-to-pore flows used are the running
+  averages [A]_t = ([A]_{t-dt} + A'_t)/2 and [q]_t = ([q]_{t-dt} + q'_t)/2 of the values used at the
+  previous step and the new ones; boundary outflows are not smoothed
 
 Pinched pores: a pore whose current void area is <= ``net.a_min`` keeps its water but exchanges
 none (its throats and boundary outflow are shut) until it reopens; its U follows eq 32.
@@ -168,9 +170,8 @@ class PoreWater:
             raise ValueError(f"dt must be > 0, got {dt}")
         A = np.asarray(A, float)
         if self.settings.smoothing:  # eq 45
-            A_used = 0.5 * (self.A_prev + A)
+            A = 0.5 * (self.A_prev + A)
             self.A_prev = A
-            A = A_used
         fl = self.flows(A, link_contact)
         limit = self._limit(fl)
         n_sub = 1
@@ -190,7 +191,7 @@ class PoreWater:
             q_new = fl.throat_q
             if self.q_prev is not None:
                 fl.throat_q = 0.5 * (self.q_prev + q_new)
-            self.q_prev = q_new
+            self.q_prev = fl.throat_q
         net = self.net
         n = net.n_pores
         i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
@@ -257,7 +258,7 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
             if near:
                 U[p], rule[p] = float(np.mean(U_old[near])), "b"
     # (c) mean of assigned neighbours, the outer face at U = 0 for surface pores
-    i, j = new_net.throat_conns[:, 0], new_net.throat_conns[:, 1]
+    i, j = np.unique(np.sort(new_net.throat_conns, axis=1), axis=0).T  # distinct neighbours
     while True:
         unset = np.isnan(U)
         if not unset.any():

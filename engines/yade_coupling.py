@@ -17,6 +17,7 @@ from engines.pore_dem import PoreDEM, disc_masses
 from engines.trajectory import Trajectory
 
 _REGISTRY = "_pore_dem_couplings"
+SHORT_RUN = 2000  # steps below which O.step() beats O.run's wait
 
 
 def build_bodies(scene, packing):
@@ -89,8 +90,16 @@ class YadeCoupling:
             O.pause()
 
     def run(self, n_steps):
-        """Run n_steps DEM steps; re-raise an error raised inside the engine."""
-        O.run(int(n_steps), True)
+        """Run n_steps DEM steps; re-raise an error raised inside the engine.
+
+        Short runs go step by step: O.run(n, True) waits about 40 ms for YADE's thread."""
+        if n_steps <= SHORT_RUN:
+            for _ in range(int(n_steps)):
+                O.step()
+                if self.error is not None:
+                    break
+        else:
+            O.run(int(n_steps), True)
         if self.error is not None:
             err, self.error = self.error, None
             raise err

@@ -122,3 +122,17 @@ def test_slow_separation_is_not_adjusted():
 def test_bad_contact_settings(kw, field):
     with pytest.raises(ValueError, match=field):
         ContactSettings(**kw)
+
+
+def test_separation_pattern_c_partner_first():
+    """Fig. 3(c): i leaves j while j leaves a wall k; j is adjusted against k first, then i
+    against the new j, so -Vn''_ij / Vn_ij = e for the pair (i, j) too."""
+    e = 0.01
+    ev_ij = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=1.0)  # i at left of j
+    ev_jk = SeparationEvent(1, 2, np.array([1.0, 0.0]), vn_collision=2.0)  # j at left of wall k
+    vel = np.array([[-0.5, 0.0], [-0.3, 0.0], [0.0, 0.0]])
+    fix = separation_adjustment([ev_ij, ev_jk], np.array([0, 0, 3]), vel, np.array([1.0, 1.0, np.inf]),
+                                np.array([True, True, False]), e)
+    # approach velocity after = v_a . n - v_b . n = -e Vn at collision
+    assert fix[1][0] - 0.0 == pytest.approx(-e * 2.0)  # j leaves the wall k
+    assert fix[0][0] - fix[1][0] == pytest.approx(-e * 1.0)  # i leaves the adjusted j

@@ -159,3 +159,15 @@ def test_bad_settings_name_the_field(kw, field):
 def test_pressure_eq32():
     assert pressure(2.0, 1.0, 240.0) == 120.0
     assert pressure(1.0, 1.0, 240.0) == 0.0
+
+
+def test_smoothing_eq46_is_a_running_average_of_used_flows():
+    xz, r, net = _two_pores()
+    m = pg.measure(net, xz, r)
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, smoothing=True)
+    w = PoreWater(net, m.void_area, s, W=m.void_area * np.array([1.1, 0.95]))
+    q1 = w.advance(1e-3, m.void_area, m.link_contact).throat_q.copy()  # first step: nothing to average
+    q2_new = w.flows(m.void_area, m.link_contact).throat_q
+    q2 = w.advance(1e-3, m.void_area, m.link_contact).throat_q
+    np.testing.assert_allclose(q2, 0.5 * (q1 + q2_new), rtol=1e-14)
+    assert w.balance_error() < 1e-14
