@@ -12,46 +12,16 @@ import argparse
 import json
 import os
 import sys
-import time
 
 _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
-from yade import O, utils  # noqa: E402
-from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,  # noqa: E402
-                          InsertionSortCollider, InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys,
-                          Law2_ScGeom_FrictPhys_CundallStrack, NewtonIntegrator)
+from yade import O  # noqa: E402
 
+from benchmarks.floor import native_floor, per_step  # noqa: E402
 from engines import scene as scenes  # noqa: E402
-from engines.pore_dem import disc_masses  # noqa: E402
 from engines.yade_coupling import YadeCoupling  # noqa: E402
 from packing.deposition import scene_packing  # noqa: E402
-
-
-def native_floor(scene, packing):
-    """The same discs in plain YADE with a native linear law (E chosen so kn ~ the scene's)."""
-    O.reset()
-    young = scene.contact.kn / float(packing.r.mean())  # FrictPhys: kn = E r for equal radii
-    mat = O.materials.append(FrictMat(young=young, poisson=0.25, frictionAngle=0.78, density=scene.material.rho))
-    mass, inertia = disc_masses(scene, packing)
-    for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
-        b = utils.sphere((float(x), 0.0, float(z)), float(r), fixed=not mob, material=mat, color=(0.5, 0.5, 0.5))
-        b.state.mass, b.state.inertia = float(m), (float(I),) * 3
-        if mob:
-            b.state.blockedDOFs = "yXZ"
-        O.bodies.append(b)
-    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
-                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
-                                 [Law2_ScGeom_FrictPhys_CundallStrack()]),
-                 NewtonIntegrator(gravity=(0, 0, -scene.material.g), damping=0.0)]
-    O.dt = scene.numerics.dt
-
-
-def per_step(steps, run):
-    run(200)  # warm up
-    t0 = time.perf_counter()
-    run(steps)
-    return 1e6 * (time.perf_counter() - t0) / steps
 
 
 def main(argv):

@@ -3,8 +3,9 @@
     /usr/bin/python3 benchmarks/pores.py --json out/bench-pores.json [--sizes 239 2000 10000]
 
 Packings are jittered polydisperse hexagonal packings (packing.layouts.random_discs) with the
-quick-sand constants; a small random displacement between steps keeps the work honest.
-Writes {"results": [{"n_discs": N, "rebuild_ms": x, "step_ms": y, ...}, ...]}.
+quick-sand constants and a bottom row as wall. The floor is a dry YADE step of the same discs
+(benchmarks/floor.py: collider + native linear law + NewtonIntegrator); all in one run.
+Writes {"results": [{"n_discs": N, "rebuild_ms": x, "step_ms": y, "yade_dry_step_ms": z, ...}, ...]}.
 """
 import argparse
 import json
@@ -13,12 +14,16 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.append("/usr/lib/x86_64-linux-gnu/yade-double/py")  # YADE's package for Debian's python3
 
 import numpy as np  # noqa: E402
 
+from benchmarks.floor import native_floor, per_step, step_by_step  # noqa: E402
 from engines import pore_geometry as pg  # noqa: E402
+from engines import scene as scenes  # noqa: E402
 from engines.pore_water import PoreWater, WaterSettings  # noqa: E402
 from packing.layouts import random_discs  # noqa: E402
+from packing.packing import Packing  # noqa: E402
 
 
 def best_of(fn, repeat):
@@ -54,8 +59,11 @@ def bench(n, rng, repeat_step=50, repeat_rebuild=5):
     step()
     t_step = best_of(step, repeat_step)
     t_rebuild = best_of(rebuild, repeat_rebuild)
+    native_floor(scenes.preset("quicksand_case1"), Packing(xz, r, walls, np.ones(len(r))))
+    floor_ms = 1e-3 * per_step(100, step_by_step, warmup=20)
     return {"n_discs": int(len(r)), "n_pores": int(net.n_pores), "n_links": int(len(net.links)),
-            "rebuild_ms": 1e3 * t_rebuild, "step_ms": 1e3 * t_step}
+            "rebuild_ms": 1e3 * t_rebuild, "step_ms": 1e3 * t_step, "yade_dry_step_ms": floor_ms,
+            "step_over_yade_dry": 1e3 * t_step / floor_ms}
 
 
 def main(argv=None):
@@ -66,9 +74,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     results = [bench(n, rng) for n in args.sizes]
-    print(f"{'discs':>8} {'pores':>8} {'links':>8} {'rebuild ms':>11} {'step ms':>9}")
+    print(f"{'discs':>8} {'pores':>8} {'links':>8} {'rebuild ms':>11} {'step ms':>9} {'YADE dry ms':>12} {'step/dry':>9}")
     for res in results:
-        print(f"{res['n_discs']:8d} {res['n_pores']:8d} {res['n_links']:8d} {res['rebuild_ms']:11.2f} {res['step_ms']:9.3f}")
+        print(f"{res['n_discs']:8d} {res['n_pores']:8d} {res['n_links']:8d} {res['rebuild_ms']:11.2f} "
+              f"{res['step_ms']:9.3f} {res['yade_dry_step_ms']:12.3f} {res['step_over_yade_dry']:9.2f}")
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:
         json.dump({"results": results}, f, indent=1)

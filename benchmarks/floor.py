@@ -1,0 +1,44 @@
+"""YADE alone, dry: the floor our costs are measured against (DEVELOPERS.md)."""
+import time
+
+from yade import O, utils
+from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
+                          InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom_FrictPhys_CundallStrack,
+                          NewtonIntegrator)
+
+from engines.pore_dem import disc_masses
+
+
+def native_floor(scene, packing):
+    """The same discs in plain YADE with a native linear law (E chosen so kn ~ the scene's)."""
+    O.reset()
+    young = scene.contact.kn / float(packing.r.mean())  # FrictPhys: kn = E r for equal radii
+    mat = O.materials.append(FrictMat(young=young, poisson=0.25, frictionAngle=0.78, density=scene.material.rho))
+    mass, inertia = disc_masses(scene, packing)
+    for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
+        b = utils.sphere((float(x), 0.0, float(z)), float(r), fixed=not mob, material=mat, color=(0.5, 0.5, 0.5))
+        b.state.mass, b.state.inertia = float(m), (float(I),) * 3
+        if mob:
+            b.state.blockedDOFs = "yXZ"
+        O.bodies.append(b)
+    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
+                                 [Law2_ScGeom_FrictPhys_CundallStrack()]),
+                 NewtonIntegrator(gravity=(0, 0, -scene.material.g), damping=0.0)]
+    O.dt = scene.numerics.dt
+
+
+def step_by_step(n):
+    """Advance YADE n steps without O.run's thread wait (about 40 ms a call)."""
+    for _ in range(n):
+        O.step()
+
+
+def per_step(steps, run, warmup=200):
+    """Microseconds per step of run(steps), after run(warmup)."""
+    run(warmup)
+    t0 = time.perf_counter()
+    run(steps)
+    return 1e6 * (time.perf_counter() - t0) / steps
+
+
