@@ -72,11 +72,12 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
     def crash(self, xz):
         raise RuntimeError("simulated crash")
     monkeypatch.setattr(PoreDEM, "rebuild", crash)
-    bad = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 300}, "output": {"history_interval": 50}})
+    # (3,000 steps: longer than SHORT_RUN, so through O.run as real runs go)
+    bad = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 2500}, "output": {"history_interval": 50}})
     with pytest.raises(RuntimeError, match="simulated crash"):
-        run_scene(bad, packing, str(tmp_path / "bad"), duration=0.002)
+        run_scene(bad, packing, str(tmp_path / "bad"), duration=0.003)
     rows = open(tmp_path / "bad" / "history.csv").read().strip().splitlines()
-    assert len(rows) == 1 + 6 and os.path.exists(tmp_path / "bad" / "checkpoint.npz")
+    assert len(rows) == 1 + 50 and os.path.exists(tmp_path / "bad" / "checkpoint.npz")
     assert "failed" in json.load(open(tmp_path / "bad" / "summary.json"))["status"]
 
 
