@@ -19,7 +19,7 @@ Degenerate pores: a face whose void area is <= ``a_min`` when the pores are buil
 not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
 Fewer than three discs or collinear centres give a network with no pores.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -112,7 +112,6 @@ class PoreNetwork:
     n_closed: int = 0
     eps_m: float = 0.0
     l_m: float = 0.0
-    info: dict = field(default_factory=dict)
 
     @property
     def n_pores(self):
@@ -142,7 +141,8 @@ class PoreMeasures:
     link_vector: np.ndarray
 
 
-def _empty_network(n, a_min, eps_m, l_m, reason):
+def _empty_network(n, a_min, eps_m, l_m):
+    """A network without pores (fewer than three discs or collinear centres)."""
     z2 = np.zeros((0, 2), dtype=np.int64)
     zi = np.zeros(0, dtype=np.int64)
     zf = np.zeros(0)
@@ -153,7 +153,7 @@ def _empty_network(n, a_min, eps_m, l_m, reason):
         pore_vertex_ptr=np.zeros(1, np.int64), pore_vertex_idx=zi, pore_signature=np.zeros(0, np.uint64),
         he_org=zi, he_dst=zi, he_left=zi, he_next=zi, corner_pore=zi, corner_disc=zi, corner_link=zi,
         corner_next_link=zi, corner_sign=zf, corner_r2=zf, corner_theta0=zf, corner_raw0=zf,
-        rattler_area=zf, a_min=a_min, eps_m=eps_m, l_m=l_m, info={"empty_reason": reason},
+        rattler_area=zf, a_min=a_min, eps_m=eps_m, l_m=l_m,
     )
 
 
@@ -197,7 +197,7 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     dl = _delaunay(xz)
     if dl is None:
-        return _empty_network(n, a_min, eps_m, l_m, "fewer than 3 discs or collinear centres")
+        return _empty_network(n, a_min, eps_m, l_m)
     tri, nb = dl
     t_count = len(tri)
 

@@ -9,7 +9,7 @@ raise SceneError naming the field.
 import math
 import os
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from engines.contact import ContactSettings
 from engines.pore_water import WaterSettings
@@ -109,7 +109,6 @@ class Scene:
 
     tables: dict
     path: str = ""
-    extras: dict = field(default_factory=dict)
 
     def __getattr__(self, table):
         try:
