@@ -14,6 +14,7 @@ Set the environment variable PORE_DEM_IO=python to force the Python backend (ben
 """
 import builtins
 import os
+import traceback
 
 import numpy as np
 from yade import O, utils
@@ -118,15 +119,37 @@ def set_velocities(ids, V):
 
 
 _REGISTRY = "_pore_dem_engines"
+ERRORS = []  # exceptions raised inside engine callbacks, first one first (raise_pending re-raises)
+
+
+def _guarded(callback):
+    def run():
+        try:
+            callback()
+        except BaseException as e:  # stop YADE cleanly; the driver re-raises (raise_pending)
+            if not ERRORS:
+                traceback.print_exc()
+            ERRORS.append(e)
+            O.pause()
+    return run
+
+
+def raise_pending():
+    """Re-raise the first exception an engine callback raised since the last call."""
+    if ERRORS:
+        err = ERRORS[0]
+        ERRORS.clear()
+        raise err
 
 
 def py_runner(callback, iter_period=1, label=""):
     """A PyRunner that calls ``callback()`` every ``iter_period`` steps (registered in builtins,
-    so the command works in any namespace YADE runs it in)."""
+    so the command works in any namespace YADE runs it in). An exception in the callback pauses
+    YADE and is kept for ``raise_pending``."""
     slot = getattr(builtins, _REGISTRY, None)
     if slot is None:
         slot = []
         setattr(builtins, _REGISTRY, slot)
-    slot.append(callback)
+    slot.append(_guarded(callback))
     return PyRunner(command=f"{_REGISTRY}[{len(slot) - 1}]()", iterPeriod=int(iter_period), initRun=True,
                     label=label)
