@@ -3,11 +3,11 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps demo test bench packings clean
+.PHONY: deps demo test bench bench-seismic packings clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -27,11 +27,16 @@ test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	$(PY) -m pytest -q tests
 
-# Cost studies (minutes): pore core sizes, YADE path against YADE alone, water sub-cycling.
+# Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
+# bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
 	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
+	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
+
+bench-seismic: deps
+	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
 # Redeposit the preset packings (the 1089-disc deposit of Fig. 14-15 takes a few minutes).
 packings: deps

@@ -137,8 +137,10 @@ def measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2
     for c in range(len(c_pore)):
         p = c_pore[c]
         poly[p] += c_sign[c] * cross[c_link[c]]
-        change = phi[c_link[c]] - phi[c_next[c]] - c_raw0[c]
-        theta[c] = c_theta0[c] + (change + math.pi) % two_pi - math.pi   # eq 29
+        x = phi[c_link[c]] - phi[c_next[c]] - c_raw0[c] + math.pi
+        if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
+            x = x % two_pi
+        theta[c] = c_theta0[c] + x - math.pi                    # eq 29
         sect[p] += theta[c] * c_r2[c]
     for p in range(len(poly)):
         poly[p] = 0.5 * poly[p]
@@ -206,6 +208,13 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
     balance[1] += s_s * h
     balance[2] += s_d * h
     return -1
+
+
+@jit
+def pore_pressures(W, A, E_w, U):
+    """U = E_w (W - A) / W [N/m] (eq 32) into U."""
+    for p in range(len(W)):
+        U[p] = E_w * (W[p] - A[p]) / W[p]
 
 
 @jit

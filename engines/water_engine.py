@@ -77,7 +77,9 @@ class WaterModel:
                       np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
         self._throats = (c(net.throat_conns[:, 0]), c(net.throat_conns[:, 1]), c(net.throat_link))
         self._masks = (surface.astype(float), drained.astype(float), bottom.astype(float))
-        self._flow = tuple(np.zeros(n_t) for _ in range(2)) + tuple(np.zeros(n_p) for _ in range(7))
+        # q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j: the output order of kernels.darcy_flows
+        self._flow = (np.zeros(n_t), np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_t)) + \
+            tuple(np.zeros(n_p) for _ in range(4))
         self._link_pores = c(net.link_pores)
         self._scratch = np.zeros((n, 2))
 
@@ -113,16 +115,15 @@ class WaterModel:
             A = 0.5 * (w.A_prev + A)
             w.A_prev = A
         ti, tj, t_link = self._throats
-        q, g, q_s, q_d, q_in, g_b, U, acc_i, acc_j = self._flow
-        lam = kernels.darcy_flows(w.W, A, contact, ti, tj, t_link, net.a_min, *self._masks, self.wp,
-                                  q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
+        q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j = self._flow
+        lam = kernels.darcy_flows(w.W, A, contact, ti, tj, t_link, net.a_min, *self._masks, self.wp, *self._flow)
         self.last_limit = 2.0 / lam if lam > 0 else np.inf
         n_sub = self._substeps(h)
         balance = np.zeros(3)
         for sub in range(n_sub):
             if sub > 0:
                 lam = kernels.darcy_flows(w.W, A, contact, ti, tj, t_link, net.a_min, *self._masks, self.wp,
-                                    q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
+                                          *self._flow)
             if s.smoothing:  # eq 46
                 if w.q_prev is not None:
                     q[:] = 0.5 * (w.q_prev + q)
@@ -134,7 +135,7 @@ class WaterModel:
         w.balance.inflow += balance[0]
         w.balance.surface_outflow += balance[1]
         w.balance.side_outflow += balance[2]
-        U = w.pressure(self._meas[2])  # eq 32 at the measured (unsmoothed) areas
+        kernels.pore_pressures(w.W, self._meas[2], s.E_w, U)  # eq 32 at the measured (unsmoothed) areas
         kernels.pressure_forces(net.links, self._link_pores, self.r, U, length, vec, self.F, self._scratch)
 
     def _substeps(self, h):
