@@ -58,18 +58,22 @@ class PaperLaw:
 
 
 class PaperLawEngine:
-    """The paper's law in a YADE scene: a PyRunner every step, after ForceResetter and before
+    """The paper's law in a YADE scene, as a PyRunner every step after ForceResetter and before
     NewtonIntegrator (no collider or InteractionLoop needed for these discs)::
 
         law = PaperLawEngine(disc_ids, ContactSettings(spring="d", kn=1.4e5, ...))
         O.engines = [ForceResetter(), law.runner(), NewtonIntegrator(gravity=(0, 0, -9.81))]
+
+    or without a PyRunner, driven from Python: ``law.drive(n)`` does the same work before each of n
+    O.step() calls and holds the forces as permanent forces (with ``held`` added, e.g. buoyancy);
+    this saves the PyRunner's dispatch (15-40 us a step).
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
     engines.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
-    run after each step.
+    run after each step's forces are written.
     """
 
     def __init__(self, disc_ids, settings=None, core=None, compiled=True):
@@ -90,6 +94,7 @@ class PaperLawEngine:
         self.core = core
         self._dynamic = np.flatnonzero(dynamic)
         self.forced = yade_io.Bodies(self.io.ids[dynamic])
+        self.held = np.zeros((len(self._dynamic), 2))  # forces added in drive mode [N]
         self.hooks = []
         self._set_velocities = yade_io.set_velocities
 
@@ -97,11 +102,27 @@ class PaperLawEngine:
         from engines import yade_io
         return yade_io.py_runner(self.__call__, 1, label)
 
-    def __call__(self):
+    def _work(self, write):
         F, fixes = self.core.step(self.io.positions())
-        self.forced.add_forces(F[self._dynamic])
+        write(F[self._dynamic])
         if fixes:
             disc = np.fromiter(fixes, np.int64)
             self._set_velocities(self.io.ids[disc], np.array([fixes[d] for d in disc.tolist()]))
         for hook in self.hooks:
             hook()
+
+    def __call__(self):
+        self._work(self.forced.add_forces)
+
+    def drive(self, n, stop=None):
+        """n steps: this engine's work, then O.step(); ``stop()`` true ends early."""
+        from yade import O
+        write = self._write_held
+        for _ in range(int(n)):
+            self._work(write)
+            O.step()
+            if stop is not None and stop():
+                break
+
+    def _write_held(self, F):
+        self.forced.set_permanent_forces(F + self.held)

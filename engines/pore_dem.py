@@ -131,7 +131,6 @@ class PoreDEM:
         self.accel = input_acceleration(scene)
         self.moving = moving_walls(scene, packing)
         self.wall_velocity = 0.0
-        self.block_bounds = packing.block_bounds(scene.output.block_z)
         self.water_model = water_model(scene, packing, compiled)
 
     @property
@@ -165,27 +164,3 @@ class PoreDEM:
             self.wall_velocity += self.accel(self.k * self.dt) * self.dt
         self.k += 1
         return F, fixes
-
-    # -- observations -----------------------------------------------------------------------------
-    def pore_state(self, xz):
-        return pore_state(self.water, xz, self.r)
-
-    def block_pressures(self, xz):
-        return block_pressures(self.water, xz, self.r, self.block_bounds)
-
-    def porosity(self, xz):
-        return porosity(self.scene, self.packing, xz)
-
-    def kinetic_energy(self):
-        """Translational + rotational kinetic energy of the particles [J per m], from du/dt."""
-        return kinetic_energy(self.mass, self.inertia, self.mobile, self.du / self.dt, self.omega)
-
-    def bottom_normal_force(self, xz):
-        """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
-        pairs, fn = self.contact.contact_pairs()
-        if len(fn) == 0:
-            return 0.0
-        zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])
-        z0, z1 = self.block_bounds[0]
-        sel = (zmid >= z0) & (zmid < z1)
-        return float(fn[sel].mean()) if sel.any() else 0.0

@@ -1,9 +1,11 @@
 """YADE glue for scenes: discs as spheres in the x-z plane, the scene's contact law, the water engine.
 
-[contact] law = "paper" (the presets): ForceResetter, the PaperLawEngine PyRunner (engines.paper_law;
-it calls PoreDEM.step: the paper's law, spin, the water in the paper's order, and adds the forces),
-the wall motion, NewtonIntegrator. No collider: the law keeps its own Verlet list. Discs translate
-only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law.
+[contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
+O.step() ``run`` drives the PaperLawEngine (engines.paper_law; it calls PoreDEM.step: the paper's
+law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
+no PyRunner (its dispatch costs 15-40 us a step). No collider: the law keeps its own Verlet list.
+Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
+scenes with ``YadeCoupling.run``, not O.run.
 
 [contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
 ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the WaterEngine PyRunner every water_interval steps
@@ -12,9 +14,8 @@ NewtonIntegrator; discs spin about y in YADE (blockedDOFs 'yXZ'). A dry scene ru
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
-of O.step() calls (a per-step PyRunner costs 15 us under O.step against 40 us under O.run, which
-hands the GIL to YADE's thread), or O.run for chunks without per-step Python; Ctrl-C stops between
-steps.
+of O.step() calls where Python works every step, or O.run for chunks without per-step Python;
+Ctrl-C stops between steps.
 """
 import math
 
@@ -91,12 +92,9 @@ class YadeCoupling:
             self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"))
             self.core = PoreDEM(scene, packing, compiled)
             self.engine = PaperLawEngine(self.ids, core=self.core)
-            python = [self.engine.runner()]
-            if wet:  # buoyancy: the buoyant weight of eq 34b, held
-                up = np.zeros((int(packing.mobile.sum()), 2))
-                up[:, 1] = scene.material.rho_w * np.pi * packing.r[packing.mobile] ** 2 * g
-                yade_io.Bodies(self.ids[packing.mobile]).set_permanent_forces(up)
-            loop = []
+            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces
+                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[packing.mobile] ** 2 * g
+            loop, python = [], []  # the law runs before each O.step (drive), not as a PyRunner
         else:
             if scene.numerics.damping_eq44:
                 raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
@@ -147,7 +145,9 @@ class YadeCoupling:
     # -- running ------------------------------------------------------------------------------------
     def _advance(self, n):
         errors = yade_io.ERRORS
-        if not self.per_step and n > PER_STEP_CHUNK:
+        if self.law == "paper":
+            self.engine.drive(n)
+        elif not self.per_step and n > PER_STEP_CHUNK:
             O.run(int(n), True)
         elif self._wall_accel is None:
             for _ in range(int(n)):
