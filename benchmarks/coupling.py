@@ -15,8 +15,9 @@ column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
   paper_law_wet_us     law = "paper" + water every step, in the paper's step order
 
 The six are measured interleaved (one run of each in turn, ``repeats`` times) and the median is
-kept; each run includes the pore rebuilds (every 1000 steps) that fall in it. The machine is
-shared: read the ratios, not the absolute times.
+kept, of wall time (the six columns) and of the process's CPU time ("cpu_us", steadier on a shared
+machine); each run includes the pore rebuilds (every 1000 steps) that fall in it. Read the ratios,
+not the absolute times.
 """
 import argparse
 import json
@@ -72,12 +73,13 @@ def scene_for(over):
 
 
 def timed(setup, steps, warmup):
-    """Microseconds per step of ``steps`` steps after ``warmup`` steps; setup() -> run(n)."""
+    """(wall, CPU) microseconds per step of ``steps`` steps after ``warmup``; setup() -> run(n).
+    CPU time (all threads of the process) is the less noisy one on a shared machine."""
     run = setup()
     run(warmup)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     run(steps)
-    return 1e6 * (time.perf_counter() - t0) / steps
+    return 1e6 * (time.perf_counter() - t0) / steps, 1e6 * (time.process_time() - c0) / steps
 
 
 def bench_size(n, steps, repeats, log):
@@ -85,14 +87,17 @@ def bench_size(n, steps, repeats, log):
     setups = {"yade_alone_us": lambda: (native_floor(scene_for({}), packing), run_steps)[1]}
     for name, over in COLUMNS.items():
         setups[name] = (lambda over=over: YadeCoupling(scene_for(over), packing).run)
-    samples = {k: [] for k in setups}
+    wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
     for rep in range(repeats):
         for name, setup in setups.items():
-            samples[name].append(timed(setup, steps, warmup=200))
-            log(f"  n = {len(packing.r)} rep {rep + 1}/{repeats} {name}: {samples[name][-1]:.1f} us/step")
+            w, c = timed(setup, steps, warmup=200)
+            wall[name].append(w)
+            cpu[name].append(c)
+            log(f"  n = {len(packing.r)} rep {rep + 1}/{repeats} {name}: {w:.1f} us/step wall, {c:.1f} CPU")
     row = {"n_bodies": int(len(packing.r)), "steps": steps, "repeats": repeats}
-    row.update({k: float(np.median(v)) for k, v in samples.items()})
-    row["samples_us"] = samples
+    row.update({k: float(np.median(v)) for k, v in wall.items()})
+    row["cpu_us"] = {k: float(np.median(v)) for k, v in cpu.items()}
+    row["samples_wall_us"], row["samples_cpu_us"] = wall, cpu
     return row
 
 
@@ -105,14 +110,16 @@ def main(argv):
     args = ap.parse_args(argv)
     results = []
     for n in args.sizes:
-        steps = int(max(1200, args.steps / n))
+        steps = int(max(1000, args.steps / n))  # >= 1000: a pore rebuild falls in every run
         results.append(bench_size(n, steps, args.repeats, lambda s: print(s, flush=True)))
     keys = ["yade_alone_us"] + list(COLUMNS)
-    print(f"I/O backend: {yade_io.BACKEND}; ratios to yade_alone (medians of {args.repeats}, one shared machine: noisy)")
-    print(f"{'bodies':>7} " + " ".join(f"{k[:-3]:>18}" for k in keys))
-    for row in results:
-        a = row["yade_alone_us"]
-        print(f"{row['n_bodies']:7d} " + " ".join(f"{row[k]:9.1f} ({row[k] / a:5.2f})" for k in keys))
+    print(f"I/O backend: {yade_io.BACKEND}; us/step (ratio to yade_alone), medians of {args.repeats}; "
+          f"one shared machine: noisy")
+    for label, get in (("wall", lambda row, k: row[k]), ("CPU", lambda row, k: row["cpu_us"][k])):
+        print(f"{label:>4} {'bodies':>7} " + " ".join(f"{k[:-3]:>18}" for k in keys))
+        for row in results:
+            a = get(row, "yade_alone_us")
+            print(f"{'':>4} {row['n_bodies']:7d} " + " ".join(f"{get(row, k):9.1f} ({get(row, k) / a:5.2f})" for k in keys))
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:
         json.dump({"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results}, f, indent=1)

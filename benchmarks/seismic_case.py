@@ -10,7 +10,9 @@ step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's law ru
 Until the seismic box of issue 11 lands (its side-wall springs, Fig. 27), the packing is our
 deposition into a box of 47 fixed wall discs (cached in out/seismic_size/packing.csv) and the
 whole box follows the input ([loading] moves = "box"), so the step does the same work per disc.
-Writes {"steps": n, "wall_s": x, "us_per_step": y, ...}.
+Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ..., "comparison": {...}}: the
+comparison times YADE alone on the same discs, our step with the compiled kernels and with the
+NumPy path, interleaved in the same run (ratios hold on a shared machine; absolute times do not).
 """
 import argparse
 import json
@@ -49,26 +51,62 @@ def seismic_packing(scene, path):
     return pk
 
 
+def compare(scene, packing, steps, repeats):
+    """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
+    + eps_m/2, no Python), our step with the compiled kernels and with the NumPy path, interleaved;
+    medians of wall and CPU microseconds per step and their ratios to YADE alone."""
+    import numpy as np
+    from benchmarks.floor import native_floor, run_steps
+    from engines.yade_coupling import YadeCoupling
+
+    def floor():
+        native_floor(scene, packing)
+        return run_steps
+
+    setups = {"yade_alone": floor, "compiled": lambda: YadeCoupling(scene, packing).run,
+              "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
+    wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
+    for _ in range(repeats):
+        for name, setup in setups.items():
+            run = setup()
+            run(200)
+            t0, c0 = time.perf_counter(), time.process_time()
+            run(steps)
+            wall[name].append(1e6 * (time.perf_counter() - t0) / steps)
+            cpu[name].append(1e6 * (time.process_time() - c0) / steps)
+    out = {"steps": steps, "repeats": repeats}
+    for label, d in (("wall_us", wall), ("cpu_us", cpu)):
+        med = {k: float(np.median(v)) for k, v in d.items()}
+        out[label] = med
+        out[label.replace("_us", "_ratio_to_yade_alone")] = {k: v / med["yade_alone"] for k, v in med.items()}
+    return out
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", required=True)
     ap.add_argument("--steps", type=int, default=180000)
     ap.add_argument("--packing", default=os.path.join(ROOT, "out", "seismic_size", "packing.csv"))
+    ap.add_argument("--compare-steps", type=int, default=3000,
+                    help="steps of the in-run comparison with YADE alone and the NumPy path (0: skip)")
+    ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
     scene = scenes.validate(SCENE)
     packing = seismic_packing(scene, args.packing)
     from engines.yade_coupling import YadeCoupling
     cp = YadeCoupling(scene, packing)
     cp.run(10)  # numba loads its cached kernels on the first call
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     cp.run(args.steps)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     w = cp.water
-    out = {"steps": args.steps, "wall_s": wall, "us_per_step": 1e6 * wall / args.steps,
+    out = {"steps": args.steps, "wall_s": wall, "us_per_step": 1e6 * wall / args.steps, "cpu_s": cpu,
            "n_particles": int(packing.mobile.sum()), "n_walls": int((~packing.mobile).sum()),
            "n_pores": int(w.net.n_pores), "n_rebuilds": cp.water_model.n_rebuilds,
            "water_balance_error": w.balance_error(), "io_backend": yade_io.BACKEND,
            "packing": "deposited in a 47-disc fixed-wall box (not yet the seismic box of issue 11)"}
+    if args.compare_steps:
+        out["comparison"] = compare(scene, packing, args.compare_steps, args.repeats)
     print(json.dumps(out, indent=1))
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:

@@ -93,6 +93,7 @@ class ContactLaw:
         if compiled:
             self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
             self._spring = kernels.SPRING_CODE[settings.spring]
+            self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
 
     @property
     def touching(self):
@@ -136,8 +137,9 @@ class ContactLaw:
         """
         self._update_list(xz)
         if self.compiled:
-            n_lost = kernels.contact_forces(xz, du, dpsi, self.r, self.i, self.j, self.state,
-                                            kernels.contact_params(self.s, dt), self._spring,
+            if self._prm[-1] != dt:
+                self._prm = kernels.contact_params(self.s, dt)
+            n_lost = kernels.contact_forces(xz, du, dpsi, self.r, self.i, self.j, self.state, self._prm, self._spring,
                                             self._F, self._M, self._acc, self._lost)
             return self._F, self._M, self._separations(xz, self._lost[:n_lost])
         s, r, i, j = self.s, self.r, self.i, self.j

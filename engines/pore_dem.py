@@ -129,7 +129,6 @@ class PoreDEM:
         self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
         self.k = 0
         self.accel = input_acceleration(scene)
-        self.moving = moving_walls(scene, packing)
         self.wall_velocity = 0.0
         self.water_model = water_model(scene, packing, compiled)
 

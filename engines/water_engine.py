@@ -204,11 +204,17 @@ class WaterEngine:
         if buoyancy:
             self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
         self.forced.set_permanent_forces(self.F_const)
-        self.k = self.k_built = O.iter  # DEM step of the last call and of the last pore build
+        self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
 
+
+    def due(self, k):
+        """True when step k is a water step (every water_interval steps from the engine's creation)."""
+        return (k - self.k0) % self.model.water_interval == 0
 
     def runner(self, label="water"):
-        """The PyRunner to put after the InteractionLoop and before NewtonIntegrator."""
+        """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. (Or, with no
+        PyRunner, call the engine before O.step() on the steps where ``due(O.iter)``: the same work,
+        since nothing moves the bodies between NewtonIntegrator and the next step's PyRunner.)"""
         from engines import yade_io
         return yade_io.py_runner(self.__call__, self.model.water_interval, label)
 

@@ -8,9 +8,10 @@ Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by t
 scenes with ``YadeCoupling.run``, not O.run.
 
 [contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
-ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the WaterEngine PyRunner every water_interval steps
-(engines.water_engine; pressure forces and buoyancy held as permanent forces), the wall motion,
-NewtonIntegrator; discs spin about y in YADE (blockedDOFs 'yXZ'). A dry scene runs no Python engine.
+ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the wall motion, NewtonIntegrator; discs spin about y
+in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.water_engine; pressure forces and buoyancy
+held as permanent forces) is called before O.step() every water_interval steps, the work its
+PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all (O.run).
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
@@ -109,9 +110,9 @@ class YadeCoupling:
                 self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
                                                 scene.contact.eps_m, packing.r, num.rebuild_interval,
                                                 num.water_interval, True, scene.material.rho_w, g, compiled)
-                python = [self.water_engine.runner()]
+                python = []  # driven before O.step on its steps (see _advance), not as a PyRunner
         self.io = yade_io.Bodies(self.ids)
-        self.per_step = self.law == "paper"
+        self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()
         O.engines = [ForceResetter()] + loop + python + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
         self.block_bounds = packing.block_bounds(scene.output.block_z)
@@ -139,7 +140,7 @@ class YadeCoupling:
         else:
             self._wall_accel = pore_dem.input_acceleration(self.scene)
             self._wall_v = 0.0
-            self.per_step = True
+            self.per_step = True  # Python sets the velocity before each O.step
         return [self.wall_engine]
 
     # -- running ------------------------------------------------------------------------------------
@@ -149,16 +150,14 @@ class YadeCoupling:
             self.engine.drive(n)
         elif not self.per_step and n > PER_STEP_CHUNK:
             O.run(int(n), True)
-        elif self._wall_accel is None:
+        else:  # law = 'yade': the water engine on its steps, a record's wall velocity v_w += a(t) dt
+            water, accel, dt = self.water_engine, self._wall_accel, O.dt
             for _ in range(int(n)):
-                O.step()
-                if errors:
-                    break
-        else:
-            dt = O.dt
-            for _ in range(int(n)):  # law = 'yade' with a record: v_w += a(t) dt before each step
-                self._wall_v += self._wall_accel(O.iter * dt) * dt
-                self.wall_engine.velocity = self._wall_v
+                if water is not None and water.due(O.iter):
+                    water()
+                if accel is not None:
+                    self._wall_v += accel(O.iter * dt) * dt
+                    self.wall_engine.velocity = self._wall_v
                 O.step()
                 if errors:
                     break
