@@ -18,6 +18,8 @@ contract shared with the reference (engines/reference.py):
 Gravity -m g and buoyancy +rho_w pi r^2 g (water scenes: the buoyant weight of eq 34b) are
 constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent forces).
 """
+import math
+
 import numpy as np
 
 from engines import pore_geometry as pg
@@ -100,7 +102,7 @@ def input_acceleration(scene):
     if ld.type == "none":
         return None
     if ld.type == "cosine":
-        return lambda t: ld.amplitude * np.cos(2 * np.pi * ld.frequency * t)
+        return lambda t: ld.amplitude * math.cos(2 * math.pi * ld.frequency * t)  # a scalar: math is 10x faster
     try:
         rec = np.loadtxt(ld.record, comments="#", ndmin=2)
     except OSError as e:

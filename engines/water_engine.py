@@ -71,17 +71,25 @@ class WaterModel:
         n_p, n_l, n_t = net.n_pores, len(net.links), len(net.throat_conns)
         c = np.ascontiguousarray
         surface, drained, bottom = self.water._boundary_masks()
-        self._net = (c(net.links), c(net.corner_pore), c(net.corner_sign), c(net.corner_link), c(net.corner_next_link),
-                     c(net.corner_raw0), c(net.corner_theta0), c(net.corner_r2), c(net.rattler_area))
+        # outputs of kernels.measure: polygon, sector and void areas, link length and contact state,
+        # corner angles, link vectors, and two scratch arrays
         self._meas = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
                       np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
-        self._throats = (c(net.throat_conns[:, 0]), c(net.throat_conns[:, 1]), c(net.throat_link))
-        self._masks = (surface.astype(float), drained.astype(float), bottom.astype(float))
-        # q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j: the output order of kernels.darcy_flows
+        # outputs of kernels.darcy_flows: q, q_s, q_d, q_in, g, g_b, U, and two scratch arrays
         self._flow = (np.zeros(n_t), np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_t)) + \
             tuple(np.zeros(n_p) for _ in range(4))
-        self._link_pores = c(net.link_pores)
-        self._scratch = np.zeros((n, 2))
+        q, q_s, q_d, q_in, _, _, U, acc_i, acc_j = self._flow
+        ti, tj, t_link = c(net.throat_conns[:, 0]), c(net.throat_conns[:, 1]), c(net.throat_link)
+        self._balance = np.zeros(3)
+        # the argument lists of the kernels after their leading per-call arguments
+        self._measure_args = (c(net.links), c(net.corner_pore), c(net.corner_sign), c(net.corner_link),
+                              c(net.corner_next_link), c(net.corner_raw0), c(net.corner_theta0), c(net.corner_r2),
+                              c(net.rattler_area), self.eps_m) + self._meas
+        self._flow_args = ((ti, tj, t_link, net.a_min, surface.astype(float), drained.astype(float),
+                            bottom.astype(float), self.wp) + self._flow)
+        self._update_args = (ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, self._balance)
+        self._force_args = (c(net.links), c(net.link_pores), self.r, U, self._meas[3], self._meas[6], self.F,
+                            np.zeros((n, 2)))
 
     # -- per step ---------------------------------------------------------------------------------
     def step(self, k, xz):
@@ -108,35 +116,35 @@ class WaterModel:
             self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
             self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(m.void_area), m)
             return
-        w, s, net = self.water, self.settings, self.water.net
-        poly, sect, A, length, contact, theta, vec, phi, cross = self._meas
-        kernels.measure(xz, self.r, *self._net, self.eps_m, *self._meas)
+        w, s = self.water, self.settings
+        kernels.measure(xz, self.r, *self._measure_args)
+        A = A_measured = self._meas[2]
+        contact = self._meas[4]
         if s.smoothing:  # eq 45
             A = 0.5 * (w.A_prev + A)
             w.A_prev = A
-        ti, tj, t_link = self._throats
-        q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j = self._flow
-        lam = kernels.darcy_flows(w.W, A, contact, ti, tj, t_link, net.a_min, *self._masks, self.wp, *self._flow)
+        lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
         self.last_limit = 2.0 / lam if lam > 0 else np.inf
         n_sub = self._substeps(h)
-        balance = np.zeros(3)
+        q = self._flow[0]
+        self._balance[:] = 0.0
         for sub in range(n_sub):
             if sub > 0:
-                lam = kernels.darcy_flows(w.W, A, contact, ti, tj, t_link, net.a_min, *self._masks, self.wp,
-                                          *self._flow)
+                lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
             if s.smoothing:  # eq 46
                 if w.q_prev is not None:
                     q[:] = 0.5 * (w.q_prev + q)
                 w.q_prev = q.copy()
-            bad = kernels.darcy_update(w.W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
+            bad = kernels.darcy_update(w.W, h / n_sub, *self._update_args)
             if bad >= 0:
                 raise DarcyStabilityError(f"water area of pore {bad} would fall to <= 0 in a step of {h / n_sub:.3e} s")
         self.last_limit = 2.0 / lam if lam > 0 else np.inf  # at the last sub-step, as PoreWater reports it
-        w.balance.inflow += balance[0]
-        w.balance.surface_outflow += balance[1]
-        w.balance.side_outflow += balance[2]
-        kernels.pore_pressures(w.W, self._meas[2], s.E_w, U)  # eq 32 at the measured (unsmoothed) areas
-        kernels.pressure_forces(net.links, self._link_pores, self.r, U, length, vec, self.F, self._scratch)
+        b = w.balance
+        b.inflow += self._balance[0]
+        b.surface_outflow += self._balance[1]
+        b.side_outflow += self._balance[2]
+        kernels.pore_pressures(w.W, A_measured, s.E_w, self._flow[6])  # eq 32 at the measured (unsmoothed) areas
+        kernels.pressure_forces(*self._force_args)
 
     def _substeps(self, h):
         """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
