@@ -19,8 +19,9 @@ the tests use it directly): the compiled kernels of engines.kernels, or with ``c
 readable NumPy functions of engines.pore_geometry and engines.pore_water.
 
 Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.pore_water),
-checked at every water step (the bound costs one pass over the throats inside the flow kernel,
-less than testing whether the areas changed enough to need it). With ``settings.substep`` a water
+checked at every water step: the bound is one more pass over throats and pores inside the flow
+kernel (measured at a few per cent of a water step), about what testing whether the areas changed
+enough to need a new check would cost, so the check is exact at every step instead. With ``settings.substep`` a water
 step above the limit is split into n = ceil(dt_w / limit) sub-steps; the engine prints the count
 when it first sub-steps and whenever the count doubles, and keeps ``substeps_max``/``substeps_total``.
 """
@@ -158,7 +159,7 @@ class WaterModel:
         n = int(math.ceil(h / self.last_limit))
         if n >= 2 * max(self.substeps_max, 1):
             self.log(f"water: step {h:.3e} s > Darcy limit {self.last_limit:.3e} s: {n} sub-steps per water step "
-                     f"(each costs one flow + update pass, about a third of a water step)")
+                     f"(each costs one flow and one update kernel pass, about a quarter of a water step)")
         self.substeps_max = max(self.substeps_max, n)
         self.substeps_total += n
         return n
@@ -193,10 +194,10 @@ class WaterEngine:
         if radii is None:
             radii = [O.bodies[i].shape.radius for i in ids.tolist()]
         code = np.zeros(len(ids), np.int64)
+        pos = {i: k for k, i in enumerate(ids.tolist())}
         for name, group in (walls or {}).items():
             if name not in WALL_CODES:
                 raise ValueError(f"walls: unknown group {name!r}; known: {sorted(WALL_CODES)}")
-            pos = {i: k for k, i in enumerate(ids.tolist())}
             missing = [i for i in group if i not in pos]
             if missing:
                 raise ValueError(f"walls[{name!r}]: ids {missing[:5]} are not among disc_ids")
@@ -213,7 +214,6 @@ class WaterEngine:
             self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
         self.forced.set_permanent_forces(self.F_const)
         self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
-
 
     def due(self, k):
         """True when step k is a water step (every water_interval steps from the engine's creation)."""

@@ -43,9 +43,9 @@ def yade_law_material(scene):
 
     Law2_ScGeom_ViscElPhys_Basic against eq 1-13: the same linear spring kn and dashpot eta_n in
     normal, incremental ks with dashpot eta_s and the Coulomb cap mu e_n in shear. It differs in
-    (1) the dashpot near separation: eq 6 keeps f_n = e_n + d_n (tension from the dashpot) until
-    e_n < 0; YADE's law ends the pair differently (measured on a head-on collision: restitution
-    0.798 against 0.789 for eq 4-6, 0.790 analytic), and its Coulomb cap uses f_n, not e_n; (2) the rolling term:
+    (1) tension: YADE clamps the total normal force kn u_n + eta_n v_n at zero, eq 6 keeps the
+    dashpot's tension while e_n >= 0 (head-on collision: restitution 0.798 against 0.789 for eq 4-6,
+    0.790 analytic), and YADE's Coulomb cap uses that total force, eq 11 uses e_n; (2) the rolling term:
     YADE's shear increment takes the relative velocity at the contact point with lever arms
     r - u_n/2 of the enlarged radii, eq 3b uses r_i dpsi_i + r_j dpsi_j; (3) no velocity
     adjustment at separation (eq 18-24); (4) eps_m (spring b) acts through radii enlarged by
@@ -95,7 +95,7 @@ class YadeCoupling:
             self.engine = PaperLawEngine(self.ids, core=self.core)
             if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces
                 self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[packing.mobile] ** 2 * g
-            loop, python = [], []  # the law runs before each O.step (drive), not as a PyRunner
+            loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
         else:
             if scene.numerics.damping_eq44:
                 raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
@@ -103,18 +103,16 @@ class YadeCoupling:
             loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
                     InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
                                     [Law2_ScGeom_ViscElPhys_Basic()])]
-            python = []
-            if wet:
+            if wet:  # called before O.step on its steps (see _advance), not as a PyRunner
                 num = scene.numerics
                 walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
                 self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
                                                 scene.contact.eps_m, packing.r, num.rebuild_interval,
                                                 num.water_interval, True, scene.material.rho_w, g, compiled)
-                python = []  # driven before O.step on its steps (see _advance), not as a PyRunner
         self.io = yade_io.Bodies(self.ids)
         self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()
-        O.engines = [ForceResetter()] + loop + python + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
+        O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
         self.block_bounds = packing.block_bounds(scene.output.block_z)
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
