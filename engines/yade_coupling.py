@@ -18,6 +18,7 @@ Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho
 of O.step() calls where Python works every step, or O.run for chunks without per-step Python;
 Ctrl-C stops between steps.
 """
+import copy
 import math
 
 import numpy as np
@@ -214,10 +215,13 @@ class YadeCoupling:
         omega = self.core.omega if self.core is not None else self.io.spins()
         return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
 
-    def contact_pairs(self):
-        """(pairs (K, 2) disc indices, normal force (K,) [N]) of the touching pairs."""
+    def contact_pairs(self, xz):
+        """(pairs (K, 2) disc indices, normal force (K,) [N]) of the pairs touching at centres xz
+        (the current ones); the paper's law is evaluated on a copy, its state is left as it is."""
         if self.core is not None:
-            return self.core.contact.contact_pairs()
+            law = copy.deepcopy(self.core.law)
+            law.step(xz)
+            return law.contact.contact_pairs()
         index = {i: k for k, i in enumerate(self.ids.tolist())}
         pairs, fn = [], []
         for inter in O.interactions:
@@ -228,7 +232,7 @@ class YadeCoupling:
 
     def bottom_normal_force(self, xz):
         """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
-        pairs, fn = self.contact_pairs()
+        pairs, fn = self.contact_pairs(xz)
         if len(fn) == 0:
             return 0.0
         zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])

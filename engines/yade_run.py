@@ -63,7 +63,7 @@ class Recorder:
         self.file.flush()
 
     def snapshot(self, cp, xz, k):
-        pairs, fn = cp.contact_pairs()
+        pairs, fn = cp.contact_pairs(xz)
         pk = cp.packing
         snap = dict(t=k * self.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
                     vel=cp.velocities(), pairs=pairs, f_n=fn)
