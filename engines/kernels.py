@@ -7,7 +7,7 @@ reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
   contact_forces    engines.contact.ContactLaw.forces          (eq 1-13, 26-27)
   measure           engines.pore_geometry.measure              (eq 29, 43b)
   darcy_flows       engines.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
-  darcy_update      engines.pore_water.PoreWater._step         (eq 42, 46)
+  darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
