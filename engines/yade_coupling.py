@@ -117,6 +117,8 @@ class YadeCoupling:
         self.block_bounds = packing.block_bounds(scene.output.block_z)
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
 
     def _wall_motion(self):
         """Engines moving the walls that follow the input ([loading]): a TranslationEngine whose

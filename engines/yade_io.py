@@ -8,11 +8,13 @@ The backend is chosen once, at import:
 * ``python``: YADE's Python API in its cheapest forms, measured on 240 spheres: positions by two
   ``utils.coordsAndDisplacements`` calls (one list per axis for all bodies), forces by
   ``map(O.forces.addF, ids, rows)`` over rows of a float buffer (0.35 us a body; building
-  Vector3 objects first costs twice that). Velocities have no bulk read: per body.
+  Vector3 objects first costs twice that). Velocities have no bulk read: per body. Call
+  ``freeze_gc()`` once the scene is built (it keeps the garbage collector off the scene's objects).
 
 Set the environment variable PORE_DEM_IO=python to force the Python backend (benchmarks, tests).
 """
 import builtins
+import gc
 import os
 import traceback
 
@@ -107,6 +109,16 @@ class Bodies:
             _BULK.set_perm_force_xz(self.ids, np.ascontiguousarray(F, float))
         else:
             list(map(O.forces.setPermF, self.id_list, self._rows(F)))
+
+
+def freeze_gc():
+    """Collect garbage, then move every live object out of the garbage collector's reach
+    (gc.freeze), undoing an earlier call first. Call it once a scene is built: the Python backend
+    makes one small list per body per write, and the collections they trigger otherwise scan the
+    whole scene each time (measured: a 10,000-body force write 14 -> 5 ms, 2,000 bodies -25 to -45 %)."""
+    gc.unfreeze()
+    gc.collect()
+    gc.freeze()
 
 
 def set_velocities(ids, V):

@@ -23,7 +23,7 @@ from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGe
 
 from engines.pore_water import WaterSettings  # noqa: E402
 from engines.water_engine import WaterEngine  # noqa: E402
-from engines.yade_io import raise_pending  # noqa: E402
+from engines.yade_io import freeze_gc, raise_pending  # noqa: E402
 
 R, RHO = 0.45e-3, 2700.0  # grain radius [m], density [kg/m^3]
 
@@ -75,6 +75,7 @@ def main(argv):
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
                         water_interval=args.water_interval)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+    freeze_gc()  # optional: keeps Python's garbage collector off the scene's objects (faster writes)
 
     O.run(args.steps, True)
     raise_pending()  # an error inside the water engine paused YADE: raise it here
