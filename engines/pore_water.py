@@ -45,6 +45,7 @@ class WaterSettings:
     sides: str = "undrained"  # "undrained" or "drained"
     smoothing: bool = False   # eq 45-46
     substep: bool = False     # sub-step instead of refusing a dt above the Darcy limit
+    transfer: str = "paper"   # re-meshing: "paper" (W from inherited U) or "conserving"
 
     def __post_init__(self):
         if not np.isfinite(self.E_w) or self.E_w <= 0:
@@ -53,6 +54,8 @@ class WaterSettings:
             check_nonnegative(name, getattr(self, name))
         if self.sides not in ("undrained", "drained"):
             raise ValueError(f"sides must be 'undrained' or 'drained', got {self.sides!r}")
+        if self.transfer not in ("paper", "conserving"):
+            raise ValueError(f"transfer must be 'paper' or 'conserving', got {self.transfer!r}")
 
 
 @dataclass
