@@ -36,6 +36,7 @@ bench: deps
 # Redeposit the preset packings (the 1089-disc deposit of Fig. 14-15 takes a few minutes).
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
+	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
 
 clean:
