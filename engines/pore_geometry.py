@@ -250,23 +250,31 @@ class _FlipTriangulation:
     vertices joined to v by an edge."""
 
     def __init__(self, xz, tri):
-        self.p = [tuple(q) for q in xz.tolist()]
-        self.third = {}
-        self.star = {}
-        for a, b, c in tri.tolist():
-            for u, v, w in ((a, b, c), (b, c, a), (c, a, b)):
-                self.third[(u, v)] = w
-                self.star.setdefault(u, set()).add(v)
+        self.p = list(map(tuple, xz.tolist()))
+        u, v, w = tri.ravel(), tri[:, [1, 2, 0]].ravel(), tri[:, [2, 0, 1]].ravel()
+        self.third = dict(zip(zip(u.tolist(), v.tolist()), w.tolist()))
+        order = np.argsort(u, kind="stable")
+        self._u, self._v = u[order], v[order]
+        self.star = {}  # filled on demand from the initial edges, then kept up to date by the flips
+
+    def _star(self, k):
+        if k not in self.star:
+            lo, hi = np.searchsorted(self._u, [k, k + 1])
+            self.star[k] = set(self._v[lo:hi].tolist())
+        return self.star[k]
 
     def triangles(self):
         """The triangles (T, 3) counter-clockwise, each listed once."""
-        return np.array([(a, b, c) for (a, b), c in self.third.items() if a < b and a < c], np.int64)
+        ab = np.array(list(self.third), np.int64)
+        c = np.fromiter(self.third.values(), np.int64, len(self.third))
+        first = (ab[:, 0] < ab[:, 1]) & (ab[:, 0] < c)
+        return np.column_stack([ab[first], c[first]])
 
     def crossed_edges(self, k, l):
         """Edges (right, left) crossed by the segment k -> l in order, or None if it runs
         through another vertex."""
         p, o = self.p, _orient
-        for a in self.star[k]:
+        for a in self._star(k):
             b = self.third.get((k, a))
             if b is None:
                 continue
@@ -319,10 +327,10 @@ class _FlipTriangulation:
         del t[(u, v)], t[(v, u)]
         t[(u, d)], t[(d, c)], t[(c, u)] = c, u, d
         t[(d, v)], t[(v, c)], t[(c, d)] = c, d, v
-        self.star[u].discard(v)
-        self.star[v].discard(u)
-        self.star[c].add(d)
-        self.star[d].add(c)
+        self._star(u).discard(v)
+        self._star(v).discard(u)
+        self._star(c).add(d)
+        self._star(d).add(c)
 
 
 def insert_missing_links(xz, r, tri, reach):
