@@ -7,7 +7,7 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   The triangulation is the regular (radius-weighted, power) triangulation: the lower convex hull
   of the lifted points (x, z, x^2 + z^2 - r^2). Where one of its edges that is not a link hides an
   eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
-  can leave out at a long l_m), that pair is put in by edge flips (``_insert_link``), so that
+  can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
   *every eq 28 pair that crosses no link is a link*. ``candidates="delaunay"`` gives the previous
   candidate set (Delaunay edges of the centres, no insertion), kept for comparison.
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
