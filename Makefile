@@ -3,7 +3,7 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-vtk9
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
