@@ -15,9 +15,7 @@ discs lie in the x-z plane, y = 0, in metres.
 ``convert_run(run_dir)`` turns the ``snapshot_*.npz`` files of a run into this series.
 Written with VTK's own XML writers (Debian's python3-vtk9).
 """
-import glob
 import os
-import re
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -25,6 +23,8 @@ from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+from postproc.run_files import read_snapshot, snapshot_files
 
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
 SERIES = ("discs", "forces", "pores")
@@ -222,12 +222,6 @@ def snapshot_frame(snap):
     return discs, forces, pores
 
 
-def snapshot_files(run_dir):
-    """The run's snapshot_*.npz files in time order."""
-    files = glob.glob(os.path.join(run_dir, "snapshot_*.npz"))
-    return sorted(files, key=lambda f: float(re.search(r"snapshot_([0-9.]+)ms", f).group(1)))
-
-
 def convert_run(run_dir, out_dir=None):
     """Write the VTK series of a run's snapshots into (out_dir or run_dir)/vtk; returns the
     VtkSeries. Raises FileNotFoundError when the run has no snapshot."""
@@ -236,8 +230,7 @@ def convert_run(run_dir, out_dir=None):
         raise FileNotFoundError(f"no snapshot_*.npz in {run_dir}")
     series = VtkSeries(out_dir or run_dir)
     for f in files:
-        with np.load(f, allow_pickle=False) as z:
-            snap = dict(z)
+        snap = read_snapshot(f)
         discs, forces, pores = snapshot_frame(snap)
         series.add(float(snap["t"]), discs, forces, pores)
     return series

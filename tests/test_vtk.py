@@ -12,6 +12,7 @@ from engines import pore_geometry as pg
 from engines import scene as scenes
 from packing.deposition import scene_packing
 from postproc import vtk as pv
+from postproc.run_files import snapshot_files
 
 
 def read(path):
@@ -120,7 +121,7 @@ def test_a_runs_snapshots_convert(tmp_path):
     run = tmp_path / "run"
     run_scene(sc, pk, str(run), duration=2e-4)
     series = pv.convert_run(str(run))
-    snaps = [dict(np.load(f)) for f in pv.snapshot_files(str(run))]
+    snaps = [dict(np.load(f)) for f in snapshot_files(str(run))]
     assert len(snaps) == 3 and series.dir == str(run / "vtk")
     for name in pv.SERIES:
         assert [t for t, _ in collection(run / "vtk" / f"{name}.pvd")] == [float(s["t"]) for s in snaps]
