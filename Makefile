@@ -33,7 +33,8 @@ bench: deps
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 
-# Redeposit the preset packings (the 1089-disc deposit of Fig. 14-15 takes a few minutes).
+# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
+# `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
