@@ -36,7 +36,7 @@ bench: deps
 # Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
-	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
+	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
 
 clean:

@@ -169,7 +169,7 @@ def snapshot_figure(snaps, title, blocks=None):
     give each panel's own maxima; a key explains discs, walls, line widths and arrows.
     ``blocks``: [(z0, z1)] [m] of the pressure blocks, drawn as brackets on the right."""
     n = len(snaps)
-    fig = plt.figure(figsize=(4.3 * n + 1.2, 5.0), layout="constrained")
+    fig = plt.figure(figsize=(max(4.3 * n + 1.2, 8.6), 5.0), layout="constrained")
     grid = fig.add_gridspec(2, n, height_ratios=(1, 0.12))
     axes = [fig.add_subplot(grid[0, k]) for k in range(n)]
     key_ax = fig.add_subplot(grid[1, :])
@@ -179,7 +179,8 @@ def snapshot_figure(snaps, title, blocks=None):
     norm = Normalize(-u_max, u_max)
     f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
     speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
-    v_max = max(v.max(initial=0.0) for v in speed) or 1.0
+    moving = max(v.max(initial=0.0) for v in speed) > 0
+    v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
     v_key = _nice(v_max / 2)
     colour_source = quiver = None
     for ax, s, v in zip(axes, snaps, speed):
@@ -216,7 +217,7 @@ def snapshot_figure(snaps, title, blocks=None):
     if blocks:
         key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
     key_ax.legend(handles=key, loc="center left", ncol=(len(key) + 1) // 2, fontsize=8, frameon=False)
-    if quiver is not None:  # a quiver key lives in its quiver's axes: place it in figure units, after layout
+    if quiver is not None and moving:  # a quiver key lives in its quiver's axes: place it in figure units, after layout
         fig.canvas.draw()
         box = key_ax.get_position()
         axes[0].quiverkey(quiver, box.x0 + 0.84 * box.width, box.y0 + 0.5 * box.height, v_key,
