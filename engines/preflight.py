@@ -6,7 +6,8 @@ the duration, the loading record and the output directory. Each refusal raises I
 one line naming the field or argument and the limit; the scripts print it and exit non-zero
 before the output directory exists. The engines keep their own checks at construction.
 
-``ArgumentParser`` and ``number`` give the scripts one-line argument errors (exit status 2).
+``ArgumentParser``, ``number`` and ``output_dir`` give the scripts one-line argument errors (exit
+status 2).
 """
 import argparse
 import math
@@ -54,21 +55,36 @@ def number(kind=float, lo=None, hi=None, lo_open=False, unit=""):
 
 
 # -- output ---------------------------------------------------------------------------------------
-def check_output_dir(path, arg="--out"):
-    """Raise InputError unless ``path`` is, or can be made, a writable directory. Creates nothing
-    (a probe directory is made and removed in the nearest existing ancestor)."""
+def output_problem(path):
+    """Why ``path`` cannot be (made) a writable directory, or None. Creates nothing (a probe
+    directory is made and removed in the nearest existing ancestor)."""
     if not path:
-        raise InputError(f"{arg}: empty path")
-    target = os.path.abspath(path)
-    probe = target
+        return "empty path"
+    probe = os.path.abspath(path)
     while not os.path.exists(probe):
         probe = os.path.dirname(probe)
     if not os.path.isdir(probe):
-        raise InputError(f"{arg}: {probe} is not a directory, so {path} cannot be created")
+        return f"{probe} is not a directory, so {path} cannot be created"
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".write-probe-", dir=probe))
     except OSError as e:
-        raise InputError(f"{arg}: cannot create {path}: {probe} is not writable ({e.strerror})") from None
+        return f"cannot create {path}: {probe} is not writable ({e.strerror})"
+    return None
+
+
+def check_output_dir(path, arg="--out"):
+    """Raise InputError (naming ``arg``) unless ``path`` is, or can be made, a writable directory."""
+    problem = output_problem(path)
+    if problem:
+        raise InputError(f"{arg}: {problem}")
+
+
+def output_dir(path):
+    """argparse type of an output directory: refused unless it can be written."""
+    problem = output_problem(path)
+    if problem:
+        raise argparse.ArgumentTypeError(problem)
+    return path
 
 
 # -- the scene against its packing ----------------------------------------------------------------

@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 from engines.particle_potential import (  # noqa: E402
     Kind, Model, Potential, SolverSettings, Step, TONNE_FORCE, find_pairs, pa_to_tf_m2,
     pair_stiffness_at_well, run_path, tf_m2_to_pa)
-from engines.preflight import ArgumentParser, InputError, check_output_dir, number  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
 
 SPACING = 1.0      # m
 HALF_COLUMNS = 3   # columns x = 0..3, axis at x = 3
@@ -285,17 +285,13 @@ def parse_args(argv=None):
     ap.add_argument("--ddisp", type=positive, default=0.01, help="displacement increment [m]")
     ap.add_argument("--paper-literal", action="store_true",
                     help="full-weight axis pairs and σ × 1 m on every top particle (see module doc)")
-    ap.add_argument("--out", required=True, help="output directory")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
     args = ap.parse_args(argv)
     for end, step, name, unit in ((max(args.load_max, SEARCH_MAX), args.dload, "--dload", "t/m²"),
                                   (args.disp_max, args.ddisp, "--ddisp", "m")):
         if end / step > MAX_INCREMENTS:
             ap.error(f"argument {name}: {step:g} {unit} gives {end / step:.0f} increments up to {end:g} {unit} "
                      f"(limit {MAX_INCREMENTS})")
-    try:
-        check_output_dir(args.out)
-    except InputError as e:
-        ap.error(str(e))
     return args
 
 

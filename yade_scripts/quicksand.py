@@ -13,7 +13,7 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser, check_output_dir, number, preflight  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir, preflight  # noqa: E402
 
 
 def parse(argv):
@@ -21,7 +21,7 @@ def parse(argv):
     which = ap.add_mutually_exclusive_group()
     which.add_argument("--case", type=int, choices=(1, 2), help="Table 1 or Table 2 (default 1)")
     which.add_argument("--scene", help="a scene file instead of the case preset")
-    ap.add_argument("--out", required=True, help="output directory")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
     ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
                     help="simulated time [s] (default: the scene's)")
     ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
@@ -37,7 +37,6 @@ def overrides_of(args):
 def main(argv):
     args = parse(argv)
     try:  # bad scenes, packings and limits: one clear line, nothing written
-        check_output_dir(args.out)
         overrides = overrides_of(args)
         sc = scenes.load(args.scene, overrides) if args.scene else \
             scenes.preset(f"quicksand_case{args.case or 1}", overrides)

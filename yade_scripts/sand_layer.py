@@ -31,7 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from engines.preflight import ArgumentParser, InputError, check_output_dir, number  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
 from engines.sand_layer_mechanics import (CC_REFERENCE_VOID_RATIO, CC_SLOPE,  # noqa: E402
                                           MechanicsSettings, analyse_layer)
 from packing.sand_layer import (GrainSizeDistribution, SandLayerSettings,  # noqa: E402
@@ -363,17 +363,13 @@ def parse_args(argv=None):
     parser = ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--realisations", type=number(int, lo=1), default=25)
     parser.add_argument("--seed", type=number(int, lo=0), default=0)
-    parser.add_argument("--out", default="out/sand-layer")
+    parser.add_argument("--out", type=output_dir, default="out/sand-layer", help="output directory")
     parser.add_argument("--load-width", type=number(int, lo=1, hi=SandLayerSettings().n_columns),
                         default=LOAD_WIDTH, help="elements")
     parser.add_argument("--load-stress", type=number(lo=0, lo_open=True, unit="Pa"), default=LOAD_STRESS,
                         help="Pa")
     parser.add_argument("--sampling", default="discrete", choices=("discrete", "continuous"))
     args = parser.parse_args(argv)
-    try:
-        check_output_dir(args.out)
-    except InputError as e:
-        parser.error(str(e))
     return args
 
 
