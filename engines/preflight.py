@@ -37,7 +37,7 @@ def number(kind=float, lo=None, hi=None, lo_open=False, unit=""):
     elif lo is not None:
         bound = f"{'>' if lo_open else '>='} {lo:g}"
     else:
-        bound = f"<= {hi:g}"
+        bound = "finite" if hi is None else f"<= {hi:g}"
     unit = f" {unit}" if unit else ""
 
     def convert(text):

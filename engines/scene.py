@@ -216,7 +216,8 @@ PATH_FIELDS = (("packing", "file"), ("loading", "record"))  # relative to the fi
 def _resolve_paths(tables, base):
     """Make the relative PATH_FIELDS of ``tables`` absolute against the folder ``base`` (in place)."""
     for table, name in PATH_FIELDS:
-        value = tables.get(table, {}).get(name) if isinstance(tables.get(table), dict) else None
+        sub = tables.get(table)
+        value = sub.get(name) if isinstance(sub, dict) else None
         if isinstance(value, str) and value and not os.path.isabs(value):
             tables[table][name] = os.path.normpath(os.path.join(base, value))
 

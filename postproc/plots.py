@@ -26,18 +26,9 @@ BLOCK_NAMES = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}
 
 def nan_runs(t, y):
     """[(t_start, t_end)] of the runs of NaN in y, each widened to the neighbouring samples."""
-    bad = np.isnan(y)
-    runs, k = [], 0
-    while k < len(y):
-        if bad[k]:
-            j = k
-            while j + 1 < len(y) and bad[j + 1]:
-                j += 1
-            runs.append((t[max(k - 1, 0)], t[min(j + 1, len(t) - 1)]))
-            k = j + 1
-        else:
-            k += 1
-    return runs
+    edges = np.diff(np.concatenate([[0], np.isnan(y).astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    return [(t[max(a - 1, 0)], t[min(b + 1, len(t) - 1)]) for a, b in zip(starts, ends)]
 
 
 def plot_block_pressures(history, E_w, path, title):
@@ -138,7 +129,7 @@ def draw_snapshot(ax, snap, U_norm=None, velocity_scale=None, force_scale=None):
     mob = group == 0
     quiver = None
     if mob.any():
-        vs = velocity_scale or max(np.abs(v[mob]).max(), 1e-12)
+        vs = velocity_scale or max(np.hypot(*v[mob].T).max(), 1e-12)
         quiver = ax.quiver(xz[mob, 0], xz[mob, 1], v[mob, 0], v[mob, 1], angles="xy", scale_units="xy",
                            scale=vs / (2 * r.mean()), color=ARROW_COLOUR, width=0.004, zorder=4)
     ax.set_aspect("equal")
@@ -217,8 +208,8 @@ def snapshot_figure(snaps, title, blocks=None):
     if blocks:
         key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
     key_ax.legend(handles=key, loc="center left", ncol=(len(key) + 1) // 2, fontsize=8, frameon=False)
-    if quiver is not None and moving:  # a quiver key lives in its quiver's axes: place it in figure units, after layout
-        fig.canvas.draw()
+    if quiver is not None and moving:
+        fig.canvas.draw()  # a quiver key belongs to its quiver's axes: place it in figure units, after layout
         box = key_ax.get_position()
         axes[0].quiverkey(quiver, box.x0 + 0.84 * box.width, box.y0 + 0.5 * box.height, v_key,
                           f"particle velocity {v_key:g} m/s", labelpos="E", coordinates="figure",

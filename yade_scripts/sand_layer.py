@@ -369,8 +369,7 @@ def parse_args(argv=None):
     parser.add_argument("--load-stress", type=number(lo=0, lo_open=True, unit="Pa"), default=LOAD_STRESS,
                         help="Pa")
     parser.add_argument("--sampling", default="discrete", choices=("discrete", "continuous"))
-    args = parser.parse_args(argv)
-    return args
+    return parser.parse_args(argv)
 
 
 def main(argv=None):
