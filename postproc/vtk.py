@@ -169,8 +169,8 @@ def outlines_from_triangles(tri, tri_pore):
     """Outline polygons of pores stored as triangles (PoreNetwork.tri, tri_pore).
 
     A pore's boundary is the set of its triangle edges whose reverse is not in the pore; walked
-    into cycles. Cycles of positive area (the triangles are counter-clockwise) are outlines;
-    negative ones are islands inside a pore and are left out. Returns (polygons, pore of each)."""
+    into cycles: the outline and, around an island of linked discs inside the pore, a cycle
+    turning the other way (``snapshot_frame`` leaves those out). Returns (polygons, pore of each)."""
     tri, tri_pore = np.asarray(tri, np.int64), np.asarray(tri_pore, np.int64)
     polygons, owner = [], []
     for p in np.unique(tri_pore):
@@ -213,7 +213,11 @@ def snapshot_frame(snap):
     pores = None
     if "tri" in snap and len(snap["tri"]):
         polygons, owner = outlines_from_triangles(snap["tri"], snap["tri_pore"])
-        keep = [k for k, poly in enumerate(polygons) if signed_area(xz, poly) > 0]
+        area = np.array([signed_area(xz, poly) for poly in polygons])
+        outer = {}  # per pore, the orientation of its largest cycle; cycles turning the other way are islands
+        for k in np.argsort(-np.abs(area)):
+            outer.setdefault(owner[k], np.sign(area[k]))
+        keep = [k for k in range(len(polygons)) if np.sign(area[k]) == outer[owner[k]]]
         owner = owner[keep]
         pores = dict(polygons=[polygons[k] for k in keep], pore=owner)
         for name in ("U", "W", "A", "rule"):
@@ -238,8 +242,7 @@ def convert_run(run_dir, out_dir=None):
 
 if __name__ == "__main__":
     import sys
-    for run in sys.argv[1:] or [""]:
-        if not run:
-            sys.exit("usage: python3 -m postproc.vtk RUN_DIR [RUN_DIR ...]  (writes RUN_DIR/vtk/*.pvd)")
-        s = convert_run(run)
-        print(f"{run}: {len(s.entries['discs'])} frames -> {s.dir}")
+    if len(sys.argv) < 2:
+        sys.exit("usage: python3 -m postproc.vtk RUN_DIR [RUN_DIR ...]  (writes RUN_DIR/vtk/*.pvd)")
+    for run in sys.argv[1:]:
+        print(f"{run}: {len(convert_run(run).entries['discs'])} frames -> {os.path.join(run, 'vtk')}")

@@ -142,3 +142,17 @@ def test_a_runs_snapshots_convert(tmp_path):
 def test_a_run_without_snapshots_is_named(tmp_path):
     with pytest.raises(FileNotFoundError, match="no snapshot"):
         pv.convert_run(str(tmp_path))
+
+
+def test_snapshot_pores_leave_islands_out_whatever_the_orientation():
+    """The ring pore of test_outlines_...: the outline is kept and the hole left out, also when
+    the whole picture is mirrored (all cycles turn the other way)."""
+    xz = np.array([[0, 0], [3, 0], [3, 3], [0, 3], [1, 1], [2, 1], [2, 2], [1, 2]], float)
+    ring = np.array([[0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+    for pts in (xz, xz * [-1, 1]):
+        snap = dict(xz=pts, r=np.full(8, 0.1), vel=np.zeros((8, 2)), density_factor=np.ones(8),
+                    group=np.zeros(8, int), pairs=np.zeros((0, 2), int), f_n=np.zeros(0), tri=ring,
+                    tri_pore=np.zeros(8, int), U=np.array([7.0]))
+        _, _, pores = pv.snapshot_frame(snap)
+        assert len(pores["polygons"]) == 1 and sorted(pores["polygons"][0]) == [0, 1, 2, 3]
+        assert pores["U"].tolist() == [7.0] and pores["pore"].tolist() == [0]
