@@ -3,7 +3,7 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-vtk9
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
@@ -33,10 +33,11 @@ bench: deps
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 
-# Redeposit the preset packings (the 1089-disc deposit of Fig. 14-15 takes a few minutes).
+# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
+# `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
-	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
-	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1
+	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
+	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
 
 clean:

@@ -9,7 +9,7 @@ raise SceneError naming the field.
 import math
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from engines.contact import ContactSettings
 from engines.pore_water import WaterSettings
@@ -85,7 +85,7 @@ SCHEMA = {
         "smoothing": (bool, False, None, "eq 45-46"),
         "substep": (bool, False, None, "sub-step the water instead of refusing a step above the Darcy limit"),
         # issue 11
-        "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.pore_water.conserving_transfer)"),
+        "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.pore_water.conserving_water)"),
     },
     "loading": {
         "type": (str, "none", ("none", "cosine", "record"), "horizontal acceleration of the moving walls"),
@@ -120,10 +120,12 @@ SCHEMA = {
 
 @dataclass
 class Scene:
-    """A validated scene: ``tables`` holds every field (defaults filled in), by table."""
+    """A validated scene: ``tables`` holds every field (defaults filled in), by table;
+    ``overrides`` the {table: {field: value}} applied on top of the file (recorded by runs)."""
 
     tables: dict
     path: str = ""
+    overrides: dict = field(default_factory=dict)
 
     def __getattr__(self, table):
         try:
@@ -148,7 +150,9 @@ class Scene:
 
     def with_overrides(self, overrides):
         """A new validated scene with {table: {field: value}} replaced."""
-        return validate(_merge(self.as_dict(), overrides), self.path)
+        sc = validate(_merge(self.as_dict(), overrides), self.path)
+        sc.overrides = _merge(self.overrides, overrides)
+        return sc
 
 
 class _Table(dict):
@@ -225,11 +229,19 @@ def _cross_checks(t, path):
         raise SceneError("[loading] side_walls = 'springs' needs moves = 'bottom' (the box moving as one has no springs)")
     if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):
         raise SceneError(f"[output] snapshot_times: expected times >= 0, got {t['output']['snapshot_times']!r}")
-    base = os.path.dirname(path) if path else SCENE_DIR
-    for table, name in (("packing", "file"), ("loading", "record")):
-        value = t[table][name]
-        if value and not os.path.isabs(value):
-            t[table][name] = os.path.normpath(os.path.join(base, value))
+    _resolve_paths(t, os.path.dirname(path) if path else SCENE_DIR)
+
+
+PATH_FIELDS = (("packing", "file"), ("loading", "record"))  # relative to the file that names them
+
+
+def _resolve_paths(tables, base):
+    """Make the relative PATH_FIELDS of ``tables`` absolute against the folder ``base`` (in place)."""
+    for table, name in PATH_FIELDS:
+        sub = tables.get(table)
+        value = sub.get(name) if isinstance(sub, dict) else None
+        if isinstance(value, str) and value and not os.path.isabs(value):
+            tables[table][name] = os.path.normpath(os.path.join(base, value))
 
 
 def _merge(base, over):
@@ -242,8 +254,11 @@ def _merge(base, over):
     return out
 
 
-def read_raw(path):
-    """Parse a scene file, following ``extends`` chains; returns the merged TOML dict."""
+def read_raw(path, _chain=None):
+    """Parse a scene file, following ``extends`` chains; returns the merged TOML dict.
+
+    Relative paths (``extends``, PATH_FIELDS) are resolved against the folder of the file that
+    names them, so a scene anywhere may extend a preset and inherit its packing file."""
     try:
         with open(path, "rb") as f:
             raw = tomllib.load(f)
@@ -251,9 +266,17 @@ def read_raw(path):
         raise SceneError(f"scene file not found: {path}") from None
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{path}: not valid TOML: {e}") from None
+    path = os.path.abspath(path)
+    _chain = (path,) if _chain is None else _chain
+    _resolve_paths(raw, os.path.dirname(path))
     parent = raw.pop("extends", None)
-    if parent:
-        raw = _merge(read_raw(os.path.join(os.path.dirname(path), parent)), raw)
+    if parent is not None:
+        if not isinstance(parent, str) or not parent:
+            raise SceneError(f"{path}: extends: expected a scene file name, got {parent!r}")
+        parent = os.path.normpath(os.path.join(os.path.dirname(path), parent))
+        if parent in _chain:
+            raise SceneError(f"{path}: extends: a loop back to {parent}")
+        raw = _merge(read_raw(parent, _chain + (parent,)), raw)
     return raw
 
 
@@ -262,7 +285,9 @@ def load(path, overrides=None):
     raw = read_raw(path)
     if overrides:
         raw = _merge(raw, overrides)
-    return validate(raw, path)
+    sc = validate(raw, path)
+    sc.overrides = _merge({}, overrides or {})
+    return sc
 
 
 def preset(name, overrides=None):
