@@ -17,9 +17,9 @@ import os
 import struct
 
 N_PROBE = 6          # probe bodies; the Newton check uses as many twins
-SCENE_SCAN = 4096    # bytes of Scene searched for the BodyContainer pointer and the ForceContainer
-BODY_SCAN = 512      # bytes of Body searched for the State pointer
-STATE_SCAN = 1024    # bytes of State searched for pos, vel, angVel
+SCENE_SCAN = 4096    # bytes of Scene searched for the BodyContainer pointer and the ForceContainer,
+BODY_SCAN = 512      # of Body for the State pointer, of State for pos, vel, angVel: at most, and no
+STATE_SCAN = 1024    # further than the object's heap block where that can be read (Memory.extent)
 CONTAINER_SCAN = 256  # bytes of BodyContainer that must be readable (it holds the body vector)
 USER_SPACE = 1 << 47
 
@@ -53,6 +53,18 @@ class Memory:
         data = self.read(addr, 8)
         return None if data is None else struct.unpack("<Q", data)[0]
 
+    def extent(self, addr, limit):
+        """Bytes to search from an object's address: its heap block's usable size if `addr` starts an
+        in-use glibc malloc chunk (size word before it, the next chunk marking it in use), else
+        `limit`. Searching past the object could find a neighbour holding the same pointer (a
+        shared_ptr's control block does); any wrong bound still only fails the probe."""
+        head = self.word(addr - 8)
+        if head is None or head & 2:  # unreadable, or an mmapped chunk
+            return limit
+        size = head & ~7
+        after = self.word(addr - 8 + size) if 32 <= size <= 1 << 16 else None
+        return min(limit, size - 8) if after is not None and after & 1 else limit
+
     def words(self, addr, n_bytes):
         data = self.read(addr, n_bytes)
         return None if data is None else struct.unpack(f"<{n_bytes // 8}Q", data)
@@ -84,28 +96,25 @@ def libyade_path():
 
 
 def _find_bodies_offset(lib, mem, scene, slots):
-    """Offset in Scene of the BodyContainer pointer: the word that points to a readable block holding
-    the address of body 0's shared_ptr slot (as Body::byId returns it); then YADE's exported
-    BodyContainer::size and operator[] must agree with the body count and every slot."""
-    scene_words = mem.words(scene, SCENE_SCAN)
+    """Offset in Scene of the BodyContainer pointer: a word pointing to a readable block that holds
+    the address of body 0's shared_ptr slot (as Body::byId returns it), and for which YADE's
+    exported BodyContainer::size and operator[] agree with the body count and every slot. (Those two
+    only read the container's first 0x28 bytes, which the readable block covers; the second test
+    tells the container from a neighbouring heap object whose block reaches into it.)"""
+    scene_words = mem.words(scene, mem.extent(scene, SCENE_SCAN) & ~7)
     if scene_words is None:
         raise ProbeError("the current Scene is not readable")
     found = set()
     for k, w in enumerate(scene_words):
         block = mem.words(w, CONTAINER_SCAN)
-        if block is not None and slots[0] in block:
+        if block is not None and slots[0] in block and _is_body_container(lib, w, slots):
             found.add(8 * k)
-    off = _unique(found, "BodyContainer pointer in Scene")
-    _check_bodies(lib, mem, scene, off, slots)
-    return off
+    return _unique(found, "BodyContainer pointer in Scene")
 
 
-def _check_bodies(lib, mem, scene, off, slots):
-    bodies = mem.word(scene + off)
-    if lib.yb_bodies_size(bodies) != len(slots):
-        raise ProbeError("BodyContainer::size disagrees with the probe's body count")
-    if any(lib.yb_bodies_at(bodies, i) != s for i, s in enumerate(slots)):
-        raise ProbeError("BodyContainer::operator[] disagrees with Body::byId")
+def _is_body_container(lib, bodies, slots):
+    return lib.yb_bodies_size(bodies) == len(slots) and all(
+        lib.yb_bodies_at(bodies, i) == s for i, s in enumerate(slots))
 
 
 def _find_state_offsets(mem, bodies, values):
@@ -113,15 +122,15 @@ def _find_state_offsets(mem, bodies, values):
     at the same offsets for every body."""
     common = None
     for body, (pos, vel, angvel) in zip(bodies, values):
-        words = mem.words(body, BODY_SCAN)
+        words = mem.words(body, mem.extent(body, BODY_SCAN) & ~7)
         if words is None:
             raise ProbeError("a probe Body is not readable")
         found = set()
         for k, w in enumerate(words):
-            block = mem.read(w, STATE_SCAN)
+            block = mem.read(w, mem.extent(w, STATE_SCAN))
             if block is None:
                 continue
-            hits = [[j for j in range(0, STATE_SCAN - 23, 8) if block[j:j + 24] == _pack(v)]
+            hits = [[j for j in range(0, len(block) - 23, 8) if block[j:j + 24] == _pack(v)]
                     for v in (pos, vel, angvel)]
             if all(len(h) == 1 for h in hits):
                 found.add((8 * k, hits[0][0], hits[1][0], hits[2][0]))
@@ -135,7 +144,7 @@ def _find_forces_offset(mem, scene, forces):
     O.forces.addF to bodies 0..n-1."""
     expected = b"".join(_pack(f) for f in forces)
     found = set()
-    for k, w in enumerate(mem.words(scene, SCENE_SCAN)):
+    for k, w in enumerate(mem.words(scene, mem.extent(scene, SCENE_SCAN) & ~7)):
         data = mem.word(w)
         if data is not None and mem.read(data, len(expected)) == expected:
             found.add(8 * k)
@@ -269,7 +278,8 @@ def _discover_and_verify(lib, bridge, mem, np, O, utils):
 
     # a second body count (the body vector reallocates): the container checks must still hold
     O.bodies.append([utils.sphere((0, 0, 0), 0.5) for _ in range(n)])
-    _check_bodies(lib, mem, lib.yb_scene(), bodies_off, [lib.yb_body_slot(i) for i in range(2 * n)])
+    _expect(_is_body_container(lib, mem.word(lib.yb_scene() + bodies_off), [lib.yb_body_slot(i) for i in range(2 * n)]),
+            "BodyContainer::size and operator[] agree with Body::byId after the body vector grew")
     _verify(bridge, np, O, np.arange(2 * n, dtype=np.int64)[::-1].copy(), 2)
     _verify_newton_step(bridge, np, O, n)
     return {"forces": forces_off, "bodies": bodies_off, "state": state_offs[0], "pos": state_offs[1],
