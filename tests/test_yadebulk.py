@@ -1,6 +1,7 @@
 """The bulk-I/O bridge (engines/yadebulk) against YADE's per-body Python API: exact agreement of
 every function, bit-identical trajectories, refused ids and arrays, a probe that leaves the user's
 scene alone and rejects a wrong layout."""
+import __main__
 import os
 
 import numpy as np
@@ -112,7 +113,7 @@ def _box_of_discs(n=40, seed=4):
                  InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Box_Sphere_ScGeom()],
                                  [Ip2_FrictMat_FrictMat_FrictPhys()], [Law2_ScGeom_FrictPhys_CundallStrack()],
                                  ompThreads=1),  # one thread: contact forces summed in a fixed order
-                 PyRunner(command=hook, iterPeriod=1),
+                 PyRunner(command=hook, iterPeriod=1, updateGlobals=False),
                  NewtonIntegrator(damping=0.1, gravity=(0, 0, -9.81))]
     O.dt = 0.5 * utils.PWaveTimeStep()
     return np.arange(len(walls), len(walls) + n, dtype=np.int64)
@@ -250,8 +251,10 @@ def _user_scene():
 
 
 def _snapshot():
+    """The user's scene, its forces, and the names of __main__ (where a PyRunner can write)."""
     return (O.sceneToString(), O.thisScene, O.iter, O.time, O.dt,
-            [(tuple(O.forces.f(i, True)), tuple(O.forces.permF(i))) for i in range(len(O.bodies))])
+            [(tuple(O.forces.f(i, True)), tuple(O.forces.permF(i))) for i in range(len(O.bodies))],
+            {k: id(v) for k, v in vars(__main__).items()})
 
 
 def test_the_probe_leaves_the_user_scene_untouched(bulk):

@@ -210,7 +210,8 @@ def _verify_newton_step(bridge, np, O, n):
     from yade import Vector3
     from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
     hook = f"__import__('sys').modules[{__name__!r}]._apply_step_forces()"
-    O.engines = [ForceResetter(), PyRunner(command=hook, iterPeriod=1),
+    # updateGlobals=False: by default PyRunner copies the locals of O.step()'s caller into __main__
+    O.engines = [ForceResetter(), PyRunner(command=hook, iterPeriod=1, updateGlobals=False),
                  NewtonIntegrator(damping=0.0, gravity=(0, 0, -9.75))]
     O.dt = 2.0 ** -10
     _step_forces = lambda: None  # noqa: E731  (a first step leaves YADE's force buffers in step)
