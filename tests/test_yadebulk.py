@@ -182,7 +182,7 @@ def test_trajectories_with_bridge_forces_equal_those_with_o_forces_bit_for_bit(b
 def test_bad_ids_are_refused_and_nothing_is_done(bulk):
     ids = _discs(10)
     O.bodies.erase(4)
-    for i in (0, 1, 2):  # known forces (YADE's O.forces.f crashes on bodies never given one)
+    for i in (0, 1, 2):  # known forces (YADE's O.forces.permF crashes if none was ever set)
         O.forces.addF(i, Vector3(1.0, 2.0, 3.0))
         O.forces.setPermF(i, Vector3(4.0, 5.0, 6.0))
     F = np.ones((3, 2))
@@ -246,7 +246,8 @@ def _user_scene():
     O.engines = O.engines[:3] + O.engines[4:]
     O.run(20, True)
     O.forces.addF(int(ids[0]), Vector3(1.0, 2.0, 3.0))
-    O.forces.setPermF(int(ids[1]), Vector3(4.0, 5.0, 6.0))
+    for i in range(len(O.bodies)):  # on every body: YADE's O.forces.permF reads past the end otherwise
+        O.forces.setPermF(i, Vector3(4.0, 5.0, i))
     return ids
 
 

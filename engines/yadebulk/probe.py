@@ -16,6 +16,10 @@ scene afterwards, so the user's bodies, forces, O.iter, O.time and O.dt are not 
 import os
 import struct
 
+import numpy as np
+from yade import O, Quaternion, Vector3, utils
+from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
+
 N_PROBE = 6          # probe bodies; the Newton check uses as many twins
 SCENE_SCAN = 4096    # bytes of Scene searched for the BodyContainer pointer and the ForceContainer,
 BODY_SCAN = 512      # of Body for the State pointer, of State for pos, vel, angVel: at most, and no
@@ -156,9 +160,8 @@ def _expect(cond, what):
         raise ProbeError(f"verification failed: {what}")
 
 
-def _verify(bridge, np, O, ids, rnd):
+def _verify(bridge, ids, rnd):
     """Behavioural checks through the configured bridge, reads before writes."""
-    from yade import Vector3
     xz = np.empty((len(ids), 2))
     y = np.empty(len(ids))
     for field, getter in ((0, bridge.get_pos_xz), (1, bridge.get_vel_xz)):
@@ -203,12 +206,10 @@ def _apply_step_forces():
     _step_forces()
 
 
-def _verify_newton_step(bridge, np, O, n):
+def _verify_newton_step(bridge, n):
     """Bodies n..2n-1 are twins of 0..n-1; each step (after ForceResetter) the twins get their forces
     through the bridge, the originals through O.forces; after two steps each pair must be identical."""
     global _step_forces
-    from yade import Vector3
-    from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
     hook = f"__import__('sys').modules[{__name__!r}]._apply_step_forces()"
     # updateGlobals=False: by default PyRunner copies the locals of O.step()'s caller into __main__
     O.engines = [ForceResetter(), PyRunner(command=hook, iterPeriod=1, updateGlobals=False),
@@ -218,8 +219,7 @@ def _verify_newton_step(bridge, np, O, n):
     O.step()
     for i in range(n):
         a, b = O.bodies[i].state, O.bodies[n + i].state
-        for name in ("pos", "vel", "angVel", "ori"):
-            setattr(b, name, type(getattr(a, name))(getattr(a, name)))
+        b.pos, b.vel, b.angVel, b.ori = Vector3(a.pos), Vector3(a.vel), Vector3(a.angVel), Quaternion(a.ori)
     start = [tuple(O.bodies[i].state.pos) for i in range(n)]
     twins = np.arange(n, 2 * n, dtype=np.int64)
     F = np.array([probe_value(4, i, 0)[::2] for i in range(n)])
@@ -248,14 +248,13 @@ def _verify_newton_step(bridge, np, O, n):
         _expect(tuple(a.pos) != start[i], "the Newton check moved the bodies")
 
 
-def _discover_and_verify(lib, bridge, mem, np, O, utils):
+def _discover_and_verify(lib, bridge, mem):
     n = N_PROBE
     O.bodies.append([utils.sphere((0, 0, 0), 0.5) for _ in range(n)])
     scene = lib.yb_scene()
     slots = [lib.yb_body_slot(i) for i in range(n)]
     bodies_off = _find_bodies_offset(lib, mem, scene, slots)
 
-    from yade import Vector3
     body_ptrs = [mem.word(s) for s in slots]
     candidates = set()
     for rnd in range(2):
@@ -275,14 +274,15 @@ def _discover_and_verify(lib, bridge, mem, np, O, utils):
     lib.yb_configure(forces_off, bodies_off, *state_offs, 1)
     ids = np.arange(n, dtype=np.int64)
     for rnd in range(2):
-        _verify(bridge, np, O, ids, rnd)
+        _verify(bridge, ids, rnd)
 
     # a second body count (the body vector reallocates): the container checks must still hold
     O.bodies.append([utils.sphere((0, 0, 0), 0.5) for _ in range(n)])
-    _expect(_is_body_container(lib, mem.word(lib.yb_scene() + bodies_off), [lib.yb_body_slot(i) for i in range(2 * n)]),
+    grown = [lib.yb_body_slot(i) for i in range(2 * n)]
+    _expect(_is_body_container(lib, mem.word(lib.yb_scene() + bodies_off), grown),
             "BodyContainer::size and operator[] agree with Body::byId after the body vector grew")
-    _verify(bridge, np, O, np.arange(2 * n, dtype=np.int64)[::-1].copy(), 2)
-    _verify_newton_step(bridge, np, O, n)
+    _verify(bridge, np.arange(2 * n, dtype=np.int64)[::-1].copy(), 2)
+    _verify_newton_step(bridge, n)
     return {"forces": forces_off, "bodies": bodies_off, "state": state_offs[0], "pos": state_offs[1],
             "vel": state_offs[2], "angvel": state_offs[3]}
 
@@ -290,8 +290,6 @@ def _discover_and_verify(lib, bridge, mem, np, O, utils):
 def run(lib, bridge):
     """Discover and verify the layout on a scratch scene; return the offsets (bytes) or raise
     ProbeError. `lib` is the opened C library, `bridge` the module of numpy wrappers."""
-    import numpy as np
-    from yade import O, utils
     if O.running:
         raise ProbeError("the simulation is running: call engines.yadebulk.available() before O.run()")
     home, home_scene = O.thisScene, lib.yb_scene()
@@ -300,7 +298,7 @@ def run(lib, bridge):
     scratch = O.addScene()
     O.switchToScene(scratch)
     try:
-        return _discover_and_verify(lib, bridge, mem, np, O, utils)
+        return _discover_and_verify(lib, bridge, mem)
     except BaseException:
         lib.yb_configure(0, 0, 0, 0, 0, 0, 0)
         raise
