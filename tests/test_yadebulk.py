@@ -3,6 +3,8 @@ every function, bit-identical trajectories, refused ids and arrays, a probe that
 scene alone and rejects a wrong layout."""
 import __main__
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -308,3 +310,27 @@ def test_the_bridge_follows_the_current_scene(bulk):
     assert np.array_equal(b, _xz(bod.state.pos for bod in O.bodies)) and not np.array_equal(a, b[:5])
     with pytest.raises(IndexError):
         bulk.get_pos_xz(np.array([30], dtype=np.int64), np.empty((1, 2)))
+
+
+def test_an_unlisted_libyade_is_refused_unless_unpinned(bulk, tmp_path):
+    """In a fresh process: with KNOWN_LIBYADE emptied the bridge refuses; YADEBULK_UNPINNED=1
+    probes anyway; YADEBULK=0 switches it off."""
+    script = tmp_path / "pin.py"
+    script.write_text(
+        "import os, sys\n"
+        "sys.path.append('/usr/lib/x86_64-linux-gnu/yade-double/py')\n"
+        "from engines import yadebulk\n"
+        "yadebulk.KNOWN_LIBYADE.clear()\n"
+        "print(yadebulk.available(), 'KNOWN_LIBYADE' in yadebulk.reason())\n"
+        "os.environ['YADEBULK_UNPINNED'] = '1'\n"
+        "yadebulk._final = False\n"
+        "print(yadebulk.available(), yadebulk.reason())\n")
+    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env.pop("YADEBULK_UNPINNED", None)
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=300)
+    lines = [ln for ln in out.stdout.splitlines() if ln.startswith(("True", "False"))]
+    assert lines == ["False True", "True probe passed"], out.stdout + out.stderr
+    env["YADEBULK"] = "0"
+    off = subprocess.run([sys.executable, "-c", "from engines import yadebulk; print(yadebulk.reason())"],
+                         env=env, capture_output=True, text=True, timeout=300)
+    assert off.stdout.strip() == "switched off by YADEBULK=0", off.stdout + off.stderr

@@ -13,9 +13,9 @@ each); these functions move arrays. They work in the x-z plane of our discs::
 ``add_force_xz``, ``add_torque_y`` and ``set_perm_force_xz`` call YADE's own ForceContainer
 functions, the ones ``O.forces.addF``/``addT``/``setPermF`` call, so results are bit-identical to
 those. The compiled part (``_yadebulk.so``, built by ``make ext`` from ``yadebulk.c``) uses no YADE
-headers; the data offsets it needs are discovered and verified at first use by ``probe.py`` on a
-scratch scene (the user's scene is left untouched), and nothing is read or written before that
-succeeded. Call ``available()`` before ``O.run()``: the probe refuses to run during a simulation.
+headers; it runs only on a libyade.so build listed in ``KNOWN_LIBYADE``, and the data offsets it
+needs are discovered and verified at first use by ``probe.py`` on a scratch scene (the user's scene
+is left untouched): nothing is read or written before that succeeded. Call ``available()`` before ``O.run()``: the probe refuses to run during a simulation.
 
 For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` are the ctypes function objects,
 ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready (``available()`` not yet
@@ -31,6 +31,14 @@ import sys
 import numpy as np
 
 SO_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_yadebulk.so")
+# Builds of libyade.so (sha256) whose calling conventions the C part relies on were checked by
+# disassembly: Omega::getScene and Body::byId return references (a by-value shared_ptr would be
+# returned through a hidden pointer, and the call would write into Omega). The data layout is
+# still probed at every load. YADEBULK_UNPINNED=1 probes an unlisted build anyway: if
+# tests/test_yadebulk.py then passes, add its hash here.
+KNOWN_LIBYADE = {
+    "6dab813fb5cb5be6adb80d973e52cc4ebc763a266317ebd1bab487264d8a391b": "Debian yade 2023.02a-1 amd64, yade-double",
+}
 NAMES = ("get_pos_xz", "get_vel_xz", "set_vel_xz", "get_angvel_y", "add_torque_y", "add_force_xz",
          "set_perm_force_xz")
 
@@ -83,10 +91,15 @@ def available():
     from . import probe
     try:
         path = probe.libyade_path()
+        _layout.update(libyade=path, sha256=sha256(path))
+        if _layout["sha256"] not in KNOWN_LIBYADE and os.environ.get("YADEBULK_UNPINNED") != "1":
+            _final, _reason = True, (f"{path} (sha256 {_layout['sha256']}) is not a build listed in "
+                                     "engines.yadebulk.KNOWN_LIBYADE (YADEBULK_UNPINNED=1 probes it anyway)")
+            return False
         if _lib.yb_open(path.encode()) != 0:
             raise probe.ProbeError(_lib.yb_error().decode())
         _probing = True
-        _layout.update(probe.run(_lib, sys.modules[__name__]), libyade=path)
+        _layout.update(probe.run(_lib, sys.modules[__name__]))
     except probe.ProbeError as e:
         _reason = f"layout probe failed: {e}"
         _final = "running" not in str(e)  # a probe refused during O.run() may be retried later
@@ -104,11 +117,14 @@ def reason():
 
 
 def layout():
-    """The verified offsets (bytes), the libyade.so they hold for and its sha256 (empty if not available)."""
-    if available() and "sha256" not in _layout:
-        with open(_layout["libyade"], "rb") as f:
-            _layout["sha256"] = hashlib.sha256(f.read()).hexdigest()
+    """The verified offsets (bytes), the libyade.so they hold for and its sha256."""
+    available()
     return dict(_layout)
+
+
+def sha256(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
 
 
 def _call(fn, ids, arr, width, writes_arr):

@@ -26,7 +26,7 @@
 #define YB_ENOSCENE (-2)  /* no current scene or body container */
 #define YB_EBADN (-3)     /* n < 0 */
 
-/* C++ signatures, `this` first (mangled names in open_symbols). */
+/* C++ signatures, `this` first (mangled names in yb_open). References are returned as pointers. */
 typedef void *(*omega_instance_fn)(void);              /* Omega& Singleton<Omega>::instance() */
 typedef void *const *(*get_scene_fn)(const void *);    /* const shared_ptr<Scene>& Omega::getScene() const */
 typedef void *const *(*body_by_id_fn)(int, void *);    /* const shared_ptr<Body>& Body::byId(int, Scene*) */
@@ -201,26 +201,23 @@ int64_t yb_add_torque_y(const int64_t *ids, int64_t n, const double *T)
     return 0;
 }
 
-/* O.forces.addF(ids[k], (F[k,0], 0, F[k,1])) */
-int64_t yb_add_force_xz(const int64_t *ids, int64_t n, const double *F)
+/* fn(forces, ids[k], (F[k,0], 0, F[k,1])) for every k */
+static int64_t apply_xz(force_fn fn, const int64_t *ids, int64_t n, const double *F)
 {
     BULK_PROLOGUE
     void *fc = c.scene + L.forces;
     for (int64_t k = 0; k < n; k++) {
         const double f[3] = {F[2 * k], 0.0, F[2 * k + 1]};
-        Y.add_force(fc, (int)ids[k], f);
+        fn(fc, (int)ids[k], f);
     }
     return 0;
 }
 
+/* O.forces.addF(ids[k], (F[k,0], 0, F[k,1])) */
+int64_t yb_add_force_xz(const int64_t *ids, int64_t n, const double *F) { return apply_xz(Y.add_force, ids, n, F); }
+
 /* O.forces.setPermF(ids[k], (F[k,0], 0, F[k,1])) */
 int64_t yb_set_perm_force_xz(const int64_t *ids, int64_t n, const double *F)
 {
-    BULK_PROLOGUE
-    void *fc = c.scene + L.forces;
-    for (int64_t k = 0; k < n; k++) {
-        const double f[3] = {F[2 * k], 0.0, F[2 * k + 1]};
-        Y.set_perm_force(fc, (int)ids[k], f);
-    }
-    return 0;
+    return apply_xz(Y.set_perm_force, ids, n, F);
 }
