@@ -148,27 +148,22 @@ static int64_t check_ids(const Ctx *c, const int64_t *ids, int64_t n)
     int64_t err = begin(&c, n);                                                                         \
     if (err || (err = check_ids(&c, ids, n))) return err;
 
-/* out[k] = (x, z) of pos of body ids[k] */
-int64_t yb_get_pos_xz(const int64_t *ids, int64_t n, double *out)
+/* out[k] = (x, z) of the Vector3r at byte `offset` in body ids[k]'s State */
+static int64_t get_xz(ptrdiff_t offset, const int64_t *ids, int64_t n, double *out)
 {
     BULK_PROLOGUE
     for (int64_t k = 0; k < n; k++) {
-        const double *p = (const double *)(state_of(&c, ids[k]) + L.pos);
-        out[2 * k] = p[0], out[2 * k + 1] = p[2];
-    }
-    return 0;
-}
-
-/* out[k] = (x, z) of vel of body ids[k] */
-int64_t yb_get_vel_xz(const int64_t *ids, int64_t n, double *out)
-{
-    BULK_PROLOGUE
-    for (int64_t k = 0; k < n; k++) {
-        const double *v = (const double *)(state_of(&c, ids[k]) + L.vel);
+        const double *v = (const double *)(state_of(&c, ids[k]) + offset);
         out[2 * k] = v[0], out[2 * k + 1] = v[2];
     }
     return 0;
 }
+
+/* out[k] = (x, z) of pos of body ids[k] */
+int64_t yb_get_pos_xz(const int64_t *ids, int64_t n, double *out) { return get_xz(L.pos, ids, n, out); }
+
+/* out[k] = (x, z) of vel of body ids[k] */
+int64_t yb_get_vel_xz(const int64_t *ids, int64_t n, double *out) { return get_xz(L.vel, ids, n, out); }
 
 /* vel of body ids[k] = (V[k,0], 0, V[k,1]) */
 int64_t yb_set_vel_xz(const int64_t *ids, int64_t n, const double *V)
