@@ -21,7 +21,8 @@ For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` are the ctypes function 
 ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready (``available()`` not yet
 True), -2 no scene, k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit`` function calls
 them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``.
-Set ``YADEBULK=0`` in the environment to switch the bridge off.
+Like YADE's Python API, call them from the thread that runs the simulation (a PyRunner) or while it
+is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
 """
 import ctypes
 import hashlib
@@ -103,6 +104,9 @@ def available():
     except probe.ProbeError as e:
         _reason = f"layout probe failed: {e}"
         _final = "running" not in str(e)  # a probe refused during O.run() may be retried later
+        return False
+    except Exception as e:  # YADE refused a probe step: the caller falls back, reason() says why
+        _final, _reason = True, f"layout probe stopped by {type(e).__name__}: {e}"
         return False
     finally:
         _probing = False
