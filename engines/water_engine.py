@@ -106,7 +106,7 @@ class WaterModel:
     def rebuild(self, xz):
         """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
-        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area)
+        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz)
         self.n_rebuilds += 1
         self._buffers()
 

@@ -14,6 +14,7 @@ from yade import O
 from engines import pore_geometry as pg
 from engines import yade_io
 from engines.pore_dem import pore_state
+from engines.provenance import provenance
 from engines.yade_coupling import YadeCoupling
 from postproc import plots
 
@@ -137,6 +138,7 @@ def summarise(scene, packing, cp, n_steps, wall, status):
         "contact_list_builds": cp.core.contact.list_builds if cp.core is not None else None,
         "block_bounds_m": cp.block_bounds,
         "parameters": scene.as_dict(),
+        "provenance": provenance(overrides=scene.overrides),
     }
 
 
