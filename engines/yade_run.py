@@ -29,7 +29,8 @@ class Recorder:
         self.n_blocks = len(cp.block_bounds)
         self.columns = (["t"] + [f"U_block{b + 1}" for b in range(self.n_blocks)] +
                         ["porosity", "kinetic_energy", "water_balance_error", "total_water", "n_pores",
-                         "fn_bottom_mean", "bed_top"])
+                         "fn_bottom_mean", "bed_top", "base_acc", "base_vel", "base_disp", "side_left_dx",
+                         "side_right_dx", "remesh_change"])
         self.file = open(os.path.join(out_dir, "history.csv"), "w", newline="")
         self.writer = csv.writer(self.file)
         self.writer.writerow(self.columns)
@@ -59,7 +60,8 @@ class Recorder:
         values = ([k * self.dt] + list(cp.block_pressures(xz)) +
                   [cp.porosity(xz), cp.kinetic_energy(), w.balance_error() if w else 0.0,
                    w.total_water() if w else 0.0, w.net.n_pores if w else 0,
-                   cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))])
+                   cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))] +
+                  list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0])
         self.writer.writerow([f"{v:.9g}" for v in values])
         self.file.flush()
 
