@@ -8,7 +8,7 @@ EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench bench-seismic packings clean
+.PHONY: deps ext demo test bench bench-seismic packings liquefaction clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -53,6 +53,20 @@ packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+
+# Seismic liquefaction (seed 000 §6): the seven cases at the paper's settings (0.18 s, dt = 1e-6 s,
+# water every step; a few minutes each), cases 1 and 3 again with the water-conserving transfer,
+# then the study: $(OUT)/liquefaction/summary.json, trends.md, Fig. 40, 41, 46. One run at a time
+# (the machine is shared); LIQ_CASES="1 2" runs a subset, the study uses what is there.
+LIQ_CASES ?= 1 2 3 4 5 6 7
+LIQ_CONSERVING ?= 1 3
+liquefaction: deps
+	@for n in $(LIQ_CASES); do \
+	  $(YADE) -n -x yade_scripts/liquefaction.py --case $$n --out $(OUT)/liquefaction/case$$n || exit 1; done
+	@for n in $(LIQ_CONSERVING); do \
+	  $(YADE) -n -x yade_scripts/liquefaction.py --case $$n --transfer conserving \
+	    --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
+	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
 
 clean:
 	rm -rf $(OUT) .pytest_cache
