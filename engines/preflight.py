@@ -7,11 +7,12 @@ one line naming the field or argument and the limit; the scripts print it and ex
 before the output directory exists. The engines keep their own checks at construction.
 
 ``ArgumentParser``, ``number`` and ``output_dir`` give the scripts one-line argument errors (exit
-status 2).
+status 2); ``scene_and_packing`` is their common start.
 """
 import argparse
 import math
 import os
+import sys
 import tempfile
 
 
@@ -183,3 +184,20 @@ def preflight(scene, packing, out_dir):
         return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
                 f"({scene.numerics.duration:g} s) and are skipped"]
     return []
+
+
+def scene_and_packing(make_scene, out_dir, check=None):
+    """A scene script's start: the scene ``make_scene()``, the script's own ``check(scene)``, the
+    scene's packing and ``preflight`` (its notes printed). Any ValueError (a bad scene, packing or
+    limit) exits with one line ``error: ...`` before anything is written. Returns (scene, packing)."""
+    try:
+        sc = make_scene()
+        if check is not None:
+            check(sc)
+        from packing.deposition import scene_packing
+        packing = scene_packing(sc)
+        for note in preflight(sc, packing, out_dir):
+            print(note)
+    except ValueError as e:
+        sys.exit(f"error: {e}")
+    return sc, packing

@@ -125,6 +125,12 @@ def run_scene(scene, packing, out_dir, duration=None):
     return summary
 
 
+def done_line(summary):
+    """The one line a scene script prints at the end of a run."""
+    return (f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s ({summary['us_per_step']:.0f} us/step), "
+            f"water balance error {summary['water_balance_error']:.2e}")
+
+
 def summarise(scene, packing, cp, n_steps, wall, status):
     w, wm = cp.water, cp.water_model
     return {

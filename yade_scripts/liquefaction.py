@@ -20,7 +20,7 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser, number, output_dir, preflight  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir, scene_and_packing  # noqa: E402
 
 CASES = tuple(range(1, 8))
 
@@ -50,26 +50,24 @@ def overrides_of(args):
     return out or None
 
 
-def main(argv):
-    args = parse(argv)
-    try:  # bad scenes, packings and limits: one clear line, nothing written
-        sc = scenes.load(args.scene, overrides_of(args)) if args.scene else \
-            scenes.preset(f"liquefaction_case{args.case}", overrides_of(args))
+def refuse_dry_transfer(args):
+    def check(sc):
         if args.transfer and not sc.water.enabled:
             raise ValueError(f"--transfer: {sc.scene.name} is dry (no water to transfer)")
-        from packing.deposition import scene_packing
-        packing = scene_packing(sc)
-        for note in preflight(sc, packing, args.out):
-            print(note)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
-    from engines.yade_run import run_scene
+    return check
+
+
+def main(argv):
+    args = parse(argv)
+    sc, packing = scene_and_packing(lambda: scenes.load(args.scene, overrides_of(args)) if args.scene else
+                                    scenes.preset(f"liquefaction_case{args.case}", overrides_of(args)), args.out,
+                                    refuse_dry_transfer(args))
+    from engines.yade_run import done_line, run_scene
     from postproc import liquefaction
     summary = run_scene(sc, packing, args.out)
     for path in liquefaction.run_figures(args.out):
         print("figure:", path)
-    print(f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s "
-          f"({summary['us_per_step']:.0f} us/step), water balance error {summary['water_balance_error']:.2e}")
+    print(done_line(summary))
 
 
 if __name__ == "__main__":
