@@ -184,3 +184,18 @@ def test_liquefaction_script_outputs_and_refusals(tmp_path):
         errors = [line for line in bad.stderr.splitlines() if "error" in line]  # YADE's banner aside
         assert bad.returncode != 0 and len(errors) == 1 and match in errors[0] and "Traceback" not in bad.stderr, bad.stderr
         assert not (tmp_path / "bad").exists()
+
+
+def test_tie_time_step_is_refused_before_the_run(tmp_path):
+    """dt above sqrt(m_min / k's) of the side-wall ties: refused by preflight (one line naming
+    ks_wall, nothing written) and by the engine at construction."""
+    from engines.preflight import InputError, preflight
+    from engines.pore_dem import PoreDEM
+    sc = preset(1, contact={"ks_wall": 1e11})  # sqrt(0.0257 kg/m / 1e11 N/m) = 5.1e-7 s < dt = 1e-6 s
+    pk = packing_of(sc)
+    with pytest.raises(InputError, match=r"ks_wall = 1e\+11 N/m") as err:
+        preflight(sc, pk, str(tmp_path / "out"))
+    assert "\n" not in str(err.value) and "5.065e-07 s" in str(err.value) and not (tmp_path / "out").exists()
+    with pytest.raises(ValueError, match="side-wall ties"):
+        PoreDEM(sc, pk)
+    preflight(preset(1, contact={"ks_wall": 1e10}), pk, str(tmp_path / "out"))  # limit 1.6e-6 s: accepted
