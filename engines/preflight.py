@@ -2,9 +2,10 @@
 
 ``preflight(scene, packing, out_dir)`` checks what can be known before the first step: the time
 step against eq 52, against the side-wall ties (Fig. 27) and against the explicit Darcy limit of
-the pores of the packing at the start, the duration, the loading record and the output directory. Each refusal raises InputError with
-one line naming the field or argument and the limit; the scripts print it and exit non-zero
-before the output directory exists. The engines keep their own checks at construction.
+the pores of the packing at the start, the duration, the loading record and the output directory.
+Each refusal raises InputError with one line naming the field or argument and the limit; the
+scripts print it and exit non-zero before the output directory exists. The engines keep their own
+checks at construction.
 
 ``ArgumentParser``, ``number`` and ``output_dir`` give the scripts one-line argument errors (exit
 status 2); ``scene_and_packing`` is their common start.

@@ -103,7 +103,7 @@ class YadeCoupling:
             self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
             self.engine = PaperLawEngine(self.ids, core=self.core)
             for i in self.ids[x_only].tolist() if x_only is not None else ():
-                O.bodies[i].state.blockedDOFs = X_ONLY  # the engine blocked spin only; these move in x only
+                O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
             if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
                 dyn = self.engine._dynamic
                 self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[dyn] ** 2 * g * packing.mobile[dyn]
