@@ -56,16 +56,17 @@ packings: deps
 
 # Seismic liquefaction (seed 000 §6): the seven cases at the paper's settings (0.18 s, dt = 1e-6 s,
 # water every step; a few minutes each), cases 1 and 3 again with the water-conserving transfer,
-# then the study: $(OUT)/liquefaction/summary.json, trends.md, Fig. 40, 41, 46. One run at a time
-# (the machine is shared); LIQ_CASES="1 2" runs a subset, the study uses what is there.
+# then the study: $(OUT)/liquefaction/summary.json, trends.md, Fig. 40, 41, 46. LIQ_JOBS runs at a
+# time (LIQ_JOBS=2 uses both cores of a machine of your own); LIQ_CASES="1 2" runs a subset, the
+# study uses what is there.
 LIQ_CASES ?= 1 2 3 4 5 6 7
 LIQ_CONSERVING ?= 1 3
+LIQ_JOBS ?= 1
+LIQ_RUN := $(YADE) -n -x yade_scripts/liquefaction.py
 liquefaction: deps
-	@for n in $(LIQ_CASES); do \
-	  $(YADE) -n -x yade_scripts/liquefaction.py --case $$n --out $(OUT)/liquefaction/case$$n || exit 1; done
-	@for n in $(LIQ_CONSERVING); do \
-	  $(YADE) -n -x yade_scripts/liquefaction.py --case $$n --transfer conserving \
-	    --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
+	@{ for n in $(LIQ_CASES); do echo "--case $$n --out $(OUT)/liquefaction/case$$n"; done; \
+	   for n in $(LIQ_CONSERVING); do echo "--case $$n --transfer conserving --out $(OUT)/liquefaction/case$$n-conserving"; done; } \
+	 | xargs -P $(LIQ_JOBS) -L 1 $(LIQ_RUN)
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
 
 clean:
