@@ -107,7 +107,7 @@ def run_scene(scene, packing, out_dir, duration=None):
     print(f"[{scene.scene.name}] {int(packing.mobile.sum())} particles, {int((~packing.mobile).sum())} wall discs, "
           f"{cp.water.net.n_pores if cp.water else 0} pores, law = {scene.contact.law}, I/O {yade_io.BACKEND}, "
           f"dt = {scene.numerics.dt:g} s, {n_steps} steps -> {out_dir}", flush=True)
-    t0 = time.time()
+    t0, c0 = time.time(), time.process_time()
     status = "completed"
     try:
         cp.run(n_steps)
@@ -116,9 +116,10 @@ def run_scene(scene, packing, out_dir, duration=None):
         write_checkpoint(cp, os.path.join(out_dir, "checkpoint.npz"))
         raise
     finally:
-        wall = time.time() - t0
+        wall, cpu = time.time() - t0, time.process_time() - c0
         rec.close()
         summary = summarise(scene, packing, cp, n_steps, wall, status)
+        summary["cpu_seconds"] = cpu
         with open(os.path.join(out_dir, "summary.json"), "w") as f:
             json.dump(summary, f, indent=1)
         make_figures(scene, out_dir, rec.snapshots)
