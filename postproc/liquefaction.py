@@ -159,7 +159,8 @@ def case_summary(run_dir):
     h = read_history(hist_path)
     t, n = h["t"], h["porosity"]
     out = {"scene": summary["scene"], "status": summary["status"], "t_end": float(t[-1]), "steps": summary["steps"],
-           "wall_seconds": summary["wall_seconds"], "us_per_step": summary["us_per_step"],
+           "wall_seconds": summary["wall_seconds"], "cpu_seconds": summary.get("cpu_seconds"),
+           "us_per_step": summary["us_per_step"],
            "porosity_initial": float(n[0]), "porosity_end": end_mean(t, n),
            "porosity_change": end_mean(t, n) - float(n[0]), "porosity_min": float(np.nanmin(n)),
            "porosity_max": float(np.nanmax(n)),
