@@ -6,7 +6,8 @@ packing, the base input, then the block-mean U from the surface block 6 down to 
 scale centred on 0); its snapshots (Fig. 36/38/43/45) and history panels are drawn by
 postproc.plots when the run ends. ``study(root)`` reads ROOT/case1 ... ROOT/case7 (and
 ROOT/case1-conserving, ROOT/case3-conserving when present) and writes ROOT/summary.json (per case:
-porosity change, mean and peak U per block, wall time, re-meshing water change), the figures
+porosity change, mean and peak U per block, wall time, re-meshing water change; the drainage
+times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
 transfer comparison and ROOT/trends.md (the paper's trends against our numbers).
 
@@ -313,7 +314,9 @@ def study(root):
         if s is not None:
             conserving[k] = s
     rows = trends(cases)
+    drain = os.path.join(root, "drainage.json")
     out = {"cases": {f"case{k}": v for k, v in cases.items()},
+           "drainage": json.load(open(drain)) if os.path.exists(drain) else None,
            "conserving": {f"case{k}": v for k, v in conserving.items()},
            "trends": rows, "paper_cpu_minutes": 330,
            "notes": {"porosity_end": f"mean over the last {PERIOD:g} s (one input period)",
