@@ -259,8 +259,10 @@ def porosity_figure(runs, title):
     axes[0].set_ylabel("porosity of the window [-]")
     axes[0].legend(fontsize=8)
     axes[0].set_title(title)
+    lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
     for ax, k in zip(axes[1:], wet):
         h = runs[k][0]
+        ax.set_ylim(-1.05 * lim, 1.05 * lim)  # one scale for the wet cases, centred on U = 0
         for b, c in enumerate(block_columns(h)):
             ax.plot(h["t"] * 1e3, h[c], color=f"C{b}", lw=0.7, label=f"block {b + 1}")
         ax.axhline(0.0, color="0.3", lw=0.6)
