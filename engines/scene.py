@@ -52,6 +52,7 @@ SCHEMA = {
         "wall_density_factor": (float, 1.0, POS, "density factor of the wall discs (seismic: 10; the side walls move)"),
         "settle_ks": (float, 0.0, (0.0, math.inf), "tangential stiffness during deposition [N/m] (§4.2: 0; §6: 3.5e4)"),
         "guard_walls": (bool, False, None, "deposition only: side walls raised above the highest particle (removed afterwards) so that no particle bounces out of the box"),
+        "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
     },
     "material": {
         "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),

@@ -123,6 +123,8 @@ def deposit(scene):
 
     ``cut_extra`` x n_particles more particles are deposited and the ``n_particles`` lowest kept,
     then re-settled: a scene cut out of a deposit, with a flat surface as in the paper (§4.2).
+    The dense top is marked afterwards; with ``settle_loaded`` > 0 the packing settles once more
+    with its masses, so that a run starts at rest (else the bed compacts under the added weight).
     Raises ValueError if a particle ends outside the box (``check_inside_box``).
     """
     p = scene.packing
@@ -149,7 +151,11 @@ def deposit(scene):
         check_inside_box(cut, f"deposit of seed {p.seed} after the cut")
         cut = Packing(cut.xz[:p.n_particles + n_box], cut.r[:p.n_particles + n_box],
                       cut.group[:p.n_particles + n_box], cut.density_factor[:p.n_particles + n_box])
-    return _mark(scene, cut)
+    cut = _mark(scene, cut)
+    if p.settle_loaded > 0:  # the dense top was settled at density 1: let the bed take its weight
+        cut = settle(scene, cut, duration=p.settle_loaded)
+        check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
+    return cut
 
 
 def cut_and_resettle(scene, deposit_packing, x0, width):

@@ -3,8 +3,9 @@ import numpy as np
 import pytest
 
 from engines import scene as scenes
+from engines.contact import ContactLaw, ContactSettings
 from engines.ground_motion import BaseMotion, input_acceleration
-from engines.pore_dem import PoreDEM
+from engines.pore_dem import PoreDEM, disc_masses
 from engines.porosity import box_window, porosity
 from engines.seismic_box import SideWallTies
 from packing.deposition import outside_box
@@ -74,6 +75,22 @@ def test_the_seismic_packing():
     assert ties.moving.sum() == 22
     n = porosity(pk.xz[pk.mobile], pk.r[pk.mobile], box_window(pk, sc.output.porosity_window))
     assert 0.3 < n < 0.7
+
+
+def test_the_seismic_packing_carries_its_dense_top():
+    """The run starts at rest: at the packing's positions the normal springs of the packing law
+    hold up the 10x denser top discs (deposited at density 1, they were held up by a tenth of
+    their weight until deposition settled them again under it: [packing] settle_loaded)."""
+    sc = scenes.preset("liquefaction_case1")
+    pk = Packing.load(sc.packing.file)
+    c = sc.contact
+    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m),
+                     pk.r, pk.mobile)
+    F, _, _ = law.forces(pk.xz, np.zeros_like(pk.xz), np.zeros(len(pk.r)), sc.numerics.dt)
+    m, _ = disc_masses(sc, pk)
+    dense = pk.mobile & (pk.density_factor > 1)
+    lift = F[dense, 1].sum() / (m[dense] * sc.material.g).sum()
+    assert 0.5 < lift < 2.0, f"the contacts carry {lift:.2f} of the dense top's weight"
 
 
 @pytest.mark.parametrize("case", [1, 6])
