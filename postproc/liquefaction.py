@@ -151,6 +151,15 @@ def dominant_period(t, y, t_from=PERIOD):
     return float(1.0 / freq[k])
 
 
+def compaction_correlation(n, U):
+    """Pearson correlation of U with the window's compaction n_0 - n over a run: near 1 when U is
+    the water squeezed by the settling bed (eq 32: U = E_w (W - A)/W rises as the voids A shrink)."""
+    ok = np.isfinite(n) & np.isfinite(U)
+    if ok.sum() < 3 or np.std(n[ok]) == 0 or np.std(U[ok]) == 0:
+        return float("nan")
+    return float(np.corrcoef(n[0] - n[ok], U[ok])[0, 1])
+
+
 def case_summary(run_dir):
     """The study's numbers of one run (see the module docstring); None when the run is missing."""
     summary = read_summary(run_dir)
@@ -184,6 +193,7 @@ def case_summary(run_dir):
                    U_low_std=float(np.nanstd(low)), U_low_end=end_mean(t, low),
                    U_low_rise_first_period=end_mean(t[t <= PERIOD], low[t <= PERIOD], PERIOD / 4) - float(low[0]),
                    U_low_dominant_period=dominant_period(t, low),
+                   U_low_vs_compaction_corr=compaction_correlation(n, low),
                    transfer=summary["parameters"]["water"]["transfer"],
                    water_initial=wb["initial"], remesh_water_change=wb["remesh_change"],
                    remesh_water_change_rel=wb["remesh_change"] / wb["initial"],
@@ -192,9 +202,10 @@ def case_summary(run_dir):
     return out
 
 
-def trends(cases):
+def trends(cases, drainage=None):
     """The paper's four observed trends (SPEC §2.5) against our numbers: a list of rows
-    {trend, paper, ours, holds}; rows whose cases are missing are left out."""
+    {trend, paper, ours, holds}; rows whose cases are missing are left out. ``drainage``: the
+    contents of drainage.json (yade_scripts/liquefaction_drainage.py), quoted in the drained row."""
     rows = []
 
     def have(*k):
@@ -209,9 +220,12 @@ def trends(cases):
                          "holds": bool(dd < 0 and dd < dw and abs(dd) > 2 * abs(dw))})
     if have(1, 3):
         u1, u3 = cases[1]["U_low_abs_mean"], cases[3]["U_low_abs_mean"]
+        tau = (drainage or {}).get("case3", {}).get("1", {}).get("tau")
         rows.append({"trend": "drained sides with high k keep |U| small (case 3 vs 1)",
                      "paper": "U hardly rises in any block, stays near 0 (Fig. 39)",
-                     "ours": f"time-mean |U| of blocks 1-4: {u3:.1f} vs {u1:.1f} N/m (ratio {u3 / u1:.2f})",
+                     "ours": f"time-mean |U| of blocks 1-4: {u3:.1f} vs {u1:.1f} N/m (ratio {u3 / u1:.2f})" +
+                             (f"; slowest drainage time constant {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
+                              if tau else ""),
                      "holds": bool(u3 < 0.5 * u1)})
     if have(3):
         d1 = cases.get(1, {}).get("porosity_change", np.nan)
@@ -235,6 +249,7 @@ def trends(cases):
                              f"{min(v['min'] for v in c4['U_blocks'].values()):.0f} (case 1: mean "
                              f"{c1['U_low_mean']:+.1f}, std {c1['U_low_std']:.1f})",
                      "holds": bool(abs(c4["U_low_mean"]) < c4["U_low_std"] and abs(c4["U_low_mean"]) < 0.5 * abs(c1["U_low_mean"]))})
+        rows[-1]["ours"] += f"; corr(U, compaction) {c4['U_low_vs_compaction_corr']:.2f}"
     if have(1):
         c1 = cases[1]
         rows.append({"trend": "hysteretic springs: U builds up with the input period (case 1)",
@@ -315,10 +330,11 @@ def study(root):
         s = case_summary(os.path.join(root, f"case{k}-conserving"))
         if s is not None:
             conserving[k] = s
-    rows = trends(cases)
     drain = os.path.join(root, "drainage.json")
+    drainage = json.load(open(drain)) if os.path.exists(drain) else None
+    rows = trends(cases, drainage)
     out = {"cases": {f"case{k}": v for k, v in cases.items()},
-           "drainage": json.load(open(drain)) if os.path.exists(drain) else None,
+           "drainage": drainage,
            "conserving": {f"case{k}": v for k, v in conserving.items()},
            "trends": rows, "paper_cpu_minutes": 330,
            "notes": {"porosity_end": f"mean over the last {PERIOD:g} s (one input period)",

@@ -204,3 +204,22 @@ def test_tie_time_step_is_refused_before_the_run(tmp_path):
     with pytest.raises(ValueError, match="side-wall ties"):
         PoreDEM(sc, pk)
     preflight(preset(1, contact={"ks_wall": 1e10}), pk, str(tmp_path / "out"))  # limit 1.6e-6 s: accepted
+
+
+def test_drainage_time_constants_of_small_networks():
+    """yade_scripts/liquefaction_drainage.time_constants: one pore draining to the outside decays
+    with tau = c / g_b; two equal pores joined by a throat g (no outlet) equalise with tau = c / 2g
+    and keep their mean (no decaying mode)."""
+    from types import SimpleNamespace
+    from engines.pore_water import FlowState
+    from yade_scripts.liquefaction_drainage import time_constants
+
+    def water(conns, g, g_b, c):
+        z = np.zeros(len(c))
+        fl = FlowState(z, z, z, z, np.array(g, float), np.array(g_b, float), np.array(c, float))
+        net = SimpleNamespace(throat_conns=np.array(conns, np.int64).reshape(-1, 2))
+        return SimpleNamespace(net=net, flows=lambda A, lc: fl)
+
+    assert time_constants(water([], [], [3e-7], [6e-10]), np.ones(1), None) == pytest.approx([2e-3])
+    tau = time_constants(water([[0, 1]], [5e-7], [0.0, 0.0], [6e-10, 6e-10]), np.ones(2), None)
+    assert tau == pytest.approx([6e-10 / (2 * 5e-7)])
