@@ -3,11 +3,11 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-distributed
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps demo test bench packings clean
+.PHONY: deps demo test bench packings biaxial clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -37,6 +37,12 @@ bench: deps
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+
+# Seed 003 (hours on 2 cores, niced, resumable): biaxial tests of the paper's specimen, φ*(φe),
+# E50, eq 4-6 and their sensitivity, through the sweep runner. SCHEDULER=tcp://host:8786 runs the
+# jobs on a Dask cluster instead of the local cores.
+biaxial: deps
+	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 clean:
 	rm -rf $(OUT) .pytest_cache

@@ -41,24 +41,22 @@ def assign_groups(xz, cell, band):
     return g
 
 
+def _segments(lo, hi):
+    """Breakpoints of the intervals [lo, hi]: segment lengths (m,) and which intervals cover
+    each segment (n, m)."""
+    edges = np.unique(np.concatenate([lo, hi]))
+    mid = 0.5 * (edges[:-1] + edges[1:])
+    return np.diff(edges), (lo[:, None] < mid[None, :]) & (mid[None, :] < hi[:, None])
+
+
 def exposed_lengths(lo, hi, depth):
     """Length of each interval [lo, hi] not covered by intervals of discs lying further out
-    (larger ``depth`` = further out, e.g. −(x − r) on the left side). Arrays of equal length."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    exposed = np.zeros(len(lo))
-    covered = []  # disjoint sorted intervals
-    for i in np.argsort(-np.asarray(depth, float), kind="stable"):
-        a, b = lo[i], hi[i]
-        hidden = sum(max(0.0, min(b, d) - max(a, c)) for c, d in covered)
-        exposed[i] = (b - a) - hidden
-        merged = [(a, b)]
-        for c, d in covered:
-            if d < merged[0][0] or c > merged[0][1]:
-                merged.append((c, d))
-            else:
-                merged[0] = (min(c, merged[0][0]), max(d, merged[0][1]))
-        covered = sorted(merged)
-    return exposed
+    (larger ``depth`` = further out, e.g. the distance of the outer edge from the specimen)."""
+    lo, hi, depth = (np.asarray(v, float) for v in (lo, hi, depth))
+    length, cover = _segments(lo, hi)
+    seen = cover.any(axis=0)
+    front = np.argmax(np.where(cover, depth[:, None], -np.inf), axis=0)  # outermost disc per segment
+    return np.bincount(front[seen], weights=length[seen], minlength=len(lo))
 
 
 def side_forces(xz, r, groups, sigma3, mode):
@@ -80,13 +78,8 @@ def side_forces(xz, r, groups, sigma3, mode):
 
 def covered_height(z, r):
     """Length of the union of the intervals [z − r, z + r] [m]."""
-    order = np.argsort(z - r)
-    total, end = 0.0, -np.inf
-    for a, b in zip((z - r)[order], (z + r)[order]):
-        if b > end:
-            total += b - max(a, end)
-            end = b
-    return total
+    length, cover = _segments(np.asarray(z) - r, np.asarray(z) + r)
+    return float(length[cover.any(axis=0)].sum())
 
 
 def e50(strain, deviator):
@@ -186,7 +179,7 @@ class BiaxialSettings:
     servo_time: float = 0.02
     record_strain: float = 2e-4
     side_update: int = 20
-    max_equilibrium_time: float = 10.0
+    max_equilibrium_time: float = 2.0
 
     def __post_init__(self):
         for name, ok, limit in [("sigma3", self.sigma3 > 0, "> 0 Pa"), ("strain_rate", self.strain_rate > 0, "> 0 1/s"),
@@ -212,6 +205,7 @@ class BiaxialResult:
     def summary(self):
         eps_f, q_f = self.curve.peak()
         return {"sigma3_pa": self.settings.sigma3, "peak_deviator_pa": q_f, "peak_strain": eps_f,
+                "peak_at_end": bool(eps_f >= self.curve.strain[-1] - 2 * self.settings.record_strain),
                 "sigma1_at_peak_pa": q_f + self.settings.sigma3, "e50_pa": self.curve.e50(),
                 "equilibrium": self.equilibrium, "steps": self.steps, "wall_s": self.wall_s}
 
@@ -328,16 +322,18 @@ class BiaxialSpecimen:
 
         ok = self.run(servo, every, int(s.max_equilibrium_time / s.dt))
         if not ok:
-            raise RuntimeError(f"preliminary equilibrium not reached in {s.max_equilibrium_time} s: "
-                               f"sigma1 = {self.sigma1():.2f} Pa for sigma3 = {s.sigma3} Pa")
+            raise RuntimeError(f"preliminary equilibrium not reached in {s.max_equilibrium_time} s (dt = {s.dt:g} s): "
+                               f"sigma1 = {self.sigma1():.2f} Pa for sigma3 = {s.sigma3:g} Pa, unbalanced force "
+                               f"ratio {utils.unbalancedForce():.3g} (> {s.unbalanced}: the discs do not come to rest)")
         self.z_top0 = self.top_z()
         self.width0 = self.side_distance()
         return {"sigma1_pa": self.sigma1(), "sigma1_bottom_pa": self.sigma1(self.bottom),
                 "sigma3_applied_pa": self.sigma3_applied, "unbalanced": utils.unbalancedForce(),
                 "steps": O.iter, "time_s": O.time}
 
-    def compress(self):
-        """Lower ④ at the constant strain rate to max_strain, recording every record_strain."""
+    def compress(self, log=None):
+        """Lower ④ at the constant strain rate to max_strain, recording every record_strain
+        (a progress line to ``log`` every 1 % of strain)."""
         s = self.s
         v = s.strain_rate * self.height
         self.set_top_velocity(-v)
@@ -351,6 +347,8 @@ class BiaxialSpecimen:
             rec["sigma1_bottom"].append(self.sigma1(self.bottom))
             rec["sigma3_applied"].append(self.sigma3_applied)
             rec["lateral_strain"].append(-(self.side_distance() - self.width0) / self.width0)
+            if log and int(100 * strain) > int(100 * rec["strain"][-2 if len(rec["strain"]) > 1 else -1]):
+                log(f"    strain {100 * strain:.1f} %: deviator {rec['sigma1'][-1] - s.sigma3:.1f} Pa")
             return strain >= s.max_strain
 
         record()
@@ -372,7 +370,7 @@ def run_biaxial(block, contact, settings, log=None):
     if log:
         log(f"  sigma3 = {settings.sigma3:g} Pa: equilibrium sigma1 = {eq['sigma1_pa']:.2f} Pa "
             f"(bottom {eq['sigma1_bottom_pa']:.2f}, sides {eq['sigma3_applied_pa']:.2f}) after {eq['steps']} steps")
-    curve = sp.compress()
+    curve = sp.compress(log)
     res = BiaxialResult(curve, settings, eq, O.iter, time.time() - t0)
     if log:
         eps_f, q_f = curve.peak()

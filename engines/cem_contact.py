@@ -111,6 +111,20 @@ def single_contact_dt_limit(r, c):
     return 2 * (math.sqrt(1 + z * z) - z) / omega
 
 
+PAPER_DT = 5e-5  # s, Table 2's constants (Fig. 6)
+
+
+def stable_dt(r, c):
+    """Time step [s] for seed 003's packings: the paper's 0.5e-4 s for its constants (Table 1–2),
+    scaled as 1/ω for others, never above it. Measured on 1000-disc packings at rest (critical
+    dashpots, docs/BIAXIAL.md): kn = 1e8, ks/kn = 0.25 rings from about 6e-5 s on, ks/kn = 0.5
+    between 4e-5 and 5e-5 s, kn = 2e8 between 3.5e-5 and 5e-5 s: the highest mode goes as
+    √(kn (1 + 4 ks/kn) / (ρ r_min))."""
+    stiff = c.kn * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
+    paper = 1e8 * (1 + 4 * 0.25) / (2500.0 * 1.4e-3)
+    return PAPER_DT * min(1.0, math.sqrt(paper / stiff))
+
+
 def check_dt(dt, r, c):
     """Refuse a time step above the single-contact limit (it cannot be stable)."""
     limit = single_contact_dt_limit(r, c)

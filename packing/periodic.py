@@ -164,7 +164,7 @@ class PackingSettings:
     max_rate: float = 1.0
     unbalanced: float = 0.01
     check_every: int = 10
-    max_time: float = 20.0
+    max_time: float = 10.0
 
     def __post_init__(self):
         if not 0 < self.tolerance < 1:
@@ -254,8 +254,9 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
         O.run(int(s.max_time / s.dt), True)
         sx, sz = state["sigma"]
         if not state["done"]:
-            raise RuntimeError(f"periodic packing did not reach sigma3 = {target} Pa within {s.max_time} s "
-                               f"(sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa)")
+            raise RuntimeError(f"periodic packing did not reach sigma3 = {target:g} Pa within {s.max_time} s "
+                               f"(sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa, unbalanced force ratio "
+                               f"{utils.unbalancedForce():.3g}, dt = {s.dt:g} s)")
         h = O.cell.hSize
         lx, lz = float(h[0, 0]), float(h[2, 2])
         pos = np.mod([[b.state.pos[0], b.state.pos[2]] for b in O.bodies], [lx, lz])

@@ -5,6 +5,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines.biaxial import mohr_coulomb_fit  # noqa: E402
+
 PHI_COLOURS = {5.0: "C0", 10.0: "C1", 15.0: "C2"}
 
 
@@ -95,10 +97,14 @@ def plot_e50_sigma3(points, path):
     _save(fig, path)
 
 
-def plot_eq4(points, fits, path):
+def plot_eq4(points, fits, path, extra=()):
     """Fig. 19: E50/σ3 against σ3/kn (log–log) with the eq 4 regression line per φe.
-    points: {"phi_e_deg", "sigma3_pa", "kn", "e50_pa"}; fits: {φe: (A, m)}."""
+    points: {"phi_e_deg", "sigma3_pa", "kn", "e50_pa"}; fits: {φe: (A, m)}; ``extra``: points of
+    other kn (not fitted), drawn open: on the line if E50/σ3 depends on σ3/kn only (Fig. 18)."""
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
+    for k, p in enumerate(extra):
+        ax.plot(p["sigma3_pa"] / p["kn"], p["e50_pa"] / p["sigma3_pa"], "D", mfc="none", ms=5,
+                color=PHI_COLOURS.get(p["phi_e_deg"]), label=f"φe = {p['phi_e_deg']:g}°, kn ≠ 1e8 (not fitted)" if k == 0 else None)
     for pe, (A, m) in sorted(fits.items()):
         sel = [p for p in points if p["phi_e_deg"] == pe]
         x = np.array([p["sigma3_pa"] / p["kn"] for p in sel])
@@ -126,10 +132,11 @@ def plot_A_m(fits, path):
     _save(fig, path)
 
 
-def plot_sensitivity(groups, path, title, label):
+def plot_sensitivity(groups, path, title, label, failed=None):
     """Fig. 5/6/8/13/14: deviator–strain curves for each value of one knob (one line per packing,
     the same colour per value), and peak deviator and E50 against the knob with the scatter.
-    groups: {value: [Curve, ...]}; label: the knob's name and unit."""
+    groups: {value: [Curve, ...]}; label: the knob's name and unit; failed: {value: runs that
+    did not finish} (named in the title)."""
     fig, (ax, ap, ae) = plt.subplots(1, 3, figsize=(13, 4), gridspec_kw={"width_ratios": [2, 1, 1]})
     values = sorted(groups)
     for k, v in enumerate(values):
@@ -141,10 +148,46 @@ def plot_sensitivity(groups, path, title, label):
         ae.plot([v] * len(e50s), e50s, "o", color=f"C{k}", ms=4)
     ap.plot(values, [np.mean([c.peak()[1] for c in groups[v]]) for v in values], "k-", lw=0.8)
     ae.plot(values, [np.mean([c.e50() for c in groups[v]]) for v in values], "k-", lw=0.8)
+    if failed:
+        title += "\n" + ", ".join(f"{label} = {v:g}: {n} run(s) failed (no rest)" for v, n in failed.items())
     ax.set(xlabel="axial strain [%]", ylabel="deviator σ1 − σ3 [Pa]", title=title)
     ax.legend(fontsize=8)
     ap.set(xlabel=label, ylabel="peak deviator [Pa]", xscale="log", ylim=(0, None), title="peak (each packing, mean)")
     ae.set(xlabel=label, ylabel="E50 [Pa]", xscale="log", ylim=(0, None), title="E50 (each packing, mean)")
     for a in (ax, ap, ae):
         a.grid(alpha=0.3)
+    _save(fig, path)
+
+
+def plot_study_curves(per_phi_e, path):
+    """Fig. 9–11: for each φe the deviator–strain curves of every packing (one colour per σ3)
+    and the Mohr circles at the peaks with the failure line of each packing."""
+    phis = sorted(per_phi_e)
+    fig, axes = plt.subplots(2, len(phis), figsize=(4.6 * len(phis), 8), squeeze=False)
+    th = np.linspace(0, np.pi, 100)
+    for col, pe in enumerate(phis):
+        ax, am = axes[0, col], axes[1, col]
+        smax = 0
+        for seed, curves in sorted(per_phi_e[pe]["curves"].items()):
+            s3, s1 = [], []
+            for k, (sig3, c) in enumerate(sorted(curves.items())):
+                ax.plot(100 * c.strain, c.deviator, color=f"C{k}", lw=0.7, alpha=0.8,
+                        label=f"σ3 = {sig3:g} Pa" if seed == min(per_phi_e[pe]["curves"]) else None)
+                q = c.peak()[1]
+                s3.append(sig3)
+                s1.append(sig3 + q)
+                am.plot((2 * sig3 + q) / 2 + q / 2 * np.cos(th), q / 2 * np.sin(th), color=f"C{k}", lw=0.7, alpha=0.8)
+            if len(s3) >= 2:
+                phi, c_star = mohr_coulomb_fit(s3, s1)
+                smax = max(smax, max(s1))
+                x = np.array([0, 1.05 * max(s1)])
+                am.plot(x, c_star + x * np.tan(np.radians(phi)), "k-", lw=0.8,
+                        label=f"seed {seed}: φ* = {phi:.1f}°, c* = {c_star:.1f} Pa")
+        ax.set(xlabel="axial strain [%]", ylabel="deviator σ1 − σ3 [Pa]", title=f"φe = {pe:g}° (Fig. 9–11 A)")
+        ax.legend(fontsize=7)
+        ax.grid(alpha=0.3)
+        am.set(xlabel="σ [Pa]", ylabel="τ [Pa]", aspect="equal", xlim=(0, 1.05 * smax or None), ylim=(0, None),
+               title=f"φe = {pe:g}°: Mohr circles (Fig. 9–11 B)")
+        am.legend(fontsize=7, loc="upper left")
+        am.grid(alpha=0.3)
     _save(fig, path)

@@ -153,3 +153,31 @@ def test_cohesionless_contacts_give_no_cohesion(specimens):
     # disc-count study), which moves c* by up to ~0.15 σ3_min; a cohesion of the order of σ3,
     # or an offset in σ1 or in the side loads of a few tens of Pa, would not pass
     assert abs(c_star) < 0.2 * min(s3)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--phi-e", "15", "--sigma3", "100,-200"], "--sigma3"),
+    (["--phi-e", "90", "--sigma3", "100"], "--phi-e"),
+    (["--phi-e", "0", "--sigma3", "100"], "--phi-e"),
+    (["--phi-e", "15", "--sigma3", "100", "--dt", "1e-3"], "--dt"),
+])
+def test_bad_input_is_refused_in_one_line_before_anything_is_written(tmp_path, capsys, args, needle):
+    from yade_scripts import biaxial
+
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as e:
+        biaxial.main(args + ["--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert e.value.code == 2 and len(err.splitlines()) == 1 and needle in err, err
+    assert not out.exists()
+
+
+def test_an_unwritable_out_is_refused(tmp_path, capsys):
+    from yade_scripts import biaxial
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")  # --out below a file cannot be created (even by root)
+    with pytest.raises(SystemExit):
+        biaxial.main(["--phi-e", "15", "--out", str(blocker / "run")])
+    err = capsys.readouterr().err.strip()
+    assert "--out" in err and len(err.splitlines()) == 1

@@ -8,6 +8,7 @@ from engines.biaxial import (BOTTOM, INTERIOR, LEFT, RIGHT, TOP, assign_groups, 
                              exposed_lengths, mohr_coulomb_fit, side_forces)
 from engines.calibration import Calibration, eq4_e50, eq6_kn, fit_eq4
 from engines.cem_contact import CemContact, contact_width, pair_constants, pair_damping_ratio, single_contact_dt_limit
+from packing.packing import Packing
 from packing.periodic import PeriodicBlock, cell_for, love_stress, random_placement, section_stress, table1_radii, tile
 
 
@@ -131,7 +132,7 @@ def test_love_and_section_stress_of_a_square_lattice():
     assert section_stress(first, branch, force, 1, 0.5 * cell[1], cell) == pytest.approx(F / (2 * r), rel=1e-12)
 
 
-def test_tiling_repeats_the_block_with_seams_as_in_the_cell():
+def test_tiling_repeats_the_block_with_seams_as_in_the_cell(tmp_path):
     rng = np.random.default_rng(1)
     r = table1_radii(60)
     cell = cell_for(r, 0.5, 0.75)
@@ -151,3 +152,7 @@ def test_tiling_repeats_the_block_with_seams_as_in_the_cell():
         np.testing.assert_allclose(near_tile, near_cell, atol=1e-15)
     with pytest.raises(ValueError, match="nx"):
         tile(block, 0, 1)
+    pk.save(str(tmp_path / "ground.csv"))  # the pore-water scenes' packing file
+    back = Packing.load(str(tmp_path / "ground.csv"))
+    np.testing.assert_allclose(back.xz, pk.xz, rtol=1e-12)
+    np.testing.assert_allclose(back.r, pk.r, rtol=1e-12)

@@ -48,7 +48,9 @@ def parser():
     ap.add_argument("--rho", type=float, default=2500.0, help="disc density [kg/m^3] (Table 2: 2500)")
     ap.add_argument("--n-discs", type=int, default=1000, help="discs in Table 1's size ratio (paper: 1000)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the random placement")
-    ap.add_argument("--dt", type=float, default=5e-5, help="time step [s] (paper: 0.5e-4)")
+    ap.add_argument("--dt", type=float, help="time step [s] (default: the paper's 0.5e-4, smaller for stiffer "
+                    "contacts: engines.cem_contact.stable_dt)")
+    ap.add_argument("--packing-dt", type=float, help="time step of the packing [s] (default: --dt)")
     ap.add_argument("--strain-rate", type=float, default=100.0, help="axial strain rate [%%/min] (paper: 100)")
     ap.add_argument("--max-strain", type=float, default=6.0, help="axial strain at which the test stops [%%]")
     ap.add_argument("--side-load", choices=("exposed", "diameter"), default="exposed",
@@ -68,20 +70,28 @@ def check(args, ap):
         bad(f"--sigma3 {e}")
     for name, ok, limit in [("--phi-e", 0 < args.phi_e < 90, "in (0, 90) degrees"), ("--kn", args.kn > 0, "> 0 Pa/m"),
                             ("--ks-ratio", args.ks_ratio >= 0, ">= 0"), ("--rho", args.rho > 0, "> 0 kg/m^3"),
-                            ("--n-discs", args.n_discs >= 20, ">= 20"), ("--dt", args.dt > 0, "> 0 s"),
+                            ("--n-discs", args.n_discs >= 20, ">= 20"),
                             ("--strain-rate", args.strain_rate > 0, "> 0 %/min"),
                             ("--max-strain", 0 < args.max_strain < 50, "in (0, 50) %"),
                             ("--aspect", 0.25 <= args.aspect <= 4, "in [0.25, 4]"), ("--seed", args.seed >= 0, ">= 0")]:
         value = getattr(args, name[2:].replace("-", "_"))
         if not (math.isfinite(value) and ok):
             bad(f"{name} must be {limit}, got {value}")
-    from engines.cem_contact import CemContact, check_dt
+    from engines.cem_contact import CemContact, check_dt, stable_dt
     from packing.periodic import table1_radii
     contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho)
-    try:
-        check_dt(args.dt, table1_radii(args.n_discs), contact)
-    except ValueError as e:
-        bad(f"--{e}")
+    r = table1_radii(args.n_discs)
+    args.dt = args.dt or stable_dt(r, contact)
+    args.packing_dt = args.packing_dt or args.dt
+    for name in ("dt", "packing_dt"):
+        try:
+            check_dt(getattr(args, name), r, contact)
+        except ValueError as e:
+            bad(f"--{name.replace('_', '-')}: {e}")
+        if getattr(args, name) > 1.2 * stable_dt(r, contact):
+            print(f"biaxial.py: warning: --{name.replace('_', '-')} {getattr(args, name):g} s is above the step "
+                  f"measured stable for these constants ({stable_dt(r, contact):.3g} s): the discs may not come "
+                  "to rest", file=sys.stderr)
     parent = os.path.abspath(args.out)
     while not os.path.exists(parent):
         parent = os.path.dirname(parent)
@@ -109,7 +119,7 @@ def table_argv(ap):
     return argv
 
 
-def write_outputs(out, args, contact, blocks, results, wall_s):
+def write_outputs(out, args, contact, blocks, results, wall_s, error=None):
     from engines.biaxial import mohr_coulomb_fit
     from postproc.biaxial_plots import plot_deviator_strain, plot_mohr
 
@@ -141,6 +151,8 @@ def write_outputs(out, args, contact, blocks, results, wall_s):
                      for b in blocks],
         "wall_s": wall_s,
     }
+    if error:
+        summary["error"] = error
     with open(os.path.join(out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     plot_deviator_strain([res.curve for res in results], os.path.join(out, "deviator_strain.png"), title)
@@ -163,14 +175,24 @@ def main(argv):
     t0 = time.time()
     os.makedirs(args.out, exist_ok=True)
     log = lambda msg: print(msg, flush=True)  # noqa: E731
-    blocks = pack_periodic(table1_radii(args.n_discs), contact, args.sigma3,
-                           PackingSettings(dt=args.dt, aspect=args.aspect), np.random.default_rng(args.seed), log=log)
+    try:
+        blocks = pack_periodic(table1_radii(args.n_discs), contact, args.sigma3,
+                               PackingSettings(dt=args.packing_dt, aspect=args.aspect), np.random.default_rng(args.seed),
+                               log=log)
+    except (RuntimeError, ValueError) as e:
+        sys.exit(f"biaxial.py: error: {e}")
     for b in blocks:
         b.save(os.path.join(args.out, f"packing_sigma3_{b.info['sigma3_pa']:g}"))
-    results = [run_biaxial(b, contact, BiaxialSettings(sigma3=b.info["sigma3_pa"], dt=args.dt,
-                                                      strain_rate=args.strain_rate * PERCENT_PER_MIN,
-                                                      max_strain=args.max_strain / 100, side_load=args.side_load),
-                           log=log) for b in blocks]
+    results = []
+    try:
+        for b in blocks:
+            results.append(run_biaxial(b, contact, BiaxialSettings(
+                sigma3=b.info["sigma3_pa"], dt=args.dt, strain_rate=args.strain_rate * PERCENT_PER_MIN,
+                max_strain=args.max_strain / 100, side_load=args.side_load), log=log))
+    except RuntimeError as e:  # keep what was done, then fail in one line
+        if results:
+            write_outputs(args.out, args, contact, blocks, results, time.time() - t0, error=str(e))
+        sys.exit(f"biaxial.py: error: {e}")
     summary = write_outputs(args.out, args, contact, blocks, results, time.time() - t0)
     print(f"phi* = {summary['phi_star_deg']:.2f} deg, c* = {summary['c_star_pa']:.2f} Pa; "
           + ", ".join(f"sigma3 {p['sigma3_pa']:g}: peak {p['peak_deviator_pa']:.1f} Pa, E50 {p['e50_pa']:.4g} Pa"
