@@ -27,77 +27,78 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 import numpy as np  # noqa: E402
 
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
+
 PERCENT_PER_MIN = 1.0 / 6000.0  # 1 %/min in 1/s
 
 
-def _positive_list(text):
-    values = [float(v) for v in str(text).replace("(", "").replace(")", "").split(",") if v.strip()]
+def stresses(text):
+    """argparse type: comma-separated stresses > 0 [Pa] (yade-batch tables give "(100, 200)")."""
+    try:
+        values = [float(v) for v in str(text).strip("()").split(",") if v.strip()]
+    except ValueError:
+        values = []
     if not values or not all(math.isfinite(v) and v > 0 for v in values):
-        raise ValueError(f"must be a comma-separated list of stresses > 0 Pa, got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be comma-separated stresses > 0 Pa, got {text!r}")
     return values
 
 
+def friction_angle(text):
+    """argparse type: φe in (0, 90) degrees."""
+    value = number(float, 0, 90, lo_open=True, unit="degrees")(text)
+    if value == 90:
+        raise argparse.ArgumentTypeError(f"must be in (0, 90) degrees, got {text}")
+    return value
+
+
 def parser():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog=__doc__.split("\n\n", 1)[1])
-    ap.add_argument("--phi-e", type=float, required=True, help="inter-element friction angle φe [deg], 0 < φe < 90")
-    ap.add_argument("--sigma3", default="100,200,300,400", help="confining stresses [Pa], comma-separated (default 100..400)")
-    ap.add_argument("--out", required=True, help="output directory")
-    ap.add_argument("--kn", type=float, default=1e8, help="normal stiffness per unit contact area [Pa/m] (Table 2: 1e8)")
-    ap.add_argument("--ks-ratio", type=float, default=0.25, help="ks/kn [-] (Table 2: 0.25)")
-    ap.add_argument("--rho", type=float, default=2500.0, help="disc density [kg/m^3] (Table 2: 2500)")
-    ap.add_argument("--n-discs", type=int, default=1000, help="discs in Table 1's size ratio (paper: 1000)")
-    ap.add_argument("--seed", type=int, default=1, help="seed of the random placement")
-    ap.add_argument("--dt", type=float, help="time step [s] (default: the paper's 0.5e-4, smaller for stiffer "
-                    "contacts: engines.cem_contact.stable_dt)")
-    ap.add_argument("--packing-dt", type=float, help="time step of the packing [s] (default: --dt)")
-    ap.add_argument("--strain-rate", type=float, default=100.0, help="axial strain rate [%%/min] (paper: 100)")
-    ap.add_argument("--max-strain", type=float, default=6.0, help="axial strain at which the test stops [%%]")
+    ap = ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
+                        epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument("--phi-e", type=friction_angle, required=True, help="inter-element friction angle φe [deg], 0 < φe < 90")
+    ap.add_argument("--sigma3", type=stresses, default="100,200,300,400",
+                    help="confining stresses [Pa], comma-separated (default 100..400)")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
+    ap.add_argument("--kn", type=number(float, 0, lo_open=True, unit="Pa/m"), default=1e8,
+                    help="normal stiffness per unit contact area [Pa/m] (Table 2: 1e8)")
+    ap.add_argument("--ks-ratio", type=number(float, 0), default=0.25, help="ks/kn [-] (Table 2: 0.25)")
+    ap.add_argument("--rho", type=number(float, 0, lo_open=True, unit="kg/m^3"), default=2500.0,
+                    help="disc density [kg/m^3] (Table 2: 2500)")
+    ap.add_argument("--n-discs", type=number(int, 20), default=1000, help="discs in Table 1's size ratio (paper: 1000)")
+    ap.add_argument("--seed", type=number(int, 0), default=1, help="seed of the random placement")
+    ap.add_argument("--dt", type=number(float, 0, lo_open=True, unit="s"),
+                    help="time step [s] (default: the paper's 0.5e-4, smaller for stiffer contacts: "
+                    "engines.cem_contact.stable_dt)")
+    ap.add_argument("--packing-dt", type=number(float, 0, lo_open=True, unit="s"),
+                    help="time step of the packing [s] (default: --dt)")
+    ap.add_argument("--strain-rate", type=number(float, 0, lo_open=True, unit="%/min"), default=100.0,
+                    help="axial strain rate [%%/min] (paper: 100)")
+    ap.add_argument("--max-strain", type=number(float, 0, 50, lo_open=True, unit="%"), default=6.0,
+                    help="axial strain at which the test stops [%%]")
     ap.add_argument("--side-load", choices=("exposed", "diameter"), default="exposed",
                     help="σ3 on the exposed projection of the side discs, or on every side disc's diameter")
-    ap.add_argument("--aspect", type=float, default=1.0, help="specimen height / width [-]")
+    ap.add_argument("--aspect", type=number(float, 0.25, 4), default=1.0, help="specimen height / width [-]")
     return ap
 
 
 def check(args, ap):
-    """Refuse bad input in one line naming the argument, before anything is written."""
-    def bad(msg):
-        ap.exit(2, f"biaxial.py: error: {msg}\n")
-
-    try:
-        args.sigma3 = _positive_list(args.sigma3)
-    except ValueError as e:
-        bad(f"--sigma3 {e}")
-    for name, ok, limit in [("--phi-e", 0 < args.phi_e < 90, "in (0, 90) degrees"), ("--kn", args.kn > 0, "> 0 Pa/m"),
-                            ("--ks-ratio", args.ks_ratio >= 0, ">= 0"), ("--rho", args.rho > 0, "> 0 kg/m^3"),
-                            ("--n-discs", args.n_discs >= 20, ">= 20"),
-                            ("--strain-rate", args.strain_rate > 0, "> 0 %/min"),
-                            ("--max-strain", 0 < args.max_strain < 50, "in (0, 50) %"),
-                            ("--aspect", 0.25 <= args.aspect <= 4, "in [0.25, 4]"), ("--seed", args.seed >= 0, ">= 0")]:
-        value = getattr(args, name[2:].replace("-", "_"))
-        if not (math.isfinite(value) and ok):
-            bad(f"{name} must be {limit}, got {value}")
+    """The contact constants and the time steps (refused in one line naming the argument, before
+    anything is written; the other arguments are checked by their argparse types)."""
     from engines.cem_contact import CemContact, check_dt, stable_dt
     from packing.periodic import table1_radii
+
     contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho)
     r = table1_radii(args.n_discs)
     args.dt = args.dt or stable_dt(r, contact)
     args.packing_dt = args.packing_dt or args.dt
     for name in ("dt", "packing_dt"):
+        arg = "--" + name.replace("_", "-")
         try:
             check_dt(getattr(args, name), r, contact)
         except ValueError as e:
-            bad(f"--{name.replace('_', '-')}: {e}")
+            ap.error(f"{arg}: {e}")
         if getattr(args, name) > 1.2 * stable_dt(r, contact):
-            print(f"biaxial.py: warning: --{name.replace('_', '-')} {getattr(args, name):g} s is above the step "
-                  f"measured stable for these constants ({stable_dt(r, contact):.3g} s): the discs may not come "
-                  "to rest", file=sys.stderr)
-    parent = os.path.abspath(args.out)
-    while not os.path.exists(parent):
-        parent = os.path.dirname(parent)
-    if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK) \
-            or (os.path.exists(args.out) and not os.access(args.out, os.W_OK)):
-        bad(f"--out {args.out}: not writable ({parent})")
+            print(f"biaxial.py: warning: {arg} {getattr(args, name):g} s is above the step measured stable for "
+                  f"these constants ({stable_dt(r, contact):.3g} s): the discs may not come to rest", file=sys.stderr)
     return contact
 
 
