@@ -12,7 +12,6 @@ the target. Writes OUT/calibration.json and the runs under OUT/runs.
 """
 import argparse
 import json
-import math
 import os
 import sys
 
@@ -21,6 +20,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import numpy as np  # noqa: E402
 
 from engines.calibration import Calibration  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
 from yade_scripts.biaxial_study import biaxial_job  # noqa: E402
 from yade_scripts.sweep import read_record, run_sweep  # noqa: E402
 
@@ -59,28 +59,28 @@ def verify(runs, jobs, target):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--phi-star", type=float, required=True, help="target friction angle of the model ground [deg]")
-    ap.add_argument("--e50", type=float, required=True, help="target E50 [Pa] at --sigma3")
-    ap.add_argument("--sigma3", type=float, required=True, help="confining stress of the target E50 [Pa]")
+    ap = ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--phi-star", type=number(float, 0, 90, lo_open=True, unit="deg"), required=True,
+                    help="target friction angle of the model ground [deg]")
+    ap.add_argument("--e50", type=number(float, 0, lo_open=True, unit="Pa"), required=True,
+                    help="target E50 [Pa] at --sigma3")
+    ap.add_argument("--sigma3", type=number(float, 0, lo_open=True, unit="Pa"), required=True,
+                    help="confining stress of the target E50 [Pa]")
     ap.add_argument("--fit", default="out/biaxial/fit.json", help="the study's curves (make biaxial writes them)")
-    ap.add_argument("--out", default="out/calibrate", help="output directory")
+    ap.add_argument("--out", type=output_dir, default="out/calibrate", help="output directory")
     ap.add_argument("--seeds", default="1,2,3", help="packings of the verification")
-    ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
+    ap.add_argument("--workers", type=number(int, 1), default=2, help="local processes (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address")
     ap.add_argument("--no-verify", action="store_true", help="only print φe and kn")
     a = ap.parse_args(argv)
-    for name in ("phi_star", "e50", "sigma3"):
-        if not (math.isfinite(getattr(a, name)) and getattr(a, name) > 0):
-            ap.error(f"--{name.replace('_', '-')} must be > 0, got {getattr(a, name)}")
     if not os.path.exists(a.fit):
         ap.error(f"--fit {a.fit}: not found (run `make biaxial` first)")
     try:
         cal = Calibration.load(a.fit)
         phi_e, kn = cal.invert(a.phi_star, a.e50, a.sigma3)
     except ValueError as e:
-        ap.exit(2, f"calibrate.py: error: {e}\n")
+        ap.error(str(e))
     A, m = cal.eq4_at(phi_e)
     print(f"eq 5: phi_e = {phi_e:.3f} deg (phi* = {a.phi_star} deg); eq 6: kn = {kn:.4g} Pa/m "
           f"(A = {A:.4g}, m = {m:.4f}; ks/kn = {cal.ks_ratio})", flush=True)

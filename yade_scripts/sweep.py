@@ -26,7 +26,6 @@ Command line:
                                            [--scheduler ADDR] [--no-resume]
     /usr/bin/python3 yade_scripts/sweep.py --out DIR --jobs jobs.json ...   # [{"name", "argv", "env"}]
 """
-import argparse
 import json
 import os
 import re
@@ -197,19 +196,19 @@ def jobs_from_table(table, script, yade=("yade", "-n")):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 epilog="Writes DIR/NAME/{job.json,stdout.log,stderr.log} and DIR/sweep.json.")
-    ap.add_argument("--out", required=True, help="root directory of the sweep")
+    from engines.preflight import ArgumentParser, number, output_dir
+
+    ap = ArgumentParser(description=__doc__.split("\n\n")[0],
+                        epilog="Writes DIR/NAME/{job.json,stdout.log,stderr.log} and DIR/sweep.json.")
+    ap.add_argument("--out", type=output_dir, required=True, help="root directory of the sweep")
     src = ap.add_mutually_exclusive_group(required=True)
     src.add_argument("--table", help="yade-batch parameter table (needs --script)")
     src.add_argument("--jobs", help='JSON list of {"name", "argv", "env"}')
     ap.add_argument("--script", help="the YADE script the table's lines run")
-    ap.add_argument("--workers", type=int, default=2, help="local processes at a time (default 2)")
+    ap.add_argument("--workers", type=number(int, 1), default=2, help="local processes at a time (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
     ap.add_argument("--no-resume", action="store_true", help="re-run jobs that are already ok")
     a = ap.parse_args(argv)
-    if a.workers < 1:
-        ap.error(f"--workers must be >= 1, got {a.workers}")
     if a.table:
         if not a.script:
             ap.error("--table needs --script")
