@@ -11,17 +11,17 @@ damping of every body's acceleration; NewtonIntegrator's damping is therefore se
 Per unit thickness (SPEC §1) a contact force is a line load [N/m], so a 2D spring is [N/m²]:
 the paper's stiffness per unit area times the contact width w [m] that carries it,
 
-    k_n = kn · w,    w = WIDTH_FACTOR · 2 r1 r2 / (r1 + r2),    k_s = (ks/kn) · k_n.
+    k_n = kn · w,    w = f_w · 2 r1 r2 / (r1 + r2),    k_s = (ks/kn) · k_n.
 
-The paper does not give w. We take WIDTH_FACTOR = 1, the harmonic mean of the radii (the radius
-for equal discs): YADE's own mapping of a modulus to a sphere contact (FrictMat: kn = E 2 R1 R2 /
+The paper does not give w. We take f_w = 1 (``CemContact.width_factor``), the harmonic mean of the
+radii (the radius for equal discs): YADE's own mapping of a modulus to a sphere contact (FrictMat: kn = E 2 R1 R2 /
 (R1 + R2)), so "kn" reads as YADE's ``young``. It reproduces the paper's time-step finding
 (Fig. 6: Δt = 0.5e-4 s is stable, 1e-4 s diverges); with the diameter (factor 2) a packing
 already rings at 0.5e-4 s (measured: docs/BIAXIAL.md).
 
 YADE's Ip2_ViscElMat_ViscElMat_ViscElPhys combines the constants of the two materials in series,
 k = k1 k2 / (k1 + k2). Each disc therefore gets a material of its own radius with
-k_i = 2 kn · WIDTH_FACTOR · r_i (the series of two gives w above exactly) and
+k_i = 2 kn f_w r_i (the series of two gives w above exactly) and
 c_i = 2 ζ √(m_i k_i): the series of two is the critical dashpot 2 ζ √(m* k) of the pair
 (m* = m1 m2 / (m1 + m2)) exactly for equal discs and within 1.5 % for Table 1's most different
 pair (r = 1.4 and 3.2 mm).
@@ -31,7 +31,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-WIDTH_FACTOR = 1.0  # w = WIDTH_FACTOR × the harmonic mean of the radii (see module doc)
 # Leapfrog with the dashpot on the previous half-step velocity is stable for one spring while
 # (ω dt)² + 4 ζ ω dt <= 4, i.e. ω dt <= 2 (√(1 + ζ²) - ζ): 0.83 at ζ = 1 (2 undamped).
 
@@ -46,6 +45,7 @@ class CemContact:
         phi_e_deg: inter-element friction angle φe [deg], 0 < φe < 90.
         rho: disc density [kg/m³] (mass per unit thickness ρ π r²).
         damping_ratio: ζn = ζs, 1 = critical [-].
+        width_factor: f_w, the contact width over the harmonic mean of the radii [-] (module doc).
     """
 
     kn: float = 1.0e8
@@ -53,11 +53,13 @@ class CemContact:
     phi_e_deg: float = 15.0
     rho: float = 2500.0
     damping_ratio: float = 1.0
+    width_factor: float = 1.0
 
     def __post_init__(self):
         for name, ok, limit in [("kn", self.kn > 0, "> 0 Pa/m"), ("ks_ratio", self.ks_ratio >= 0, ">= 0"),
                                 ("phi_e_deg", 0 < self.phi_e_deg < 90, "in (0, 90) degrees"),
-                                ("rho", self.rho > 0, "> 0 kg/m^3"), ("damping_ratio", self.damping_ratio >= 0, ">= 0")]:
+                                ("rho", self.rho > 0, "> 0 kg/m^3"), ("damping_ratio", self.damping_ratio >= 0, ">= 0"),
+                                ("width_factor", self.width_factor > 0, "> 0")]:
             if not (math.isfinite(getattr(self, name)) and ok):
                 raise ValueError(f"{name} must be {limit}, got {getattr(self, name)}")
 
@@ -71,7 +73,7 @@ def disc_constants(r, c):
     """Per-disc constants (k_n, k_s, c_n, c_s) [N/m², N/m², N s/m²] whose series combination
     (YADE's Ip2_ViscElMat_ViscElMat_ViscElPhys) is the pair's contact (see module doc)."""
     r = np.asarray(r, float)
-    kn_i = 2.0 * c.kn * WIDTH_FACTOR * r
+    kn_i = 2.0 * c.kn * c.width_factor * r
     ks_i = c.ks_ratio * kn_i
     m = disc_mass(r, c.rho)
     return kn_i, ks_i, 2 * c.damping_ratio * np.sqrt(m * kn_i), 2 * c.damping_ratio * np.sqrt(m * ks_i)
@@ -83,9 +85,9 @@ def series(a, b):
     return a * b / (a + b)
 
 
-def contact_width(r1, r2):
+def contact_width(r1, r2, c):
     """Contact width w [m] carrying the paper's per-area stiffness (module doc)."""
-    return WIDTH_FACTOR * 2 * series(r1, r2)
+    return c.width_factor * 2 * series(r1, r2)
 
 
 def pair_constants(r1, r2, c):
@@ -120,7 +122,7 @@ def stable_dt(r, c):
     dashpots, docs/BIAXIAL.md): kn = 1e8, ks/kn = 0.25 rings from about 6e-5 s on, ks/kn = 0.5
     between 4e-5 and 5e-5 s, kn = 2e8 between 3.5e-5 and 5e-5 s: the highest mode goes as
     √(kn (1 + 4 ks/kn) / (ρ r_min))."""
-    stiff = c.kn * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
+    stiff = c.kn * c.width_factor * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
     paper = 1e8 * (1 + 4 * 0.25) / (2500.0 * 1.4e-3)
     return PAPER_DT * min(1.0, math.sqrt(paper / stiff))
 

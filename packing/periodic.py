@@ -13,9 +13,11 @@ it as a relative velocity (in the paper it is an imposed displacement increment;
 used the two are the same to first order in ε̇ Δt); (2) σx, σz are the Love averages over all
 contacts of the cell instead of the forces across one section line (equal in static
 equilibrium; ``section_stress`` gives the paper's measure and the tests compare the two);
-(3) the paper does not say how L′/L is chosen: we shrink fast while the discs are apart, then
-servo each direction on its own stress error (a PeriTriaxController written for 2D), and stop
-when both stresses are within the tolerance and the assembly is at rest.
+(3) the paper does not say how L′/L is chosen: each direction is servoed on its own stress
+error with a rate (σ3 − σ)/(K τ), K the assembly's modulus estimated from its number of
+contacts (a PeriTriaxController written for 2D): fast while the discs are apart, slow once they
+carry load; it stops when both stresses are within the tolerance and the assembly is at rest.
+The shear stress σxz is not controlled (in the paper neither); it is recorded in the block's info.
 """
 import json
 import math

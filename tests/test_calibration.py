@@ -35,7 +35,7 @@ def test_random_placement_has_no_overlap_across_the_periodic_edges():
 def test_contact_constants_are_the_papers_springs_per_unit_thickness():
     c = CemContact(kn=1e8, ks_ratio=0.25, phi_e_deg=15)
     kn, ks, cn, cs = pair_constants(2e-3, 2e-3, c)
-    assert contact_width(2e-3, 2e-3) == pytest.approx(2e-3)  # equal discs: w = r
+    assert contact_width(2e-3, 2e-3, c) == pytest.approx(2e-3)  # equal discs: w = r
     assert kn == pytest.approx(1e8 * 2e-3) and ks == pytest.approx(0.25 * kn)
     m_star = 2500 * math.pi * 4e-6 / 2
     assert cn == pytest.approx(2 * math.sqrt(m_star * kn))  # critical
