@@ -1,7 +1,8 @@
 """`make biaxial`: seed 003's study (Murakami et al. §3) through the sweep runner.
 
     /usr/bin/python3 yade_scripts/biaxial_study.py --out out/biaxial [--workers 2] [--scheduler ADDR]
-                     [--parts main,rate,dt,discs,stiffness,sideload,calibration] [--seeds 1,2,3] [--analyse-only]
+                     [--parts main,rate,dt,discs,stiffness,sideload,stability,calibration] [--seeds 1,2,3]
+                     [--analyse-only] [--quick]
 
 Runs yade_scripts/biaxial.py jobs (one directory each under OUT/runs/, resumable) on the paper's
 specimen (Table 1: 1000 discs; Table 2: kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, Δt = 0.5e-4 s,
@@ -12,9 +13,11 @@ specimen (Table 1: 1000 discs; Table 2: kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, 
     discs       125, 250, 500, 1000 discs (Fig. 7–8)
     stiffness   kn ×0.5, ×2 and ks/kn ×0.5, ×2 (Fig. 13–14, 17)
     sideload    φe = 15° with σ3 on every side disc's diameter (the paper's words read literally)
+    stability   time steps and contact widths at which a packed specimen stays at rest
+                (yade_scripts/biaxial_stability.py on the reference packing of the first seed)
     calibration target φ*, E50 → φe, kn (eq 5–6) → the biaxial test again (yade_scripts/calibrate.py)
 then writes into OUT: study.json (every number), fit.json (the eq 2/4 curves calibrate.py reads),
-table.md (side by side with the paper) and the figures fig05_strain_rate.png, fig06_dt.png,
+table.md (side by side with the paper, and the time steps) and the figures fig05_strain_rate.png, fig06_dt.png,
 fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png, fig13_14_stiffness.png,
 fig15_e50_sigma3.png, fig19_eq4.png, fig20_21_A_m.png.
 """
@@ -34,6 +37,8 @@ from yade_scripts.sweep import Job, run_sweep  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIAXIAL = os.path.join(ROOT, "yade_scripts", "biaxial.py")
+STABILITY = os.path.join(ROOT, "yade_scripts", "biaxial_stability.py")
+PARTS = ("main", "rate", "dt", "discs", "stiffness", "sideload", "stability", "calibration")
 PHI_E = (5.0, 10.0, 15.0)
 SIGMA3 = (100.0, 200.0, 300.0, 400.0)
 KN = 1e8
@@ -88,7 +93,7 @@ def stage1_jobs(parts, seeds, quick=False):
     if "sideload" in parts:
         jobs += [biaxial_job(f"sideload_diameter_seed{s}", quick=quick, phi_e=15.0, sigma3=(100.0, 400.0),
                              max_strain=5.0, side_load="diameter", seed=s) for s in seeds]
-    if parts & {"rate", "dt", "discs", "stiffness"}:
+    if parts & {"rate", "dt", "discs", "stiffness", "stability"}:
         jobs += [sens(s) for s in seeds]
     if "dt" in parts:
         jobs += [sens(s, dt=dt, packing_dt=5e-5) for dt in DTS for s in seeds]
@@ -99,6 +104,12 @@ def stage1_jobs(parts, seeds, quick=False):
     if "discs" in parts:
         jobs += [sens(s, n_discs=n) for n in DISCS for s in seeds]
     return jobs
+
+
+def stability_job(runs, seed):
+    """biaxial_stability.py on the reference packing of ``seed`` (it must have run)."""
+    block = os.path.join(os.path.abspath(runs), sensitivity_name(seed), f"packing_sigma3_{SENS_SIGMA3:g}")
+    return Job("stability", ("yade", "-n", "-x", STABILITY, "--block", block, "--out", "{out}"))
 
 
 # ---- reading the runs ------------------------------------------------------------------------
@@ -245,6 +256,13 @@ def write_table(study, path):
         lines.append(f"| calibration round trip: E50 at σ3 = {cal['target']['sigma3_pa']:g} Pa | within 10 % | "
                      f"target {cal['target']['e50_pa']:.4g} Pa, got {v['e50_pa']['mean']:.4g} Pa "
                      f"({100 * v['e50_error']:+.1f} %) |")
+    if study.get("stability"):
+        st = study["stability"]
+        lines += ["", f"Time steps ({st['n_discs']} discs packed at 0.5e-4 s, left at rest {st['rest_time_s']:g} s):", "",
+                  "| contact width / harmonic-mean radius | kn [Pa/m] | ks/kn | Δt [s] | unbalanced force ratio | "
+                  "σ change over the last half | outcome |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {c['width_factor']:g} | {c['kn_pa_per_m']:.0e} | {c['ks_ratio']:g} | {c['dt_s']:.2e} | "
+                  f"{c['unbalanced']:.1e} | {100 * c['stress_change']:.2f} % | {c['outcome']} |" for c in st["cases"]]
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
     return "\n".join(lines)
@@ -319,24 +337,31 @@ def main(argv=None):
     ap.add_argument("--out", default="out/biaxial", help="output directory (runs in OUT/runs)")
     ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address: run the jobs on that cluster")
-    ap.add_argument("--parts", default="main,rate,dt,discs,stiffness,sideload,calibration",
-                    help="comma-separated parts of the study (default: all)")
+    ap.add_argument("--parts", default=",".join(PARTS), help="comma-separated parts of the study (default: all)")
     ap.add_argument("--seeds", default="1,2,3", help="packings per point (placement seeds)")
     ap.add_argument("--analyse-only", action="store_true", help="do not run anything, analyse what is there")
     ap.add_argument("--quick", action="store_true",
                     help="150 discs, 1.5 %% strain, 400 %%/min: checks the pipeline in minutes (numbers meaningless)")
     a = ap.parse_args(argv)
     parts = set(a.parts.split(","))
-    unknown = parts - {"main", "rate", "dt", "discs", "stiffness", "sideload", "calibration"}
+    unknown = parts - set(PARTS)
     if unknown:
         ap.error(f"--parts: unknown {', '.join(sorted(unknown))}")
     seeds = [int(s) for s in a.seeds.split(",")]
     runs = os.path.join(a.out, "runs")
     if not a.analyse_only:
-        run_sweep(stage1_jobs(parts, seeds, a.quick), runs, workers=a.workers, scheduler=a.scheduler)
+        jobs = stage1_jobs(parts, seeds, a.quick)
+        run_sweep(jobs, runs, workers=a.workers, scheduler=a.scheduler)
+        if "stability" in parts:
+            run_sweep([stability_job(runs, seeds[0])], runs, workers=a.workers, scheduler=a.scheduler)
     main_res = analyse_main(runs, seeds)
     sens = analyse_sensitivity(runs, seeds)
     study = summarise(main_res, sens, seeds)
+    try:
+        with open(os.path.join(runs, "stability", "stability.json")) as f:
+            study["stability"] = json.load(f)
+    except OSError:
+        pass
     if len(main_res["fits"]) >= 2:
         cal = calibration_from(main_res)
         cal.save(os.path.join(a.out, "fit.json"))
