@@ -190,7 +190,9 @@ def py_runner(callback, iter_period):
 def contact_arrays():
     """Real contacts as arrays: ids (n, 2), contact force on the second body (n, 2) [N/m] in
     (x, z), and the branch vector from the first to the second centre (n, 2) [m] including the
-    periodic shift. One Python pass over the interactions (tests and end-of-stage readings)."""
+    periodic shift. The force is YADE's stored normal + shear force (as utils.getStress uses):
+    the viscous part of the shear force of a sticking contact is not stored, which at rest is
+    nothing. One Python pass over the interactions (tests and end-of-stage readings)."""
     from yade import O
 
     ids, force, branch = [], [], []
