@@ -84,16 +84,13 @@ def covered_height(z, r):
 
 def e50(strain, deviator):
     """E50 [Pa] (§2(3)): slope of the line from the origin to the point of the curve at half the
-    peak deviator, on the branch rising to the peak: the last crossing of q_f / 2 before the
-    peak (linear interpolation between records). The first crossing would be taken at the start
-    when the dashpots' resistance to the sudden start of ④ exceeds q_f / 2 (fast tests, low σ3)."""
+    peak deviator, its first crossing on the loading branch (linear interpolation between
+    records; a later dip of a stick-slip plateau below q_f / 2 is not the loading branch)."""
     strain, q = np.asarray(strain, float), np.asarray(deviator, float)
-    peak = int(np.argmax(q))
-    half = 0.5 * q[peak]
-    below = np.flatnonzero(q[:peak + 1] < half)
-    if len(below) == 0:
+    half = 0.5 * q.max()
+    k = int(np.argmax(q >= half))
+    if k == 0:
         return math.nan
-    k = below[-1] + 1
     e = strain[k - 1] + (half - q[k - 1]) * (strain[k] - strain[k - 1]) / (q[k] - q[k - 1])
     return float(half / e)
 

@@ -152,8 +152,12 @@ def plot_sensitivity(groups, path, title, label, failed=None):
         title += "\n" + ", ".join(f"{label} = {v:g}: {n} run(s) failed (no rest)" for v, n in failed.items())
     ax.set(xlabel="axial strain [%]", ylabel="deviator σ1 − σ3 [Pa]", title=title)
     ax.legend(fontsize=8)
-    ap.set(xlabel=label, ylabel="peak deviator [Pa]", xscale="log", ylim=(0, None), title="peak (each packing, mean)")
-    ae.set(xlabel=label, ylabel="E50 [Pa]", xscale="log", ylim=(0, None), title="E50 (each packing, mean)")
+    ap.set(xlabel=label, ylabel="peak deviator [Pa]", ylim=(0, None), title="peak (each packing, mean)")
+    ae.set(xlabel=label, ylabel="E50 [Pa]", ylim=(0, None), title="E50 (each packing, mean)")
+    for a in (ap, ae):
+        a.set_xscale("log")
+        a.set_xticks(values, [f"{v:g}" for v in values])
+        a.minorticks_off()
     for a in (ax, ap, ae):
         a.grid(alpha=0.3)
     _save(fig, path)

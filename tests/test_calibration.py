@@ -74,9 +74,11 @@ def test_exposed_side_loads_add_up_to_sigma3_times_the_covered_height():
         assert np.abs(lit).sum() == pytest.approx(150.0 * 2 * r.sum())
 
 
-def test_e50_and_peak_of_a_bilinear_curve():
+def test_e50_of_a_bilinear_curve_with_a_stick_slip_plateau():
     eps = np.linspace(0, 0.05, 501)
-    q = np.minimum(2e4 * eps, 300.0)  # linear to the peak at 1.5 %
+    q = np.minimum(2e4 * eps, 300.0)  # linear to 1.5 %, then a plateau
+    assert e50(eps, q) == pytest.approx(2e4, rel=1e-9)
+    q[300:310] = 100.0  # a slip on the plateau dips below half the peak: not the loading branch
     assert e50(eps, q) == pytest.approx(2e4, rel=1e-9)
 
 

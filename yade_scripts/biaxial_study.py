@@ -157,19 +157,20 @@ def analyse_main(runs, seeds):
             summary, curves = read_run(runs, f"main_phi{p:g}_seed{s}")
             if summary is None or "error" in summary:
                 continue
-            per["phi_star_deg"].append(summary["phi_star_deg"])
-            per["c_star_pa"].append(summary["c_star_pa"])
-            out["rows"].append({"phi_e_deg": p, "seed": s, "phi_star_deg": summary["phi_star_deg"],
-                                "c_star_pa": summary["c_star_pa"]})
+            s3s = sorted(curves)
+            phi, c_star = mohr_coulomb_fit(s3s, [s3 + curves[s3].peak()[1] for s3 in s3s])
+            per["phi_star_deg"].append(phi)
+            per["c_star_pa"].append(c_star)
+            out["rows"].append({"phi_e_deg": p, "seed": s, "phi_star_deg": phi, "c_star_pa": c_star})
             per["curves"][s] = curves
-            for q in summary["per_sigma3"]:
-                s3 = q["sigma3_pa"]
-                per["peak"][s3].append(q["peak_deviator_pa"])
-                per["e50"][s3].append(q["e50_pa"])
-                per["peak_strain"][s3].append(q["peak_strain"])
-                per["peak_at_end"] += int(q["peak_at_end"])
-                out["points"].append({"phi_e_deg": p, "seed": s, "sigma3_pa": s3, "kn": KN, "e50_pa": q["e50_pa"],
-                                      "peak_deviator_pa": q["peak_deviator_pa"]})
+            for s3, c in sorted(curves.items()):  # peak and E50 from the records (engines.biaxial)
+                eps_f, q_f = c.peak()
+                per["peak"][s3].append(q_f)
+                per["e50"][s3].append(c.e50())
+                per["peak_strain"][s3].append(eps_f)
+                per["peak_at_end"] += int(eps_f >= c.strain[-1] - 0.001)
+                out["points"].append({"phi_e_deg": p, "seed": s, "sigma3_pa": s3, "kn": KN, "e50_pa": c.e50(),
+                                      "peak_deviator_pa": q_f})
         pts = [x for x in out["points"] if x["phi_e_deg"] == p]
         if len(pts) >= 2:
             out["fits"][p] = fit_eq4([x["sigma3_pa"] for x in pts], [x["kn"] for x in pts], [x["e50_pa"] for x in pts])
@@ -195,11 +196,12 @@ def analyse_sensitivity(runs, seeds):
                     cells["failed"].append({"seed": s, "status": st["status"],
                                             "reason": (st.get("stderr_tail") or "").strip().splitlines()[-1:]})
                     continue
-                q = summary["per_sigma3"][0]
-                cells["peak_deviator_pa"].append(q["peak_deviator_pa"])
-                cells["e50_pa"].append(q["e50_pa"])
-                cells["phi0_deg"].append(summary["phi_star_deg"])
-                cells["curves"].append(curves[SENS_SIGMA3])
+                c = curves[SENS_SIGMA3]
+                q_f = c.peak()[1]
+                cells["peak_deviator_pa"].append(q_f)
+                cells["e50_pa"].append(c.e50())
+                cells["phi0_deg"].append(math.degrees(math.asin(q_f / (q_f + 2 * SENS_SIGMA3))))  # c* = 0
+                cells["curves"].append(c)
                 cells["wall_s"].append(summary["wall_s"])
             res[v] = cells
         out[label] = res

@@ -21,7 +21,8 @@ import numpy as np  # noqa: E402
 
 from engines.calibration import Calibration  # noqa: E402
 from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
-from yade_scripts.biaxial_study import biaxial_job  # noqa: E402
+from engines.biaxial import mohr_coulomb_fit  # noqa: E402
+from yade_scripts.biaxial_study import biaxial_job, read_run  # noqa: E402
 from yade_scripts.sweep import read_record, run_sweep  # noqa: E402
 
 VERIFY_SIGMA3 = (100.0, 400.0)  # Pa, with the target's σ3: φ* over the study's range
@@ -38,17 +39,14 @@ def verify(runs, jobs, target):
     """What the verification runs gave against the target (φ* [deg], E50 [Pa], σ3 [Pa])."""
     phi, e50, failed = [], [], []
     for j in jobs:
-        try:
-            with open(os.path.join(runs, j.name, "summary.json")) as f:
-                summary = json.load(f)
-        except OSError:
-            summary = None
+        summary, curves = read_run(runs, j.name)
         if summary is None or "error" in summary:
             rec = read_record(runs, j.name) or {}
             failed.append({"job": j.name, "reason": (rec.get("stderr_tail") or "no result").splitlines()[-1:]})
             continue
-        phi.append(summary["phi_star_deg"])
-        e50.append(next(p["e50_pa"] for p in summary["per_sigma3"] if p["sigma3_pa"] == target[2]))
+        s3 = sorted(curves)
+        phi.append(mohr_coulomb_fit(s3, [s + curves[s].peak()[1] for s in s3])[0])
+        e50.append(curves[float(target[2])].e50())
     rec = {"jobs": [j.name for j in jobs], "failed": failed}
     if phi:
         rec["verified"] = {"phi_star_deg": {"mean": float(np.mean(phi)), "values": phi},
