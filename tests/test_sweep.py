@@ -89,3 +89,13 @@ def test_yade_batch_table_becomes_jobs(tmp_path):
     recs = run_sweep(jobs, str(tmp_path / "sweep"), log=None)
     assert [r["status"] for r in recs] == ["ok", "ok"], recs[0]["stderr_tail"]
     assert [(tmp_path / "sweep" / n / "ab.txt").read_text() for n in ("first", "second")] == ["1.5", "2.0"]
+
+
+def test_a_runner_failure_is_reported_not_lost(tmp_path, monkeypatch):
+    from yade_scripts import sweep
+
+    def broken(job, root):
+        raise OSError("disk full")
+    monkeypatch.setattr(sweep, "run_job", broken)
+    rec = run_sweep([Job("a", ("true",))], str(tmp_path), log=None)[0]
+    assert rec["status"] == "failed" and "disk full" in rec["stderr_tail"]

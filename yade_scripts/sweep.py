@@ -134,24 +134,31 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
     done = {}
 
-    def finished(rec):
-        done[rec["name"]] = rec
-        log(f"[{len(done)}/{len(todo)}] {rec['name']}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
+    def finished(job, fut):
+        try:
+            rec = fut.result()
+        except Exception as e:  # the runner itself failed (a lost Dask worker, a full disk): keep the job
+            rec = {"name": job.name, "status": "failed", "returncode": None, "wall_s": 0.0,
+                   "command": job.command(os.path.abspath(os.path.join(root, job.name))), "env": dict(job.env),
+                   "stderr_tail": f"runner error: {type(e).__name__}: {e}"}
+        done[job.name] = rec
+        log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
     if scheduler is None:
         with ThreadPoolExecutor(max_workers=workers) as pool:
-            for fut in as_completed([pool.submit(run_job, j, root) for j in todo]):
-                finished(fut.result())
+            futures = {pool.submit(run_job, j, root): j for j in todo}
+            for fut in as_completed(futures):
+                finished(futures[fut], fut)
     elif todo:
         from distributed import Client, as_completed as dask_completed
 
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
             root_abs = os.path.abspath(root)
-            futures = [client.submit(run_job, j, root_abs, key=f"sweep-{j.name}-{time.time_ns()}", pure=False)
-                       for j in todo]
-            for fut in dask_completed(futures):
-                finished(fut.result())
+            futures = {client.submit(run_job, j, root_abs, key=f"sweep-{j.name}-{time.time_ns()}", pure=False): j
+                       for j in todo}
+            for fut in dask_completed(list(futures)):
+                finished(futures[fut], fut)
         finally:
             if client is not scheduler:
                 client.close()
@@ -173,7 +180,7 @@ def format_summary(records):
     lines = [f"{'job':<{width}}  status  rc    wall_s"]
     for r in records:
         status = "ok*" if r.get("kept") else r["status"]
-        lines.append(f"{r['name']:<{width}}  {status:<6}  {r.get('returncode', ''):<4}  {r.get('wall_s', 0):8.1f}")
+        lines.append(f"{r['name']:<{width}}  {status:<6}  {str(r.get('returncode', '')):<4}  {r.get('wall_s', 0):8.1f}")
     failed = [r for r in records if r["status"] != "ok"]
     lines.append(f"{len(records) - len(failed)} ok ({sum(1 for r in records if r.get('kept'))} kept from before, *), "
                  f"{len(failed)} failed" + ("".join(f"\n  {r['name']}: {r.get('stderr_tail', '').splitlines()[-1:]}"
