@@ -317,6 +317,21 @@ def summarise(main, sens, seeds):
     return {"seeds": list(seeds), "main": m, "sensitivity": s}
 
 
+def timing(runs):
+    """Cost of the runs: wall seconds per job, and per test the time per step (1000 discs)."""
+    jobs, per_step = {}, []
+    for name in sorted(os.listdir(runs)) if os.path.isdir(runs) else []:
+        rec = job_status(runs, name)
+        if rec["status"] in ("ok", "failed") and rec.get("wall_s") is not None:
+            jobs[name] = rec["wall_s"]
+        summary, _ = read_run(runs, name)
+        if summary and summary["parameters"]["n_discs"] == 1000:
+            per_step += [1e6 * q["wall_s"] / q["steps"] for q in summary["per_sigma3"]]  # equilibrium + test
+    main = [w for n, w in jobs.items() if n.startswith("main_")]
+    return {"jobs": len(jobs), "cpu_h": sum(jobs.values()) / 3600, "main_job_wall_s": _mean_sd(main),
+            "us_per_step_1000_discs": _mean_sd(per_step), "wall_s": jobs}
+
+
 def calibration_round_trip(runs, cal, seeds, workers, scheduler, run=True, quick=False):
     """eq 5–6 for calibration_target, the verification runs (unless ``run`` is False: read what
     is there), and the record comparing what they give with the target."""
@@ -359,6 +374,7 @@ def main(argv=None):
     main_res = analyse_main(runs, seeds)
     sens = analyse_sensitivity(runs, seeds)
     study = summarise(main_res, sens, seeds)
+    study["timing"] = timing(runs)
     try:
         with open(os.path.join(runs, "stability", "stability.json")) as f:
             study["stability"] = json.load(f)
