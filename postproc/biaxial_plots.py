@@ -195,3 +195,18 @@ def plot_study_curves(per_phi_e, path):
         am.legend(fontsize=7, loc="upper left")
         am.grid(alpha=0.3)
     _save(fig, path)
+
+
+def plot_sigma3_kn_collapse(pairs, path):
+    """Fig. 18: q/σ3 against axial strain for tests at equal σ3/kn but different kn, one panel per
+    σ3/kn. pairs: {σ3/kn [m]: {label: [Curve, ...]}}."""
+    fig, axes = plt.subplots(1, len(pairs), figsize=(5.2 * len(pairs), 4), squeeze=False)
+    for ax, (ratio, groups) in zip(axes[0], sorted(pairs.items())):
+        for k, (label, curves) in enumerate(sorted(groups.items())):
+            for j, c in enumerate(curves):
+                ax.plot(100 * c.strain, c.deviator / c.sigma3, color=f"C{k}", lw=0.8, alpha=0.8,
+                        label=label if j == 0 else None)
+        ax.set(xlabel="axial strain [%]", ylabel="(σ1 − σ3) / σ3 [-]", title=f"σ3 / kn = {ratio:.0e} m (Fig. 18)")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+    _save(fig, path)

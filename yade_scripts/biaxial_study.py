@@ -18,7 +18,8 @@ specimen (Table 1: 1000 discs; Table 2: kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, 
     calibration target φ*, E50 → φe, kn (eq 5–6) → the biaxial test again (yade_scripts/calibrate.py)
 then writes into OUT: study.json (every number), fit.json (the eq 2/4 curves calibrate.py reads),
 table.md (side by side with the paper, and the time steps) and the figures fig05_strain_rate.png, fig06_dt.png,
-fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png, fig13_14_stiffness.png,
+fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png, fig13_kn.png, fig14_ks.png,
+fig18_sigma3_over_kn.png,
 fig15_e50_sigma3.png, fig19_eq4.png, fig20_21_A_m.png.
 """
 import argparse
@@ -272,7 +273,7 @@ def write_table(study, path):
 
 def figures(out, main, sens):
     from postproc.biaxial_plots import (plot_A_m, plot_e50_sigma3, plot_eq4, plot_phi_star, plot_sensitivity,
-                                        plot_study_curves)
+                                        plot_sigma3_kn_collapse, plot_study_curves)
 
     if main["rows"]:
         plot_phi_star(main["rows"], {15.0: 27.4}, os.path.join(out, "fig12_phi_star.png"))
@@ -283,6 +284,15 @@ def figures(out, main, sens):
                      for k, c in sens["kn_pa_per_m"].items() for e in c["e50_pa"] if float(k) != KN]
         plot_eq4(main["points"], main["fits"], os.path.join(out, "fig19_eq4.png"), extra=kn_points)
         plot_A_m(main["fits"], os.path.join(out, "fig20_21_A_m.png"))
+    pairs = {}  # Fig. 18: the kn runs at σ3 = 200 Pa against the main grid's φe = 10° at the same σ3/kn
+    for kn, s3 in ((2e8, 100.0), (0.5e8, 400.0)):
+        main_curves = [c[s3] for c in main["per_phi_e"].get(SENS_PHI, {}).get("curves", {}).values() if s3 in c]
+        kn_curves = sens["kn_pa_per_m"].get(kn, {}).get("curves", [])
+        if main_curves and kn_curves:
+            pairs[s3 / KN] = {f"kn = {KN:.0e}, σ3 = {s3:g} Pa": main_curves,
+                              f"kn = {kn:.0e}, σ3 = {SENS_SIGMA3:g} Pa": kn_curves}
+    if pairs:
+        plot_sigma3_kn_collapse(pairs, os.path.join(out, "fig18_sigma3_over_kn.png"))
     for key, fname, title, label in [
             ("strain_rate_pct_min", "fig05_strain_rate.png", "axial strain rate (Fig. 5)", "strain rate [%/min]"),
             ("dt_s", "fig06_dt.png", "time step (Fig. 6)", "Δt [s]"),
