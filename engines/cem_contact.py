@@ -13,11 +13,11 @@ the paper's stiffness per unit area times the contact width w [m] that carries i
 
     k_n = kn · w,    w = f_w · 2 r1 r2 / (r1 + r2),    k_s = (ks/kn) · k_n.
 
-The paper does not give w. We take f_w = 1 (``CemContact.width_factor``), the harmonic mean of the
-radii (the radius for equal discs): YADE's own mapping of a modulus to a sphere contact (FrictMat: kn = E 2 R1 R2 /
-(R1 + R2)), so "kn" reads as YADE's ``young``. It reproduces the paper's time-step finding
-(Fig. 6: Δt = 0.5e-4 s is stable, 1e-4 s diverges); with the diameter (factor 2) a packing
-already rings at 0.5e-4 s (measured: docs/BIAXIAL.md).
+The paper does not give w. We take f_w = 1 (``CemContact.width_factor``), the harmonic mean of
+the radii (the radius for equal discs): YADE's own mapping of a modulus to a sphere contact
+(FrictMat: kn = E 2 R1 R2 / (R1 + R2)), so "kn" reads as YADE's ``young``. It reproduces the
+paper's time-step finding (Fig. 6: Δt = 0.5e-4 s is stable, 1e-4 s diverges); with the diameter
+(f_w = 2) a packing already rings at 0.5e-4 s (yade_scripts/biaxial_stability.py, docs/BIAXIAL.md).
 
 YADE's Ip2_ViscElMat_ViscElMat_ViscElPhys combines the constants of the two materials in series,
 k = k1 k2 / (k1 + k2). Each disc therefore gets a material of its own radius with
@@ -30,9 +30,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
-# Leapfrog with the dashpot on the previous half-step velocity is stable for one spring while
-# (ω dt)² + 4 ζ ω dt <= 4, i.e. ω dt <= 2 (√(1 + ζ²) - ζ): 0.83 at ζ = 1 (2 undamped).
 
 
 @dataclass(frozen=True)
@@ -105,7 +102,9 @@ def pair_damping_ratio(r1, r2, c):
 
 def single_contact_dt_limit(r, c):
     """Largest stable dt [s] of the lightest pair alone (normal spring, leapfrog, ζ): a time step
-    above it diverges for sure; a dense packing's modes are stiffer and diverge earlier."""
+    above it diverges for sure; a dense packing's modes are stiffer and diverge earlier.
+    Leapfrog with the dashpot on the previous half-step velocity is stable for one spring while
+    (ω dt)² + 4 ζ ω dt <= 4, i.e. ω dt <= 2 (√(1 + ζ²) − ζ): 0.83 at ζ = 1 (2 undamped)."""
     rmin = float(np.min(r))
     kn = pair_constants(rmin, rmin, c)[0]
     omega = math.sqrt(kn / series(disc_mass(rmin, c.rho), disc_mass(rmin, c.rho)))
@@ -118,10 +117,10 @@ PAPER_DT = 5e-5  # s, Table 2's constants (Fig. 6)
 
 def stable_dt(r, c):
     """Time step [s] for seed 003's packings: the paper's 0.5e-4 s for its constants (Table 1–2),
-    scaled as 1/ω for others, never above it. Measured on 1000-disc packings at rest (critical
-    dashpots, docs/BIAXIAL.md): kn = 1e8, ks/kn = 0.25 rings from about 6e-5 s on, ks/kn = 0.5
-    between 4e-5 and 5e-5 s, kn = 2e8 between 3.5e-5 and 5e-5 s: the highest mode goes as
-    √(kn (1 + 4 ks/kn) / (ρ r_min))."""
+    scaled as 1/ω for others, never above it. Measured on a 1000-disc packing at rest
+    (yade_scripts/biaxial_stability.py): kn = 1e8, ks/kn = 0.25 rings at 7e-5 s, not at 5e-5 s;
+    ks/kn = 0.5 at 5e-5 s, not at 4e-5 s; kn = 2e8 at 5e-5 s, not at 3.5e-5 s: the highest mode
+    goes as √(kn f_w (1 + 4 ks/kn) / (ρ r_min))."""
     stiff = c.kn * c.width_factor * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
     paper = 1e8 * (1 + 4 * 0.25) / (2500.0 * 1.4e-3)
     return PAPER_DT * min(1.0, math.sqrt(paper / stiff))

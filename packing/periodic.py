@@ -262,8 +262,8 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
         h = O.cell.hSize
         lx, lz = float(h[0, 0]), float(h[2, 2])
         pos = np.mod([[b.state.pos[0], b.state.pos[2]] for b in O.bodies], [lx, lz])
-        info = {"sigma3_pa": target, "sigma_xz_pa": yade_cell_stress(depth, shear=True)[2], "steps": O.iter - start, "time_s": O.time, "contact": asdict(contact),
-                "settings": asdict(s), "depth_m": depth}
+        info = {"sigma3_pa": target, "sigma_xz_pa": yade_cell_stress(depth, shear=True)[2], "steps": O.iter - start,
+                "time_s": O.time, "contact": asdict(contact), "settings": asdict(s), "depth_m": depth}
         blocks[target] = PeriodicBlock(pos, r.copy(), (lx, lz), (sx, sz), info)
         if log:
             log(f"packed {len(r)} discs to sigma3 = {target:g} Pa: sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa "
