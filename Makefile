@@ -3,12 +3,13 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev \
+           python3-distributed
 EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench bench-seismic packings clean
+.PHONY: deps ext demo test bench bench-seismic packings biaxial clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -53,6 +54,12 @@ packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+
+# Seed 003 (hours on 2 cores, niced, resumable): biaxial tests of the paper's specimen, φ*(φe),
+# E50, eq 4-6 and their sensitivity, through the sweep runner. SCHEDULER=tcp://host:8786 runs the
+# jobs on a Dask cluster instead of the local cores.
+biaxial: deps
+	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 clean:
 	rm -rf $(OUT) .pytest_cache
