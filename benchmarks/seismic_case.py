@@ -31,7 +31,8 @@ from packing.packing import Packing  # noqa: E402
 SCENE = {
     "scene": {"name": "seismic-size", "description": "Table 4, spring d, cosine 1500 gal 50 Hz, case 1 water"},
     "packing": {"source": "deposit", "seed": 5, "n_particles": 192, "n_bottom": 15, "n_side": 17,
-                "dense_top_depth": 2.7e-3, "dense_top_factor": 10.0, "settle_time": 0.3},
+                "dense_top_depth": 2.7e-3, "dense_top_factor": 10.0, "settle_time": 0.3,
+                "guard_walls": True},
     "contact": {"spring": "d", "kn": 1.4e5, "eta_n": 2.6, "ks": 3.5e4, "eta_s": 0.6, "mu": 1.0,
                 "restitution": 0.001, "f_max": 1.5, "eps_m": 2e-4},
     "water": {"E_w": 2400.0, "k1": 1e3, "k2": 1e2, "k3": 0.0, "q_w": 0.0, "sides": "undrained", "l_m": 3.5e-4},
