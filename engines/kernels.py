@@ -10,6 +10,12 @@ reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
   darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
 
+and two per-step kernels chain them, so that a step costs one call from Python (each array passed to
+a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~60 arrays):
+
+  law_step          engines.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
+  water_step        engines.water_engine.WaterModel.advance  (measure, flows, update, eq 32, 33)
+
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
 written into arrays the caller owns (allocated once per network or contact list). numba compiles on
@@ -116,6 +122,25 @@ def spin_update(omega, M, inertia, mobile, dt):
 
 
 @jit
+def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+             r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+    """One step of PaperLaw: du = xz - xz_prev (eq 17), dpsi = omega dt, the contact forces F, M
+    (``contact_forces``, its arguments from r on), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
+    Returns the number of pairs that stopped touching (indices in ``lost``), or -1, having changed
+    nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
+    if max_sq_displacement(xz, xz_list) >= half_skin2:
+        return -1
+    for a in range(len(xz)):
+        du[a, 0] = xz[a, 0] - xz_prev[a, 0]
+        du[a, 1] = xz[a, 1] - xz_prev[a, 1]
+        dpsi[a] = omega[a] * dt
+    n_lost = contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    spin_update(omega, M, inertia, mobile, dt)
+    xz_prev[:] = xz
+    return n_lost
+
+
+@jit
 def measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
             poly, sect, void, length, contact, theta, vec, phi, cross):
     """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
@@ -208,6 +233,96 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
     balance[1] += s_s * h
     balance[2] += s_d * h
     return -1
+
+
+# The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
+# unboxes each array argument, ~0.2 us each): the parts in this order, each flattened.
+WATER_INTS = ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link", "throat_i", "throat_j",
+              "throat_link")
+WATER_FLOATS = ("corner_sign", "corner_raw0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
+                "bottom", "wp", "eps_m_a_min", "r",                                      # inputs
+                "poly", "sect", "void", "length", "contact", "theta", "vec", "phi", "cross",  # measure
+                "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",             # flows
+                "balance", "Fj", "lam")                                                  # update, forces
+
+
+def pack(parts):
+    """(buffer, offsets): the arrays ``parts`` flattened one after the other into one buffer; part k
+    is buffer[offsets[k]:offsets[k + 1]]."""
+    at = np.cumsum([0] + [np.size(p) for p in parts]).astype(np.int64)
+    return np.concatenate([np.ravel(p) for p in parts]), at
+
+
+@jit
+def _part(buf, at, k):
+    return buf[at[k]:at[k + 1]]
+
+
+@jit
+def _part2(buf, at, k):
+    """Part k as an (n, 2) array."""
+    p = buf[at[k]:at[k + 1]]
+    return p.reshape((len(p) // 2, 2))
+
+
+@jit
+def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """Advance the water by h [s] at centres xz and recompute the pressure forces F (N, 2) [N]
+    (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
+    n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
+    throat flows into q_prev), U at the measured areas (eq 32), ``pressure_forces``. The network's
+    arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (``pack``);
+    "lam" gets the Gershgorin bound of the first and of the last flows, "balance" the water of this
+    step. Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or
+    -1 - p when pore p would fall dry (W as after the previous sub-step)."""
+    links, link_pores = _part2(ints, i_at, 0), _part2(ints, i_at, 1)
+    c_pore, c_link, c_next = _part(ints, i_at, 2), _part(ints, i_at, 3), _part(ints, i_at, 4)
+    ti, tj, t_link = _part(ints, i_at, 5), _part(ints, i_at, 6), _part(ints, i_at, 7)
+    c_sign, c_raw0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part(floats, f_at, 1), _part(floats, f_at, 2),
+                                      _part(floats, f_at, 3))
+    rattler_area, surface, drained, bottom = (_part(floats, f_at, 4), _part(floats, f_at, 5), _part(floats, f_at, 6),
+                                              _part(floats, f_at, 7))
+    wp, eps_m, a_min, r = _part(floats, f_at, 8), floats[f_at[9]], floats[f_at[9] + 1], _part(floats, f_at, 10)
+    poly, sect, A_measured, length = (_part(floats, f_at, 11), _part(floats, f_at, 12), _part(floats, f_at, 13),
+                                      _part(floats, f_at, 14))
+    contact, theta, vec = _part(floats, f_at, 15), _part(floats, f_at, 16), _part2(floats, f_at, 17)
+    phi, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
+    q, q_s, q_d, q_in = _part(floats, f_at, 20), _part(floats, f_at, 21), _part(floats, f_at, 22), _part(floats, f_at, 23)
+    g, g_b, U = _part(floats, f_at, 24), _part(floats, f_at, 25), _part(floats, f_at, 26)
+    acc_i, acc_j, balance = _part(floats, f_at, 27), _part(floats, f_at, 28), _part(floats, f_at, 29)
+    Fj, lam = _part2(floats, f_at, 30), _part(floats, f_at, 31)
+
+    measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, A_measured, length, contact, theta, vec, phi, cross)
+    A = A_measured
+    if smoothing:  # eq 45
+        for p in range(len(A_prev)):
+            A_prev[p] = 0.5 * (A_prev[p] + A_measured[p])
+        A = A_prev
+    flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
+    lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
+    limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
+    n_sub = 1
+    if h > limit:
+        if not substep:
+            return 0
+        n_sub = int(math.ceil(h / limit))
+    balance[:] = 0.0
+    for sub in range(n_sub):
+        if sub > 0:
+            lam[1] = darcy_flows(W, A, contact, *flow)
+        if smoothing:  # eq 46
+            for t in range(len(q)):
+                if has_q_prev:
+                    q[t] = 0.5 * (q_prev[t] + q[t])
+                q_prev[t] = q[t]
+            has_q_prev = True
+        bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
+        if bad >= 0:
+            return -1 - bad
+    pore_pressures(W, A_measured, wp[0], U)  # eq 32 at the measured (unsmoothed) areas
+    pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
+    return n_sub
 
 
 @jit

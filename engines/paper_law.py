@@ -32,30 +32,48 @@ class PaperLaw:
         self.omega = np.zeros(n)
         self.du = np.zeros((n, 2))
         self.xz_prev = None
+        self._dpsi = np.zeros(n)  # omega dt, scratch of the compiled step
         self.extra_forces = []
 
     def step(self, xz, vel=None):
         """Forces (N, 2) [N] at centres xz (N, 2) of this step and {disc: new velocity (2,)} of the
-        discs that became free (eq 18-24); ``vel`` (N, 2) the velocities if known, else du/dt."""
-        dt = self.dt
-        self.du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev  # eq 17
-        F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
+        discs that became free (eq 18-24); ``vel`` (N, 2) the velocities if known, else du/dt.
+        Compiled, the forces are a buffer that the next step overwrites."""
+        if self.compiled:
+            F, separations = self._step_compiled(xz)
+        else:
+            F, separations = self._step_numpy(xz)
         fixes = {}
         s = self.settings
         if separations and s.separation_adjustment:
-            v = self.du / dt if vel is None else vel
+            v = self.du / self.dt if vel is None else vel
             fixes = separation_adjustment(separations, self.contact.touch_count(), v, self.mass, self.mobile,
                                           s.restitution)
-        if self.compiled:
-            kernels.spin_update(self.omega, M, self.inertia, self.mobile, dt)
-        else:
-            mob = self.mobile
-            self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
         for extra in self.extra_forces:
             F = F + extra(xz, self.du)
-        self.xz_prev = xz
         return F, fixes
 
+    def _step_numpy(self, xz):
+        dt = self.dt
+        self.du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev  # eq 17
+        F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
+        mob = self.mobile
+        self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
+        self.xz_prev = xz
+        return F, separations
+
+    def _step_compiled(self, xz):
+        """kernels.law_step: the same arithmetic as _step_numpy; du and xz_prev are updated in place."""
+        c = self.contact
+        if self.xz_prev is None:  # du = 0 at the first step
+            self.xz_prev = np.array(xz, float)
+            c._update_list(xz)
+        while True:
+            n_lost = kernels.law_step(xz, self.xz_prev, c.xz_list, c.half_skin2, self.omega, self._dpsi, self.du,
+                                      self.inertia, self.mobile, self.dt, *c.kernel_args(self.dt))
+            if n_lost >= 0:
+                return c._F, c._separations(xz, c._lost[:n_lost])
+            c._update_list(xz)
 
 class PaperLawEngine:
     """The paper's law in a YADE scene, as a PyRunner every step after ForceResetter and before
@@ -104,7 +122,7 @@ class PaperLawEngine:
 
     def _work(self, write):
         F, fixes = self.core.step(self.io.positions())
-        write(F[self._dynamic])
+        write(F)
         if fixes:
             disc = np.fromiter(fixes, np.int64)
             self._set_velocities(self.io.ids[disc], np.array([fixes[d] for d in disc.tolist()]))
@@ -112,7 +130,10 @@ class PaperLawEngine:
             hook()
 
     def __call__(self):
-        self._work(self.forced.add_forces)
+        self._work(self._add)
+
+    def _add(self, F):
+        self.forced.add_forces(F[self._dynamic])
 
     def drive(self, n, stop=None):
         """n steps: this engine's work, then O.step(); ``stop()`` true ends early."""
@@ -125,4 +146,4 @@ class PaperLawEngine:
                 break
 
     def _write_held(self, F):
-        self.forced.set_permanent_forces(F + self.held)
+        self.forced.set_permanent_forces(F, self._dynamic, self.held)
