@@ -44,17 +44,17 @@ class Bodies:
         self.ids = np.ascontiguousarray(ids, np.int64)
         self.id_list = self.ids.tolist()
         self.n = len(self.ids)
-        self._xz = np.zeros((self.n, 2))
         self._row = np.zeros((self.n, 3))  # x, y = 0, z rows for the Python API
+        self._F = np.zeros((self.n, 2))  # forces being written
         self._index = None  # position of each id in coordsAndDisplacements' lists
         self._n_listed = -1
 
     # -- reads -----------------------------------------------------------------------------------
     def positions(self):
         """Centres (n, 2) [m]; a new array."""
+        out = np.empty((self.n, 2))
         if _BULK is not None:
-            out = np.empty((self.n, 2))
-            _BULK.get_pos_xz(self.ids, out)
+            _check(_jit()["get_pos_xz"](self.ids, out), self.ids)
             return out
         x = utils.coordsAndDisplacements(0)[0]
         z = utils.coordsAndDisplacements(2)[0]
@@ -64,7 +64,6 @@ class Bodies:
             if np.any(self._index >= len(existing)) or np.any(existing[np.minimum(self._index, len(existing) - 1)] != self.ids):
                 raise ValueError("yade_io: some of the engine's body ids do not exist in O.bodies")
             self._n_listed = len(x)
-        out = np.empty((self.n, 2))
         out[:, 0] = np.asarray(x)[self._index]
         out[:, 1] = np.asarray(z)[self._index]
         return out
@@ -103,12 +102,52 @@ class Bodies:
         else:
             list(map(O.forces.addF, self.id_list, self._rows(F)))
 
-    def set_permanent_forces(self, F):
-        """O.forces.setPermF for every body, F (n, 2) [N] (held until set again)."""
+    def set_permanent_forces(self, F, rows=None, add=None):
+        """O.forces.setPermF for every body (held until set again): F (n, 2) [N], or with ``rows``
+        (n,) F[rows] + add, F (m, 2) over some larger set of which these bodies are the rows."""
+        if rows is None:
+            rows, add = np.arange(self.n), np.zeros((self.n, 2))
         if _BULK is not None:
-            _BULK.set_perm_force_xz(self.ids, np.ascontiguousarray(F, float))
+            _check(_jit()["set_perm_force_xz"](self.ids, np.ascontiguousarray(F, float), rows, add, self._F), self.ids)
         else:
-            list(map(O.forces.setPermF, self.id_list, self._rows(F)))
+            np.add(F[rows], add, out=self._F)
+            list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
+
+
+_JIT = {}
+
+
+def _jit():
+    """@njit callers of the bridge's C functions: a position read, and a permanent-force write of
+    F[rows] + add (through the ``out`` buffer). They embed the functions' addresses, so numba
+    cannot cache them: they compile at first use (~0.3 s; benchmarks/yade_io.py). Per call they
+    cost about an empty numba call (~1 us), the bridge's Python wrappers ~10 us."""
+    if not _JIT:
+        import numba
+
+        get_pos, set_perm = _BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz
+
+        @numba.njit
+        def get_pos_xz(ids, out):
+            return get_pos(ids.ctypes.data, ids.size, out.ctypes.data)
+
+        @numba.njit
+        def set_perm_force_xz(ids, F, rows, add, out):
+            for k in range(len(rows)):
+                out[k, 0] = F[rows[k], 0] + add[k, 0]
+                out[k, 1] = F[rows[k], 1] + add[k, 1]
+            return set_perm(ids.ctypes.data, ids.size, out.ctypes.data)
+
+        _JIT.update(get_pos_xz=get_pos_xz, set_perm_force_xz=set_perm_force_xz)
+    return _JIT
+
+
+def _check(rc, ids):
+    """Raise on a bridge function's error code (engines.yadebulk)."""
+    if rc > 0:
+        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
+    if rc < 0:
+        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
 
 
 def freeze_gc():
