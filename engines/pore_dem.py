@@ -102,7 +102,8 @@ def input_acceleration(scene):
     if ld.type == "none":
         return None
     if ld.type == "cosine":
-        return lambda t: ld.amplitude * math.cos(2 * math.pi * ld.frequency * t)  # a scalar: math is 10x faster
+        a0, w = ld.amplitude, 2 * math.pi * ld.frequency
+        return lambda t: a0 * math.cos(w * t)  # a scalar: math is 10x faster than NumPy
     try:
         rec = np.loadtxt(ld.record, comments="#", ndmin=2)
     except OSError as e:
