@@ -15,6 +15,7 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~6
 
   law_step          engines.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.water_engine.WaterModel.advance  (measure, flows, update, eq 32, 33)
+  dem_step          engines.pore_dem.PoreDEM.step: law_step, water_step when due, the forces to write
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
@@ -323,6 +324,41 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints
     pore_pressures(W, A_measured, wp[0], U)  # eq 32 at the measured (unsmoothed) areas
     pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
     return n_sub
+
+
+LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
+
+
+@jit
+def dem_step(xz, F_out, rows, held, water_due,
+             xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
+             acc_j, lost,
+             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at):
+    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (its arguments from xz_prev
+    to lost), ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water),
+    then F_out = (F + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
+    answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list is stale."""
+    n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+                      r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    if n_lost == LIST_STALE:
+        return n_lost, 0
+    n_sub = 1
+    if water_due:
+        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at)
+    wet = len(F_water) > 0
+    for k in range(len(rows)):
+        a = rows[k]
+        for c in range(2):
+            f = F[a, c] + F_water[a, c] if wet else F[a, c]
+            F_out[k, c] = f + held[k, c]
+    return n_lost, n_sub
+
+
+def dry_water_args():
+    """Arguments of dem_step from h on for a scene without water."""
+    no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
+    return 0.0, no_f, no_f, no_f, False, False, False, np.zeros((0, 2)), no_i, np.zeros(1, np.int64), no_f, \
+        np.zeros(1, np.int64)
 
 
 @jit

@@ -116,14 +116,22 @@ class WaterModel:
             self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
             self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(m.void_area), m)
             return
+        args = self.kernel_args(h)
+        self.finish_kernel_step(h, kernels.water_step(xz, *args), args)
+
+    def kernel_args(self, h):
+        """The arguments of kernels.water_step after xz, for a water step of h [s] (compiled)."""
         w, s = self.water, self.settings
-        q_prev, has_q_prev = w.q_prev, w.q_prev is not None
-        if not has_q_prev:
-            q_prev = self._q_prev
-        n_sub = kernels.water_step(xz, h, w.W, w.A_prev, q_prev, s.smoothing, s.substep, has_q_prev, self.F,
-                                   self._ints, self._i_at, self._floats, self._f_at)
-        if s.smoothing:
-            w.q_prev = q_prev
+        q_prev = self._q_prev if w.q_prev is None else w.q_prev
+        return (h, w.W, w.A_prev, q_prev, s.smoothing, s.substep, w.q_prev is not None, self.F,
+                self._ints, self._i_at, self._floats, self._f_at)
+
+    def finish_kernel_step(self, h, n_sub, args):
+        """Book a water_step(xz, *args) that returned n_sub: the Darcy limit, sub-steps, balance;
+        raise DarcyStabilityError if it refused or a pore fell dry."""
+        w = self.water
+        if self.settings.smoothing:
+            w.q_prev = args[3]
         first, last = (2.0 / lam if lam > 0 else np.inf for lam in self._part("lam").tolist())
         self.last_limit = first
         n = 1 if n_sub == 1 else self._substeps(h)  # raises above the limit without settings.substep

@@ -114,6 +114,42 @@ class Bodies:
             list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
 
 
+def run_kernel(kernel, reader, xz, writer, out, *args):
+    """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
+    into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
+    (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one @njit
+    call (compiled at the first use of each kernel). Returns (status, info)."""
+    if _BULK is None:
+        xz[:] = reader.positions()
+        status, info = kernel(xz, out, *args)
+        if status >= 0:
+            writer.set_permanent_forces(out)
+        return status, info
+    step = _JIT.get(kernel)
+    if step is None:
+        step = _JIT[kernel] = _bridged(kernel)
+    rc, status, info = step(reader.ids, xz, writer.ids, out, *args)
+    _check(rc, reader.ids if status < 0 else writer.ids)
+    return status, info
+
+
+def _bridged(kernel):
+    import numba
+
+    get_pos, set_perm = _BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz
+
+    @numba.njit
+    def step(ids_in, xz, ids_out, out, *args):
+        rc = get_pos(ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+        if rc != 0:
+            return rc, -1, 0
+        status, info = kernel(xz, out, *args)
+        if status >= 0:
+            rc = set_perm(ids_out.ctypes.data, ids_out.size, out.ctypes.data)
+        return rc, status, info
+    return step
+
+
 _JIT = {}
 
 
