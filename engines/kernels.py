@@ -16,6 +16,7 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~6
   law_step          engines.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.water_engine.WaterModel.advance  (measure, flows, update, eq 32, 33)
   dem_step          engines.pore_dem.PoreDEM.step: law_step, water_step when due, the forces to write
+  water_forces_step engines.water_engine.WaterEngine: water_step and the forces to write
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
@@ -352,6 +353,18 @@ def dem_step(xz, F_out, rows, held, water_due,
             f = F[a, c] + F_water[a, c] if wet else F[a, c]
             F_out[k, c] = f + held[k, c]
     return n_lost, n_sub
+
+
+@jit
+def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at,
+                      floats, f_at):
+    """``water_step`` (arguments from h on), then F_out = held + F[rows] (n, 2) [N], the forces to
+    write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n) when it failed."""
+    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at)
+    for k in range(len(rows)):
+        F_out[k, 0] = held[k, 0] + F[rows[k], 0]
+        F_out[k, 1] = held[k, 1] + F[rows[k], 1]
+    return (n_sub if n_sub > 0 else -1), n_sub
 
 
 def dry_water_args():

@@ -210,6 +210,8 @@ class WaterEngine:
         if buoyancy:
             self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
         self.forced.set_permanent_forces(self.F_const)
+        self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
+        self._run_kernel = yade_io.run_kernel
         self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
 
     def due(self, k):
@@ -229,11 +231,18 @@ class WaterEngine:
         from yade import O
         m = self.model
         self.k = O.iter
+        h = m.water_interval * O.dt
+        if m.compiled and self.k - self.k_built < m.rebuild_interval:  # read, water, write: one compiled call
+            args = m.kernel_args(h)
+            _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
+                                        self._dynamic, self.F_const, *args)
+            m.finish_kernel_step(h, n_sub, args)
+            return
         xz = self.io.positions()
         if self.k - self.k_built >= m.rebuild_interval:
             m.rebuild(xz)
             self.k_built = self.k
-        m.advance(m.water_interval * O.dt, xz)
+        m.advance(h, xz)
         self.forced.set_permanent_forces(m.F, self._dynamic, self.F_const)
 
     def pressures(self):

@@ -46,6 +46,7 @@ class Bodies:
         self.n = len(self.ids)
         self._row = np.zeros((self.n, 3))  # x, y = 0, z rows for the Python API
         self._F = np.zeros((self.n, 2))  # forces being written
+        self._all, self._zero = np.arange(self.n), np.zeros((self.n, 2))
         self._index = None  # position of each id in coordsAndDisplacements' lists
         self._n_listed = -1
 
@@ -106,7 +107,7 @@ class Bodies:
         """O.forces.setPermF for every body (held until set again): F (n, 2) [N], or with ``rows``
         (n,) F[rows] + add, F (m, 2) over some larger set of which these bodies are the rows."""
         if rows is None:
-            rows, add = np.arange(self.n), np.zeros((self.n, 2))
+            rows, add = self._all, self._zero
         if _BULK is not None:
             _check(_jit()["set_perm_force_xz"](self.ids, np.ascontiguousarray(F, float), rows, add, self._F), self.ids)
         else:
