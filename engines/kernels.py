@@ -18,6 +18,10 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~6
   dem_step          engines.pore_dem.PoreDEM.step: law_step, water_step when due, the forces to write
   water_forces_step engines.water_engine.WaterEngine: water_step and the forces to write
 
+``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
+functions of engines.yadebulk, passed as addresses (so that this module stays cacheable and free of
+YADE): read, step, write in one call.
+
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
 written into arrays the caller owns (allocated once per network or contact list). numba compiles on
@@ -27,6 +31,8 @@ import math
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.extending import intrinsic
 
 jit = nb.njit(cache=True, nogil=True)
 
@@ -365,6 +371,61 @@ def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, su
         F_out[k, 0] = held[k, 0] + F[rows[k], 0]
         F_out[k, 1] = held[k, 1] + F[rows[k], 1]
     return (n_sub if n_sub > 0 else -1), n_sub
+
+
+@intrinsic
+def _c_bulk_call(typingctx, address, ids, n, data):
+    """(*address)(ids, n, data) for the C function int64 f(const int64 *ids, int64 n, double *data)
+    at the integer ``address`` (engines.yadebulk's bulk functions), ids and data addresses too."""
+    def codegen(context, builder, signature, args):
+        i64, ptr = ir.IntType(64), ir.IntType(8).as_pointer()
+        fn = builder.inttoptr(args[0], ir.FunctionType(i64, [ptr, i64, ptr]).as_pointer())
+        return builder.call(fn, [builder.inttoptr(args[1], ptr), args[2], builder.inttoptr(args[3], ptr)])
+    return nb.types.int64(address, ids, n, data), codegen
+
+
+@jit
+def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
+    """get_pos(ids_in -> xz), dem_step(xz, F_out, *args), set_perm(ids_out <- F_out) if its status
+    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
+    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = dem_step(xz, F_out, *args)
+    if status >= 0:
+        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
+    return rc, status, info
+
+
+@jit
+def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
+    """As dem_step_bulk_io for water_forces_step."""
+    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = water_forces_step(xz, F_out, *args)
+    if status >= 0:
+        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
+    return rc, status, info
+
+
+@jit
+def read_bulk_io(get_pos, ids, xz):
+    """get_pos(ids -> xz): the bridge's position read; returns its error code."""
+    return _c_bulk_call(get_pos, ids.ctypes.data, ids.size, xz.ctypes.data)
+
+
+@jit
+def write_rows_bulk_io(set_perm, ids, F, rows, add, out):
+    """out = F[rows] + add, then set_perm(ids <- out): the bridge's permanent-force write of
+    some rows of F plus held forces; returns its error code."""
+    for k in range(len(rows)):
+        out[k, 0] = F[rows[k], 0] + add[k, 0]
+        out[k, 1] = F[rows[k], 1] + add[k, 1]
+    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, out.ctypes.data)
+
+
+with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}
 
 
 def dry_water_args():

@@ -14,6 +14,7 @@ The backend is chosen once, at import:
 Set the environment variable PORE_DEM_IO=python to force the Python backend (benchmarks, tests).
 """
 import builtins
+import ctypes
 import gc
 import os
 import traceback
@@ -21,6 +22,8 @@ import traceback
 import numpy as np
 from yade import O, utils
 from yade.wrapper import PyRunner
+
+from engines import kernels
 
 
 def _load_bulk():
@@ -35,6 +38,8 @@ def _load_bulk():
 
 _BULK = _load_bulk()
 BACKEND = "yadebulk" if _BULK is not None else "python"
+if _BULK is not None:  # addresses of the bridge's position read and permanent-force write, for kernels
+    _GET_POS, _SET_PERM = (ctypes.cast(f, ctypes.c_void_p).value for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz))
 
 
 class Bodies:
@@ -55,7 +60,7 @@ class Bodies:
         """Centres (n, 2) [m]; a new array."""
         out = np.empty((self.n, 2))
         if _BULK is not None:
-            _check(_jit()["get_pos_xz"](self.ids, out), self.ids)
+            _check(kernels.read_bulk_io(_GET_POS, self.ids, out), self.ids)
             return out
         x = utils.coordsAndDisplacements(0)[0]
         z = utils.coordsAndDisplacements(2)[0]
@@ -109,7 +114,8 @@ class Bodies:
         if rows is None:
             rows, add = self._all, self._zero
         if _BULK is not None:
-            _check(_jit()["set_perm_force_xz"](self.ids, np.ascontiguousarray(F, float), rows, add, self._F), self.ids)
+            _check(kernels.write_rows_bulk_io(_SET_PERM, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
+                   self.ids)
         else:
             np.add(F[rows], add, out=self._F)
             list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
@@ -118,65 +124,17 @@ class Bodies:
 def run_kernel(kernel, reader, xz, writer, out, *args):
     """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
     into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
-    (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one @njit
-    call (compiled at the first use of each kernel). Returns (status, info)."""
+    (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one compiled
+    call (engines.kernels.with_bulk_io). Returns (status, info)."""
     if _BULK is None:
         xz[:] = reader.positions()
         status, info = kernel(xz, out, *args)
         if status >= 0:
             writer.set_permanent_forces(out)
         return status, info
-    step = _JIT.get(kernel)
-    if step is None:
-        step = _JIT[kernel] = _bridged(kernel)
-    rc, status, info = step(reader.ids, xz, writer.ids, out, *args)
+    rc, status, info = kernels.with_bulk_io[kernel](_GET_POS, _SET_PERM, reader.ids, xz, writer.ids, out, *args)
     _check(rc, reader.ids if status < 0 else writer.ids)
     return status, info
-
-
-def _bridged(kernel):
-    import numba
-
-    get_pos, set_perm = _BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz
-
-    @numba.njit
-    def step(ids_in, xz, ids_out, out, *args):
-        rc = get_pos(ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
-        if rc != 0:
-            return rc, -1, 0
-        status, info = kernel(xz, out, *args)
-        if status >= 0:
-            rc = set_perm(ids_out.ctypes.data, ids_out.size, out.ctypes.data)
-        return rc, status, info
-    return step
-
-
-_JIT = {}
-
-
-def _jit():
-    """@njit callers of the bridge's C functions: a position read, and a permanent-force write of
-    F[rows] + add (through the ``out`` buffer). They embed the functions' addresses, so numba
-    cannot cache them: they compile at first use (~0.3 s; benchmarks/yade_io.py). Per call they
-    cost about an empty numba call (~1 us), the bridge's Python wrappers ~10 us."""
-    if not _JIT:
-        import numba
-
-        get_pos, set_perm = _BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz
-
-        @numba.njit
-        def get_pos_xz(ids, out):
-            return get_pos(ids.ctypes.data, ids.size, out.ctypes.data)
-
-        @numba.njit
-        def set_perm_force_xz(ids, F, rows, add, out):
-            for k in range(len(rows)):
-                out[k, 0] = F[rows[k], 0] + add[k, 0]
-                out[k, 1] = F[rows[k], 1] + add[k, 1]
-            return set_perm(ids.ctypes.data, ids.size, out.ctypes.data)
-
-        _JIT.update(get_pos_xz=get_pos_xz, set_perm_force_xz=set_perm_force_xz)
-    return _JIT
 
 
 def _check(rc, ids):
