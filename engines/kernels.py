@@ -69,6 +69,10 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
         new = now and not was
         dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
         dun = dux * nx + duz * nz                               # eq 3a
+        if not (now or was):  # apart before and now: no force, the state of a pair out of reach
+            state[k, U_N] += dun
+            state[k, E_N] = state[k, E_S] = state[k, F_N] = 0.0
+            continue
         dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]   # eq 3b
         u_n = delta if new else state[k, U_N] + dun
         if spring == 0:
