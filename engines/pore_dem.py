@@ -106,7 +106,8 @@ class PoreDEM:
             if self.k % num.water_interval == 0:
                 m = pg.measure(self.water.net, xz, self.r)
                 self.water.advance(num.water_interval * dt, m.void_area, m.link_contact)
-                self.F_pressure = pg.pressure_forces(self.water.net, self.r, self.water.pressure(m.void_area), m)
+                A = self.water.A_prev if self.water.settings.smoothing else m.void_area  # eq 45: the area used
+                self.F_pressure = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
             F = F + self.F_pressure
         self.omega[self.mobile] += M[self.mobile] / self.inertia[self.mobile] * dt  # eq 14c, 16c
         if self.accel is not None:
