@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from engines import pore_geometry as pg
+from engines import reference as ref
 from packing.layouts import hex_lattice, random_discs, square_lattice
 
 
@@ -53,23 +54,28 @@ def test_euler_formula_random_packing():
     assert net.n_pores > 100
 
 
-def _shoelace(xz, cycle):
-    p = xz[cycle]
-    return 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+def _reference_pores(xz, r, l_m, walls=None):
+    """The reference's pores (engines/reference.py: its own Delaunay candidates, union-find faces
+    and the paper's walk over its own link lists), keyed by vertex set."""
+    group = np.zeros(len(r), int) if walls is None else walls
+    pores = ref.build_pores(xz, r, group, 0.0, l_m)
+    return pores, {vs: p for p, vs in enumerate(pores.vertex_sets)}
 
 
-def test_areas_against_independent_walk():
-    """Polygon area from triangles equals the shoelace area of the paper's clockwise walk, and
-    void + disc area inside the linked region = the region's area; full discs inside sum to pi r^2."""
+def test_areas_against_the_reference_walk():
+    """Every pore of build_pores is a pore of the reference's independent walk with the same vertex
+    set, polygon area and void area (eq 29), rattlers and islands included."""
     rng = np.random.default_rng(2)
     xz, r = random_discs(200, rng)
     net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
     m = pg.measure(net, xz, r)
-    # an island inside a pore is walked clockwise: its shoelace area is negative and subtracts
-    walk = np.array([sum(_shoelace(xz, c) for c in pg.pore_polygon(net, p)) for p in range(net.n_pores)])
-    np.testing.assert_allclose(walk, m.polygon_area, rtol=1e-10, atol=1e-15)
-    region = walk.sum()
-    np.testing.assert_allclose(m.void_area.sum() + m.sector_area.sum(), region, rtol=1e-12)
+    rp, by_set = _reference_pores(xz, r, 0.7 * r.mean())
+    geo = ref.measure(rp, xz, r, 0.0)
+    assert net.n_pores == rp.n_pores > 100
+    for p in range(net.n_pores):
+        q = by_set[frozenset(net.vertices_of(p).tolist())]
+        assert m.polygon_area[p] == pytest.approx(geo.polygon_area[q], rel=1e-10, abs=1e-15)
+        assert m.void_area[p] == pytest.approx(geo.void_area[q], rel=1e-9, abs=1e-13)
     # discs whose every surrounding face is a pore lie wholly inside the region: 2 pi of angles
     total = np.zeros(len(r))
     for corners in pg.interior_angles(net, m).values():
@@ -78,6 +84,42 @@ def test_areas_against_independent_walk():
     inner = np.isclose(total, 2 * np.pi, rtol=1e-9)
     assert inner.sum() > 50
     assert np.all(total <= 2 * np.pi + 1e-9)
+
+
+def _arc_force(U, r, a1, a2, n=64):
+    """-U r times the integral of the outward normal (cos a, sin a) over the arc a1 -> a2 (a2 > a1),
+    by n-point Gauss-Legendre quadrature: the left-hand side of eq 33 integrated numerically."""
+    t, w = np.polynomial.legendre.leggauss(n)
+    a = 0.5 * (a2 - a1) * t + 0.5 * (a2 + a1)
+    half = 0.5 * (a2 - a1)
+    return -U * r * half * np.array([np.sum(w * np.cos(a)), np.sum(w * np.sin(a))])
+
+
+@pytest.mark.parametrize("seed", [3, 8])
+def test_eq33_against_arc_integrals_with_non_uniform_pressure(seed):
+    """Random U per pore: the force on every disc equals the sum over the pores around it of the
+    numerically integrated pressure on its arc inside each pore. The arcs come from the reference's
+    independent walk (corner disc d, the arc from the direction d -> next counter-clockwise over the
+    interior angle), not from the telescoped sum that pressure_forces uses."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(150, rng)
+    l_m = 0.7 * r.mean()
+    net = pg.build_pores(xz, r, l_m=l_m)
+    m = pg.measure(net, xz, r)
+    U = rng.uniform(-50.0, 200.0, net.n_pores)
+    F = pg.pressure_forces(net, r, U, m)
+    rp, _ = _reference_pores(xz, r, l_m)
+    U_ref = np.empty(rp.n_pores)
+    for p in range(net.n_pores):
+        U_ref[rp.vertex_sets.index(frozenset(net.vertices_of(p).tolist()))] = U[p]
+    theta = ref.corner_angles(xz, rp.corner_disc, rp.corner_prev, rp.corner_next)
+    expected = np.zeros_like(xz)
+    for p, d, nxt, th in zip(rp.corner_pore, rp.corner_disc, rp.corner_next, theta):
+        a1 = np.arctan2(*(xz[nxt] - xz[d])[::-1])
+        expected[d] += _arc_force(U_ref[p], r[d], a1, a1 + th)
+    scale = np.abs(U).max() * r.max()
+    np.testing.assert_allclose(F, expected, rtol=0, atol=1e-12 * scale)
+    assert np.abs(F).max() > 0.1 * scale  # the pressures are far from uniform: real forces
 
 
 def test_measure_matches_triangles_after_motion():
@@ -90,19 +132,6 @@ def test_measure_matches_triangles_after_motion():
         xz = xz + 0.02 * r.mean() * rng.standard_normal(xz.shape)
         m = pg.measure(net, xz, r)
         np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
-
-
-def test_uniform_pressure_gives_zero_force_on_inner_discs():
-    rng = np.random.default_rng(3)
-    xz, r = random_discs(200, rng)
-    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
-    F = pg.pressure_forces(net, r, np.full(net.n_pores, 123.0), pg.measure(net, xz, r))
-    outer_disc = np.zeros(len(r), bool)
-    on_outer = (net.link_pores == pg.OUTER).any(axis=1)
-    outer_disc[net.links[on_outer].ravel()] = True
-    inner = ~outer_disc
-    assert inner.sum() > 50
-    assert np.abs(F[inner]).max() < 1e-12 * 123.0 * r.max()
 
 
 def test_eq33_single_arc():

@@ -171,3 +171,70 @@ def test_smoothing_eq46_is_a_running_average_of_used_flows():
     q2 = w.advance(1e-3, m.void_area, m.link_contact).throat_q
     np.testing.assert_allclose(q2, 0.5 * (q1 + q2_new), rtol=1e-14)
     assert w.balance_error() < 1e-14
+
+
+# -- analytic cases (issue 9) --------------------------------------------------------------------
+def test_drained_side_drains_exponentially_with_k3():
+    """Two equal pores against a drained side wall (every vertex a side-wall disc: no free surface),
+    both at the same excess W - A: no throat flow, and each loses q = k3 W U / E_w = k3 (W - A), so
+    one explicit step of h multiplies W - A by exactly (1 - k3 h). Undrained: nothing leaves."""
+    xz, r, net = _two_pores()
+    assert net.pore_touches["left"].all() and not net.pore_surface.any()
+    m = pg.measure(net, xz, r)
+    A = m.void_area
+    np.testing.assert_allclose(A[0], A[1], rtol=1e-12)
+    k1, k3, h, n = 50.0, 7.0, 1e-3, 40
+    W0 = A * 1.05
+    w = PoreWater(net, A, WaterSettings(E_w=1000.0, k1=k1, k2=0.5, k3=k3, sides="drained"), W=W0)
+    for _ in range(n):
+        w.advance(h, A, m.link_contact)
+    np.testing.assert_allclose(w.W - A, (W0 - A) * (1 - k3 * h) ** n, rtol=1e-10)
+    assert w.balance.side_outflow == pytest.approx(np.sum(W0 - w.W), rel=1e-12)
+    assert w.balance.surface_outflow == 0 and w.balance_error() < 1e-13
+    shut = PoreWater(net, A, WaterSettings(E_w=1000.0, k1=k1, k2=0.5, k3=k3, sides="undrained"), W=W0)
+    for _ in range(n):
+        shut.advance(h, A, m.link_contact)
+    np.testing.assert_array_equal(shut.W, W0)
+
+
+def test_eq45_46_running_averages_with_changing_areas():
+    """Smoothing on, the void areas change every step: the area used is [A]_t = ([A]_{t-dt} + A'_t)/2
+    from the build-time area on, and the throat flow used is [q]_t = ([q]_{t-dt} + q'_t)/2 with q' of
+    eq 39-41 at the area used; W follows eq 42. Written out here for the two pores."""
+    xz, r, net = _two_pores()
+    m = pg.measure(net, xz, r)
+    A0 = m.void_area.copy()
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, smoothing=True)
+    W = A0 * np.array([1.1, 0.95])
+    w = PoreWater(net, A0, s, W=W)
+    a, b = net.throat_conns[0]
+    k = s.k1 if not m.link_contact[net.throat_link[0]] else s.k2
+    A_used, q_used, h = A0.copy(), None, 1e-3
+    for step in range(6):
+        A_new = A0 * (1 + 0.2 * np.array([np.sin(step + 1.0), np.cos(2.0 * step)]))
+        A_used = (A_used + A_new) / 2                                          # eq 45
+        U = s.E_w * (W - A_used) / W                                          # eq 32
+        q_new = k * W[a] * W[b] / (A_used[a] + A_used[b]) * (U[a] - U[b]) / s.E_w  # eq 39-41
+        q_used = q_new if q_used is None else (q_used + q_new) / 2            # eq 46
+        W = W + np.where(np.arange(2) == a, -q_used, q_used) * h               # eq 42
+        w.advance(h, A_new, m.link_contact)
+        np.testing.assert_allclose(w.W, W, rtol=1e-13)
+    np.testing.assert_allclose(w.A_prev, A_used, rtol=1e-14)
+
+
+def test_rule_c_for_a_surface_pore():
+    """A surface pore without (a) or (b): the mean of its assigned neighbours with the outer face
+    counted as one more neighbour at U = 0 (the fast code's reading, docs/READINGS.md):
+    U = sum(U_nb) / (n_nb + 1). An inner pore gets the plain mean."""
+    xz, r, net = _random_network(n=100)
+    n = net.n_pores
+    U_old = np.linspace(10.0, 30.0, n)
+    i, j = net.throat_conns.T
+    for p in (int(np.flatnonzero(net.pore_surface)[0]), int(np.flatnonzero(~net.pore_surface)[0])):
+        valid = np.ones(n, bool)
+        valid[p] = False
+        U, counts = inherit_pressures(net, U_old, valid, net)
+        assert counts["c"] == 1 and counts["a"] == n - 1
+        nb = np.unique(np.concatenate([j[i == p], i[j == p]]))
+        assert len(nb) >= 1
+        np.testing.assert_allclose(U[p], U_old[nb].sum() / (len(nb) + net.pore_surface[p]), rtol=1e-14)
