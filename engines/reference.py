@@ -769,7 +769,8 @@ class ReferenceModel:
         self.moving = np.isin(self.group, moving) & (self.accel is not None)
         self.wall_v = dt_(0)
         self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
-        self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0)}
+        self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0),
+                       "history": []}   # history: (step, rule counts) of every rebuild
         self.pores = self.water = None
         self.F_pressure = np.zeros_like(self.x)
         if s.wet:
@@ -787,8 +788,10 @@ class ReferenceModel:
         new = self._build()
         rules = self.water.remesh(new, self._measure(new).void_area, self._measure().void_area,
                                   self.readings["rule_c_counts_outside"])
-        for rule in rules:
-            self.counts["remesh"][rule] += 1
+        this = {r: rules.count(r) for r in "abcd"}
+        for r, c in this.items():
+            self.counts["remesh"][r] += c
+        self.counts["history"].append((self.k, this))
         self.counts["rebuilds"] += 1
         self.pores = new
 

@@ -105,10 +105,12 @@ class YadeCoupling:
             raise err
 
 
-def simulate(scene, packing, n_steps, record_every):
+def simulate(scene, packing, n_steps, record_every, hooks=()):
     """Run a scene in YADE and record a Trajectory after every ``record_every`` steps
-    (at t = (k + 1) dt); the recording contract is shared with engines.reference."""
+    (at t = (k + 1) dt); the recording contract is shared with engines.reference.
+    ``hooks``: extra per-step hooks hook(coupling, xz) (see YadeCoupling)."""
     cp = YadeCoupling(scene, packing)
+    cp.hooks.extend(hooks)
     traj = Trajectory(info={"implementation": "yade"})
 
     steps_left = n_steps

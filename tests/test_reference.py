@@ -301,20 +301,33 @@ def load_crosscheck():
 
 
 def test_crosscheck_plumbing_with_the_reference_on_both_sides(tmp_path):
+    """The cross-check's machinery with the reference standing in for YADE: every case passes with
+    identical trajectories, the JSON holds the features and counts, and a deliberately different
+    'other implementation' (start moved by 1e-9 m) fails."""
     cc = load_crosscheck()
-    cases = [c for c in cc.contact_cases()] + [cc.column_case("small_column", boxed_column(closed=False),
-                                                              wet_scene(q_w=5e-4), 300, 50)]
-    result = cc.run_cases(ref.simulate_reference, ref.simulate_reference, cases)
-    assert result["passed"], [c for c in result["cases"] if not c["passed"]]
+
+    def stand_in(scene, pk, n, every, hooks=(), **kw):
+        return ref.simulate_reference(scene, pk, n, every, readings=ref.FAST_CODE_READINGS, **kw)
+
+    small = cc.FeatureCase("small_settling", cc.settling_build(numerics={"rebuild_interval": 10}), 300, 20,
+                           rules="a", readings=("rule_c_counts_outside",))
+    contact = [c for c in cc.contact_cases() if c.name in ("head_on_collision", "pressed_release_d")]
+    result = cc.run_cases(stand_in, stand_in, cases=contact, features=[small],
+                          paper_simulate=ref.simulate_reference)
+    assert result["passed"], [c["why"] for c in result["cases"] + result["feature_cases"] if not c["passed"]]
     for case in result["cases"]:
         assert case["metrics"]["max_position_diff_rel"] == 0.0
+    feat = result["feature_cases"][0]
+    assert feat["window"]["max_position_diff_rel"] == 0.0 and feat["counts"]["ref"]["rebuilds"] >= 20
+    assert feat["features"]["water"] and "reading_disagreements" in feat
     path = cc.write_json(result, str(tmp_path))
     with open(path) as f:
         back = json.load(f)
-    assert {c["name"] for c in back["cases"]} >= {"head_on_collision", "pressed_release_d", "small_column"}
-    # a deliberately different 'other implementation' must fail
-    def shaken(scene, pk, n, every, dtype=np.float64):
+    assert {c["name"] for c in back["cases"]} >= {"head_on_collision", "pressed_release_d"}
+    assert back["feature_cases"][0]["name"] == "small_settling"
+
+    def shaken(scene, pk, n, every, hooks=(), **kw):
         moved = Packing(pk.xz + 1e-9, pk.r, pk.group, pk.density_factor)
-        return ref.simulate_reference(scene, moved, n, every)
-    bad = cc.run_cases(shaken, ref.simulate_reference, cases[-1:])
-    assert not bad["passed"]
+        return stand_in(scene, moved, n, every, **kw)
+    bad = cc.run_cases(shaken, stand_in, cases=[], features=[small])
+    assert not bad["passed"] and not bad["feature_cases"][0]["checks"]["positions_in_window"]
