@@ -3,11 +3,11 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-venv
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps demo test bench packings clean
+.PHONY: deps demo test bench packings mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -26,6 +26,16 @@ demo: deps
 test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	$(PY) -m pytest -q tests
+
+# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~20-40 min on 2 cores):
+# out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
+MUTANT_VENV := $(OUT)/venv-mutants
+$(MUTANT_VENV)/bin/mutmut:
+	$(PY) -m venv --system-site-packages $(MUTANT_VENV)
+	$(MUTANT_VENV)/bin/pip install -q "mutmut==3.8.1"
+
+mutants: deps $(MUTANT_VENV)/bin/mutmut
+	$(MUTANT_VENV)/bin/python tests/mutants.py --out $(OUT)/mutants
 
 # Cost studies (minutes): pore core sizes, YADE path against YADE alone, water sub-cycling.
 bench: deps
