@@ -331,3 +331,88 @@ def test_crosscheck_plumbing_with_the_reference_on_both_sides(tmp_path):
         return stand_in(scene, moved, n, every, **kw)
     bad = cc.run_cases(shaken, stand_in, cases=[], features=[small])
     assert not bad["passed"] and not bad["feature_cases"][0]["checks"]["positions_in_window"]
+
+
+# -- the reference's own readings (docs/READINGS.md) and analytic checks -----------------------------
+def test_third_law_holds_without_being_built_in():
+    """Each ordered pair (i, j) computes the force on i alone: in a jammed cluster of free discs with
+    sliding, rolling and all springs active, the forces still sum to zero and the moments are
+    -r_i f_s on both sides, because record (j, i) is the exact mirror of (i, j)."""
+    rng = np.random.default_rng(7)
+    xz = hex_lattice(5, 5, 1.9 * R) + 0.05 * R * rng.standard_normal((25, 2))
+    pk = Packing(xz, np.full(25, R), np.zeros(25, int), np.ones(25))
+    s = make_scene(contact={"spring": "d", "f_max": 0.5})
+    m = ref.ReferenceModel(s, pk)
+    m.v = 0.05 * rng.standard_normal(m.v.shape)
+    m.omega = 50.0 * rng.standard_normal(m.omega.shape)
+    for _ in range(20):
+        m.step()
+    F, M, _ = m.contact.forces(m.x, m.x - m.x_prev, m.psi - m.psi_prev, m.dt)
+    assert np.abs(F).max() > 0.1
+    np.testing.assert_allclose(F.sum(axis=0), 0.0, atol=1e-14 * np.abs(F).sum())
+    assert np.count_nonzero(m.contact.in_contact) % 2 == 0     # every touching pair seen from both sides
+
+
+def test_drained_side_in_the_reference_drains_with_k3():
+    """The same analytic case as tests/test_pore_water.py, on the reference's own Water:
+    W - A shrinks by exactly (1 - k3 h) per step; undrained it stays."""
+    xz = np.array([[-1.2, 0.0], [1.2, 0.0], [0.0, 1.0], [0.0, -1.0]]) * 1e-3
+    r = np.full(4, 0.5e-3)
+    pores = ref.build_pores(xz, r, np.full(4, ref.LEFT), 0.0, 1.5e-3)
+    geo = ref.measure(pores, xz, r, 0.0)
+    assert pores.side.all() and not pores.surface.any()
+    for sides, factor in (("drained", 1 - 7.0 * 1e-3), ("undrained", 1.0)):
+        s = ref.read_settings(sc.validate({"scene": {"name": "w"}, "water": {
+            "E_w": 1000.0, "k1": 50.0, "k2": 0.5, "k3": 7.0, "sides": sides}}).as_dict())
+        w = ref.Water(pores, geo.void_area, s, np.float64)
+        w.W = geo.void_area * 1.05
+        for _ in range(40):
+            w.advance(1e-3, geo.void_area, geo.link_contact)
+        np.testing.assert_allclose(w.W - geo.void_area, 0.05 * geo.void_area * factor**40, rtol=1e-10)
+
+
+@pytest.mark.parametrize("wall_step, steps_factor", [("constant_acceleration", lambda n: n * n / 2),
+                                                     ("symplectic_euler", lambda n: n * (n + 1) / 2)])
+def test_wall_kinematics_under_a_constant_input(wall_step, steps_factor):
+    """§6.1's constant-acceleration method: under a constant a, x_w(n dt) = a (n dt)^2 / 2 exactly;
+    the fast code's symplectic Euler moves a dt^2 n (n + 1) / 2 (READINGS D1)."""
+    s = make_scene(loading={"type": "cosine", "amplitude": 3.0, "frequency": 1e-12, "moves": "bottom"},
+                   numerics={"dt": 1e-6})
+    pk = packing([[0.0, 0.0], [5 * R, 0.0]], [ref.BOTTOM, 0])
+    m = ref.ReferenceModel(s, pk, readings={"wall_step": wall_step})
+    for _ in range(200):
+        m.step()
+    assert m.x[0, 0] == pytest.approx(3.0 * 1e-12 * steps_factor(200), rel=1e-9)
+    assert m.wall_v == pytest.approx(3.0 * 200e-6, rel=1e-12)
+    assert m.x[1, 0] == 5 * R                                   # the particle was not moved
+
+
+def test_record_held_or_interpolated(tmp_path):
+    """READINGS D1: between samples the record's acceleration is held ("hold", §6.1's
+    constant-acceleration method) or interpolated ("linear", the fast code); 0 after its end."""
+    rec = tmp_path / "rec.txt"
+    rec.write_text("0.0 0.0\n0.02 0.5\n0.04 -0.25\n")
+    loading = {"type": "record", "record": str(rec), "time_scale": 0.5, "amplitude_scale": 2.0}
+    g0 = ref.G0
+    hold, linear = ref.input_acceleration(loading, "hold"), ref.input_acceleration(loading, "linear")
+    assert hold(0.005) == 0.0 and linear(0.005) == pytest.approx(0.5 * g0)
+    assert hold(0.01) == pytest.approx(g0) and hold(0.015) == pytest.approx(g0)
+    assert linear(0.015) == pytest.approx((g0 - 0.5 * g0) / 2)
+    assert hold(0.02) == pytest.approx(-0.5 * g0) and hold(0.03) == 0.0 and linear(0.03) == 0.0
+
+
+def test_rule_c_reading_for_a_surface_pore():
+    """READINGS D2: the reference averages over neighbouring pores only; with the fast code's
+    reading the outer face adds a neighbour at U = 0."""
+    pk = boxed_column(closed=False)
+    m = ref.ReferenceModel(wet_scene(q_w=0.0), pk)
+    pores = m.pores
+    p = int(np.flatnonzero(pores.surface & np.array([len(n) > 0 for n in pores.neighbours]))[0])
+    U_old = np.linspace(10.0, 30.0, pores.n_pores)
+    valid = np.ones(pores.n_pores, bool)
+    valid[p] = False
+    nb = sorted(pores.neighbours[p])
+    for outside, extra in ((False, 0), (True, 1)):
+        U, rule = ref.inherit_pressures(pores, U_old, valid, pores, outside)
+        assert rule[p] == "c" and rule.count("a") == pores.n_pores - 1
+        assert U[p] == pytest.approx(U_old[nb].sum() / (len(nb) + extra), rel=1e-14)
