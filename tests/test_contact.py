@@ -136,3 +136,17 @@ def test_separation_pattern_c_partner_first():
     # approach velocity after = v_a . n - v_b . n = -e Vn at collision
     assert fix[1][0] - 0.0 == pytest.approx(-e * 2.0)  # j leaves the wall k
     assert fix[0][0] - fix[1][0] == pytest.approx(-e * 1.0)  # i leaves the adjusted j
+
+
+def test_touching_pairs_counts_and_forces_for_plots():
+    """Three discs in a row, the middle one overlapping both neighbours, a fourth far away: two
+    touching pairs with their normal forces kn x overlap, counts 1, 2, 1, 0."""
+    r = np.full(4, 1e-3)
+    xz = np.array([[0.0, 0.0], [2e-3 - 1e-6, 0.0], [4e-3 - 3e-6, 0.0], [10e-3, 0.0]])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0), r, mobile=np.ones(4, bool))
+    law.forces(xz, np.zeros((4, 2)), np.zeros(4), 1e-6)
+    np.testing.assert_array_equal(law.touch_count(), [1, 2, 1, 0])
+    pairs, fn = law.contact_pairs()
+    order = np.argsort(pairs[:, 0])
+    np.testing.assert_array_equal(pairs[order], [[0, 1], [1, 2]])
+    np.testing.assert_allclose(fn[order], [1.0, 2.0], rtol=1e-9)

@@ -190,3 +190,18 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     _, fixes = core.step(xz.copy())
     assert set(fixes) == {1}
     np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+def test_observations_kinetic_energy_with_spin_and_block_forces():
+    """Kinetic energy adds the spin 1/2 I omega^2 of the particles (walls excluded); the bottom-block
+    normal force is the mean over the touching pairs whose midpoint lies in the first block only."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7},
+              output={"block_z": [[-1.0, 0.25], [0.25, 10.0]]})
+    xz = np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7], [0.0, 4 * R - 3e-7]])
+    pk = Packing(xz, np.full(3, R), [pg.WALL_BOTTOM, 0, 0], [1.0, 1.0, 1.0])
+    core = PoreDEM(s, pk)
+    core.step(xz)
+    assert core.bottom_normal_force(xz) == pytest.approx(s.contact.kn * 1e-7, rel=1e-9)  # the upper pair is out
+    core.omega[:] = [7.0, 3.0, -2.0]
+    m, inertia = disc_masses(s, pk)
+    assert core.kinetic_energy() == pytest.approx(0.5 * inertia[1] * 9.0 + 0.5 * inertia[2] * 4.0, rel=1e-14)

@@ -232,3 +232,48 @@ def test_bad_input_names_the_field(kw, field):
         args["r"] = np.ones(len(args["xz"]))
     with pytest.raises(ValueError, match=field):
         pg.build_pores(**args)
+
+
+@pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
+                                np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
+def test_a_network_without_pores_is_well_formed_and_usable(xz):
+    """Degenerate inputs give a network with every array empty and correctly shaped, the scene's
+    eps_m, l_m and the closure area a_min = 1e-4 mean(pi r^2), on which the water and force code
+    run without special cases."""
+    from engines.pore_water import PoreWater, WaterSettings
+    r = np.full(len(xz), 0.5)
+    net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.1, walls=np.full(len(xz), pg.WALL_BOTTOM))
+    assert (net.n_discs, net.n_pores, net.n_closed, net.eps_m, net.l_m) == (len(xz), 0, 0, 0.01, 0.1)
+    assert net.a_min == pytest.approx(1e-4 * np.pi * 0.25 if len(xz) else 0.0)
+    for name in ("links", "link_pores", "throat_conns"):
+        assert getattr(net, name).shape == (0, 2), name
+    assert net.tri.shape == (0, 3) and net.pore_vertex_ptr.tolist() == [0]
+    for name in ("tri_pore", "throat_link", "pore_surface", "pore_vertex_idx", "pore_signature", "he_org",
+                 "he_dst", "he_left", "he_next", "corner_pore", "corner_disc", "corner_link",
+                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "corner_raw0", "rattler_area"):
+        assert getattr(net, name).shape == (0,), name
+    assert sorted(net.pore_touches) == ["bottom", "left", "right"]
+    assert all(v.shape == (0,) and v.dtype == bool for v in net.pore_touches.values())
+    m = pg.measure(net, xz, r)
+    assert pg.pore_centroids(net, xz).shape == (0, 2)
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1.0))
+    w.advance(1.0, m.void_area, m.link_contact)
+    assert w.darcy_limit(m.void_area, m.link_contact) == np.inf and w.total_water() == 0.0
+
+
+def test_centroids_and_polygons_of_a_square_lattice():
+    """Each pore of a square lattice (spacing a) is its cell: the walk visits its 4 corners
+    counter-clockwise (positive shoelace area a^2) and the area-weighted centroid is the cell centre."""
+    a = 2.05
+    xz = square_lattice(5, 4, a, origin=(3.0, -1.0))
+    r = np.ones(len(xz))
+    net = pg.build_pores(xz, r, l_m=0.1)
+    cen = pg.pore_centroids(net, xz)
+    for p in range(net.n_pores):
+        (cycle,) = pg.pore_polygon(net, p)
+        corners = xz[cycle]
+        assert len(cycle) == 4 and set(cycle) == set(net.vertices_of(p).tolist())
+        shoelace = 0.5 * np.sum(corners[:, 0] * np.roll(corners[:, 1], -1) - np.roll(corners[:, 0], -1) * corners[:, 1])
+        assert shoelace == pytest.approx(a * a, rel=1e-12)
+        np.testing.assert_allclose(cen[p], corners.mean(axis=0), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(pg.void_area_by_triangles(net, xz, r), a * a - np.pi, rtol=1e-12)

@@ -238,3 +238,36 @@ def test_rule_c_for_a_surface_pore():
         nb = np.unique(np.concatenate([j[i == p], i[j == p]]))
         assert len(nb) >= 1
         np.testing.assert_allclose(U[p], U_old[nb].sum() / (len(nb) + net.pore_surface[p]), rtol=1e-14)
+
+
+def test_remesh_recomputes_water_from_eq32_and_books_the_change():
+    """After a rebuild W = A_new E_w / (E_w - U) with the inherited U (§3.4(2)); the change of total
+    water is booked in the budget (balance error stays at round-off); the eq 45-46 running averages
+    restart from the new areas."""
+    xz, r, one = _two_pores(diagonal_linked=False)
+    _, _, two = _two_pores(diagonal_linked=True)
+    A1 = pg.measure(one, xz, r).void_area
+    m2 = pg.measure(two, xz, r)
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, smoothing=True)
+    w = PoreWater(one, A1, s, W=A1 * 1.2)
+    w.advance(1e-3, A1 * 0.9, np.zeros(len(one.links), bool))
+    U = w.pressure(A1)
+    counts = w.remesh(two, m2.void_area, A1)
+    assert counts == {"a": 0, "b": 2, "c": 0, "d": 0} and w.remesh_counts == counts and w.net is two
+    np.testing.assert_allclose(w.W, m2.void_area * s.E_w / (s.E_w - U[0]), rtol=1e-14)
+    np.testing.assert_allclose(w.pressure(m2.void_area), U[0], rtol=1e-12)
+    assert w.balance.remesh_change == pytest.approx(w.W.sum() - A1.sum() * 1.2, rel=1e-12)
+    assert w.balance_error() < 1e-14
+    np.testing.assert_array_equal(w.A_prev, m2.void_area)
+    assert w.q_prev is None
+
+
+def test_split_and_merge_need_only_containment_one_way():
+    """Rule (b): a new pore inherits from every valid old pore whose vertex set contains it (a
+    split) or that it contains (a merge); a pinched old pore passes nothing on (then (d))."""
+    xz, r, one = _two_pores(diagonal_linked=False)
+    _, _, two = _two_pores(diagonal_linked=True)
+    U, counts = inherit_pressures(one, np.array([40.0]), np.array([False]), two)
+    assert counts["d"] == 2 and np.all(U == 0)
+    U, counts = inherit_pressures(two, np.array([10.0, 30.0]), np.array([True, False]), one)
+    assert counts["b"] == 1 and U[0] == 10.0
