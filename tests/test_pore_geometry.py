@@ -277,3 +277,31 @@ def test_centroids_and_polygons_of_a_square_lattice():
         assert shoelace == pytest.approx(a * a, rel=1e-12)
         np.testing.assert_allclose(cen[p], corners.mean(axis=0), rtol=0, atol=1e-12)
     np.testing.assert_allclose(pg.void_area_by_triangles(net, xz, r), a * a - np.pi, rtol=1e-12)
+
+
+def test_link_state_counts_eps_m_as_contact():
+    """Eq 43 with eps_m > 0: a link whose gap is below eps_m is a contact (k2); above it, not."""
+    r = np.ones(3)
+    xz = np.array([[0.0, 0.0], [2.03, 0.0], [1.0, 1.75]])   # gaps 0.03 (0-1), 0.016 (0-2), 0.031 (1-2)
+    net = pg.build_pores(xz, r, eps_m=0.02, l_m=0.2)
+    m = pg.measure(net, xz, r)
+    state = {tuple(l): c for l, c in zip(net.links.tolist(), m.link_contact)}
+    gaps = {k: np.hypot(*(xz[k[1]] - xz[k[0]])) - 2.0 for k in state}
+    assert state == {k: g <= 0.02 for k, g in gaps.items()}
+    assert sorted(state.values()) == [False, False, True]
+
+
+def test_pore_signatures_identify_vertex_sets():
+    """Different vertex sets have different signatures (rule (a) relies on it), here for every pore
+    of a random packing against every other; a rebuild at the same positions gives the same ones;
+    the keys of the discs are distinct."""
+    rng = np.random.default_rng(9)
+    xz, r = random_discs(400, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    sets = [frozenset(net.vertices_of(p).tolist()) for p in range(net.n_pores)]
+    sig = net.pore_signature.tolist()
+    assert len(set(sets)) == len(sets) == len(set(sig))
+    again = pg.build_pores(xz + 1e-9, r, l_m=0.7 * r.mean())
+    assert {frozenset(again.vertices_of(p).tolist()): s for p, s in enumerate(again.pore_signature.tolist())} == dict(zip(sets, sig))
+    keys = pg._mix64(np.arange(100000))
+    assert len(np.unique(keys)) == 100000
