@@ -3,9 +3,15 @@
 Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and radii ``r`` (N,) [m].
 
 * A *link* joins two discs i, j when r_i + r_j + eps_m + l_m >= R_ij (eq 28). Candidates are the
-  Delaunay edges of the centres, so links never cross and the link graph is planar.
-* A *pore* is a bounded face of the link graph. It is stored as the set of Delaunay triangles that
-  lie in it (triangles joined across non-link edges). The unbounded outer face is not a pore.
+  edges of a triangulation of the centres, so links never cross and the link graph is planar.
+  The triangulation is the regular (radius-weighted, power) triangulation: the lower convex hull
+  of the lifted points (x, z, x^2 + z^2 - r^2). Where one of its edges that is not a link hides an
+  eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
+  can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
+  *every eq 28 pair that crosses no link is a link*. ``candidates="delaunay"`` gives the previous
+  candidate set (Delaunay edges of the centres, no insertion), kept for comparison.
+* A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
+  it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
   are neglected, as in the paper. Each step, the polygon area is the shoelace sum and theta the
   interior angle (eq 29) over the pore's boundary links, walked as in the paper (turn clockwise at
@@ -17,14 +23,17 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 
 Degenerate pores: a face whose void area is <= ``a_min`` when the pores are built is *closed*: it is
 not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
-Fewer than three discs or collinear centres give a network with no pores.
+Fewer than three discs or collinear centres give a network with no pores. A disc whose power cell
+is empty (a small disc deep inside a larger one) is not a vertex of the regular triangulation: it
+gets no links and counts as a rattler of the pore that contains its centre.
 """
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import Delaunay, QhullError
+from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
 WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT = 0, 1, 2, 3
 WALL_NAMES = {WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
@@ -64,7 +73,7 @@ class PoreNetwork:
 
     Attributes (N discs, L links, Np pores, Nt throats, K pore corners):
       n_discs, n_pores
-      tri, tri_pore  Delaunay triangles inside pores (counter-clockwise at build) and their pore
+      tri, tri_pore  triangles inside pores (counter-clockwise at build) and their pore
       links          (L, 2) linked disc pairs (eq 28), i < j
       link_pores     (L, 2) pore on the left and on the right of i->j (OUTER = outer face or closed)
       throat_conns   (Nt, 2) pore pairs sharing a link (eq 38-41), throat_link (Nt,) its link
@@ -81,6 +90,7 @@ class PoreNetwork:
                      and the build-time angle (eq 29) and raw link-angle difference
       rattler_area   (Np,) area of the unlinked discs inside each pore [m^2]
       a_min          area below which a face is closed [m^2]; n_closed faces closed at build
+      n_inserted     eq 28 pairs the regular triangulation hid, put in by edge flips at build
     """
 
     n_discs: int
@@ -112,6 +122,7 @@ class PoreNetwork:
     n_closed: int = 0
     eps_m: float = 0.0
     l_m: float = 0.0
+    n_inserted: int = 0
 
     @property
     def n_pores(self):
@@ -162,28 +173,216 @@ def _signed_area(p):
     return 0.5 * ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
 
 
+def _ccw(xz, tri):
+    """Triangles (T, 3) reordered counter-clockwise."""
+    tri = np.array(tri, dtype=np.int64)
+    cw = _signed_area(xz[tri]) < 0
+    tri[cw] = tri[cw][:, [0, 2, 1]]
+    return tri
+
+
 def _delaunay(xz):
-    """Counter-clockwise Delaunay triangles and their neighbours, or None if there are none."""
+    """Counter-clockwise Delaunay triangles of the centres, or None if there are none."""
     if len(xz) < 3:
         return None
     try:
-        d = Delaunay(xz)
+        return _ccw(xz, Delaunay(xz).simplices)
     except QhullError:
         return None
-    tri = d.simplices.astype(np.int64)
-    nb = d.neighbors.astype(np.int64)
-    p = xz[tri]
-    cw = _signed_area(p) < 0
-    tri[cw] = tri[cw][:, [0, 2, 1]]
-    nb[cw] = nb[cw][:, [0, 2, 1]]
-    return tri, nb
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4):
+LOWER_FACET_TOL = 1e-12  # a hull facet is lower when its unit normal's lift component is below -this
+
+
+def regular_triangulation(xz, r):
+    """Counter-clockwise triangles (T, 3) of the regular (power) triangulation of the discs, or None.
+
+    The lower convex hull of the lifted points (x, z, x^2 + z^2 - r^2) (centred and scaled by the
+    extent of the centres), one triangle per hull facet whose outward normal points down. An extra
+    point lifted above all others, at the centroid, is never on the lower hull; it makes a 3D hull
+    of three discs or of lifted points that lie in one plane (cocircular equal discs). Collinear
+    centres stay flat: None. Discs whose power cell is empty are in no triangle.
+    """
+    n = len(xz)
+    if n < 3:
+        return None
+    scale = float(np.ptp(xz, axis=0).max())
+    if not scale > 0:
+        return None
+    p = (xz - xz.mean(axis=0)) / scale
+    lift = np.einsum("ij,ij->i", p, p) - (r / scale) ** 2
+    points = np.vstack([np.column_stack([p, lift]), [0.0, 0.0, lift.max() + 1.0]])
+    try:
+        hull = ConvexHull(points)
+    except QhullError:
+        return None
+    lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
+    return _ccw(xz, hull.simplices[lower]) if lower.any() else None
+
+
+def _neighbours(tri):
+    """nb (T, 3): the triangle across the edge opposite corner k of each triangle (-1: none)."""
+    n = int(tri.max()) + 1
+    a, b = tri[:, [1, 2, 0]].ravel(), tri[:, [2, 0, 1]].ravel()
+    key, rev = a * n + b, b * n + a
+    order = np.argsort(key)
+    pos = np.minimum(np.searchsorted(key[order], rev), len(key) - 1)
+    return np.where(key[order[pos]] == rev, order[pos] // 3, -1).reshape(tri.shape)
+
+
+def eq28_pairs(xz, r, reach):
+    """All disc pairs (P, 2), i < j, with r_i + r_j + reach >= R_ij (eq 28 with reach = eps_m + l_m)."""
+    if len(r) < 2:
+        return np.zeros((0, 2), np.int64)
+    pairs = cKDTree(xz).query_pairs(2 * float(r.max()) + reach, output_type="ndarray").astype(np.int64)
+    d = xz[pairs[:, 1]] - xz[pairs[:, 0]]
+    return pairs[r[pairs[:, 0]] + r[pairs[:, 1]] + reach >= np.hypot(d[:, 0], d[:, 1])]
+
+
+def _orient(a, b, c):
+    """Twice the signed area of the triangle a, b, c (points as (x, z) tuples); > 0 counter-clockwise."""
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+
+class _FlipTriangulation:
+    """A triangulation edited by edge flips. ``third[(a, b)]`` is the third vertex c of the
+    counter-clockwise triangle (a, b, c) on the left of the directed edge a -> b; ``star[v]`` the
+    vertices joined to v by an edge."""
+
+    def __init__(self, xz, tri):
+        self.p = list(map(tuple, xz.tolist()))
+        u, v, w = tri.ravel(), tri[:, [1, 2, 0]].ravel(), tri[:, [2, 0, 1]].ravel()
+        self.third = dict(zip(zip(u.tolist(), v.tolist()), w.tolist()))
+        order = np.argsort(u, kind="stable")
+        self._u, self._v = u[order], v[order]
+        self.star = {}  # filled on demand from the initial edges, then kept up to date by the flips
+
+    def _star(self, k):
+        if k not in self.star:
+            lo, hi = np.searchsorted(self._u, [k, k + 1])
+            self.star[k] = set(self._v[lo:hi].tolist())
+        return self.star[k]
+
+    def triangles(self):
+        """The triangles (T, 3) counter-clockwise, each listed once."""
+        ab = np.array(list(self.third), np.int64)
+        c = np.fromiter(self.third.values(), np.int64, len(self.third))
+        first = (ab[:, 0] < ab[:, 1]) & (ab[:, 0] < c)
+        return np.column_stack([ab[first], c[first]])
+
+    def crossed_edges(self, k, l):
+        """Edges (right, left) crossed by the segment k -> l in order, or None if it runs
+        through another vertex."""
+        p, o = self.p, _orient
+        for a in self._star(k):
+            b = self.third.get((k, a))
+            if b is None:
+                continue
+            oa, ob = o(p[k], p[a], p[l]), o(p[k], p[b], p[l])
+            if oa == 0 and (p[a][0] - p[k][0]) * (p[l][0] - p[k][0]) + (p[a][1] - p[k][1]) * (p[l][1] - p[k][1]) > 0:
+                return None  # a lies on the segment
+            if oa > 0 and ob < 0:
+                break
+        else:
+            return None
+        right, left, edges = a, b, []
+        while True:
+            edges.append((right, left))
+            c = self.third.get((left, right))
+            if c is None:
+                return None
+            if c == l:
+                return edges
+            side = o(p[k], p[l], p[c])
+            if side == 0:
+                return None
+            if side > 0:
+                left = c
+            else:
+                right = c
+
+    def insert(self, k, l, edges):
+        """Flip the crossed ``edges`` until k - l is an edge (Sloan 1993: a crossed edge whose
+        quadrilateral is not convex waits its turn; some crossed edge is always flippable)."""
+        p, o = self.p, _orient
+        queue = deque(edges)
+        budget = 100 + 10 * len(edges) ** 2
+        while queue:
+            budget -= 1
+            if budget < 0:
+                raise RuntimeError(f"edge insertion of link {k}-{l} did not converge")
+            u, v = queue.popleft()
+            c, d = self.third[(u, v)], self.third[(v, u)]
+            if not (o(p[u], p[d], p[c]) > 0 and o(p[d], p[v], p[c]) > 0):
+                queue.append((u, v))  # quadrilateral u, d, v, c not strictly convex: later
+                continue
+            self._flip(u, v, c, d)
+            if {c, d} != {k, l} and o(p[k], p[l], p[c]) * o(p[k], p[l], p[d]) < 0 \
+                    and o(p[c], p[d], p[k]) * o(p[c], p[d], p[l]) < 0:
+                queue.append((c, d))
+
+    def _flip(self, u, v, c, d):
+        """Triangles (u, v, c), (v, u, d) -> (u, d, c), (d, v, c)."""
+        t = self.third
+        del t[(u, v)], t[(v, u)]
+        t[(u, d)], t[(d, c)], t[(c, u)] = c, u, d
+        t[(d, v)], t[(v, c)], t[(c, d)] = c, d, v
+        self._star(u).discard(v)
+        self._star(v).discard(u)
+        self._star(c).add(d)
+        self._star(d).add(c)
+
+
+def insert_missing_links(xz, r, tri, reach):
+    """Make every eq 28 pair between triangulation vertices that crosses no link an edge (and so a
+    link), by edge flips. Only edges that are not links are flipped, so no link is lost.
+
+    Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m].
+    """
+    n = len(r)
+    pairs = eq28_pairs(xz, r, reach)
+    is_vertex = np.zeros(n, bool)
+    is_vertex[tri.ravel()] = True
+    edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
+    missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
+    if not len(missing):
+        return tri, 0
+    ft = _FlipTriangulation(xz, tri)
+    rr = r.tolist()
+
+    def is_link(a, b):  # eq 28
+        return rr[a] + rr[b] + reach >= np.hypot(ft.p[b][0] - ft.p[a][0], ft.p[b][1] - ft.p[a][1])
+
+    inserted = 0
+    for k, l in missing.tolist():
+        edges = ft.crossed_edges(k, l)
+        if edges is None or any(is_link(a, b) for a, b in edges):
+            continue  # it runs through a disc centre or crosses a link
+        ft.insert(k, l, edges)
+        inserted += 1
+    return (ft.triangles() if inserted else tri), inserted
+
+
+def _locate(xz, tri, points):
+    """Index of a triangle containing each point (M, 2), -1 where none (brute force, for few points)."""
+    a, b, c = (xz[tri[:, k]][None] for k in range(3))
+    q = points[:, None, :]
+
+    def side(u, v):
+        return (v[..., 0] - u[..., 0]) * (q[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (q[..., 0] - u[..., 0])
+
+    inside = (side(a, b) >= 0) & (side(b, c) >= 0) & (side(c, a) >= 0)
+    return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
+
+
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, candidates="regular"):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
     An edge between two wall discs is a wall element, not a free surface.
+    ``candidates``: "regular" (the regular triangulation plus the eq 28 pairs it hides, see the
+    module docstring) or "delaunay" (Delaunay edges of the centres only; misses some eq 28 pairs
+    at a long l_m).
     Returns a PoreNetwork; positions may then move and ``measure`` gives the new areas.
     """
     xz, r = check_discs(xz, r)
@@ -195,10 +394,15 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
     if walls.shape != (n,):
         raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
-    dl = _delaunay(xz)
-    if dl is None:
+    if candidates not in ("regular", "delaunay"):
+        raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
+    tri = regular_triangulation(xz, r) if candidates == "regular" else _delaunay(xz)
+    if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
-    tri, nb = dl
+    n_inserted = 0
+    if candidates == "regular":
+        tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m)
+    nb = _neighbours(tri)
     t_count = len(tri)
 
     # Half-edges of the triangulation: corner k of triangle t owns the edge opposite it,
@@ -258,7 +462,13 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
     # Pore vertex sets and wall contacts.
     tri_k = tri[tri_pore_all >= 0]
     tp = tri_pore_all[tri_pore_all >= 0]
-    pv_key = np.unique(np.repeat(tp, 3) * n + tri_k.ravel())
+    pv_key = np.repeat(tp, 3) * n + tri_k.ravel()
+    off_mesh = np.setdiff1d(np.arange(n), tri.ravel())  # empty power cells: rattlers where they lie
+    if len(off_mesh):
+        t_in = _locate(xz, tri, xz[off_mesh])
+        p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
+        pv_key = np.concatenate([pv_key, p_in[p_in >= 0] * n + off_mesh[p_in >= 0]])
+    pv_key = np.unique(pv_key)
     pv = np.column_stack([pv_key // n, pv_key % n])
     ptr = np.searchsorted(pv[:, 0], np.arange(n_pores + 1))
     signature = np.zeros(n_pores, np.uint64)
@@ -296,7 +506,7 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4)
         corner_pore=he_left[h], corner_disc=he_dst[h], corner_link=he_link[h],
         corner_next_link=he_link[he_next[h]], corner_sign=np.where(h < n_l, 1.0, -1.0),
         corner_r2=r[he_dst[h]] ** 2, corner_theta0=theta0, corner_raw0=raw0, rattler_area=rattler_area,
-        a_min=a_min, n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m),
+        a_min=a_min, n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
 
 
@@ -403,7 +613,7 @@ def measure(net, xz, r):
 
 
 def void_area_by_triangles(net, xz, r):
-    """Void area per pore from its Delaunay triangles (slow independent reference of ``measure``)."""
+    """Void area per pore from its triangles (slow independent reference of ``measure``)."""
     area, sectors = _triangle_void(xz, r, net.tri)
     return np.bincount(net.tri_pore, area - sectors, minlength=net.n_pores)
 
@@ -451,3 +661,73 @@ def pore_centroids(net, xz):
     cz = np.bincount(net.tri_pore, area * c[:, 1], minlength=net.n_pores)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.column_stack([cx / w, cz / w])
+
+
+# -- water-conserving transfer at re-meshing (issue 11) ------------------------------------------------
+def _clip_areas(subj, clip):
+    """Areas (K,) of the intersections of triangles subj (K, 3, 2) and clip (K, 3, 2), both
+    counter-clockwise: Sutherland-Hodgman clipping of subj by the three edges of clip, vectorised
+    over the pairs on padded vertex arrays."""
+    poly, count = subj.copy(), np.full(len(subj), 3)
+    for e in range(3):
+        a, b = clip[:, e][:, None, :], clip[:, (e + 1) % 3][:, None, :]
+        m = poly.shape[1]
+        i = np.arange(m)[None, :]
+        nxt = np.where(i + 1 < count[:, None], i + 1, 0)
+        p_next = np.take_along_axis(poly, nxt[..., None], axis=1)
+
+        def side(p):
+            return (b[..., 0] - a[..., 0]) * (p[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (p[..., 0] - a[..., 0])
+
+        s, s_next = side(poly), side(p_next)
+        valid = i < count[:, None]
+        keep = valid & (s >= 0)
+        cross = valid & ((s >= 0) != (s_next >= 0))
+        t = np.where(cross, s / np.where(cross, s - s_next, 1.0), 0.0)[..., None]
+        cand = np.stack([poly, poly + t * (p_next - poly)], axis=2).reshape(len(poly), 2 * m, 2)
+        mask = np.stack([keep, cross], axis=2).reshape(len(poly), 2 * m)
+        order = np.argsort(~mask, axis=1, kind="stable")
+        count = mask.sum(axis=1)
+        width = max(int(count.max(initial=0)), 1)
+        poly = np.take_along_axis(cand, order[:, :width, None], axis=1)
+    i = np.arange(poly.shape[1])[None, :]
+    nxt = np.take_along_axis(poly, np.where(i + 1 < count[:, None], i + 1, 0)[..., None], axis=1)
+    cr = poly[..., 0] * nxt[..., 1] - nxt[..., 0] * poly[..., 1]
+    return np.where(count >= 3, 0.5 * np.sum(np.where(i < count[:, None], cr, 0.0), axis=1), 0.0)
+
+
+def pore_overlaps(old_net, new_net, xz):
+    """Polygon overlap areas of the pores of two networks at positions xz (N, 2) [m].
+
+    Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
+    triangles: a triangle present in both networks (same three discs) overlaps only itself; the
+    others are clipped against the nearby triangles of the other network (``_clip_areas``).
+    """
+    n = len(xz)
+    to, tn = old_net.tri, new_net.tri
+
+    def keys(tri):
+        s = np.sort(tri, axis=1)
+        return (s[:, 0] * n + s[:, 1]) * n + s[:, 2]
+
+    _, io, jn = np.intersect1d(keys(to), keys(tn), assume_unique=True, return_indices=True)
+    same = np.abs(_signed_area(xz[to[io]]))
+    ro = np.setdiff1d(np.arange(len(to)), io)
+    rn = np.setdiff1d(np.arange(len(tn)), jn)
+    p, q, area = [old_net.tri_pore[io]], [new_net.tri_pore[jn]], [same]
+    if len(ro) and len(rn):
+        P, Q = xz[to[ro]], xz[tn[rn]]
+        P[_signed_area(P) < 0] = P[_signed_area(P) < 0][:, [0, 2, 1]]  # an old triangle turned over since its build
+        cp, cq = P.mean(axis=1), Q.mean(axis=1)
+        rp = np.max(np.hypot(*(P - cp[:, None]).transpose(2, 0, 1)), axis=1)
+        rq = np.max(np.hypot(*(Q - cq[:, None]).transpose(2, 0, 1)), axis=1)
+        near = cKDTree(cp).sparse_distance_matrix(cKDTree(cq), rp.max() + rq.max(), output_type="ndarray")
+        near = near[near["v"] < rp[near["i"]] + rq[near["j"]]]
+        a = _clip_areas(P[near["i"]], Q[near["j"]])
+        p.append(old_net.tri_pore[ro[near["i"]]])
+        q.append(new_net.tri_pore[rn[near["j"]]])
+        area.append(a)
+    p, q, area = np.concatenate(p), np.concatenate(q), np.concatenate(area)
+    keep = area > 0
+    key, inv = np.unique(p[keep] * max(new_net.n_pores, 1) + q[keep], return_inverse=True)
+    return key // max(new_net.n_pores, 1), key % max(new_net.n_pores, 1), np.bincount(inv, area[keep])

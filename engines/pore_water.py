@@ -17,6 +17,15 @@ modulus E_w in N/m, permeabilities k in 1/s, flows q in m^2/s.
 Pinched pores: a pore whose current void area is <= ``net.a_min`` keeps its water but exchanges
 none (its throats and boundary outflow are shut) until it reopens; its U follows eq 32.
 
+Re-meshing (§3.4(2), ``PoreWater.remesh``): the paper's rule (``transfer = "paper"``) gives each new
+pore the pressure of the old pores by rules (a)-(d) and its water from eq 32, so water is created
+or destroyed (the balance records it as ``remesh_change``). ``transfer = "conserving"`` moves the
+water itself (``conserving_water``): the void A of a new pore holds water at U = 0, and the excess
+water X = W - A of the old pores (X = W U / E_w: the part that carries the pressure) is split over
+the new pores by overlap. Total water is then conserved to round-off wherever old and new pores
+cover the same region; where they do not (the free surface moved, a closed face reopened) the
+difference is exchanged with the outside at U = 0 and recorded in ``remesh_change`` too.
+
 Stability: the update is explicit. Linearising eq 32 (dU/dW = E_w A / W^2) gives
 dU/dt = -M U with M = C^-1 G, conductances g = k A_ij / E_w and capacities c = W^2 / (E_w A).
 Gershgorin bounds its eigenvalues by lambda = max_i (2 sum_j g_ij + g_boundary,i) / c_i, and
@@ -26,6 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from engines import pore_geometry as pg
 from engines.pore_geometry import check_nonnegative
 
 
@@ -45,6 +58,7 @@ class WaterSettings:
     sides: str = "undrained"  # "undrained" or "drained"
     smoothing: bool = False   # eq 45-46
     substep: bool = False     # sub-step instead of refusing a dt above the Darcy limit
+    transfer: str = "paper"   # re-meshing: "paper" (W from inherited U) or "conserving"
 
     def __post_init__(self):
         if not np.isfinite(self.E_w) or self.E_w <= 0:
@@ -53,6 +67,8 @@ class WaterSettings:
             check_nonnegative(name, getattr(self, name))
         if self.sides not in ("undrained", "drained"):
             raise ValueError(f"sides must be 'undrained' or 'drained', got {self.sides!r}")
+        if self.transfer not in ("paper", "conserving"):
+            raise ValueError(f"transfer must be 'paper' or 'conserving', got {self.transfer!r}")
 
 
 @dataclass
@@ -209,20 +225,31 @@ class PoreWater:
         return fl
 
     # -- re-meshing --------------------------------------------------------------------------------
-    def remesh(self, new_net, A_new, A_old, centroids_new=None):
-        """Move the water onto a rebuilt network, keeping pressures continuous (§3.4(2)).
+    def remesh(self, new_net, A_new, A_old, xz=None):
+        """Move the water onto a rebuilt network (§3.4(2)); A_new, A_old: void areas of the new and
+        the old network at the current positions xz (N, 2) [m].
 
         A new pore takes (a) the U of the old pore with the same vertex set; else (b) the mean U
         of the old pores whose vertex set contains or is contained in its own (a split or merge);
         else (c) the mean U of its already assigned neighbouring pores (the outer face counts as
-        U = 0 for a surface pore), repeated until nothing changes; else (d) U = 0.
-        W is then recomputed from U and the new A (eq 32). Old pores pinched at A <= a_min do not
-        pass on their pressure. Returns the counts per rule.
+        U = 0 for a surface pore), repeated until nothing changes; else (d) U = 0. Old pores
+        pinched at A <= a_min do not pass on their pressure.
+        transfer = "paper": W is recomputed from U and the new A (eq 32).
+        transfer = "conserving": W from ``conserving_water`` (needs xz); new pores that overlap no
+        old pore take the water of the pressure of rules (a)-(d) (counted as "unmatched").
+        Returns the counts per rule.
         """
         U_old = pressure(self.W, A_old, self.settings.E_w)
         U_new, counts = inherit_pressures(self.net, U_old, A_old > self.net.a_min, new_net)
         A_new = np.asarray(A_new, float)
-        W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
+        if self.settings.transfer == "conserving":
+            if xz is None:
+                raise ValueError("transfer = 'conserving' needs the positions xz at re-meshing")
+            W_new, matched = conserving_water(self.net, self.W, np.asarray(A_old, float), new_net, A_new, xz)
+            W_new[~matched] = water_from_pressure(U_new[~matched], A_new[~matched], self.settings.E_w)
+            counts["unmatched"] = int((~matched).sum())
+        else:
+            W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
         self.balance.remesh_change += float(W_new.sum() - self.W.sum())
         self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
         self.remesh_counts = counts
@@ -281,3 +308,56 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
 
 def _subset_or_superset(a, b):
     return a <= b or b <= a
+
+
+SINKHORN_TOL, SINKHORN_MAX_ITER = 1e-13, 500
+
+
+def conserving_water(old_net, W_old, A_old, new_net, A_new, xz):
+    """Water of the new pores from the water of the old ones, conserved (module docstring).
+
+    O_pq: polygon overlap of old pore p and new pore q (pore_geometry.pore_overlaps). The void of
+    the overlap is not known exactly (the discs cut it), so V_pq = alpha_p O_pq beta_q is scaled
+    (Sinkhorn iterations) until its rows sum to the old voids A_p and its columns to the new voids
+    A_q (times the ratio of the two totals in each connected group of overlapping pores, which is 1
+    up to round-off where old and new cover the same region). The excess water X_p = W_p - A_p of
+    old pore p goes to the new pores in the shares V_pq / sum_q V_pq (exactly all of it), and
+    W_q = A_q + sum_p X_p V_pq / sum_q V_pq. So a uniform pressure stays uniform, and the total
+    water changes only by the void gained or lost at the edges of the covered region (at U = 0)
+    and by the water of old pores that no new pore overlaps.
+    Returns (W_new (Np_new,), matched (Np_new,) bool: the pore overlaps some old pore; W_new is
+    nan where it does not). Raises ValueError if a new pore would get no water (W <= 0).
+    """
+    p, q, o = pg.pore_overlaps(old_net, new_net, xz)
+    n_old, n_new = old_net.n_pores, new_net.n_pores
+    W_new = np.full(n_new, np.nan)
+    matched = np.zeros(n_new, bool)
+    if not len(o):
+        return W_new, matched
+    matched[q] = True
+    a = np.maximum(A_old, old_net.a_min)  # a pinched old pore still hands on its water
+    b = np.asarray(A_new, float).copy()
+    _, group = connected_components(coo_matrix((o, (p, n_old + q)), shape=(n_old + n_new,) * 2), directed=False)
+    ga, gb = group[:n_old], group[n_old:]
+    has_old = np.zeros(n_old, bool)
+    has_old[p] = True
+    tot_a = np.bincount(ga[has_old], a[has_old], minlength=group.max() + 1)
+    tot_b = np.bincount(gb[matched], b[matched], minlength=group.max() + 1)
+    b[matched] *= tot_a[gb[matched]] / tot_b[gb[matched]]
+    alpha, beta = np.ones(n_old), np.ones(n_new)
+    for _ in range(SINKHORN_MAX_ITER):
+        alpha[has_old] = a[has_old] / np.bincount(p, o * beta[q], minlength=n_old)[has_old]
+        col = np.bincount(q, o * alpha[p], minlength=n_new)
+        beta[matched] = b[matched] / col[matched]
+        row = np.bincount(p, o * alpha[p] * beta[q], minlength=n_old)
+        if np.max(np.abs(row[has_old] / a[has_old] - 1)) < SINKHORN_TOL:
+            break
+    v = o * alpha[p] * beta[q]
+    share = v / np.bincount(p, v, minlength=n_old)[p]
+    X = np.asarray(W_old, float) - np.asarray(A_old, float)
+    W_new[matched] = np.asarray(A_new, float)[matched] + np.bincount(q, X[p] * share, minlength=n_new)[matched]
+    if np.any(W_new[matched] <= 0):
+        k = int(np.flatnonzero(matched & ~(W_new > 0))[0])
+        raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2); "
+                         f"use transfer = 'paper'")
+    return W_new, matched

@@ -9,7 +9,7 @@ raise SceneError naming the field.
 import math
 import os
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from engines.contact import ContactSettings
 from engines.pore_water import WaterSettings
@@ -47,6 +47,11 @@ SCHEMA = {
         "cut_extra": (float, 0.4, (0.0, 10.0), "deposit this fraction more particles, keep the lowest n_particles (a flat cut)"),
         "dense_top_depth": (float, 0.45e-3, (0.0, math.inf), "particles whose top lies within this depth of the top of their column are denser [m]"),
         "dense_top_factor": (float, 5.0, POS, "density factor of the top particles (5 quick sand, 10 seismic)"),
+        # seismic box (issue 11)
+        "dense_top_count": (int, 0, (0, 100000), "if > 0: the dense top particles are the n highest centres instead of the dense_top_depth layer (seismic: 54, the paper's discs 139-192)"),
+        "wall_density_factor": (float, 1.0, POS, "density factor of the wall discs (seismic: 10; the side walls move)"),
+        "settle_ks": (float, 0.0, (0.0, math.inf), "tangential stiffness during deposition [N/m] (§4.2: 0; §6: 3.5e4)"),
+        "guard_walls": (bool, False, None, "deposition only: side walls raised above the highest particle (removed afterwards) so that no particle bounces out of the box"),
     },
     "material": {
         "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),
@@ -64,6 +69,9 @@ SCHEMA = {
         "f_max": (float, 2.5, POS, "cap of the elastic normal force for springs c, d [N] (eq 27)"),
         "eps_m": (float, 0.0, (0.0, math.inf), "force range beyond touching [m] (eq 26)"),
         "separation_adjustment": (bool, True, None, "apply eq 18-24 when a particle becomes free"),
+        # side-wall springs of the seismic box (issue 11, Fig. 27; used when loading.side_walls = springs)
+        "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
+        "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
     },
     "water": {
         "enabled": (bool, True, None, "false: a dry scene, no water code runs"),
@@ -76,6 +84,8 @@ SCHEMA = {
         "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
         "smoothing": (bool, False, None, "eq 45-46"),
         "substep": (bool, False, None, "sub-step the water instead of refusing a step above the Darcy limit"),
+        # issue 11
+        "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.pore_water.conserving_water)"),
     },
     "loading": {
         "type": (str, "none", ("none", "cosine", "record"), "horizontal acceleration of the moving walls"),
@@ -85,6 +95,9 @@ SCHEMA = {
         "record": (str, "", None, "two-column file time [s], acceleration [g]"),
         "time_scale": (float, 1.0, POS, "record time is multiplied by this"),
         "amplitude_scale": (float, 1.0, (0.0, math.inf), "record acceleration is multiplied by this"),
+        # issue 11
+        "record_units": (str, "g", ("g", "gal", "m/s2"), "unit of the record's acceleration column"),
+        "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
     },
     "numerics": {
         "dt": (float, 1e-6, POS, "time step [s]"),
@@ -99,16 +112,20 @@ SCHEMA = {
         "snapshot_times": (list, [0.02, 0.04, 0.06], None, "times of the snapshot figures [s]"),
         "block_z": (list, [[0.0, 0.34], [0.66, 10.0]], None, "pressure blocks as [z0, z1] fractions of the initial bed height above the bottom wall (block1 bottom, block2 surface)"),
         "progress_seconds": (float, 10.0, POS, "wall seconds between progress lines"),
+        # issue 11
+        "porosity_window": (list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.porosity)"),
     },
 }
 
 
 @dataclass
 class Scene:
-    """A validated scene: ``tables`` holds every field (defaults filled in), by table."""
+    """A validated scene: ``tables`` holds every field (defaults filled in), by table;
+    ``overrides`` the {table: {field: value}} applied on top of the file (recorded by runs)."""
 
     tables: dict
     path: str = ""
+    overrides: dict = field(default_factory=dict)
 
     def __getattr__(self, table):
         try:
@@ -125,14 +142,17 @@ class Scene:
         w = self.tables["water"]
         if not w["enabled"]:
             return None
-        return WaterSettings(**{k: w[k] for k in ("E_w", "k1", "k2", "k3", "q_w", "sides", "smoothing", "substep")})
+        return WaterSettings(**{k: w[k] for k in ("E_w", "k1", "k2", "k3", "q_w", "sides", "smoothing", "substep",
+                                                  "transfer")})
 
     def as_dict(self):
         return {t: dict(v) for t, v in self.tables.items()}
 
     def with_overrides(self, overrides):
         """A new validated scene with {table: {field: value}} replaced."""
-        return validate(_merge(self.as_dict(), overrides), self.path)
+        sc = validate(_merge(self.as_dict(), overrides), self.path)
+        sc.overrides = _merge(self.overrides, overrides)
+        return sc
 
 
 class _Table(dict):
@@ -201,13 +221,27 @@ def _cross_checks(t, path):
     for k, blk in enumerate(t["output"]["block_z"]):
         if not (isinstance(blk, list) and len(blk) == 2 and blk[0] < blk[1]):
             raise SceneError(f"[output] block_z[{k}]: expected [z0, z1] with z0 < z1, got {blk!r}")
+    win = t["output"]["porosity_window"]
+    if not (len(win) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in win)
+            and 0 <= win[0] < win[1]):
+        raise SceneError(f"[output] porosity_window: expected [z0, z1] with 0 <= z0 < z1, got {win!r}")
+    if t["loading"]["side_walls"] == "springs" and t["loading"]["moves"] != "bottom":
+        raise SceneError("[loading] side_walls = 'springs' needs moves = 'bottom' (the box moving as one has no springs)")
     if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):
         raise SceneError(f"[output] snapshot_times: expected times >= 0, got {t['output']['snapshot_times']!r}")
-    base = os.path.dirname(path) if path else SCENE_DIR
-    for table, name in (("packing", "file"), ("loading", "record")):
-        value = t[table][name]
-        if value and not os.path.isabs(value):
-            t[table][name] = os.path.normpath(os.path.join(base, value))
+    _resolve_paths(t, os.path.dirname(path) if path else SCENE_DIR)
+
+
+PATH_FIELDS = (("packing", "file"), ("loading", "record"))  # relative to the file that names them
+
+
+def _resolve_paths(tables, base):
+    """Make the relative PATH_FIELDS of ``tables`` absolute against the folder ``base`` (in place)."""
+    for table, name in PATH_FIELDS:
+        sub = tables.get(table)
+        value = sub.get(name) if isinstance(sub, dict) else None
+        if isinstance(value, str) and value and not os.path.isabs(value):
+            tables[table][name] = os.path.normpath(os.path.join(base, value))
 
 
 def _merge(base, over):
@@ -220,8 +254,11 @@ def _merge(base, over):
     return out
 
 
-def read_raw(path):
-    """Parse a scene file, following ``extends`` chains; returns the merged TOML dict."""
+def read_raw(path, _chain=None):
+    """Parse a scene file, following ``extends`` chains; returns the merged TOML dict.
+
+    Relative paths (``extends``, PATH_FIELDS) are resolved against the folder of the file that
+    names them, so a scene anywhere may extend a preset and inherit its packing file."""
     try:
         with open(path, "rb") as f:
             raw = tomllib.load(f)
@@ -229,9 +266,17 @@ def read_raw(path):
         raise SceneError(f"scene file not found: {path}") from None
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{path}: not valid TOML: {e}") from None
+    path = os.path.abspath(path)
+    _chain = (path,) if _chain is None else _chain
+    _resolve_paths(raw, os.path.dirname(path))
     parent = raw.pop("extends", None)
-    if parent:
-        raw = _merge(read_raw(os.path.join(os.path.dirname(path), parent)), raw)
+    if parent is not None:
+        if not isinstance(parent, str) or not parent:
+            raise SceneError(f"{path}: extends: expected a scene file name, got {parent!r}")
+        parent = os.path.normpath(os.path.join(os.path.dirname(path), parent))
+        if parent in _chain:
+            raise SceneError(f"{path}: extends: a loop back to {parent}")
+        raw = _merge(read_raw(parent, _chain + (parent,)), raw)
     return raw
 
 
@@ -240,7 +285,9 @@ def load(path, overrides=None):
     raw = read_raw(path)
     if overrides:
         raw = _merge(raw, overrides)
-    return validate(raw, path)
+    sc = validate(raw, path)
+    sc.overrides = _merge({}, overrides or {})
+    return sc
 
 
 def preset(name, overrides=None):

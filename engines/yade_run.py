@@ -12,6 +12,7 @@ import numpy as np
 from yade import O
 
 from engines import pore_geometry as pg
+from engines.provenance import provenance
 from engines.yade_coupling import YadeCoupling
 from postproc import plots
 
@@ -132,6 +133,7 @@ def summarise(scene, packing, cp, n_steps, wall, status):
         "contact_list_builds": core.contact.list_builds,
         "block_bounds_m": core.block_bounds,
         "parameters": scene.as_dict(),
+        "provenance": provenance(overrides=scene.overrides),
     }
 
 

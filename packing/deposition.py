@@ -5,7 +5,13 @@ discs sharing the corners (the quick-sand box: 15 + 8 + 8 = 31). Particles with 
 diameters start on a loose grid above the bottom and settle with the paper's packing law
 (linear spring a, ks = 0, no water) plus YADE's numerical damping to come to rest sooner.
 Afterwards the top layer (see ``mark_dense_top``) gets the density factor of the paper's heavy
-top discs.
+top discs, and the walls their own density factor.
+
+No particle may end outside the box: ``check_inside_box`` refuses a packing with one. With
+``guard_walls`` the side columns are raised during deposition above the highest particle (the
+extra wall discs are removed afterwards), so that particles dropped from the loose grid cannot
+bounce out over the side walls (the seismic box with its soft kn = 1.4e5 N/m did, for every seed
+tried, without them).
 """
 import os
 
@@ -30,6 +36,40 @@ def wall_box(n_bottom, n_side, radius):
     return np.vstack([bottom, left, right]), groups
 
 
+def guard_columns(n_bottom, n_side, radius, top):
+    """Extra side-wall discs (M, 2) [m] and groups stacked on the two columns of ``wall_box`` up
+    to height ``top`` [m]: the taller walls of the deposition."""
+    step = 2 * radius
+    zs = np.arange(n_side, max(n_side, int(np.ceil(top / step)) + 1)) * step
+    x_right = (n_bottom - 1) * step
+    xz = np.vstack([np.column_stack([np.zeros(len(zs)), zs]), np.column_stack([np.full(len(zs), x_right), zs])])
+    return xz, np.concatenate([np.full(len(zs), WALL_LEFT), np.full(len(zs), WALL_RIGHT)])
+
+
+def outside_box(packing):
+    """Indices of the particles whose centre is not inside the box: not strictly between the
+    centres of the left and right wall columns, or not above the bottom wall centres."""
+    g, x, z = packing.group, packing.xz[:, 0], packing.xz[:, 1]
+    m = np.flatnonzero(packing.mobile)
+    out = np.zeros(len(m), bool)
+    if (g == WALL_LEFT).any():
+        out |= x[m] <= x[g == WALL_LEFT].max()
+    if (g == WALL_RIGHT).any():
+        out |= x[m] >= x[g == WALL_RIGHT].min()
+    if (g == WALL_BOTTOM).any():
+        out |= z[m] <= z[g == WALL_BOTTOM].max()
+    return m[out]
+
+
+def check_inside_box(packing, what="packing"):
+    """Raise ValueError naming the particles outside the box (see ``outside_box``)."""
+    out = outside_box(packing)
+    if len(out):
+        where = ", ".join(f"{i} at ({packing.xz[i, 0] * 1e3:.2f}, {packing.xz[i, 1] * 1e3:.2f}) mm" for i in out[:5])
+        raise ValueError(f"{what}: {len(out)} particle(s) outside the box: {where}"
+                         f"{' ...' if len(out) > 5 else ''} (raise the side walls: [packing] guard_walls = true)")
+
+
 def loose_grid(diameters, x_left, x_right, z_bottom, rng):
     """Centres of the particles on a grid between x_left and x_right above z_bottom [m]."""
     pitch = 1.05 * diameters.max()
@@ -47,7 +87,7 @@ def settle(scene, packing, duration=None):
 
     p = scene.packing
     dep = scene.with_overrides({
-        "contact": {"spring": "a", "ks": 0.0, "eta_s": 0.0, "separation_adjustment": False},
+        "contact": {"spring": "a", "ks": p.settle_ks, "eta_s": 0.0, "separation_adjustment": False},
         "water": {"enabled": False}, "loading": {"type": "none"},
         "numerics": {"dt": p.settle_dt, "damping_eq44": False}})
     cp = YadeCoupling(dep, packing, newton_damping=SETTLE_DAMPING)
@@ -55,16 +95,27 @@ def settle(scene, packing, duration=None):
     return Packing(cp.positions(), packing.r, packing.group, packing.density_factor)
 
 
-def mark_dense_top(packing, depth, factor):
+def mark_dense_top(packing, depth, factor, count=0, wall_factor=1.0):
     """Density factor ``factor`` for the top layer: particles whose top lies within ``depth`` of
-    the highest particle top in their own column (particles overlapping them horizontally)."""
+    the highest particle top in their own column (particles overlapping them horizontally), or,
+    with ``count`` > 0, the ``count`` particles with the highest centres (the paper numbers its
+    seismic discs from the bottom up; discs 139-192 of 192 are the 54 highest). Wall discs get
+    ``wall_factor``."""
     m = np.flatnonzero(packing.mobile)
-    x, top, r = packing.xz[m, 0], packing.xz[m, 1] + packing.r[m], packing.r[m]
-    column = np.abs(x[:, None] - x[None, :]) < r[:, None] + r[None, :]
-    local_top = np.max(np.where(column, top[None, :], -np.inf), axis=1)
-    f = np.ones(len(packing.r))
-    f[m[top >= local_top - depth]] = factor
+    f = np.where(packing.mobile, 1.0, wall_factor)
+    if count > 0:
+        f[m[np.argsort(packing.xz[m, 1])[len(m) - count:]]] = factor
+    else:
+        x, top, r = packing.xz[m, 0], packing.xz[m, 1] + packing.r[m], packing.r[m]
+        column = np.abs(x[:, None] - x[None, :]) < r[:, None] + r[None, :]
+        local_top = np.max(np.where(column, top[None, :], -np.inf), axis=1)
+        f[m[top >= local_top - depth]] = factor
     return Packing(packing.xz, packing.r, packing.group, f)
+
+
+def _mark(scene, packing):
+    p = scene.packing
+    return mark_dense_top(packing, p.dense_top_depth, p.dense_top_factor, p.dense_top_count, p.wall_density_factor)
 
 
 def deposit(scene):
@@ -72,6 +123,7 @@ def deposit(scene):
 
     ``cut_extra`` x n_particles more particles are deposited and the ``n_particles`` lowest kept,
     then re-settled: a scene cut out of a deposit, with a flat surface as in the paper (§4.2).
+    Raises ValueError if a particle ends outside the box (``check_inside_box``).
     """
     p = scene.packing
     rng = np.random.default_rng(p.seed)
@@ -80,16 +132,24 @@ def deposit(scene):
     walls, groups = wall_box(p.n_bottom, p.n_side, p.wall_radius)
     inner_left, inner_right = p.wall_radius, (p.n_bottom - 1) * 2 * p.wall_radius - p.wall_radius
     xz = loose_grid(d, inner_left, inner_right, p.wall_radius, rng)
+    if p.guard_walls:
+        extra, extra_groups = guard_columns(p.n_bottom, p.n_side, p.wall_radius, (xz[:, 1] + d / 2).max() + d.max())
+        walls, groups = np.vstack([walls, extra]), np.concatenate([groups, extra_groups])
     n_w = len(walls)
     loose = Packing(np.vstack([xz, walls]), np.concatenate([d / 2, np.full(n_w, p.wall_radius)]),
                     np.concatenate([np.full(n_dep, WALL_NONE), groups]), np.ones(n_dep + n_w))
     settled = settle(scene, loose)
+    check_inside_box(settled, f"deposit of seed {p.seed}")
+    n_box = p.n_bottom + 2 * (p.n_side - 1)  # the guard discs come after the box's walls
     keep = np.argsort(settled.xz[:n_dep, 1])[:p.n_particles]
-    keep = np.concatenate([np.sort(keep), np.arange(n_dep, n_dep + n_w)])
+    keep = np.concatenate([np.sort(keep), np.arange(n_dep, n_dep + (n_w if p.cut_extra > 0 else n_box))])
     cut = Packing(settled.xz[keep], settled.r[keep], settled.group[keep], settled.density_factor[keep])
     if p.cut_extra > 0:
         cut = settle(scene, cut, duration=0.5 * p.settle_time)
-    return mark_dense_top(cut, p.dense_top_depth, p.dense_top_factor)
+        check_inside_box(cut, f"deposit of seed {p.seed} after the cut")
+        cut = Packing(cut.xz[:p.n_particles + n_box], cut.r[:p.n_particles + n_box],
+                      cut.group[:p.n_particles + n_box], cut.density_factor[:p.n_particles + n_box])
+    return _mark(scene, cut)
 
 
 def cut_and_resettle(scene, deposit_packing, x0, width):
@@ -105,7 +165,7 @@ def cut_and_resettle(scene, deposit_packing, x0, width):
     r = deposit_packing.r[keep]
     cut = Packing(np.vstack([xz, walls]), np.concatenate([r, np.full(len(walls), p.wall_radius)]),
                   np.concatenate([np.full(len(r), WALL_NONE), groups]), np.ones(len(r) + len(walls)))
-    return mark_dense_top(settle(scene, cut), p.dense_top_depth, p.dense_top_factor)
+    return _mark(scene, settle(scene, cut))
 
 
 def scene_packing(scene):

@@ -1,8 +1,9 @@
 """Figures of the seed-000 runs: snapshots (Fig. 22/24) and block pressure histories (Fig. 21/23).
 
-They read what the runs write: snapshot .npz files and history.csv (columns named as written).
+They read what the runs write (postproc/run_files.py): history.csv (columns named as written),
+snapshot .npz files and summary.json. ``python3 -m postproc.plots RUN_DIR`` redraws a run's figures.
 """
-import csv
+import os
 
 import matplotlib
 
@@ -10,34 +11,65 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection, PatchCollection, PolyCollection  # noqa: E402
-from matplotlib.patches import Circle  # noqa: E402
+from matplotlib.colors import Normalize  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Circle, Patch  # noqa: E402
+
+from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402,F401
 
 GROUP_COLOURS = {0: "0.85", 1: "0.35", 2: "0.35", 3: "0.35"}
+U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess pressure
+FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
+FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max
+BLOCK_NAMES = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}
 
 
-def read_history(path):
-    """history.csv as {column: array}."""
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
+def nan_runs(t, y):
+    """[(t_start, t_end)] of the runs of NaN in y, each widened to the neighbouring samples."""
+    edges = np.diff(np.concatenate([[0], np.isnan(y).astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    return [(t[max(a - 1, 0)], t[min(b + 1, len(t) - 1)]) for a, b in zip(starts, ends)]
 
 
 def plot_block_pressures(history, E_w, path, title):
-    """Block-mean excess pore pressure against time, one line per block (Fig. 21/23)."""
-    fig, ax = plt.subplots(figsize=(6.5, 4))
-    t_ms = history["t"] * 1e3
-    for name in sorted(k for k in history if k.startswith("U_block")):
-        label = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}.get(name, name)
-        ax.plot(t_ms, history[name], label=label)
-    ax.axhline(E_w, color="0.5", ls="--", lw=0.8, label=f"E_w = {E_w:g} N/m (bound of eq 32)")
-    ax.set_xlabel("t [ms]")
-    ax.set_ylabel("excess pore pressure U [N/m]")
-    ax.set_title(title)
-    ax.legend(loc="best", fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
+    """block_pressure_figure saved to ``path``."""
+    fig = block_pressure_figure(history, E_w, title)
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def block_pressure_figure(history, E_w, title):
+    """Block-mean excess pore pressure against time, one line per block (Fig. 21/23). A block
+    holding no pore has no mean (NaN in history.csv): drawn as a hatched band in its colour."""
+    fig, ax = plt.subplots(figsize=(7.5, 4.9))
+    t_ms = history["t"] * 1e3
+    handles, any_gap = [], False
+    for k, name in enumerate(sorted(c for c in history if c.startswith("U_block"))):
+        colour = f"C{k}"
+        label = BLOCK_NAMES.get(name, name)
+        handles += ax.plot(t_ms, history[name], color=colour, label=label)
+        gaps = nan_runs(t_ms, history[name])
+        for t0, t1 in gaps:
+            ax.axvspan(t0, t1, ymin=0.01 + 0.07 * k, ymax=0.07 + 0.07 * k, facecolor="none",
+                       edgecolor=colour, hatch="////", linewidth=0)
+        if gaps:
+            any_gap = True
+            share = np.isnan(history[name]).mean()
+            handles.append(Patch(facecolor="none", edgecolor=colour, hatch="////", linewidth=0,
+                                 label=f"{label}: no pore, no mean ({100 * share:.0f} % of the time)"))
+    handles.append(ax.axhline(E_w, color="0.5", ls="--", lw=0.8, label=f"E_w = {E_w:g} N/m (bound of eq 32)"))
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.set_xlabel("t [ms]")
+    ax.set_ylabel("block-mean excess pore pressure U [N/m]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
+    if any_gap:
+        ax.text(0.0, -0.33, "Hatched: no pore centroid lies in the block at that time (its discs lost their\n"
+                "links as the bed loosened), so the block has no mean U and the line breaks.",
+                transform=ax.transAxes, fontsize=8, color="0.3", va="top")
+    fig.tight_layout()
+    return fig
 
 
 def plot_history_panels(history, path, title):
@@ -60,16 +92,28 @@ def plot_history_panels(history, path, title):
     plt.close(fig)
 
 
-def draw_snapshot(ax, snap, U_range=None, velocity_scale=None, force_scale=None):
-    """Discs, pores coloured by U, normal-force network (width ~ force) and velocity arrows."""
+def force_width(fn, f_max):
+    """Line width [pt] of a normal force [N] on the shared scale."""
+    lo, span = FORCE_WIDTH
+    return lo + span * np.clip(fn, 0, None) / f_max
+
+
+def draw_snapshot(ax, snap, U_norm=None, velocity_scale=None, force_scale=None):
+    """Discs, pores coloured by U, normal-force network (width ~ force) and velocity arrows.
+
+    U_norm: colour normalisation of U (default centred on 0 at +-max|U|); velocity_scale [m/s]
+    is drawn one mean diameter long; force_scale [N] gets the widest line. Returns the pore
+    collection (for a colour bar) or None and the quiver (for a key) or None."""
     xz, r, group = snap["xz"] * 1e3, snap["r"] * 1e3, snap["group"]
+    polys = None
     if "tri" in snap and len(snap["tri"]):
         U = snap["U"][snap["tri_pore"]]
-        vmin, vmax = U_range if U_range else (min(U.min(), 0), max(U.max(), 1e-9))
-        polys = PolyCollection(xz[snap["tri"]], array=U, cmap="coolwarm", edgecolors="none", zorder=0)
-        polys.set_clim(vmin, vmax)
+        if U_norm is None:
+            u = max(np.abs(U).max(), 1e-9)
+            U_norm = Normalize(-u, u)
+        polys = PolyCollection(xz[snap["tri"]], array=U, cmap=U_CMAP, norm=U_norm, edgecolors="face",
+                               linewidths=0.2, zorder=0)
         ax.add_collection(polys)
-        plt.colorbar(polys, ax=ax, label="pore excess pressure U [N/m]", shrink=0.8)
     circles = [Circle(p, rr) for p, rr in zip(xz, r)]
     ax.add_collection(PatchCollection(circles, facecolor=[GROUP_COLOURS[g] for g in group], edgecolor="k",
                                       linewidth=0.4, alpha=0.55, zorder=1))
@@ -79,39 +123,120 @@ def draw_snapshot(ax, snap, U_range=None, velocity_scale=None, force_scale=None)
                                           edgecolor="k", linewidth=1.6, zorder=2))
     pairs, fn = snap["pairs"], snap["f_n"]
     if len(fn):
-        scale = force_scale or max(fn.max(), 1e-12)
-        ax.add_collection(LineCollection(xz[pairs], linewidths=0.3 + 3.5 * np.clip(fn, 0, None) / scale,
-                                         colors="darkred", zorder=3))
+        ax.add_collection(LineCollection(xz[pairs], linewidths=force_width(fn, force_scale or max(fn.max(), 1e-12)),
+                                         colors=FORCE_COLOUR, zorder=3))
     v = snap["vel"]
     mob = group == 0
+    quiver = None
     if mob.any():
-        vs = velocity_scale or max(np.abs(v[mob]).max(), 1e-12)
-        ax.quiver(xz[mob, 0], xz[mob, 1], v[mob, 0], v[mob, 1], angles="xy", scale_units="xy",
-                  scale=vs / (2 * r.mean()), color="navy", width=0.004, zorder=4)
+        vs = velocity_scale or max(np.hypot(*v[mob].T).max(), 1e-12)
+        quiver = ax.quiver(xz[mob, 0], xz[mob, 1], v[mob, 0], v[mob, 1], angles="xy", scale_units="xy",
+                           scale=vs / (2 * r.mean()), color=ARROW_COLOUR, width=0.004, zorder=4)
     ax.set_aspect("equal")
-    pad = r.max()
-    ax.set_xlim(xz[:, 0].min() - pad, xz[:, 0].max() + pad)
-    ax.set_ylim(xz[:, 1].min() - pad, xz[:, 1].max() + 2 * pad)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("z [mm]")
+    return polys, quiver
 
 
-def plot_snapshots(snaps, path, title):
-    """One panel per snapshot, with shared colour range, force and velocity scales."""
-    n = len(snaps)
-    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 5.2), squeeze=False)
-    Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
-    U_range = (min(0.0, min(u.min() for u in Us)), max(u.max() for u in Us)) if Us else None
-    fmax = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
-    vmax = max(np.abs(s["vel"][s["group"] == 0]).max() for s in snaps) or 1.0
-    for ax, s in zip(axes[0], snaps):
-        draw_snapshot(ax, s, U_range, vmax, fmax)
-        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms   (max |v| = {vmax:.3g} m/s, max f_n = {fmax:.3g} N)",
-                     fontsize=9)
-    fig.suptitle(title + ": pores coloured by U, normal forces (width ~ f_n), velocities (arrows)")
-    fig.tight_layout()
+def _nice(x):
+    """A round number near x (1, 2 or 5 x 10^k) for scale keys."""
+    if x <= 0:
+        return 1.0
+    e = np.floor(np.log10(x))
+    m = x / 10**e
+    return float((1 if m < 1.5 else 2 if m < 3.5 else 5) * 10**e)
+
+
+def plot_snapshots(snaps, path, title, blocks=None):
+    """snapshot_figure saved to ``path``."""
+    fig = snapshot_figure(snaps, title, blocks)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def snapshot_figure(snaps, title, blocks=None):
+    """One panel per snapshot with shared scales: pores coloured by U on one diverging scale
+    centred on 0 (one colour bar), normal-force widths, velocity arrows and axis limits. Titles
+    give each panel's own maxima; a key explains discs, walls, line widths and arrows.
+    ``blocks``: [(z0, z1)] [m] of the pressure blocks, drawn as brackets on the right."""
+    n = len(snaps)
+    fig = plt.figure(figsize=(max(4.3 * n + 1.2, 8.6), 5.0), layout="constrained")
+    grid = fig.add_gridspec(2, n, height_ratios=(1, 0.12))
+    axes = [fig.add_subplot(grid[0, k]) for k in range(n)]
+    key_ax = fig.add_subplot(grid[1, :])
+    key_ax.axis("off")
+    Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
+    u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
+    norm = Normalize(-u_max, u_max)
+    f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
+    speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
+    moving = max(v.max(initial=0.0) for v in speed) > 0
+    v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
+    v_key = _nice(v_max / 2)
+    colour_source = quiver = None
+    for ax, s, v in zip(axes, snaps, speed):
+        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
+        colour_source = colour_source or polys
+        quiver = quiver or q
+        parts = [f"max |v| = {v.max(initial=0.0):.3g} m/s", f"max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
+        if "U" in s and len(s["U"]):
+            parts.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
+        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + ", ".join(parts), fontsize=8.5)
+        if blocks:
+            for k, (z0, z1) in enumerate(blocks):
+                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    pad = 0.3
+    for k, ax in enumerate(axes):
+        ax.set_xlim(lo[0] - pad, hi[0] + pad)
+        ax.set_ylim(lo[1] - pad, hi[1] + pad)
+        if k:
+            ax.set_ylabel("")
+            ax.tick_params(labelleft=False)
+    if colour_source is not None:
+        fig.colorbar(colour_source, ax=axes, label="pore excess pressure U [N/m] (0 = hydrostatic)",
+                     shrink=0.85, pad=0.01)
+    dense = max(s["density_factor"].max() for s in snaps)
+    key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
+    if dense > 1:
+        key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
+                         label=f"dense top particle (density x {dense:g})"))
+    key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc (fixed)"))
+    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N")
+            for f in (f_max / 4, f_max)]
+    if blocks:
+        key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
+    key_ax.legend(handles=key, loc="center left", ncol=(len(key) + 1) // 2, fontsize=8, frameon=False)
+    if quiver is not None and moving:
+        fig.canvas.draw()  # a quiver key belongs to its quiver's axes: place it in figure units, after layout
+        box = key_ax.get_position()
+        axes[0].quiverkey(quiver, box.x0 + 0.84 * box.width, box.y0 + 0.5 * box.height, v_key,
+                          f"particle velocity {v_key:g} m/s", labelpos="E", coordinates="figure",
+                          color=ARROW_COLOUR, fontproperties={"size": 8})
+    fig.suptitle(title + ": pores coloured by U, normal forces (line width), particle velocities (arrows)")
+    return fig
+
+
+def figures_of_run(run_dir):
+    """Redraw a run's figures from its files (history.csv, snapshot_*.npz, summary.json)."""
+    summary = read_summary(run_dir)
+    params = summary.get("parameters", {})
+    title = summary.get("scene", os.path.basename(os.path.normpath(run_dir)))
+    history = read_history(os.path.join(run_dir, "history.csv"))
+    written = []
+    if len(history.get("t", [])) >= 2:
+        if params.get("water", {}).get("enabled", True) and any(c.startswith("U_block") for c in history):
+            written.append(os.path.join(run_dir, "pressure_blocks.png"))
+            plot_block_pressures(history, params.get("water", {}).get("E_w", np.nan), written[-1],
+                                 f"{title}: block-mean excess pore pressure")
+        written.append(os.path.join(run_dir, "history_panels.png"))
+        plot_history_panels(history, written[-1], title)
+    snaps = [read_snapshot(f) for f in snapshot_files(run_dir)]
+    if snaps:
+        written.append(os.path.join(run_dir, "snapshots.png"))
+        plot_snapshots(snaps, written[-1], title, summary.get("block_bounds_m"))
+    return written
 
 
 def plot_packing(packing, path, title):
@@ -131,3 +256,11 @@ def plot_packing(packing, path, title):
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+if __name__ == "__main__":
+    import sys
+    if len(sys.argv) < 2:
+        sys.exit("usage: python3 -m postproc.plots RUN_DIR [RUN_DIR ...]  (redraws the run's figures)")
+    for run in sys.argv[1:]:
+        print("\n".join(figures_of_run(run)))

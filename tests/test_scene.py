@@ -1,4 +1,6 @@
 """Scene files: presets load, extends merges, bad files are refused naming the field."""
+import os
+
 import numpy as np
 import pytest
 
@@ -52,3 +54,38 @@ def test_dt_above_the_stability_limit_is_refused():
     pk = Packing(np.array([[0.0, 1e-3], [0.0, 0.0]]), np.array([0.5e-3, 0.5e-3]), [0, 1], [1.0, 1.0])
     with pytest.raises(ValueError, match=r"\[numerics\] dt .* stability limit"):
         PoreDEM(sc, pk)
+
+
+def test_paths_resolve_against_the_file_that_names_them(tmp_path):
+    """A scene elsewhere extending a preset inherits the preset's packing (beside the preset);
+    its own relative paths resolve against its own folder."""
+    preset = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
+    mine = tmp_path / "sub" / "mine.toml"
+    mine.parent.mkdir()
+    mine.write_text(f'extends = "{os.path.relpath(preset, mine.parent)}"\n[scene]\nname = "mine"\n')
+    sc = scenes.load(str(mine))
+    assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
+    assert os.path.exists(sc.packing.file) and sc.water.k1 == 200.0
+    child = tmp_path / "child.toml"
+    child.write_text('extends = "sub/mine.toml"\n[loading]\ntype = "record"\nrecord = "rec.txt"\n')
+    sc = scenes.load(str(child))
+    assert sc.loading.record == str(tmp_path / "rec.txt")
+    assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
+
+
+def test_extends_loops_and_bad_extends_are_refused(tmp_path):
+    (tmp_path / "a.toml").write_text('extends = "b.toml"\n[scene]\nname = "a"\n')
+    (tmp_path / "b.toml").write_text('extends = "a.toml"\n')
+    with pytest.raises(scenes.SceneError, match="extends: a loop"):
+        scenes.load(str(tmp_path / "a.toml"))
+    (tmp_path / "c.toml").write_text('extends = 3\n')
+    with pytest.raises(scenes.SceneError, match="extends: expected a scene file name"):
+        scenes.load(str(tmp_path / "c.toml"))
+
+
+def test_overrides_are_recorded():
+    sc = scenes.preset("quicksand_case1", {"numerics": {"duration": 0.02}})
+    assert sc.overrides == {"numerics": {"duration": 0.02}} and sc.numerics.duration == 0.02
+    sc2 = sc.with_overrides({"water": {"k1": 20.0}})
+    assert sc2.overrides == {"numerics": {"duration": 0.02}, "water": {"k1": 20.0}}
+    assert scenes.preset("quicksand_case1").overrides == {}

@@ -1,7 +1,10 @@
 """Deposit a scene's packing in YADE and save it as CSV (x, z, r, group, density_factor), with the
 size distribution (Fig. 14) and a drawing of the packing (Fig. 15) beside it.
 
-    yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE]
+    yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE | --replace]
+
+By default the packing goes to out/packings/<scene name>.csv; ``--replace`` overwrites the
+packing file the scene names (a tracked preset file: check the diff before committing it).
 """
 import argparse
 import os
@@ -11,27 +14,38 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
+from engines.preflight import ArgumentParser, InputError, check_output_dir  # noqa: E402
 from packing.deposition import deposit  # noqa: E402
 from packing.psd import plot_distribution  # noqa: E402
 from postproc.plots import plot_packing  # noqa: E402
 
 
 def main(argv):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scene", required=True, help="preset name or scene file path")
-    ap.add_argument("--out", help="CSV path (default: the scene's packing file)")
+    where = ap.add_mutually_exclusive_group()
+    where.add_argument("--out", help="CSV path (default: out/packings/<scene name>.csv)")
+    where.add_argument("--replace", action="store_true", help="overwrite the packing file the scene names")
     args = ap.parse_args(argv)
-    sc = scenes.load(args.scene) if args.scene.endswith(".toml") else scenes.preset(args.scene)
-    out = args.out or sc.packing.file
-    if not out:
-        raise SystemExit("--out is required when the scene names no packing file")
+    try:
+        sc = scenes.load(args.scene) if args.scene.endswith(".toml") else scenes.preset(args.scene)
+        if args.replace and not sc.packing.file:
+            raise InputError("--replace: the scene names no [packing] file")
+        out = sc.packing.file if args.replace else args.out or os.path.join("out", "packings", sc.scene.name + ".csv")
+        check_output_dir(os.path.dirname(os.path.abspath(out)), "--out")
+    except ValueError as e:
+        sys.exit(f"error: {e}")
     pk = deposit(sc)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     pk.save(out)
     p = sc.packing
     stem = os.path.splitext(out)[0]
     plot_distribution(2 * pk.r[pk.mobile], p.mean_diameter, p.std_diameter, p.d_min, p.d_max, stem + "_fig14_diameters.png")
     plot_packing(pk, stem + "_fig15_packing.png", sc.scene.name)
-    print(f"deposited {int(pk.mobile.sum())} particles + {int((~pk.mobile).sum())} wall discs -> {out}")
+    print(f"deposited {int(pk.mobile.sum())} particles + {int((~pk.mobile).sum())} wall discs -> {out} "
+          f"(figures {stem}_fig14_diameters.png, {stem}_fig15_packing.png)")
+    if sc.packing.file and not args.replace:
+        print(f"the scene still runs on {sc.packing.file}; --replace overwrites it")
 
 
 if __name__ == "__main__":

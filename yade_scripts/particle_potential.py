@@ -28,7 +28,6 @@ Stress is the applied top stress (load control) or the top reaction over the 3 m
 (displacement control), positive in compression; strain is the tributary-weighted mean top
 settlement over the 12 m height. Outputs are in t/m² as in the paper (SI inside).
 """
-import argparse
 import json
 import os
 import sys
@@ -45,12 +44,15 @@ import numpy as np  # noqa: E402
 from engines.particle_potential import (  # noqa: E402
     Kind, Model, Potential, SolverSettings, Step, TONNE_FORCE, find_pairs, limit_load, pa_to_tf_m2,
     pair_stiffness_at_well, run_path, tf_m2_to_pa)
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
 
 SPACING = 1.0      # m
 HALF_COLUMNS = 3   # columns x = 0..3, axis at x = 3
 ROWS = 12          # rows z = 0..12
 HEIGHT = ROWS * SPACING
 DL = 1.8           # m, influence radius of §3
+SEARCH_MAX = 80.0  # t/m², largest load of the yield searches
+MAX_INCREMENTS = 100_000  # per path: a smaller increment would run for hours
 
 
 @dataclass(frozen=True)
@@ -153,7 +155,7 @@ PAPER = {1.0: {"E_t_m2": 300.0, "yield_stress_t_m2": 26.0, "yield_strain": 0.085
 
 
 def run_all(alpha, C=2.0, Am=1.0, load_max=22.0, dload=0.25, disp_max=0.9, ddisp=0.01,
-            search_max=80.0, settings=SolverSettings()):
+            search_max=SEARCH_MAX, settings=SolverSettings()):
     """All §4 runs for one parameter set. Loads in t/m², displacements in m, A_m in tf·m/m.
 
     Returns a dict: the specimens 'loaded' and 'pushed', the `Path`s 'load' (top load to load_max)
@@ -309,21 +311,23 @@ def plot_deformed(spec, inc, title, path):
 
 
 def parse_args(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--alpha", type=float, nargs="+", default=[1.0, 2.0], help="potential parameter(s) α [-]")
-    ap.add_argument("--C", type=float, default=2.0, help="potential exponent C [-]")
-    ap.add_argument("--Am", type=float, default=1.0, help="potential amplitude A_m [tf·m per m depth]")
-    ap.add_argument("--load-max", type=float, default=22.0, help="top load of Fig. 6 [t/m²]")
-    ap.add_argument("--dload", type=float, default=0.25, help="first load increment of the yield search [t/m²]")
-    ap.add_argument("--disp-max", type=float, default=0.9, help="forced top displacement of Fig. 7 [m]")
-    ap.add_argument("--ddisp", type=float, default=0.01, help="displacement increment [m]")
-    ap.add_argument("--out", required=True, help="output directory (one subfolder per α)")
+    """Command line; bad values are refused in one line naming the argument and its limit."""
+    ap = ArgumentParser(description=__doc__.split("\n")[0])
+    positive = number(lo=0, lo_open=True)
+    ap.add_argument("--alpha", type=positive, nargs="+", default=[1.0, 2.0], help="potential parameter(s) α [-]")
+    ap.add_argument("--C", type=positive, default=2.0, help="potential exponent C [-]")
+    ap.add_argument("--Am", type=positive, default=1.0, help="potential amplitude A_m [tf·m per m depth]")
+    ap.add_argument("--load-max", type=positive, default=22.0, help="top load of Fig. 6 [t/m²]")
+    ap.add_argument("--dload", type=positive, default=0.25, help="first load increment of the yield search [t/m²]")
+    ap.add_argument("--disp-max", type=positive, default=0.9, help="forced top displacement of Fig. 7 [m]")
+    ap.add_argument("--ddisp", type=positive, default=0.01, help="displacement increment [m]")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory (one subfolder per α)")
     args = ap.parse_args(argv)
-    for name in ("C", "Am", "load_max", "dload", "disp_max", "ddisp"):
-        if not np.isfinite(getattr(args, name)) or getattr(args, name) <= 0:
-            ap.error(f"--{name.replace('_', '-')} must be > 0, got {getattr(args, name)}")
-    if any(not np.isfinite(a) or a <= 0 for a in args.alpha):
-        ap.error(f"--alpha must be > 0, got {args.alpha}")
+    for end, step, name, unit in ((max(args.load_max, SEARCH_MAX), args.dload, "--dload", "t/m²"),
+                                  (args.disp_max, args.ddisp, "--ddisp", "m")):
+        if end / step > MAX_INCREMENTS:
+            ap.error(f"argument {name}: {step:g} {unit} gives {end / step:.0f} increments up to {end:g} {unit} "
+                     f"(limit {MAX_INCREMENTS})")
     return args
 
 

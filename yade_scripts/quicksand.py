@@ -13,29 +13,41 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir, preflight  # noqa: E402
 
 
 def parse(argv):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--case", type=int, choices=(1, 2), default=1, help="Table 1 or Table 2")
-    ap.add_argument("--scene", help="a scene file instead of the case preset")
-    ap.add_argument("--out", required=True, help="output directory")
-    ap.add_argument("--duration", type=float, help="simulated time [s] (default: the scene's)")
-    ap.add_argument("--dt", type=float, help="time step [s] (default: the scene's)")
+    ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    which = ap.add_mutually_exclusive_group()
+    which.add_argument("--case", type=int, choices=(1, 2), help="Table 1 or Table 2 (default 1)")
+    which.add_argument("--scene", help="a scene file instead of the case preset")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
+    ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
+                    help="simulated time [s] (default: the scene's)")
+    ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
     return ap.parse_args(argv)
+
+
+def overrides_of(args):
+    """The command line's changes to the scene, {table: {field: value}} (recorded in summary.json)."""
+    num = {k: v for k, v in (("dt", args.dt), ("duration", args.duration)) if v is not None}
+    return {"numerics": num} if num else None
 
 
 def main(argv):
     args = parse(argv)
-    overrides = {"numerics": {"dt": args.dt}} if args.dt else None
-    try:
-        sc = scenes.load(args.scene, overrides) if args.scene else scenes.preset(f"quicksand_case{args.case}", overrides)
+    try:  # bad scenes, packings and limits: one clear line, nothing written
+        overrides = overrides_of(args)
+        sc = scenes.load(args.scene, overrides) if args.scene else \
+            scenes.preset(f"quicksand_case{args.case or 1}", overrides)
         from packing.deposition import scene_packing
         packing = scene_packing(sc)
-    except ValueError as e:  # SceneError and bad packing files: one clear line
+        for note in preflight(sc, packing, args.out):
+            print(note)
+    except ValueError as e:
         sys.exit(f"error: {e}")
     from engines.yade_run import run_scene
-    summary = run_scene(sc, packing, args.out, args.duration)
+    summary = run_scene(sc, packing, args.out)
     print(f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s "
           f"({summary['us_per_step']:.0f} us/step), water balance error {summary['water_balance_error']:.2e}")
 

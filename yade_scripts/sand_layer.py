@@ -18,7 +18,6 @@ Writes into DIR:
     fig10_stress.png             transmitted vertical stress
     fig12_settlement.png         layer compression and surface settlement
 """
-import argparse
 import json
 import os
 import sys
@@ -32,6 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
 from engines.sand_layer_mechanics import (CC_REFERENCE_VOID_RATIO, CC_SLOPE,  # noqa: E402
                                           MechanicsSettings, analyse_layer)
 from packing.sand_layer import (GrainSizeDistribution, SandLayerSettings,  # noqa: E402
@@ -358,15 +358,22 @@ def write_outputs(study, out):
     return result
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--realisations", type=int, default=25)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="out/sand-layer")
-    parser.add_argument("--load-width", type=int, default=LOAD_WIDTH, help="elements")
-    parser.add_argument("--load-stress", type=float, default=LOAD_STRESS, help="Pa")
+def parse_args(argv=None):
+    """Command line; bad values are refused in one line naming the argument and its limit."""
+    parser = ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--realisations", type=number(int, lo=1), default=25)
+    parser.add_argument("--seed", type=number(int, lo=0), default=0)
+    parser.add_argument("--out", type=output_dir, default="out/sand-layer", help="output directory")
+    parser.add_argument("--load-width", type=number(int, lo=1, hi=SandLayerSettings().n_columns),
+                        default=LOAD_WIDTH, help="elements")
+    parser.add_argument("--load-stress", type=number(lo=0, lo_open=True, unit="Pa"), default=LOAD_STRESS,
+                        help="Pa")
     parser.add_argument("--sampling", default="discrete", choices=("discrete", "continuous"))
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv=None):
+    args = parse_args(argv)
     study = run(args.realisations, args.seed, args.load_width, args.load_stress, args.sampling)
     result = write_outputs(study, args.out)
     print(f"settlement under the load: {result['settlement_mean'] * UM:.1f} ± "

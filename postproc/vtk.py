@@ -1,0 +1,248 @@
+"""ParaView output: a VTK time series of discs, contact forces and pores in DIR/vtk/.
+
+Three series, each a ``.pvd`` collection (``discs.pvd``, ``forces.pvd``, ``pores.pvd``) of
+XML PolyData files (``discs_00000.vtp``, ...) with their times [s]. Coordinates are YADE's: the
+discs lie in the x-z plane, y = 0, in metres.
+
+* discs: one point per disc, point arrays ``radius`` [m], ``velocity`` [m/s] (3 components, y = 0),
+  ``density_factor`` [-], ``group`` (0 particle, 1 bottom, 2 left, 3 right wall).
+* forces: one line per touching pair between the disc centres, cell arrays ``normal_force`` and
+  ``shear_force`` [N per m thickness] (each written when given).
+* pores: one polygon per pore outline (vertices at the disc centres), cell arrays ``pore`` (index),
+  ``U`` [N/m], ``W``, ``A`` [m^2 per m] and ``rule``: 0 built from the packing, 1-4 inherited at a
+  rebuild by rule (a)-(d) of §3.4(2) (the names are kept in the field array ``rule_names``).
+
+``convert_run(run_dir)`` turns the ``snapshot_*.npz`` files of a run into this series.
+Written with VTK's own XML writers (Debian's python3-vtk9).
+"""
+import os
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
+from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
+from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+from postproc.run_files import read_snapshot, snapshot_files
+
+RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
+SERIES = ("discs", "forces", "pores")
+
+
+def _points(xz):
+    """(N, 2) x-z positions -> vtkPoints at (x, 0, z)."""
+    xz = np.asarray(xz, float)
+    p3 = np.column_stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]])
+    pts = vtkPoints()
+    pts.SetData(numpy_to_vtk(p3, deep=True))
+    return pts
+
+
+def _cells(offsets, connectivity):
+    cells = vtkCellArray()
+    cells.SetData(numpy_to_vtkIdTypeArray(np.asarray(offsets, np.int64), deep=True),
+                  numpy_to_vtkIdTypeArray(np.asarray(connectivity, np.int64), deep=True))
+    return cells
+
+
+def _add(data, name, values):
+    """Attach ``values`` (n,) or (n, k) as a named array to point or cell data ``data``."""
+    values = np.asarray(values)
+    arr = numpy_to_vtk(np.ascontiguousarray(values), deep=True)
+    arr.SetName(name)
+    data.AddArray(arr)
+
+
+def _in_plane(v):
+    """(N, 2) x-z vectors -> (N, 3) with y = 0."""
+    v = np.asarray(v, float)
+    return np.column_stack([v[:, 0], np.zeros(len(v)), v[:, 1]])
+
+
+def _write(poly, path):
+    w = vtkXMLPolyDataWriter()
+    w.SetFileName(path)
+    w.SetInputData(poly)
+    w.SetDataModeToAppended()
+    w.EncodeAppendedDataOff()  # raw binary: exact float64, small files
+    if not w.Write():
+        raise OSError(f"VTK could not write {path}")
+
+
+def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
+    """Discs as points with radius [m], velocity [m/s], density factor and group arrays."""
+    n = len(xz)
+    poly = vtkPolyData()
+    poly.SetPoints(_points(xz))
+    poly.SetVerts(_cells(np.arange(n + 1), np.arange(n)))
+    pd = poly.GetPointData()
+    _add(pd, "radius", np.asarray(r, float))
+    if vel is not None:
+        _add(pd, "velocity", _in_plane(vel))
+    if density_factor is not None:
+        _add(pd, "density_factor", np.asarray(density_factor, float))
+    if group is not None:
+        _add(pd, "group", np.asarray(group, np.int32))
+    _write(poly, path)
+
+
+def write_forces(path, xz, pairs, f_n, f_s=None):
+    """The contact-force network: a line per pair (i, j) with normal (and shear) force [N]."""
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    poly = vtkPolyData()
+    poly.SetPoints(_points(xz))
+    poly.SetLines(_cells(2 * np.arange(len(pairs) + 1), pairs.ravel()))
+    cd = poly.GetCellData()
+    _add(cd, "normal_force", np.asarray(f_n, float))
+    if f_s is not None:
+        _add(cd, "shear_force", np.asarray(f_s, float))
+    _write(poly, path)
+
+
+def rule_codes(rule):
+    """Rules as codes 0..4 (see RULES); accepts the codes or the names."""
+    rule = np.asarray(rule)
+    if rule.dtype.kind in "iu":
+        return rule.astype(np.int32)
+    return np.array([RULES.index(str(x) or "build") for x in rule], np.int32)
+
+
+def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None):
+    """Pore outlines: ``polygons`` a list of disc-index sequences; per polygon the pore index and
+    its U [N/m], W, A [m^2] and rule (names or codes, see RULES)."""
+    poly = vtkPolyData()
+    poly.SetPoints(_points(xz))
+    sizes = np.array([len(p) for p in polygons], np.int64)
+    conn = np.concatenate([np.asarray(p, np.int64) for p in polygons]) if len(polygons) else np.zeros(0, np.int64)
+    poly.SetPolys(_cells(np.concatenate([[0], np.cumsum(sizes)]), conn))
+    cd = poly.GetCellData()
+    for name, values in (("pore", pore), ("U", U), ("W", W), ("A", A)):
+        if values is not None:
+            _add(cd, name, np.asarray(values, np.int32 if name == "pore" else float))
+    if rule is not None:
+        _add(cd, "rule", rule_codes(rule))
+        names = vtkStringArray()
+        names.SetName("rule_names")
+        for name in RULES:
+            names.InsertNextValue(name)
+        poly.GetFieldData().AddArray(names)
+    _write(poly, path)
+
+
+def write_collection(path, entries):
+    """A ParaView .pvd collection: entries [(time [s], file relative to the .pvd)]."""
+    lines = ['<?xml version="1.0"?>',
+             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
+    lines += [f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(f)}/>' for t, f in entries]
+    lines += ["  </Collection>", "</VTKFile>", ""]
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines))
+
+
+class VtkSeries:
+    """Frames of a run written to ``out_dir``/vtk; the .pvd files are rewritten after every
+    frame, so an interrupted run leaves a readable series."""
+
+    def __init__(self, out_dir):
+        self.dir = os.path.join(out_dir, "vtk")
+        os.makedirs(self.dir, exist_ok=True)
+        self.entries = {s: [] for s in SERIES}
+
+    def add(self, t, discs, forces=None, pores=None):
+        """One frame at time t [s]: keyword dicts for write_discs, write_forces and write_pores
+        (without path; positions are taken from ``discs['xz']``)."""
+        k = len(self.entries["discs"])
+        xz = discs["xz"]
+        for series, kwargs, write in (("discs", discs, write_discs), ("forces", forces, write_forces),
+                                      ("pores", pores, write_pores)):
+            if kwargs is None:
+                continue
+            name = f"{series}_{k:05d}.vtp"
+            write(os.path.join(self.dir, name), **({"xz": xz} | kwargs))
+            self.entries[series].append((float(t), name))
+            write_collection(os.path.join(self.dir, f"{series}.pvd"), self.entries[series])
+
+
+# -- pores from the triangles of a snapshot -----------------------------------------------------
+def outlines_from_triangles(tri, tri_pore):
+    """Outline polygons of pores stored as triangles (PoreNetwork.tri, tri_pore).
+
+    A pore's boundary is the set of its triangle edges whose reverse is not in the pore; walked
+    into cycles: the outline and, around an island of linked discs inside the pore, a cycle
+    turning the other way (``snapshot_frame`` leaves those out). Returns (polygons, pore of each)."""
+    tri, tri_pore = np.asarray(tri, np.int64), np.asarray(tri_pore, np.int64)
+    polygons, owner = [], []
+    for p in np.unique(tri_pore):
+        t = tri[tri_pore == p]
+        edges = {(int(a), int(b)) for a, b in np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])}
+        nxt = {}
+        for a, b in edges:
+            if (b, a) not in edges:
+                nxt.setdefault(a, []).append(b)
+        while nxt:
+            start = min(nxt)
+            cycle, v = [start], _pop(nxt, start)
+            while v != start:
+                cycle.append(v)
+                v = _pop(nxt, v)
+            polygons.append(cycle)
+            owner.append(int(p))
+    return polygons, np.array(owner, np.int64)
+
+
+def _pop(nxt, a):
+    """Follow (and remove) one boundary edge out of vertex a."""
+    b = nxt[a].pop()
+    if not nxt[a]:
+        del nxt[a]
+    return b
+
+
+def signed_area(xz, polygon):
+    """Shoelace area of a polygon of disc centres [m^2] (positive counter-clockwise in x-z)."""
+    x, z = np.asarray(xz)[polygon].T
+    return 0.5 * float(np.sum(x * np.roll(z, -1) - np.roll(x, -1) * z))
+
+
+def snapshot_frame(snap):
+    """write keyword dicts (discs, forces, pores) of one snapshot .npz (engines/yade_run.Recorder)."""
+    xz = snap["xz"]
+    discs = dict(xz=xz, r=snap["r"], vel=snap["vel"], density_factor=snap["density_factor"], group=snap["group"])
+    forces = dict(pairs=snap["pairs"], f_n=snap["f_n"], f_s=snap["f_s"] if "f_s" in snap else None)
+    pores = None
+    if "tri" in snap and len(snap["tri"]):
+        polygons, owner = outlines_from_triangles(snap["tri"], snap["tri_pore"])
+        area = np.array([signed_area(xz, poly) for poly in polygons])
+        outer = {}  # per pore, the orientation of its largest cycle; cycles turning the other way are islands
+        for k in np.argsort(-np.abs(area)):
+            outer.setdefault(owner[k], np.sign(area[k]))
+        keep = [k for k in range(len(polygons)) if np.sign(area[k]) == outer[owner[k]]]
+        owner = owner[keep]
+        pores = dict(polygons=[polygons[k] for k in keep], pore=owner)
+        for name in ("U", "W", "A", "rule"):
+            if name in snap:
+                pores[name] = np.asarray(snap[name])[owner]
+    return discs, forces, pores
+
+
+def convert_run(run_dir, out_dir=None):
+    """Write the VTK series of a run's snapshots into (out_dir or run_dir)/vtk; returns the
+    VtkSeries. Raises FileNotFoundError when the run has no snapshot."""
+    files = snapshot_files(run_dir)
+    if not files:
+        raise FileNotFoundError(f"no snapshot_*.npz in {run_dir}")
+    series = VtkSeries(out_dir or run_dir)
+    for f in files:
+        snap = read_snapshot(f)
+        discs, forces, pores = snapshot_frame(snap)
+        series.add(float(snap["t"]), discs, forces, pores)
+    return series
+
+
+if __name__ == "__main__":
+    import sys
+    if len(sys.argv) < 2:
+        sys.exit("usage: python3 -m postproc.vtk RUN_DIR [RUN_DIR ...]  (writes RUN_DIR/vtk/*.pvd)")
+    for run in sys.argv[1:]:
+        print(f"{run}: {len(convert_run(run).entries['discs'])} frames -> {os.path.join(run, 'vtk')}")

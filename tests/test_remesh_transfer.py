@@ -1,0 +1,172 @@
+"""Water at re-meshing (issue 11, item 5): the paper's rule against the conserving transfer; and the
+drained side-wall flux against the analytic solution of eq 32 with the k3 outflow."""
+import numpy as np
+import pytest
+
+from engines import pore_geometry as pg
+from engines.pore_water import PoreWater, WaterSettings, pressure, water_from_pressure
+from packing.layouts import random_discs, random_sequential
+from packing.psd import sample_diameters
+
+E_W = 2400.0
+
+
+def _closed_box(seed, k=13, rw=0.45e-3):
+    """Particles inside a closed ring of touching wall discs around [0, L]^2, L = 2 k rw, none
+    overlapping the ring: the pores always fill the ring, so old and new networks cover the same
+    region (no free surface)."""
+    rng = np.random.default_rng(seed)
+    L = 2 * k * rw
+    d = sample_diameters(140, 0.9e-3, 0.25e-3, 0.4e-3, 2e-3, rng)
+    xz, r = random_sequential(d, L - 2e-3, L - 2e-3, rng)
+    xz = xz + 1e-3  # the largest radius is 1 mm
+    s = (np.arange(k + 2) - 0.5) * 2 * rw
+    side = rw + np.arange(k) * 2 * rw
+    ring = np.vstack([np.column_stack([s, np.full(k + 2, -rw)]), np.column_stack([s, np.full(k + 2, L + rw)]),
+                      np.column_stack([np.full(k, -rw), side]), np.column_stack([np.full(k, L + rw), side])])
+    walls = np.concatenate([np.zeros(len(r), int), np.full(len(ring), pg.WALL_LEFT)])
+    return np.vstack([xz, ring]), np.concatenate([r, np.full(len(ring), rw)]), walls, rng
+
+
+def _remesh(transfer, seed=0, W_of=None):
+    xz, r, walls, rng = _closed_box(seed)
+    old = pg.build_pores(xz, r, eps_m=0.0, l_m=1.3e-4, walls=walls)
+    xz2 = xz.copy()
+    inner = walls == 0
+    xz2[inner] += 1e-5 * rng.standard_normal((inner.sum(), 2))
+    new = pg.build_pores(xz2, r, eps_m=2e-4, l_m=3.5e-4, walls=walls)
+    A_old = pg.measure(old, xz2, r).void_area
+    A_new = pg.measure(new, xz2, r).void_area
+    W0 = W_of(A_old) if W_of else A_old * (1 + 0.1 * rng.random(old.n_pores))
+    w = PoreWater(old, A_old, WaterSettings(E_w=E_W, k1=1e3, k2=1e2, transfer=transfer), W=W0)
+    before = w.total_water()
+    counts = w.remesh(new, A_new, A_old, xz=xz2)
+    return w, before, counts, old, new, A_new
+
+
+def test_conserving_transfer_conserves_water_to_round_off():
+    w, before, counts, old, new, _ = _remesh("conserving")
+    assert new.n_pores > 2 * old.n_pores  # merges and splits everywhere
+    assert counts["unmatched"] == 0 and counts["a"] < new.n_pores  # many pores changed
+    assert abs(w.total_water() - before) < 1e-13 * before
+    assert abs(w.balance.remesh_change) < 1e-13 * before
+    assert w.balance_error() < 1e-13
+    assert np.all(w.W > 0)
+
+
+def test_paper_rule_creates_or_destroys_water_and_reports_it_exactly():
+    w, before, counts, *_ = _remesh("paper")
+    change = w.total_water() - before
+    assert abs(change) > 1e-6 * before
+    assert w.balance.remesh_change == pytest.approx(change, rel=1e-12)
+    assert w.balance_error() < 1e-13
+
+
+def test_conserving_transfer_keeps_a_uniform_pressure():
+    U0 = 300.0
+    w, before, counts, old, new, A_new = _remesh("conserving", W_of=lambda A: water_from_pressure(U0, A, E_W))
+    np.testing.assert_allclose(w.pressure(A_new), U0, rtol=1e-9)
+    assert abs(w.total_water() - before) < 1e-13 * before
+
+
+def test_unchanged_pores_keep_their_water():
+    xz, r, walls, rng = _closed_box(1)
+    net = pg.build_pores(xz, r, l_m=3.5e-4, eps_m=2e-4, walls=walls)
+    A = pg.measure(net, xz, r).void_area
+    w = PoreWater(net, A, WaterSettings(E_w=E_W, k1=1e3, k2=1e2, transfer="conserving"),
+                  W=A * (1 + 0.2 * rng.random(net.n_pores)))
+    W0 = w.W.copy()
+    again = pg.build_pores(xz, r, l_m=3.5e-4, eps_m=2e-4, walls=walls)
+    w.remesh(again, pg.measure(again, xz, r).void_area, A, xz=xz)
+    np.testing.assert_allclose(w.W, W0, rtol=1e-12)
+
+
+def test_open_surface_exchange_is_recorded():
+    """With a free surface the covered region changes: new pores that overlap no old pore take the
+    paper's pressure, the rest is split; the balance still closes exactly."""
+    rng = np.random.default_rng(4)
+    xz, r = random_discs(300, rng)
+    old = pg.build_pores(xz, r, l_m=0.3 * r.mean())
+    new = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    A_old, A_new = pg.measure(old, xz, r).void_area, pg.measure(new, xz, r).void_area
+    w = PoreWater(old, A_old, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, transfer="conserving"),
+                  W=A_old * (1 + 0.1 * rng.random(old.n_pores)))
+    before = w.total_water()
+    counts = w.remesh(new, A_new, A_old, xz=xz)
+    assert counts["unmatched"] > 0
+    assert w.balance.remesh_change == pytest.approx(w.total_water() - before, rel=1e-12)
+    assert w.balance_error() < 1e-13 and np.all(w.W > 0)
+
+
+def test_conserving_needs_positions():
+    w, *_ = _remesh("paper")
+    w.settings.transfer = "conserving"
+    with pytest.raises(ValueError, match="needs the positions"):
+        w.remesh(w.net, np.ones(w.net.n_pores), np.ones(w.net.n_pores))
+
+
+def test_clip_areas_star_of_david():
+    """Two concentric equilateral triangles, one turned by 180 degrees: the overlap is the hexagon,
+    2/3 of either; identical triangles overlap fully; distant ones not at all."""
+    t1 = np.array([[[0.0, 1.0], [-np.sqrt(3) / 2, -0.5], [np.sqrt(3) / 2, -0.5]]])
+    t2 = -t1  # also counter-clockwise
+    area = 3 * np.sqrt(3) / 4
+    np.testing.assert_allclose(pg._clip_areas(t1, t2), [2 / 3 * area], rtol=1e-14)
+    np.testing.assert_allclose(pg._clip_areas(t1, t1), [area], rtol=1e-14)
+    assert pg._clip_areas(t1, t1 + 10.0)[0] == 0.0
+
+
+def test_pore_overlaps_partition_the_old_pores():
+    xz, r, walls, rng = _closed_box(2)
+    old = pg.build_pores(xz, r, l_m=1.3e-4, walls=walls)
+    new = pg.build_pores(xz, r, eps_m=2e-4, l_m=3.5e-4, walls=walls)
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    np.testing.assert_allclose(np.bincount(p, o, old.n_pores), pg.measure(old, xz, r).polygon_area, rtol=1e-10)
+    np.testing.assert_allclose(np.bincount(q, o, new.n_pores), pg.measure(new, xz, r).polygon_area, rtol=1e-10)
+
+
+# -- drained side wall: one pore losing water through k3 ------------------------------------------------
+def _drained_pore(k3):
+    xz = np.array([[0.0, 0.0], [2.2e-3, 0.0], [1.1e-3, 1.9e-3]])
+    r = np.full(3, 0.9e-3)
+    net = pg.build_pores(xz, r, l_m=0.5e-3, walls=np.full(3, pg.WALL_LEFT))
+    assert net.n_pores == 1 and net.pore_touches["left"][0] and not net.pore_surface[0]
+    A = pg.measure(net, xz, r).void_area
+    return net, A, WaterSettings(E_w=E_W, k1=1e3, k2=1e2, k3=k3, sides="drained")
+
+
+def _drain(dt, t_end, k3=1e3, W0_over_A=1.3):
+    net, A, s = _drained_pore(k3)
+    w = PoreWater(net, A, s, W=A * W0_over_A)
+    for _ in range(int(round(t_end / dt))):
+        w.advance(dt, A, np.zeros(0, bool))
+    return w, A
+
+
+def test_drained_pore_decays_exponentially():
+    """dW/dt = -k3 W U / E_w = -k3 (W - A) (eq 32): W - A = (W0 - A) exp(-k3 t). The explicit step
+    gives (1 - k3 dt)^n exactly, first order in dt; the outflow is booked as side outflow."""
+    k3, t_end = 1e3, 2e-3
+    errors = []
+    for dt in (2e-5, 1e-5, 5e-6):
+        w, A = _drain(dt, t_end, k3)
+        n = int(round(t_end / dt))
+        np.testing.assert_allclose(w.W - A, 0.3 * A * (1 - k3 * dt) ** n, rtol=1e-10)
+        exact = A * (1 + 0.3 * np.exp(-k3 * t_end))
+        errors.append(abs(w.W[0] - exact[0]))
+        U_exact = E_W * (1 - A / exact)
+        assert abs(w.pressure(A)[0] - U_exact[0]) < 0.02 * U_exact[0]
+        assert w.balance.side_outflow == pytest.approx(0.3 * A[0] - (w.W[0] - A[0]), rel=1e-10)
+        assert w.balance_error() < 1e-13
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    np.testing.assert_allclose(ratios, 2.0, rtol=0.02)
+
+
+def test_undrained_pore_keeps_its_water():
+    net, A, s = _drained_pore(1e3)
+    s.sides = "undrained"
+    w = PoreWater(net, A, s, W=A * 1.3)
+    for _ in range(100):
+        w.advance(1e-5, A, np.zeros(0, bool))
+    np.testing.assert_allclose(w.W, A * 1.3, rtol=1e-15)
+    assert pressure(w.W, A, E_W)[0] == pytest.approx(E_W * 0.3 / 1.3)
