@@ -275,15 +275,7 @@ def settling_build(**overrides):
     return build
 
 
-def shared_data(name):
-    """A file of the project's shared/data folder, which lies beside the checkout (CI, the lead's
-    tree) or beside the folder of worktrees; the first existing of those, else the first candidate."""
-    up = os.path.dirname(ROOT)
-    candidates = [os.path.join(d, "shared", "data", name) for d in (up, os.path.dirname(up))]
-    return next((c for c in candidates if os.path.exists(c)), candidates[0])
-
-
-ELCENTRO = shared_data("elcentro_ns_1940.txt")
+ELCENTRO = os.path.join(sc.SCENE_DIR, "elcentro_ns_1940.txt")   # the 1940 N-S record, in g
 
 
 def feature_cases():
