@@ -27,7 +27,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODULES = ["engines/pore_water.py", "engines/pore_geometry.py", "engines/contact.py", "engines/pore_dem.py"]
 TESTS = ["tests/test_pore_water.py", "tests/test_pore_geometry.py", "tests/test_contact.py",
-         "tests/test_pore_dem.py", "tests/test_scene.py"]
+         "tests/test_pore_dem.py", "tests/test_scene.py", "tests/test_pore_candidates.py",
+         "tests/test_remesh_transfer.py"]
 COPY = ["engines", "packing", "yade_scripts", "tests"]
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_mutants.txt")
 KILLED = {"killed", "timeout", "segfault"}
