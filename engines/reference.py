@@ -689,8 +689,9 @@ def inherit_pressures(old, U_old, old_valid, new, outside_counts=False):
 def input_acceleration(loading, record="hold"):
     """a(t) [m/s^2] of the moving walls from the [loading] table, or None for no loading.
 
-    cosine: amplitude cos(2 pi frequency t). record: a two-column file (time [s], acceleration [g])
-    rescaled by time_scale and amplitude_scale; between samples the acceleration is held
+    cosine: amplitude cos(2 pi frequency t). record: a two-column file (time [s], acceleration in
+    record_units: g, gal or m/s2) rescaled by time_scale and amplitude_scale; between samples the
+    acceleration is held
     (record = "hold", the constant-acceleration method of §6.1) or interpolated linearly
     ("linear"); 0 after the last sample.
     """
@@ -702,7 +703,8 @@ def input_acceleration(loading, record="hold"):
         return lambda t: A * np.cos(2 * np.pi * f * t)
     data = np.loadtxt(loading["record"], comments="#", ndmin=2)
     t_rec = data[:, 0] * loading["time_scale"]
-    a_rec = data[:, 1] * G0 * loading["amplitude_scale"]
+    unit = {"g": G0, "gal": 0.01, "m/s2": 1.0}[loading.get("record_units", "g")]
+    a_rec = data[:, 1] * unit * loading["amplitude_scale"]
     if record == "linear":
         return lambda t: float(np.interp(t, t_rec, a_rec, right=0.0))
 

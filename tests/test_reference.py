@@ -399,6 +399,8 @@ def test_record_held_or_interpolated(tmp_path):
     assert hold(0.01) == pytest.approx(g0) and hold(0.015) == pytest.approx(g0)
     assert linear(0.015) == pytest.approx((g0 - 0.5 * g0) / 2)
     assert hold(0.02) == pytest.approx(-0.5 * g0) and hold(0.03) == 0.0 and linear(0.03) == 0.0
+    in_gal = ref.input_acceleration({**loading, "record_units": "gal"}, "hold")
+    assert in_gal(0.01) == pytest.approx(0.01)     # 0.5 gal x 2 = 1 gal = 0.01 m/s^2
 
 
 def test_rule_c_reading_for_a_surface_pore():
