@@ -254,6 +254,7 @@ def test_a_network_without_pores_is_well_formed_and_usable(xz):
         assert getattr(net, name).shape == (0,), name
     assert sorted(net.pore_touches) == ["bottom", "left", "right"]
     assert all(v.shape == (0,) and v.dtype == bool for v in net.pore_touches.values())
+    assert (net.pore_surface.dtype, net.pore_vertex_ptr.dtype, net.pore_signature.dtype) == (bool, np.int64, np.uint64)
     m = pg.measure(net, xz, r)
     assert pg.pore_centroids(net, xz).shape == (0, 2)
     w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1.0))
@@ -305,3 +306,36 @@ def test_pore_signatures_identify_vertex_sets():
     assert {frozenset(again.vertices_of(p).tolist()): s for p, s in enumerate(again.pore_signature.tolist())} == dict(zip(sets, sig))
     keys = pg._mix64(np.arange(100000))
     assert len(np.unique(keys)) == 100000
+
+
+def test_interior_angles_of_every_pore_walk_sum_to_k_minus_2_pi():
+    """The closed walk around a pore with K corners turns through (K - 2) pi of interior angles
+    (eq 29), dangling links included (2 pi at the tip, the base disc met twice and summed)."""
+    rng = np.random.default_rng(14)
+    xz, r = random_discs(300, rng)
+    keep = rng.random(len(r)) > 0.35                # holes: dangling links and pinches appear
+    xz, r = xz[keep], r[keep]
+    net = pg.build_pores(xz, r, l_m=0.9 * r.mean())
+    m = pg.measure(net, xz, r)
+    angles = pg.interior_angles(net, m)
+    repeated = 0
+    for p in range(net.n_pores):
+        cycles = pg.pore_polygon(net, p)
+        if len(cycles) != 1:
+            continue
+        k = len(cycles[0])
+        repeated += k > len(set(cycles[0]))
+        assert sum(angles[p].values()) == pytest.approx((k - 2) * np.pi, rel=1e-9)
+    assert repeated > 0
+
+
+def test_the_outer_boundary_of_a_pore_with_an_island_comes_first():
+    """A ring of 8 linked discs around a linked pair that touches none of them: one pore whose walk
+    has two cycles, the ring's (8 corners) first, then the island's (2), clockwise (negative area)."""
+    ring = 6.0 * np.array([[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4])
+    xz = np.vstack([ring, [[-0.8, 0.0], [0.8, 0.0]]])
+    r = np.concatenate([np.full(8, 2.2), [0.7, 0.7]])
+    net = pg.build_pores(xz, r, l_m=0.3)
+    assert net.n_pores == 1
+    cycles = pg.pore_polygon(net, 0)
+    assert [len(c) for c in cycles] == [8, 2] and set(cycles[1]) == {8, 9}
