@@ -309,7 +309,7 @@ def test_crosscheck_plumbing_with_the_reference_on_both_sides(tmp_path):
     def stand_in(scene, pk, n, every, hooks=(), **kw):
         return ref.simulate_reference(scene, pk, n, every, readings=ref.FAST_CODE_READINGS, **kw)
 
-    small = cc.FeatureCase("small_settling", cc.settling_build(numerics={"rebuild_interval": 10}), 300, 20,
+    small = cc.FeatureCase("small_settling", cc.settling_build(numerics={"rebuild_interval": 5}), 150, 10,
                            rules="a", readings=("rule_c_counts_outside",))
     contact = [c for c in cc.contact_cases() if c.name in ("head_on_collision", "pressed_release_d")]
     result = cc.run_cases(stand_in, stand_in, cases=contact, features=[small],
