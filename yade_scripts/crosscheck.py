@@ -16,7 +16,7 @@ Contact cases (short, deterministic; every tolerance is stated with its reason i
 Feature cases (2,100-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
   settling_rules           loose discs falling into a wet box under 1000 m/s^2: re-meshing rules a-d
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
-  shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3, spring d with
+  shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
                            eps_m > 0, water_interval 2, smoothing
   elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
 and the precision study: the reference runs the quick-sand preset in float32, float64 and longdouble.
@@ -287,7 +287,7 @@ def feature_cases():
         FeatureCase("quicksand_smoothing", quicksand_build(water={"q_w": 5e-3, "smoothing": True},
                                                            numerics={"rebuild_interval": 100}), 2100, 50),
         FeatureCase("shaken_drained_wet_d", quicksand_build(
-            water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 1000.0, "smoothing": True},
+            water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
             contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
             numerics={"rebuild_interval": 100, "water_interval": 2}, **shaken), 2100, 50,
             readings=("wall_step",)),
