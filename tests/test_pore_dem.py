@@ -52,6 +52,10 @@ def test_input_acceleration_cosine_and_record(tmp_path):
     assert a(0.02) == pytest.approx(-2.0 * 0.25 * g0, rel=1e-12)
     assert a(0.03) == 0.0                                               # after the record
     assert input_acceleration(scene()) is None
+    one = tmp_path / "one.txt"
+    one.write_text("0.0 0.2\n")                                        # a record of one sample
+    a = input_acceleration(scene(loading={"type": "record", "record": str(one)}))
+    assert a(0.0) == pytest.approx(0.2 * g0) and a(1.0) == 0.0
     with pytest.raises(ValueError, match=r"\[loading\] record"):
         input_acceleration(scene(loading={"type": "record", "record": str(tmp_path / "missing.txt")}))
 
@@ -194,6 +198,12 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     _, fixes = core.step(xz.copy())
     assert set(fixes) == {1}
     np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6)
+    # the caller's velocities, when given, are the ones adjusted (YADE's state.vel instead of du/dt)
+    twin = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        twin.step(np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes = twin.step(xz.copy(), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
 
 
 def test_observations_kinetic_energy_with_spin_and_block_forces():
@@ -224,7 +234,7 @@ def test_steps_match_the_reference_without_yade(variant):
         tables = dict(water={**water, "q_w": 2e-3, "smoothing": True}, contact={"spring": "c", "separation_adjustment": True})
         loading = {}
     else:
-        tables = dict(water={**water, "sides": "drained", "k3": 500.0, "smoothing": True},
+        tables = dict(water={**water, "sides": "drained", "k3": 500.0},
                       contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
         loading = {"type": "cosine", "amplitude": 30.0, "frequency": 200.0, "moves": "box"}
     s = scene(material={"g": 1000.0}, loading=loading, numerics={"dt": 1e-6, "rebuild_interval": 25, "water_interval": 2},
@@ -253,3 +263,11 @@ def test_steps_match_the_reference_without_yade(variant):
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
     assert core.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
+
+
+def test_rebuild_every_step_when_asked():
+    pk = wet_box()
+    core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}), pk)
+    for k in range(4):
+        core.step(moving_positions(pk, k))
+    assert core.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
