@@ -36,7 +36,7 @@ test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q tests
 
-# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~20-40 min on 2 cores):
+# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,750 mutants, about an hour on 2 busy cores):
 # out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
 MUTANT_VENV := $(OUT)/venv-mutants
 $(MUTANT_VENV)/bin/mutmut:

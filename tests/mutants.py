@@ -6,11 +6,13 @@ Copies the project into OUT/work, configures mutmut (setup.cfg) to mutate MODULE
 fast tests of TESTS (no YADE, no cross-check: mutmut runs, per mutant, only the tests that reach the
 mutated function), runs it niced, and writes OUT/summary.json:
 
-    {"modules": {path: {"total": n, "killed": k, "survived": s, "equivalent": e, "score": ...}},
+    {"modules": {path: {"total": n, "killed": k, "survived": s, "equivalent": e, "score": ...,
+                        "not_checked": u}},
      "score": killed / (total - equivalent), "seconds": ..., "stale_equivalent": [...]}
 
 and OUT/survivors.txt (each surviving mutant's diff, for review). A timed-out or crashed mutant
-counts as killed; a mutant no test reaches counts as survived. Mutants judged equivalent (they
+counts as killed; a mutant no test reaches counts as survived; mutants an interrupted run did not
+reach are left out of the totals (``not_checked``). Mutants judged equivalent (they
 cannot change any result) are listed in tests/equivalent_mutants.txt, one per line as
 ``mutant-name  reason``; a listed mutant that was killed is reported as stale.
 mutmut must run from a virtual environment over Debian's Python with --system-site-packages, so
@@ -84,10 +86,13 @@ def module_of(name, modules):
 
 
 def summarise(status, modules, equivalent):
-    per = {m: {"total": 0, "killed": 0, "survived": 0, "equivalent": 0} for m in modules}
+    per = {m: {"total": 0, "killed": 0, "survived": 0, "equivalent": 0, "not_checked": 0} for m in modules}
     stale = []
     for name, state in status.items():
         row = per[module_of(name, modules)]
+        if state == "not checked":      # an interrupted run: left out of the score, counted apart
+            row["not_checked"] += 1
+            continue
         row["total"] += 1
         if state in KILLED:
             row["killed"] += 1
@@ -135,7 +140,7 @@ def main(argv=None):
     summary["tests"] = TESTS
     with open(os.path.join(args.out, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
-    survivors = sorted(n for n, s in status.items() if s not in KILLED and n not in read_equivalent())
+    survivors = sorted(n for n, s in status.items() if s not in KILLED | {"not checked"} and n not in read_equivalent())
     with open(os.path.join(args.out, "survivors.txt"), "w") as f:
         for name in survivors:
             diff = subprocess.run([mutmut, "show", name], cwd=work, capture_output=True, text=True).stdout
