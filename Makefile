@@ -3,12 +3,12 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-vtk9 gcc libc6-dev python3-venv
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev python3-venv
 EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench packings mutants clean
+.PHONY: deps ext demo test bench bench-seismic packings mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -46,11 +46,16 @@ $(MUTANT_VENV)/bin/mutmut:
 mutants: deps $(MUTANT_VENV)/bin/mutmut
 	$(MUTANT_VENV)/bin/python tests/mutants.py --out $(OUT)/mutants
 
-# Cost studies (minutes): pore core sizes, YADE path against YADE alone, water sub-cycling.
+# Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
+# bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
 	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
+	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
+
+bench-seismic: deps
+	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
 # Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.

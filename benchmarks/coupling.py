@@ -1,50 +1,128 @@
-"""Cost of the YADE path against YADE itself, on the quick-sand scene (76 discs).
+"""Cost of our engines against YADE alone, at about 240, 2,000 and 10,000 bodies (issue 10 item 5).
 
-    yade -n -x benchmarks/coupling.py --json out/bench-coupling.json [--steps 5000]
+    yade -n -x benchmarks/coupling.py --json out/bench-coupling.json [--sizes 240 2000 10000] [--repeats 3]
 
-floor       YADE alone, dry: collider + Law2_ScGeom_FrictPhys_CundallStrack + NewtonIntegrator
-dry         our engine, dry scene (the paper's contact law in NumPy, no water code)
-wet         our engine, quick-sand case 1 (water every step)
-wet_M10     the same with the water advanced every 10 DEM steps (pressure forces persist)
-Prints microseconds per step and the ratios to the floor; all measured in one run.
+Per size, one packing (a jittered polydisperse hexagonal packing, packing.layouts.random_discs,
+mean radius 0.45 mm, a bottom row and two side columns of fixed wall discs) and the seismic
+constants of Table 4 with spring (b) (linear, eps_m = 2e-4 m: the same pairs touch in every
+column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
+
+  yade_alone_us        YADE's collider + FrictMat/CundallStrack, radii enlarged by eps_m/2, no Python
+  yade_law_dry_us      [contact] law = "yade", dry: our setup, no Python engine
+  yade_law_wet_us      law = "yade" + WaterEngine every step (forces as permanent forces)
+  yade_law_wet_m10_us  law = "yade" + WaterEngine every 10 steps
+  paper_law_dry_us     law = "paper" (PaperLawEngine, compiled kernels), dry
+  paper_law_wet_us     law = "paper" + water every step, in the paper's step order
+
+The six are measured interleaved (one run of each in turn, ``repeats`` times) and the median is
+kept, of wall time (the six columns) and of the process's CPU time ("cpu_us", steadier on a shared
+machine); each run includes the pore rebuilds (every 1000 steps) that fall in it. Read the ratios,
+not the absolute times.
 """
 import argparse
 import json
 import os
 import sys
+import time
 
 _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
-from yade import O  # noqa: E402
+import numpy as np  # noqa: E402
 
-from benchmarks.floor import native_floor, per_step  # noqa: E402
+from benchmarks.floor import native_floor, run_steps  # noqa: E402
+from engines import pore_geometry as pg  # noqa: E402
 from engines import scene as scenes  # noqa: E402
+from engines import yade_io  # noqa: E402
 from engines.yade_coupling import YadeCoupling  # noqa: E402
-from packing.deposition import scene_packing  # noqa: E402
+from packing.layouts import random_discs  # noqa: E402
+from packing.packing import Packing  # noqa: E402
+
+R_MEAN = 0.45e-3
+TABLE4 = {"contact": {"spring": "b", "kn": 1.4e5, "eta_n": 2.6, "ks": 3.5e4, "eta_s": 0.6, "mu": 1.0,
+                      "restitution": 0.001, "f_max": 1.5, "eps_m": 2e-4},
+          "water": {"E_w": 2400.0, "k1": 1e3, "k2": 1e2, "k3": 0.0, "q_w": 0.0, "l_m": 3.5e-4},
+          "numerics": {"dt": 1e-6, "rebuild_interval": 1000}}
+COLUMNS = {
+    "yade_law_dry_us": {"contact": {"law": "yade"}, "water": {"enabled": False}},
+    "yade_law_wet_us": {"contact": {"law": "yade"}},
+    "yade_law_wet_m10_us": {"contact": {"law": "yade"}, "numerics": {"water_interval": 10}},
+    "paper_law_dry_us": {"water": {"enabled": False}},
+    "paper_law_wet_us": {},
+}
+
+
+def box_packing(n, seed=0):
+    """About n discs: random_discs with the lowest row as bottom wall and the outer columns as
+    side walls (fixed), particles in between."""
+    xz, r = random_discs(n, np.random.default_rng(seed), r_mean=R_MEAN, aspect=1.0)
+    group = np.zeros(len(r), np.int64)
+    group[xz[:, 1] < xz[:, 1].min() + R_MEAN] = pg.WALL_BOTTOM
+    group[(xz[:, 0] < xz[:, 0].min() + R_MEAN) & (group == 0)] = pg.WALL_LEFT
+    group[(xz[:, 0] > xz[:, 0].max() - R_MEAN) & (group == 0)] = pg.WALL_RIGHT
+    return Packing(xz, r, group, np.ones(len(r)))
+
+
+def scene_for(over):
+    base = {"scene": {"name": "bench"}, "output": {"snapshot_times": []}}
+    for table, fields in TABLE4.items():
+        base[table] = dict(fields)
+    for table, fields in over.items():
+        base.setdefault(table, {}).update(fields)
+    return scenes.validate(base)
+
+
+def timed(setup, steps, warmup):
+    """(wall, CPU) microseconds per step of ``steps`` steps after ``warmup``; setup() -> run(n).
+    CPU time (all threads of the process) is the less noisy one on a shared machine."""
+    run = setup()
+    run(warmup)
+    t0, c0 = time.perf_counter(), time.process_time()
+    run(steps)
+    return 1e6 * (time.perf_counter() - t0) / steps, 1e6 * (time.process_time() - c0) / steps
+
+
+def bench_size(n, steps, repeats, log):
+    packing = box_packing(n)
+    setups = {"yade_alone_us": lambda: (native_floor(scene_for({}), packing), run_steps)[1]}
+    for name, over in COLUMNS.items():
+        setups[name] = (lambda over=over: YadeCoupling(scene_for(over), packing).run)
+    wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
+    for rep in range(repeats):
+        for name, setup in setups.items():
+            w, c = timed(setup, steps, warmup=200)
+            wall[name].append(w)
+            cpu[name].append(c)
+            log(f"  n = {len(packing.r)} rep {rep + 1}/{repeats} {name}: {w:.1f} us/step wall, {c:.1f} CPU")
+    row = {"n_bodies": int(len(packing.r)), "steps": steps, "repeats": repeats}
+    row.update({k: float(np.median(v)) for k, v in wall.items()})
+    row["cpu_us"] = {k: float(np.median(v)) for k, v in cpu.items()}
+    row["samples_wall_us"], row["samples_cpu_us"] = wall, cpu
+    return row
 
 
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", required=True)
-    ap.add_argument("--steps", type=int, default=5000)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[240, 2000, 10000])
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--steps", type=float, default=4.8e6, help="bodies x steps per timed run")
     args = ap.parse_args(argv)
-    base = scenes.preset("quicksand_case1")
-    packing = scene_packing(base)
-    native_floor(base, packing)
-    res = {"floor": per_step(10 * args.steps, lambda n: O.run(n, True))}  # O.run waits ~40 ms a call
-    for name, over in [("dry", {"water": {"enabled": False}}), ("wet", {}),
-                       ("wet_M10", {"numerics": {"water_interval": 10}})]:
-        cp = YadeCoupling(base.with_overrides(over), packing)
-        res[name] = per_step(args.steps, cp.run)
-    out = {"n_discs": int(len(packing.r)), "steps": args.steps, "us_per_step": res,
-           "ratio_to_floor": {k: v / res["floor"] for k, v in res.items()}}
-    print(f"{'path':>8} {'us/step':>9} {'x floor':>8}")
-    for k, v in res.items():
-        print(f"{k:>8} {v:9.1f} {v / res['floor']:8.1f}")
+    results = []
+    for n in args.sizes:
+        steps = int(max(1000, args.steps / n))  # >= 1000: a pore rebuild falls in every run
+        results.append(bench_size(n, steps, args.repeats, lambda s: print(s, flush=True)))
+    keys = ["yade_alone_us"] + list(COLUMNS)
+    print(f"I/O backend: {yade_io.BACKEND}; us/step (ratio to yade_alone), medians of {args.repeats}; "
+          f"one shared machine: noisy")
+    for label, get in (("wall", lambda row, k: row[k]), ("CPU", lambda row, k: row["cpu_us"][k])):
+        print(f"{label:>4} {'bodies':>7} " + " ".join(f"{k[:-3]:>18}" for k in keys))
+        for row in results:
+            a = get(row, "yade_alone_us")
+            print(f"{'':>4} {row['n_bodies']:7d} " + " ".join(f"{get(row, k):9.1f} ({get(row, k) / a:5.2f})" for k in keys))
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:
-        json.dump(out, f, indent=1)
+        json.dump({"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results}, f, indent=1)
 
 
 if __name__ == "__main__":

@@ -10,13 +10,16 @@ from engines.pore_dem import disc_masses
 
 
 def native_floor(scene, packing):
-    """The same discs in plain YADE with a native linear law (E chosen so kn ~ the scene's)."""
+    """The same discs in plain YADE with its collider and a native linear law (FrictMat /
+    CundallStrack, E chosen so kn ~ the scene's), radii enlarged by eps_m/2 so the same pairs touch
+    as with the paper's eps_m (eq 26). No Python engine."""
     O.reset()
     young = scene.contact.kn / float(packing.r.mean())  # FrictPhys: kn = E r for equal radii
     mat = O.materials.append(FrictMat(young=young, poisson=0.25, frictionAngle=0.78, density=scene.material.rho))
     mass, inertia = disc_masses(scene, packing)
+    grow = 0.5 * scene.contact.eps_m
     for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
-        b = utils.sphere((float(x), 0.0, float(z)), float(r), fixed=not mob, material=mat, color=(0.5, 0.5, 0.5))
+        b = utils.sphere((float(x), 0.0, float(z)), float(r + grow), fixed=not mob, material=mat, color=(0.5, 0.5, 0.5))
         b.state.mass, b.state.inertia = float(m), (float(I),) * 3
         if mob:
             b.state.blockedDOFs = "yXZ"
@@ -34,11 +37,17 @@ def step_by_step(n):
         O.step()
 
 
+def run_steps(n):
+    """Advance YADE n steps the way YadeCoupling runs a scene without per-step Python."""
+    if n > 1000:
+        O.run(int(n), True)
+    else:
+        step_by_step(n)
+
+
 def per_step(steps, run, warmup=200):
     """Microseconds per step of run(steps), after run(warmup)."""
     run(warmup)
     t0 = time.perf_counter()
     run(steps)
     return 1e6 * (time.perf_counter() - t0) / steps
-
-

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from engines import kernels
 from engines.pore_geometry import check_nonnegative
 
 
@@ -68,31 +69,47 @@ class SeparationEvent:
 
 class ContactLaw:
     """State and forces of all disc pairs. Pairs come from a Verlet list (cKDTree) rebuilt when
-    a disc has moved by more than half the skin; state is carried over by pair key."""
+    a disc has moved by more than half the skin; state is carried over by pair key.
 
-    def __init__(self, settings, r, mobile, skin=None):
+    ``state`` (m, 6) holds per pair the columns of engines.kernels (TOUCHING, U_N, E_N, E_S,
+    VN_COLL, F_N): touching flag, accumulated overlap u_n [m], elastic forces e_n, e_s [N],
+    approach velocity at first touch [m/s], last normal force [N]. ``compiled=True`` runs the
+    per-step loop in engines.kernels.contact_forces (the same arithmetic as the NumPy code below,
+    which stays the readable path); the returned F, M are then buffers reused by the next call.
+    """
+
+    def __init__(self, settings, r, mobile, skin=None, compiled=False):
         self.s = settings
-        self.r = np.asarray(r, float)
+        self.r = np.ascontiguousarray(r, float)
         self.mobile = np.asarray(mobile, bool)
         self.n = len(self.r)
         self.skin = 0.25 * self.r.min() if skin is None else skin
         self.reach = 2 * self.r.max() + settings.eps_m
         self.i = self.j = np.zeros(0, np.int64)
         self.xz_list = None
-        self._zero_state(0)
-        self.f_n = np.zeros(0)  # last normal forces per pair (for plots)
+        self.state = np.zeros((0, 6))
         self.list_builds = 0
+        self.compiled = compiled
+        if compiled:
+            self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
+            self._spring = kernels.SPRING_CODE[settings.spring]
+            self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
 
-    def _zero_state(self, m):
-        self.touching = np.zeros(m, bool)
-        self.u_n = np.zeros(m)
-        self.e_n = np.zeros(m)
-        self.e_s = np.zeros(m)
-        self.vn_coll = np.zeros(m)
+    @property
+    def touching(self):
+        return self.state[:, kernels.TOUCHING] != 0
+
+    @property
+    def f_n(self):
+        """Normal force of each pair at the last step [N] (0 when not touching)."""
+        return self.state[:, kernels.F_N]
 
     def _update_list(self, xz):
         if self.xz_list is not None:
-            moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
+            if self.compiled:
+                moved = kernels.max_sq_displacement(xz, self.xz_list)
+            else:
+                moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
             if moved < (0.5 * self.skin) ** 2:
                 return
         pairs = cKDTree(xz).query_pairs(self.reach + self.skin, output_type="ndarray").astype(np.int64)
@@ -102,16 +119,15 @@ class ContactLaw:
         order = np.argsort(key_new)
         pairs, key_new = pairs[order], key_new[order]
         key_old = self.i * self.n + self.j  # sorted by construction
-        old = dict(touching=self.touching, u_n=self.u_n, e_n=self.e_n, e_s=self.e_s, vn_coll=self.vn_coll)
-        self._zero_state(len(pairs))
+        old, self.state = self.state, np.zeros((len(pairs), 6))
         if len(key_old):
             pos = np.minimum(np.searchsorted(key_old, key_new), len(key_old) - 1)
             hit = key_old[pos] == key_new
-            for name, arr in old.items():
-                getattr(self, name)[hit] = arr[pos[hit]]
-        self.i, self.j = pairs[:, 0], pairs[:, 1]
+            self.state[hit] = old[pos[hit]]
+        self.i, self.j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
         self.xz_list = xz.copy()
         self.list_builds += 1
+        self._lost = np.zeros(len(pairs), np.int64)
 
     def forces(self, xz, du, dpsi, dt):
         """Contact forces (N, 2) [N] and moments (N,) [N m, counter-clockwise] at positions xz.
@@ -120,28 +136,36 @@ class ContactLaw:
         increments [rad, counter-clockwise]. Returns (F, M, separations).
         """
         self._update_list(xz)
+        if self.compiled:
+            if self._prm[-1] != dt:
+                self._prm = kernels.contact_params(self.s, dt)
+            n_lost = kernels.contact_forces(xz, du, dpsi, self.r, self.i, self.j, self.state, self._prm, self._spring,
+                                            self._F, self._M, self._acc, self._lost)
+            return self._F, self._M, self._separations(xz, self._lost[:n_lost])
         s, r, i, j = self.s, self.r, self.i, self.j
+        touching, u_n_old, e_n_old, e_s_old, vn_coll, _ = self.state.T
+        touching = touching != 0
         d = xz[j] - xz[i]
         R = np.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2)
         nx, nz = d[:, 0] / R, d[:, 1] / R  # cos a, sin a (eq 2)
         delta = r[i] + r[j] + s.eps_m - R
         now = delta >= 0  # eq 1, 26
-        new = now & ~self.touching
+        new = now & ~touching
         dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
         dun = dux * nx + duz * nz  # eq 3a
         dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]  # eq 3b
-        self.u_n = np.where(new, delta, self.u_n + dun)
+        u_n = np.where(new, delta, u_n_old + dun)
         if s.spring in ("a", "b"):
-            e_n = s.kn * self.u_n  # eq 4a, 5a
+            e_n = s.kn * u_n  # eq 4a, 5a
         elif s.spring == "c":
-            e_n = np.minimum(s.kn * self.u_n, s.f_max)  # eq 27, elastic
+            e_n = np.minimum(s.kn * u_n, s.f_max)  # eq 27, elastic
         else:
-            e_n = np.minimum(np.where(new, s.kn * delta, self.e_n + s.kn * dun), s.f_max)  # eq 27
+            e_n = np.minimum(np.where(new, s.kn * delta, e_n_old + s.kn * dun), s.f_max)  # eq 27
         d_n = s.eta_n * dun / dt  # eq 4b, 5b
         cut = (e_n < 0) | ~now  # eq 6 (and no force out of reach)
         e_n = np.where(cut, 0.0, e_n)
         d_n = np.where(cut, 0.0, d_n)
-        e_s = np.where(new, 0.0, self.e_s) + s.ks * dus  # eq 8a, 9a
+        e_s = np.where(new, 0.0, e_s_old) + s.ks * dus  # eq 8a, 9a
         d_s = s.eta_s * dus / dt  # eq 8b, 9b
         e_s = np.where(cut, 0.0, e_s)  # eq 10
         d_s = np.where(cut, 0.0, d_s)
@@ -155,12 +179,21 @@ class ContactLaw:
         F = np.column_stack([np.bincount(i, fx, minlength=n) - np.bincount(j, fx, minlength=n),
                              np.bincount(i, fz, minlength=n) - np.bincount(j, fz, minlength=n)])
         M = -(np.bincount(i, r[i] * f_s, minlength=n) + np.bincount(j, r[j] * f_s, minlength=n))  # eq 13c
-        lost = np.flatnonzero(self.touching & ~now)
-        separations = [SeparationEvent(int(i[k]), int(j[k]), np.array([nx[k], nz[k]]), float(self.vn_coll[k]))
-                       for k in lost]
-        self.vn_coll = np.where(new, dun / dt, self.vn_coll)
-        self.touching, self.e_n, self.e_s, self.f_n = now, e_n, np.where(now, e_s, 0.0), np.where(now, f_n, 0.0)
+        separations = self._separations(xz, np.flatnonzero(touching & ~now))
+        self.state = np.column_stack([now, u_n, e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
+                                      np.where(now, f_n, 0.0)])
         return F, M, separations
+
+    def _separations(self, xz, lost):
+        """SeparationEvents of the pairs ``lost`` (their vn_coll is that of their first touch)."""
+        out = []
+        for k in lost.tolist():
+            a, b = self.i[k], self.j[k]
+            d = xz[b] - xz[a]
+            R = np.sqrt(d[0] ** 2 + d[1] ** 2)
+            out.append(SeparationEvent(int(a), int(b), np.array([d[0] / R, d[1] / R]),
+                                       float(self.state[k, kernels.VN_COLL])))
+        return out
 
     def touch_count(self):
         """Number of touching partners of each disc."""
@@ -170,7 +203,7 @@ class ContactLaw:
     def contact_pairs(self):
         """(pairs (K, 2), normal force (K,) [N]) of the touching pairs, for plots."""
         t = self.touching
-        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t]
+        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy()
 
 
 def separation_adjustment(events, touch_count, vel, mass, mobile, e):

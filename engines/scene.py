@@ -69,6 +69,7 @@ SCHEMA = {
         "f_max": (float, 2.5, POS, "cap of the elastic normal force for springs c, d [N] (eq 27)"),
         "eps_m": (float, 0.0, (0.0, math.inf), "force range beyond touching [m] (eq 26)"),
         "separation_adjustment": (bool, True, None, "apply eq 18-24 when a particle becomes free"),
+        "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, see README)"),
         # side-wall springs of the seismic box (issue 11, Fig. 27; used when loading.side_walls = springs)
         "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
         "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
@@ -212,6 +213,10 @@ def validate(raw, path=""):
 
 def _cross_checks(t, path):
     p = t["packing"]
+    c = t["contact"]
+    if c["law"] == "yade" and c["spring"] not in ("a", "b"):
+        raise SceneError(f"[contact] spring = {c['spring']!r}: law = 'yade' has springs a and b only "
+                         f"(no YADE law has the f_max plateau of c and d); use law = 'paper'")
     if p["d_min"] >= p["d_max"]:
         raise SceneError(f"[packing] d_min = {p['d_min']} must be < d_max = {p['d_max']}")
     if p["source"] == "file" and not p["file"]:

@@ -1,125 +1,263 @@
-"""YADE glue: discs as spheres in the x-z plane, a PyRunner that calls PoreDEM every step.
+"""YADE glue for scenes: discs as spheres in the x-z plane, the scene's contact law, the water engine.
 
-Engines: ForceResetter, PyRunner (reads centres in bulk with utils.coordsAndDisplacements, calls
-PoreDEM.step, adds the forces), NewtonIntegrator (gravity along -z, no numerical damping unless
-asked). No collider or interaction loop: the paper's contact law is not among YADE's laws (none
-has the f_max plateau of springs c and d), so it runs vectorised in engines.contact. Particles
-translate in x and z only (blockedDOFs 'yXYZ'); their spin about y is integrated by PoreDEM.
-Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho.
+[contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
+O.step() ``run`` drives the PaperLawEngine (engines.paper_law; it calls PoreDEM.step: the paper's
+law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
+no PyRunner (its dispatch costs 15-40 us a step). No collider: the law keeps its own Verlet list.
+Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
+scenes with ``YadeCoupling.run``, not O.run.
+
+[contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
+ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the wall motion, NewtonIntegrator; discs spin about y
+in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.water_engine; pressure forces and buoyancy
+held as permanent forces) is called before O.step() every water_interval steps, the work its
+PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all (O.run).
+The mapping to eq 1-13 and what differs: see ``yade_law_material``.
+
+Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
+of O.step() calls where Python works every step, or O.run for chunks without per-step Python;
+Ctrl-C stops between steps.
 """
-import builtins
+import copy
+import math
 
 import numpy as np
 from yade import O, utils
-from yade.wrapper import ForceResetter, FrictMat, NewtonIntegrator, PyRunner
+from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, HarmonicMotionEngine, Ig2_Sphere_Sphere_ScGeom,
+                          InsertionSortCollider, InteractionLoop, Ip2_ViscElMat_ViscElMat_ViscElPhys,
+                          Law2_ScGeom_ViscElPhys_Basic, NewtonIntegrator, TranslationEngine, ViscElMat)
 
+from engines import pore_dem
+from engines import pore_geometry as pg
+from engines import yade_io
+from engines.paper_law import PaperLawEngine
 from engines.pore_dem import PoreDEM, disc_masses
 from engines.trajectory import Trajectory
+from engines.water_engine import WaterEngine
 
-_REGISTRY = "_pore_dem_couplings"
-SHORT_RUN = 2000  # steps below which O.step() beats O.run's wait
+PER_STEP_CHUNK = 1000  # steps between checks of a per-step run (errors, Ctrl-C)
 
 
-def build_bodies(scene, packing):
-    """Reset YADE and create one sphere per disc; returns the body ids (same order as packing)."""
+def yade_law_material(scene):
+    """ViscElMat whose pair constants are the paper's springs (a)/(b): YADE combines two materials
+    in series (k = k1 k2 / (k1 + k2)), so each material gets twice the pair value.
+
+    Law2_ScGeom_ViscElPhys_Basic against eq 1-13: the same linear spring kn and dashpot eta_n in
+    normal, incremental ks with dashpot eta_s and the Coulomb cap mu e_n in shear. It differs in
+    (1) tension: YADE clamps the total normal force kn u_n + eta_n v_n at zero, eq 6 keeps the
+    dashpot's tension while e_n >= 0 (head-on collision: restitution 0.798 against 0.789 for eq 4-6,
+    0.790 analytic), and YADE's Coulomb cap uses that total force, eq 11 uses e_n; (2) the rolling term:
+    YADE's shear increment takes the relative velocity at the contact point with lever arms
+    r - u_n/2 of the enlarged radii, eq 3b uses r_i dpsi_i + r_j dpsi_j; (3) no velocity
+    adjustment at separation (eq 18-24); (4) eps_m (spring b) acts through radii enlarged by
+    eps_m/2, so YADE's overlap is r_i + r_j + eps_m - R as in eq 26, while the pores use the true
+    radii; (5) YADE rotates the shear force with the contact and integrates spin itself.
+    """
+    c = scene.contact
+    return ViscElMat(kn=2 * c.kn, ks=2 * c.ks, cn=2 * c.eta_n, cs=2 * c.eta_s, frictionAngle=math.atan(c.mu),
+                     density=scene.material.rho, label="discs")
+
+
+def build_bodies(scene, packing, material, radius_add=0.0, spin=False):
+    """Reset YADE and create one sphere per disc (radius r + radius_add) with per-unit-thickness
+    mass and inertia; returns the body ids (same order as packing)."""
     O.reset()
-    mat = O.materials.append(FrictMat(density=scene.material.rho, label="discs"))
+    mat = O.materials.append(material)
     mass, inertia = disc_masses(scene, packing)
     bodies = []
     for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
-        b = utils.sphere((float(x), 0.0, float(z)), float(r), fixed=not mob, material=mat, color=(0.6, 0.6, 0.6))
+        b = utils.sphere((float(x), 0.0, float(z)), float(r + radius_add), fixed=not mob, material=mat,
+                         color=(0.6, 0.6, 0.6))
         b.state.mass = float(m)
         b.state.inertia = (float(I),) * 3
         if mob:
-            b.state.blockedDOFs = "yXYZ"
+            b.state.blockedDOFs = "yXZ" if spin else "yXYZ"
         bodies.append(b)
     ids = O.bodies.append(bodies)
     O.dt = scene.numerics.dt
-    return np.asarray(ids)
+    return np.asarray(ids, np.int64)
 
 
 class YadeCoupling:
-    """The engine behind the PyRunner: one per scene. ``hooks`` are called after each step as
-    hook(coupling, xz) (for histories and snapshots); they must be cheap or check the step."""
+    """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
+    between chunks of steps (see ``run``)."""
 
-    def __init__(self, scene, packing, newton_damping=0.0):
+    def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
         self.scene, self.packing = scene, packing
-        self.ids = build_bodies(scene, packing)
-        self.core = PoreDEM(scene, packing)
-        self.mobile_ids = self.ids[packing.mobile].tolist()
-        self.moving_ids = self.ids[self.core.moving].tolist()
-        self.hooks = []
+        self.law = scene.contact.law
+        self.mass, self.inertia = disc_masses(scene, packing)
+        pore_dem.check_time_step(scene, self.mass[packing.mobile])
         g = scene.material.g
-        if self.core.water is not None:  # buoyancy: the buoyant weight of eq 34b
-            up = scene.material.rho_w * np.pi * packing.r**2 * g
-            for i in self.mobile_ids:
-                O.forces.setPermF(i, (0.0, 0.0, float(up[i])))
-        slot = getattr(builtins, _REGISTRY, None)
-        if slot is None:
-            slot = []
-            setattr(builtins, _REGISTRY, slot)
-        slot.append(self)
-        O.engines = [
-            ForceResetter(),
-            PyRunner(command=f"{_REGISTRY}[{len(slot) - 1}].step()", iterPeriod=1, initRun=True, label="poreDEM"),
-            NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping),
-        ]
-        self.error = None
+        wet = scene.water.enabled
+        self.core = self.water_engine = None
+        if self.law == "paper":
+            self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"))
+            self.core = PoreDEM(scene, packing, compiled)
+            self.engine = PaperLawEngine(self.ids, core=self.core)
+            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces
+                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[packing.mobile] ** 2 * g
+            loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
+        else:
+            if scene.numerics.damping_eq44:
+                raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
+            self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)
+            loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
+                                    [Law2_ScGeom_ViscElPhys_Basic()])]
+            if wet:  # called before O.step on its steps (see _advance), not as a PyRunner
+                num = scene.numerics
+                walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
+                self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
+                                                scene.contact.eps_m, packing.r, num.rebuild_interval,
+                                                num.water_interval, True, scene.material.rho_w, g, compiled)
+        self.io = yade_io.Bodies(self.ids)
+        self.per_step = self.law == "paper" or self.water_engine is not None
+        walls = self._wall_motion()
+        O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
+        self.block_bounds = packing.block_bounds(scene.output.block_z)
+        self.hooks = []
+        self.run_every, self.stops, self._hooked_at = None, set(), None
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
+
+    def _wall_motion(self):
+        """Engines moving the walls that follow the input ([loading]): a TranslationEngine whose
+        velocity the paper's law sets each step (v_w += a(t) dt, as the reference), or with
+        law = 'yade' a HarmonicMotionEngine for the cosine (the exact integral v = a0/w sin(w t),
+        no Python) and for a record a TranslationEngine updated between O.step calls."""
+        moving = pore_dem.moving_walls(self.scene, self.packing)
+        self.wall_engine = self._wall_accel = None
+        if not moving.any():
+            return []
+        ids = self.ids[moving].tolist()
+        ld = self.scene.loading
+        if self.law == "yade" and ld.type == "cosine":
+            w = 2 * np.pi * ld.frequency
+            return [HarmonicMotionEngine(ids=ids, A=(ld.amplitude / w**2, 0, 0), f=(ld.frequency,) * 3, fi=(np.pi,) * 3)]
+        self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
+        if self.law == "paper":
+            core, eng = self.core, self.wall_engine
+            self.engine.hooks.append(lambda: setattr(eng, "velocity", core.wall_velocity))
+        else:
+            self._wall_accel = pore_dem.input_acceleration(self.scene)
+            self._wall_v = 0.0
+            self.per_step = True  # Python sets the velocity before each O.step
+        return [self.wall_engine]
+
+    # -- running ------------------------------------------------------------------------------------
+    def _advance(self, n):
+        errors = yade_io.ERRORS
+        if self.law == "paper":
+            self.engine.drive(n)
+        elif not self.per_step and n > PER_STEP_CHUNK:
+            O.run(int(n), True)
+        else:  # law = 'yade': the water engine on its steps, a record's wall velocity v_w += a(t) dt
+            water, accel, dt = self.water_engine, self._wall_accel, O.dt
+            for _ in range(int(n)):
+                if water is not None and water.due(O.iter):
+                    water()
+                if accel is not None:
+                    self._wall_v += accel(O.iter * dt) * dt
+                    self.wall_engine.velocity = self._wall_v
+                O.step()
+                if errors:
+                    break
+        yade_io.raise_pending()
+
+    def run(self, n_steps):
+        """Run n_steps DEM steps. The hooks are called as hook(self) whenever O.iter is a multiple of
+        ``run_every`` or one of ``stops`` (the start and the end included), once per step index.
+        An error inside an engine stops YADE and is re-raised here."""
+        end = O.iter + int(n_steps)
+        while True:
+            k = O.iter
+            due = (self.run_every and k % self.run_every == 0) or k in self.stops
+            if due and k != self._hooked_at:
+                self._hooked_at = k
+                for hook in self.hooks:
+                    hook(self)
+            if k >= end:
+                return
+            nxt = min([end] + [s for s in self.stops if s > k])
+            if self.run_every:
+                nxt = min(nxt, (k // self.run_every + 1) * self.run_every)
+            self._advance(min(nxt - k, PER_STEP_CHUNK) if self.per_step else nxt - k)
+
+    # -- observations ------------------------------------------------------------------------------
+    @property
+    def step_index(self):
+        return O.iter
+
+    @property
+    def water(self):
+        """The PoreWater state, or None for a dry scene."""
+        if self.core is not None:
+            return self.core.water
+        return self.water_engine.model.water if self.water_engine else None
+
+    @property
+    def water_model(self):
+        return self.core.water_model if self.core is not None else (self.water_engine.model if self.water_engine else None)
 
     def positions(self):
         """Disc centres (N, 2) [m], read in bulk."""
-        return np.column_stack([utils.coordsAndDisplacements(0)[0], utils.coordsAndDisplacements(2)[0]])
+        return self.io.positions()
 
-    def step(self):
-        try:
-            xz = self.positions()
-            F, fixes = self.core.step(xz)
-            mob = self.mobile_ids
-            for i, (fx, fz) in zip(mob, F[mob].tolist()):
-                O.forces.addF(i, (fx, 0.0, fz))
-            for i, (vx, vz) in fixes.items():
-                O.bodies[int(i)].state.vel = (float(vx), 0.0, float(vz))
-            if self.moving_ids:
-                v = (float(self.core.wall_velocity), 0.0, 0.0)
-                for i in self.moving_ids:
-                    O.bodies[i].state.vel = v
-            for hook in self.hooks:
-                hook(self, xz)
-        except Exception as e:  # stop YADE cleanly; the caller re-raises
-            self.error = e
-            O.pause()
+    def velocities(self):
+        return self.io.velocities()
 
-    def run(self, n_steps):
-        """Run n_steps DEM steps; re-raise an error raised inside the engine.
+    def block_pressures(self, xz):
+        return pore_dem.block_pressures(self.water, xz, self.packing.r, self.block_bounds)
 
-        Short runs go step by step: O.run(n, True) waits about 40 ms for YADE's thread."""
-        if n_steps <= SHORT_RUN:
-            for _ in range(int(n_steps)):
-                O.step()
-                if self.error is not None:
-                    break
-        else:
-            O.run(int(n_steps), True)
-        if self.error is not None:
-            err, self.error = self.error, None
-            raise err
+    def porosity(self, xz):
+        return pore_dem.porosity(self.scene, self.packing, xz)
+
+    def kinetic_energy(self):
+        """Translational + rotational kinetic energy of the particles [J per m]."""
+        omega = self.core.omega if self.core is not None else self.io.spins()
+        return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
+
+    def contact_pairs(self, xz):
+        """(pairs (K, 2) disc indices, normal force (K,) [N]) of the pairs touching at centres xz
+        (the current ones); the paper's law is evaluated on a copy, its state is left as it is."""
+        if self.core is not None:
+            law = copy.deepcopy(self.core.law)
+            law.step(xz)
+            return law.contact.contact_pairs()
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        pairs, fn = [], []
+        for inter in O.interactions:
+            if inter.isReal and inter.id1 in index and inter.id2 in index:
+                pairs.append((index[inter.id1], index[inter.id2]))
+                fn.append(inter.phys.normalForce.norm())
+        return np.array(pairs, np.int64).reshape(-1, 2), np.array(fn)
+
+    def bottom_normal_force(self, xz):
+        """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
+        pairs, fn = self.contact_pairs(xz)
+        if len(fn) == 0:
+            return 0.0
+        zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])
+        z0, z1 = self.block_bounds[0]
+        sel = (zmid >= z0) & (zmid < z1)
+        return float(fn[sel].mean()) if sel.any() else 0.0
 
 
 def simulate(scene, packing, n_steps, record_every, hooks=()):
     """Run a scene in YADE and record a Trajectory after every ``record_every`` steps
     (at t = (k + 1) dt); the recording contract is shared with engines.reference.
-    ``hooks``: extra per-step hooks hook(coupling, xz) (see YadeCoupling)."""
+    ``hooks``: called as hook(coupling) after each recorded chunk (the cross-check counts rules)."""
     cp = YadeCoupling(scene, packing)
-    cp.hooks.extend(hooks)
-    traj = Trajectory(info={"implementation": "yade"})
-
+    traj = Trajectory(info={"implementation": "yade", "law": scene.contact.law, "io": yade_io.BACKEND})
     steps_left = n_steps
     while steps_left > 0:
         chunk = min(record_every, steps_left)
         cp.run(chunk)
         steps_left -= chunk
+        for hook in hooks:
+            hook(cp)
         xz = cp.positions()
-        w = cp.core.water
-        traj.append(O.iter * scene.numerics.dt, xz, cp.core.block_pressures(xz),
+        w = cp.water
+        traj.append(O.iter * scene.numerics.dt, xz, cp.block_pressures(xz),
                     w.total_water() if w else np.nan, w.balance_error() if w else np.nan)
     return traj

@@ -1,11 +1,13 @@
 """One model step without YADE (engines/pore_dem.py): masses, input motion, the order of a step
-(rebuilds, water steps, held pressure forces, eq 45 in the forces), observations. No YADE."""
+(rebuilds, water steps, held pressure forces, eq 45 in the forces), observations. No YADE.
+Runs both the compiled kernels and the readable NumPy path where the water is involved."""
 import numpy as np
 import pytest
 
 from engines import pore_geometry as pg
 from engines import scene as sc
-from engines.pore_dem import PoreDEM, disc_masses, input_acceleration
+from engines import pore_dem
+from engines.pore_dem import PoreDEM, disc_masses, input_acceleration, moving_walls
 from packing.layouts import hex_lattice
 from packing.packing import Packing
 
@@ -65,13 +67,13 @@ def test_wall_velocity_integrates_the_input():
               numerics={"dt": 1e-6})
     pk = wet_box()
     core = PoreDEM(s, pk)
-    assert core.moving.sum() == np.sum(pk.group != 0)
+    np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
     for _ in range(30):
         core.step(pk.xz)
     expected = sum(15.0 * np.cos(2 * np.pi * 50.0 * k * 1e-6) * 1e-6 for k in range(30))
     assert core.wall_velocity == pytest.approx(expected, rel=1e-13)
-    bottom_only = PoreDEM(scene(loading={"type": "cosine"}, numerics={"dt": 1e-6}), pk)
-    np.testing.assert_array_equal(bottom_only.moving, pk.group == pg.WALL_BOTTOM)
+    np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
+    assert not moving_walls(scene(), pk).any()
 
 
 def test_bad_numerics_are_refused():
@@ -97,17 +99,21 @@ def moving_positions(pk, k):
     return xz
 
 
-def test_step_order_rebuilds_water_steps_and_held_forces():
+@pytest.mark.parametrize("compiled", [True, False])
+def test_step_order_rebuilds_water_steps_and_held_forces(compiled):
     """Rebuilds at k > 0, k % rebuild_interval == 0; water advanced only at k % water_interval == 0
     and by water_interval dt; the pressure forces of eq 33 recomputed then and held in between."""
     pk = wet_box()
-    core = PoreDEM(wet_scene(q_w=1e-4), pk)
+    core = PoreDEM(wet_scene(q_w=1e-4), pk, compiled)
+    dry = PoreDEM(scene(numerics={"dt": 1e-6}), pk, compiled)
     W_seen, F_seen = [], []
     for k in range(10):
-        F, _ = core.step(moving_positions(pk, k))
+        xz = moving_positions(pk, k)
+        F, _ = core.step(xz)
         W_seen.append(core.water.total_water())
-        F_seen.append(core.F_pressure.copy())
-        assert core.n_rebuilds == k // 4
+        F_seen.append(core.water_model.F.copy())
+        np.testing.assert_allclose(F, dry.step(xz)[0] + core.water_model.F, rtol=1e-13, atol=1e-18)  # law + water
+        assert core.water_model.n_rebuilds == k // 4
     water_steps = [k for k in range(10) if k % 3 == 0]
     for k in range(1, 10):
         if k in water_steps or k % 4 != 0:    # (a rebuild may recompute W by eq 32: either way)
@@ -117,12 +123,13 @@ def test_step_order_rebuilds_water_steps_and_held_forces():
     assert core.water.balance.inflow == pytest.approx(len(water_steps) * 3 * 1e-6 * 1e-4 * n_bottom, rel=1e-12)
 
 
-def test_pressure_forces_use_the_area_of_eq45():
+@pytest.mark.parametrize("compiled", [True, False])
+def test_pressure_forces_use_the_area_of_eq45(compiled):
     """With smoothing the forces of eq 33 come from U of eq 32 at the area actually used
     ([A]_t = ([A]_{t-dt} + A'_t)/2), the same U that drives the flows."""
     pk = wet_box()
     s = wet_scene(rebuild_interval=1000, smoothing=True)
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s, pk, compiled)
     A_used = pg.measure(core.water.net, pk.xz, core.r).void_area
     for k in range(3):
         xz = moving_positions(pk, 3 * k)
@@ -130,57 +137,76 @@ def test_pressure_forces_use_the_area_of_eq45():
         m = pg.measure(core.water.net, xz, core.r)
         A_used = (A_used + m.void_area) / 2
         expected = pg.pressure_forces(core.water.net, core.r, core.water.pressure(A_used), m)
-        np.testing.assert_allclose(core.F_pressure, expected, rtol=1e-12, atol=1e-18)
+        np.testing.assert_allclose(core.water_model.F, expected, rtol=1e-12, atol=1e-18)
         core.step(xz)
         core.step(xz)   # two steps without a water step: the force is held
     raw = pg.pressure_forces(core.water.net, core.r, core.water.pressure(m.void_area), m)
-    assert np.abs(raw - core.F_pressure).max() > 1e-6 * np.abs(raw).max()   # smoothing made a difference
+    assert np.abs(raw - core.water_model.F).max() > 1e-6 * np.abs(raw).max()   # smoothing made a difference
 
 
 def test_dry_scene_has_no_water_and_nan_pressures():
     pk = wet_box()
-    core = PoreDEM(scene(), pk)
-    assert core.water is None and core.pore_state(pk.xz) is None
-    assert core.bottom_normal_force(pk.xz) == 0.0               # nothing touches yet
-    assert np.all(np.isnan(core.block_pressures(pk.xz)))
+    s = scene()
+    core = PoreDEM(s, pk)
+    assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
+    assert pore_dem.water_model(s, pk) is None
+    bounds = pk.block_bounds(s.output.block_z)
+    assert np.all(np.isnan(pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)))
     F, fixes = core.step(pk.xz)
     assert np.all(np.isfinite(F)) and fixes == {}
 
 
 def test_block_pressures_are_means_of_the_pores_in_each_block():
     pk = wet_box()
-    core = PoreDEM(wet_scene(), pk)
+    s = wet_scene()
+    core = PoreDEM(s, pk)
     rng = np.random.default_rng(0)
     core.water.W = core.water.W * (1 + 0.1 * rng.random(core.water.net.n_pores))
-    net, m, U = core.pore_state(pk.xz)
+    net, m, U = pore_dem.pore_state(core.water, pk.xz, pk.r)
+    np.testing.assert_allclose(m.void_area, pg.measure(net, pk.xz, pk.r).void_area, rtol=1e-15)
+    np.testing.assert_allclose(U, s.water.E_w * (1 - m.void_area / core.water.W), rtol=1e-12)   # eq 32
     cz = pg.pore_centroids(net, pk.xz)[:, 1]
-    for (z0, z1), got in zip(core.block_bounds, core.block_pressures(pk.xz)):
+    bounds = pk.block_bounds(s.output.block_z)
+    got = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert len(got) == len(bounds)
+    for (z0, z1), g in zip(bounds, got):
         sel = (cz >= z0) & (cz < z1)
-        assert sel.any() and got == pytest.approx(U[sel].mean(), rel=1e-14)
+        assert sel.any() and g == pytest.approx(U[sel].mean(), rel=1e-14)
 
 
 def test_porosity_of_a_hexagonal_lattice_is_exact():
     """Void / polygon area of the pores of a touching hexagonal lattice: 1 - pi / (2 sqrt 3)."""
     xz = hex_lattice(6, 5, 2 * R)
     pk = Packing(xz, np.full(len(xz), R), np.zeros(len(xz), int), np.ones(len(xz)))
-    core = PoreDEM(scene(), pk)
-    assert core.porosity(xz) == pytest.approx(1 - np.pi / (2 * np.sqrt(3)), rel=1e-12)
+    assert pore_dem.porosity(scene(), pk, xz) == pytest.approx(1 - np.pi / (2 * np.sqrt(3)), rel=1e-12)
+    far = Packing(np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, R), [0, 0], [1.0, 1.0])
+    assert np.isnan(pore_dem.porosity(scene(), far, far.xz))   # no pore: no porosity
 
 
-def test_kinetic_energy_and_bottom_normal_force():
-    """A free disc resting on a bottom wall disc, pushed into it: kinetic energy m v^2 / 2 of du/dt,
-    and the mean normal force of the touching pairs in the first block is the spring force."""
-    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7}, output={"block_z": [[-1.0, 0.5]]})
+def test_kinetic_energy_with_spin_of_the_mobile_discs():
+    """1/2 m v^2 + 1/2 I omega^2 summed over the particles only (walls excluded)."""
+    mass, inertia = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
+    mobile = np.array([False, True, True])
+    vel = np.array([[9.0, 9.0], [3.0, 4.0], [0.0, -2.0]])
+    omega = np.array([5.0, 7.0, -1.0])
+    expected = 0.5 * (2.0 * 25.0 + 3.0 * 4.0) + 0.5 * (0.2 * 49.0 + 0.3 * 1.0)
+    assert pore_dem.kinetic_energy(mass, inertia, mobile, vel, omega) == pytest.approx(expected, rel=1e-15)
+
+
+def test_a_disc_pressed_into_a_wall_feels_the_spring():
+    """A free disc overlapping a bottom wall disc by 1e-7 m: the step's force is kn x overlap
+    upwards (spring a, no dashpot at rest), the pair is listed with that normal force."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
     core = PoreDEM(s, pk)
     F, _ = core.step(pk.xz)
-    assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9)
-    assert core.bottom_normal_force(pk.xz) == pytest.approx(s.contact.kn * 1e-7, rel=1e-9)
+    assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
+    pairs, fn = core.contact.contact_pairs()
+    assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
     moved = pk.xz.copy()
     moved[1, 1] += 3e-9
     core.step(moved)
-    m = disc_masses(s, pk)[0][1]
-    assert core.kinetic_energy() == pytest.approx(0.5 * m * (3e-9 / 1e-7) ** 2, rel=1e-12)
+    np.testing.assert_allclose(core.du, [[0.0, 0.0], [0.0, 3e-9]], atol=1e-20)   # eq 17: du of the step
 
 
 def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
@@ -206,22 +232,6 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
 
 
-def test_observations_kinetic_energy_with_spin_and_block_forces():
-    """Kinetic energy adds the spin 1/2 I omega^2 of the particles (walls excluded); the bottom-block
-    normal force is the mean over the touching pairs whose midpoint lies in the first block only."""
-    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7},
-              output={"block_z": [[-1.0, 0.2], [0.2, 10.0]]})
-    xz = np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7], [0.0, 4 * R - 3e-7]])
-    pk = Packing(xz, np.full(3, R), [pg.WALL_BOTTOM, 0, 0], [1.0, 1.0, 1.0])
-    core = PoreDEM(s, pk)
-    core.step(xz)
-    assert core.bottom_normal_force(xz) == pytest.approx(s.contact.kn * 1e-7, rel=1e-9)  # the upper pair is out
-    assert np.all(np.isnan(core.block_pressures(xz))) and core.block_pressures(xz).shape == (2,)
-    core.omega[:] = [7.0, 3.0, -2.0]
-    m, inertia = disc_masses(s, pk)
-    assert core.kinetic_energy() == pytest.approx(0.5 * inertia[1] * 9.0 + 0.5 * inertia[2] * 4.0, rel=1e-14)
-
-
 @pytest.mark.parametrize("variant", ["inflow_smoothing", "shaken_drained_d"])
 def test_steps_match_the_reference_without_yade(variant):
     """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
@@ -241,6 +251,7 @@ def test_steps_match_the_reference_without_yade(variant):
               **tables)
     pk = wet_box(seed=5, jitter=0.05)
     core = PoreDEM(s, pk)
+    moving = moving_walls(s, pk)
     model = ref.ReferenceModel(s.as_dict(), pk, readings=ref.FAST_CODE_READINGS)
     m, _ = disc_masses(s, pk)
     mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
@@ -253,15 +264,15 @@ def test_steps_match_the_reference_without_yade(variant):
             v[d] = vel
         v[mob, 0] += F[mob, 0] / m[mob] * dt
         v[mob, 1] += ((F[mob, 1] + up[mob]) / m[mob] - g) * dt
-        v[core.moving] = [core.wall_velocity, 0.0]
-        step = mob | core.moving
+        v[moving] = [core.wall_velocity, 0.0]
+        step = mob | moving
         x[step] += v[step] * dt
         model.step()
         np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
         np.testing.assert_allclose(core.omega[mob], model.omega[mob], rtol=1e-9, atol=1e-9 * np.abs(model.omega).max())
         moved = max(moved, np.abs(x - pk.xz).max())
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
-    assert core.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
+    assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
 
 
@@ -270,4 +281,4 @@ def test_rebuild_every_step_when_asked():
     core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}), pk)
     for k in range(4):
         core.step(moving_positions(pk, k))
-    assert core.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
+    assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)

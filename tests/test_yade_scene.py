@@ -8,7 +8,7 @@ import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs 
 
 from engines import pore_water
 from engines import scene as scenes
-from engines.pore_dem import PoreDEM
+from engines.water_engine import WaterModel
 from engines.yade_coupling import YadeCoupling, simulate
 from engines.yade_run import run_scene
 from packing.deposition import cut_and_resettle, deposit, scene_packing
@@ -66,15 +66,15 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
     assert summary["steps"] == 1000 and summary["n_pores"] > 0
     assert json.load(open(tmp_path / "ok" / "summary.json"))["parameters"]["water"]["k1"] == 200.0
     # a run that crashes half way (here: at its first pore rebuild): history so far and a checkpoint remain
-    def crash(self, xz):
+    def crash(self, xz):  # noqa: ARG001
         raise RuntimeError("simulated crash")
-    monkeypatch.setattr(PoreDEM, "rebuild", crash)
+    monkeypatch.setattr(WaterModel, "rebuild", crash)
     # (3,000 steps: longer than SHORT_RUN, so through O.run as real runs go)
     bad = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 2500}, "output": {"history_interval": 50}})
     with pytest.raises(RuntimeError, match="simulated crash"):
         run_scene(bad, packing, str(tmp_path / "bad"), duration=0.003)
     rows = open(tmp_path / "bad" / "history.csv").read().strip().splitlines()
-    assert len(rows) == 1 + 50 and os.path.exists(tmp_path / "bad" / "checkpoint.npz")
+    assert len(rows) == 1 + 51 and os.path.exists  # rows at k = 0, 50, ..., 2500 (before step 2500 crashed)(tmp_path / "bad" / "checkpoint.npz")
     assert "failed" in json.load(open(tmp_path / "bad" / "summary.json"))["status"]
 
 

@@ -316,17 +316,21 @@ def features_of(scene):
 
 
 def yade_remesh_counter():
-    """A YADE per-step hook counting the fast code's re-meshing rules per rebuild; (hook, counts)."""
+    """A hook of yade_coupling.simulate (called after each recorded chunk, so at most one rebuild
+    in between when record_every <= rebuild_interval) counting the fast code's re-meshing rules
+    per rebuild; (hook, counts). Rebuild n happens at step n x rebuild_interval."""
     counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "history": [], "separation": None}
 
-    def hook(cp, xz):
-        core = cp.core
-        if core.water is not None and core.n_rebuilds > counts["rebuilds"]:
-            counts["rebuilds"] = core.n_rebuilds
-            this = {r: int(core.water.remesh_counts.get(r, 0)) for r in "abcd"}
+    def hook(cp):
+        model = cp.water_model
+        if model is not None and model.n_rebuilds > counts["rebuilds"]:
+            if model.n_rebuilds > counts["rebuilds"] + 1:
+                raise RuntimeError("more than one rebuild between two hook calls: record_every > rebuild_interval")
+            counts["rebuilds"] = model.n_rebuilds
+            this = {r: int(model.water.remesh_counts.get(r, 0)) for r in "abcd"}
             for r, v in this.items():
                 counts["remesh"][r] += v
-            counts["history"].append((core.k - 1, this))
+            counts["history"].append((model.n_rebuilds * model.rebuild_interval, this))
     return hook, counts
 
 

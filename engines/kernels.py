@@ -1,0 +1,237 @@
+"""Compiled (numba) per-step kernels: the paper's contact law, the pore measure, the Darcy step and
+the eq 33 pressure forces. No YADE.
+
+Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, which stays the
+reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
+
+  contact_forces    engines.contact.ContactLaw.forces          (eq 1-13, 26-27)
+  measure           engines.pore_geometry.measure              (eq 29, 43b)
+  darcy_flows       engines.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
+  darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
+  pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
+
+Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
+(the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
+written into arrays the caller owns (allocated once per network or contact list). numba compiles on
+first use and caches the machine code beside this file (``cache=True``); fastmath is off.
+"""
+import math
+
+import numba as nb
+import numpy as np
+
+jit = nb.njit(cache=True, nogil=True)
+
+# columns of the per-pair contact state (engines.contact.ContactLaw.state)
+TOUCHING, U_N, E_N, E_S, VN_COLL, F_N = range(6)
+SPRING_CODE = {"a": 0, "b": 0, "c": 1, "d": 2}  # linear, capped elastic, capped hysteretic
+
+
+def contact_params(s, dt):
+    """The float parameters of ``contact_forces`` from ContactSettings ``s`` and dt [s]."""
+    return np.array([s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m, dt])
+
+
+@jit
+def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+    """Forces F (N, 2) and moments M (N,) of all pairs (pi, pj); updates ``state`` (m, 6) in place.
+
+    prm = (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); spring = SPRING_CODE; acc_j (N, 3) is scratch.
+    Writes the indices of the pairs that stopped touching into ``lost``; returns their number.
+    """
+    kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7]
+    F[:] = 0.0
+    M[:] = 0.0
+    acc_j[:] = 0.0
+    n_lost = 0
+    for k in range(len(pi)):
+        i, j = pi[k], pj[k]
+        dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
+        R = math.sqrt(dx * dx + dz * dz)
+        nx, nz = dx / R, dz / R                                 # eq 2
+        delta = r[i] + r[j] + eps_m - R
+        now = delta >= 0                                        # eq 1, 26
+        was = state[k, TOUCHING] != 0.0
+        new = now and not was
+        dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
+        dun = dux * nx + duz * nz                               # eq 3a
+        dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]   # eq 3b
+        u_n = delta if new else state[k, U_N] + dun
+        if spring == 0:
+            e_n = kn * u_n                                      # eq 4a, 5a
+        elif spring == 1:
+            e_n = min(kn * u_n, f_max)                          # eq 27, elastic
+        else:
+            e_n = min(kn * delta if new else state[k, E_N] + kn * dun, f_max)  # eq 27, hysteretic
+        d_n = eta_n * dun / dt                                  # eq 4b, 5b
+        e_s = (0.0 if new else state[k, E_S]) + ks * dus        # eq 8a, 9a
+        d_s = eta_s * dus / dt                                  # eq 8b, 9b
+        if e_n < 0 or not now:                                  # eq 6, 10
+            e_n = d_n = e_s = d_s = 0.0
+        if abs(e_s) > mu * e_n:                                 # eq 11
+            e_s = mu * e_n * (1.0 if e_s > 0 else -1.0)
+            d_s = 0.0
+        f_n, f_s = e_n + d_n, e_s + d_s                         # eq 7, 12
+        fx = -f_n * nx + f_s * nz                               # eq 13a, on i
+        fz = -f_n * nz - f_s * nx                               # eq 13b
+        F[i, 0] += fx
+        F[i, 1] += fz
+        M[i] += r[i] * f_s
+        acc_j[j, 0] += fx
+        acc_j[j, 1] += fz
+        acc_j[j, 2] += r[j] * f_s
+        if was and not now:
+            lost[n_lost] = k
+            n_lost += 1
+        if new:
+            state[k, VN_COLL] = dun / dt
+        state[k, TOUCHING] = 1.0 if now else 0.0
+        state[k, U_N] = u_n
+        state[k, E_N] = e_n
+        state[k, E_S] = e_s if now else 0.0
+        state[k, F_N] = f_n if now else 0.0
+    for a in range(len(F)):
+        F[a, 0] -= acc_j[a, 0]
+        F[a, 1] -= acc_j[a, 1]
+        M[a] = -(M[a] + acc_j[a, 2])                            # eq 13c: -r f_s on both
+    return n_lost
+
+
+@jit
+def max_sq_displacement(xz, xz_ref):
+    """max_a |xz_a - xz_ref_a|^2 [m^2] (the Verlet-list check)."""
+    out = 0.0
+    for a in range(len(xz)):
+        dx, dz = xz[a, 0] - xz_ref[a, 0], xz[a, 1] - xz_ref[a, 1]
+        out = max(out, dx * dx + dz * dz)
+    return out
+
+
+@jit
+def spin_update(omega, M, inertia, mobile, dt):
+    """omega += M / I dt for mobile discs (eq 14c, 16c)."""
+    for a in range(len(omega)):
+        if mobile[a]:
+            omega[a] += M[a] / inertia[a] * dt
+
+
+@jit
+def measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, void, length, contact, theta, vec, phi, cross):
+    """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
+
+    phi, cross (L,) are scratch. ``contact`` is a bool array.
+    """
+    for l in range(len(links)):
+        i, j = links[l, 0], links[l, 1]
+        xi, zi = xz[i, 0], xz[i, 1]
+        dx, dz = xz[j, 0] - xi, xz[j, 1] - zi
+        length[l] = math.sqrt(dx * dx + dz * dz)
+        phi[l] = math.atan2(dz, dx)
+        cross[l] = xi * dz - dx * zi
+        vec[l, 0], vec[l, 1] = dx, dz
+        contact[l] = r[i] + r[j] + eps_m >= length[l]
+    poly[:] = 0.0
+    sect[:] = 0.0
+    two_pi = 2 * math.pi
+    for c in range(len(c_pore)):
+        p = c_pore[c]
+        poly[p] += c_sign[c] * cross[c_link[c]]
+        x = phi[c_link[c]] - phi[c_next[c]] - c_raw0[c] + math.pi
+        if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
+            x = x % two_pi
+        theta[c] = c_theta0[c] + x - math.pi                    # eq 29
+        sect[p] += theta[c] * c_r2[c]
+    for p in range(len(poly)):
+        poly[p] = 0.5 * poly[p]
+        sect[p] = 0.5 * sect[p] + rattler_area[p]
+        void[p] = poly[p] - sect[p]
+
+
+@jit
+def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bottom, wp,
+                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j):
+    """Throat flows q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and inflow
+    q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too.
+
+    wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
+    bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
+    exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j (Np,) are scratch.
+    """
+    E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
+    for p in range(len(W)):
+        U[p] = E_w * (W[p] - A[p]) / W[p]                       # eq 32
+        per_k = W[p] / E_w if A[p] > a_min else 0.0             # outside at U = 0: A_ij -> W_i
+        g_s = k1 * surface[p] * per_k
+        g_d = k3 * drained[p] * per_k
+        q_s[p] = g_s * U[p]
+        q_d[p] = g_d * U[p]
+        q_in[p] = q_w * bottom[p]
+        g_b[p] = g_s + g_d
+        acc_i[p] = acc_j[p] = 0.0
+    for t in range(len(ti)):
+        i, j = ti[t], tj[t]
+        if A[i] > a_min and A[j] > a_min:
+            k = k2 if link_contact[t_link[t]] else k1           # eq 43
+            g[t] = k * (W[i] * W[j] / (A[i] + A[j])) / E_w      # eq 40
+        else:
+            g[t] = 0.0
+        q[t] = g[t] * (U[i] - U[j])                             # eq 39, 41
+        acc_i[i] += g[t]
+        acc_j[j] += g[t]
+    lam = 0.0
+    for p in range(len(W)):
+        if A[p] > a_min:
+            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) / (W[p] ** 2 / (E_w * A[p])))
+    return lam
+
+
+@jit
+def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
+    """W <- W - (sum of throat outflow + q_s + q_d - q_in) h (eq 42); balance += (inflow, surface,
+    side) volumes [m^2]. Returns the first pore whose W would fall to <= 0 (nothing changed), or -1."""
+    out_i[:] = 0.0
+    out_j[:] = 0.0
+    for t in range(len(ti)):
+        out_i[ti[t]] += q[t]
+        out_j[tj[t]] += q[t]
+    for p in range(len(W)):
+        if W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h <= 0:
+            return p
+    s_in = s_s = s_d = 0.0
+    for p in range(len(W)):
+        W[p] = W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h
+        s_in += q_in[p]
+        s_s += q_s[p]
+        s_d += q_d[p]
+    balance[0] += s_in * h
+    balance[1] += s_s * h
+    balance[2] += s_d * h
+    return -1
+
+
+@jit
+def pore_pressures(W, A, E_w, U):
+    """U = E_w (W - A) / W [N/m] (eq 32) into U."""
+    for p in range(len(W)):
+        U[p] = E_w * (W[p] - A[p]) / W[p]
+
+
+@jit
+def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
+    """Force of the pore pressures U on every disc, F (N, 2) [N] (eq 33); Fj (N, 2) is scratch.
+    The outer face and closed faces (link_pores = -1) have U = 0."""
+    F[:] = 0.0
+    Fj[:] = 0.0
+    for l in range(len(links)):
+        p0, p1 = link_pores[l, 0], link_pores[l, 1]
+        s = ((U[p1] if p1 >= 0 else 0.0) - (U[p0] if p0 >= 0 else 0.0)) / length[l]
+        px, pz = -vec[l, 1] * s, vec[l, 0] * s
+        i, j = links[l, 0], links[l, 1]
+        F[i, 0] += r[i] * px
+        F[i, 1] += r[i] * pz
+        Fj[j, 0] += r[j] * px
+        Fj[j, 1] += r[j] * pz
+    for a in range(len(F)):
+        F[a, 0] += Fj[a, 0]
+        F[a, 1] += Fj[a, 1]

@@ -1,0 +1,245 @@
+"""The pore water as an engine: pores between discs, Darcy exchange, pressure forces (seed 000 §3).
+
+``WaterEngine`` is the public YADE object: a YADE script with its own spheres (kept in the x-z
+plane), its own collider and contact law adds the water in a few lines::
+
+    from engines.water_engine import WaterEngine
+    from engines.pore_water import WaterSettings
+    water = WaterEngine(disc_ids, walls={"bottom": bottom_ids, "left": left_ids, "right": right_ids},
+                        settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4)
+    O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]   # before NewtonIntegrator
+
+Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade_io), rebuilds
+the pores when ``rebuild_interval`` steps have passed, measures the void areas (eq 29), advances
+the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces (eq 33) plus
+buoyancy (eq 34b) as permanent forces: between water steps no Python runs.
+
+``WaterModel`` is the same work without YADE (engines.pore_dem uses it for the paper's step order;
+the tests use it directly): the compiled kernels of engines.kernels, or with ``compiled=False`` the
+readable NumPy functions of engines.pore_geometry and engines.pore_water.
+
+Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.pore_water),
+checked at every water step: the bound is one more pass over throats and pores inside the flow
+kernel (measured at a few per cent of a water step), about what testing whether the areas changed
+enough to need a new check would cost, so the check is exact at every step instead. With ``settings.substep`` a water
+step above the limit is split into n = ceil(dt_w / limit) sub-steps; the engine prints the count
+when it first sub-steps and whenever the count doubles, and keeps ``substeps_max``/``substeps_total``.
+"""
+import math
+
+import numpy as np
+
+from engines import kernels
+from engines import pore_geometry as pg
+from engines.pore_water import DarcyStabilityError, PoreWater
+
+WALL_CODES = {"bottom": pg.WALL_BOTTOM, "left": pg.WALL_LEFT, "right": pg.WALL_RIGHT}
+
+
+class WaterModel:
+    """Pores and water of N discs (no YADE). Units: SI per unit thickness (engines.pore_water).
+
+    r (N,) radii [m] (the true ones: pores use them even where a contact law enlarges them by
+    eps_m/2); walls (N,) wall codes of engines.pore_geometry; xz (N, 2) initial centres [m].
+    ``F`` (N, 2) [N] holds the pressure forces of the last water step.
+    """
+
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
+                 compiled=True, log=print):
+        self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
+        self.r = np.ascontiguousarray(r, float)
+        self.walls = np.asarray(walls, np.int64)
+        self.dt, self.rebuild_interval, self.water_interval = float(dt), int(rebuild_interval), int(water_interval)
+        if self.rebuild_interval < 1 or self.water_interval < 1:
+            raise ValueError(f"rebuild_interval and water_interval must be >= 1, got "
+                             f"{rebuild_interval}, {water_interval}")
+        self.compiled, self.log = compiled, log
+        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
+        self.F = np.zeros((len(self.r), 2))
+        self.n_rebuilds = 0
+        self.substeps_max = self.substeps_total = 0
+        self.last_limit = np.inf  # Darcy limit of the last water step [s]
+        net = self._build(xz)
+        self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
+        self._buffers()
+
+    def _build(self, xz):
+        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls)
+
+    def _buffers(self):
+        """Arrays of the current network for the kernels (allocated once per rebuild)."""
+        net, n = self.water.net, len(self.r)
+        n_p, n_l, n_t = net.n_pores, len(net.links), len(net.throat_conns)
+        c = np.ascontiguousarray
+        surface, drained, bottom = self.water._boundary_masks()
+        # outputs of kernels.measure: polygon, sector and void areas, link length and contact state,
+        # corner angles, link vectors, and two scratch arrays
+        self._meas = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
+                      np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
+        # outputs of kernels.darcy_flows: q, q_s, q_d, q_in, g, g_b, U, and two scratch arrays
+        self._flow = (np.zeros(n_t), np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_t)) + \
+            tuple(np.zeros(n_p) for _ in range(4))
+        q, q_s, q_d, q_in, _, _, U, acc_i, acc_j = self._flow
+        ti, tj, t_link = c(net.throat_conns[:, 0]), c(net.throat_conns[:, 1]), c(net.throat_link)
+        self._balance = np.zeros(3)
+        # the argument lists of the kernels after their leading per-call arguments
+        self._measure_args = (c(net.links), c(net.corner_pore), c(net.corner_sign), c(net.corner_link),
+                              c(net.corner_next_link), c(net.corner_raw0), c(net.corner_theta0), c(net.corner_r2),
+                              c(net.rattler_area), self.eps_m) + self._meas
+        self._flow_args = ((ti, tj, t_link, net.a_min, surface.astype(float), drained.astype(float),
+                            bottom.astype(float), self.wp) + self._flow)
+        self._update_args = (ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, self._balance)
+        self._force_args = (c(net.links), c(net.link_pores), self.r, U, self._meas[3], self._meas[6], self.F,
+                            np.zeros((n, 2)))
+
+    # -- per step ---------------------------------------------------------------------------------
+    def step(self, k, xz):
+        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when k > 0 and k % rebuild_interval
+        == 0, advance when k % water_interval == 0. Returns True when ``F`` was recomputed."""
+        if k > 0 and k % self.rebuild_interval == 0:
+            self.rebuild(xz)
+        if k % self.water_interval != 0:
+            return False
+        self.advance(self.water_interval * self.dt, xz)
+        return True
+
+    def rebuild(self, xz):
+        """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
+        old, new = self.water.net, self._build(xz)
+        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz)
+        self.n_rebuilds += 1
+        self._buffers()
+
+    def advance(self, h, xz):
+        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
+        if not self.compiled:
+            m = pg.measure(self.water.net, xz, self.r)
+            self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
+            A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
+            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
+            return
+        w, s = self.water, self.settings
+        kernels.measure(xz, self.r, *self._measure_args)
+        A = self._meas[2]
+        contact = self._meas[4]
+        if s.smoothing:  # eq 45
+            A = 0.5 * (w.A_prev + A)
+            w.A_prev = A
+        lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
+        self.last_limit = 2.0 / lam if lam > 0 else np.inf
+        n_sub = self._substeps(h)
+        q = self._flow[0]
+        self._balance[:] = 0.0
+        for sub in range(n_sub):
+            if sub > 0:
+                lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
+            if s.smoothing:  # eq 46
+                if w.q_prev is not None:
+                    q[:] = 0.5 * (w.q_prev + q)
+                w.q_prev = q.copy()
+            bad = kernels.darcy_update(w.W, h / n_sub, *self._update_args)
+            if bad >= 0:
+                raise DarcyStabilityError(f"water area of pore {bad} would fall to <= 0 in a step of {h / n_sub:.3e} s")
+        self.last_limit = 2.0 / lam if lam > 0 else np.inf  # at the last sub-step, as PoreWater reports it
+        b = w.balance
+        b.inflow += self._balance[0]
+        b.surface_outflow += self._balance[1]
+        b.side_outflow += self._balance[2]
+        kernels.pore_pressures(w.W, A, s.E_w, self._flow[6])  # eq 32 at the area used (eq 45) for the forces
+        kernels.pressure_forces(*self._force_args)
+
+    def _substeps(self, h):
+        """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
+        if h <= self.last_limit:
+            return 1
+        if not self.settings.substep:
+            raise DarcyStabilityError(
+                f"water step dt = {h:.3e} s exceeds the explicit Darcy limit {self.last_limit:.3e} s "
+                f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or water_interval, "
+                f"or set [water] substep = true")
+        n = int(math.ceil(h / self.last_limit))
+        if n >= 2 * max(self.substeps_max, 1):
+            self.log(f"water: step {h:.3e} s > Darcy limit {self.last_limit:.3e} s: {n} sub-steps per water step "
+                     f"(each costs one flow and one update kernel pass, about a quarter of a water step)")
+        self.substeps_max = max(self.substeps_max, n)
+        self.substeps_total += n
+        return n
+
+    # -- observations ------------------------------------------------------------------------------
+    def measures(self, xz):
+        return pg.measure(self.water.net, xz, self.r)
+
+    def pressures(self, xz):
+        """U (Np,) [N/m] at centres xz (eq 32)."""
+        return self.water.pressure(self.measures(xz).void_area)
+
+
+class WaterEngine:
+    """The pore water of a YADE scene as a PyRunner (see the module docstring for the usage).
+
+    disc_ids: the spheres that bound the pores (particles and wall discs), kept in the x-z plane.
+    walls: {"bottom"|"left"|"right": ids} among disc_ids (inflow enters bottom pores; drained
+    sides drain through left/right). radii: the true disc radii [m] (default: read from the
+    bodies; give them when the contact law enlarges the spheres by eps_m/2). eps_m: contact range
+    of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
+    dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
+    """
+
+    def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
+                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True):
+        from yade import O  # YADE only here and below
+        from engines import yade_io
+
+        self.io = yade_io.Bodies(disc_ids)
+        ids = self.io.ids
+        if radii is None:
+            radii = [O.bodies[i].shape.radius for i in ids.tolist()]
+        code = np.zeros(len(ids), np.int64)
+        pos = {i: k for k, i in enumerate(ids.tolist())}
+        for name, group in (walls or {}).items():
+            if name not in WALL_CODES:
+                raise ValueError(f"walls: unknown group {name!r}; known: {sorted(WALL_CODES)}")
+            missing = [i for i in group if i not in pos]
+            if missing:
+                raise ValueError(f"walls[{name!r}]: ids {missing[:5]} are not among disc_ids")
+            code[[pos[i] for i in group]] = WALL_CODES[name]
+        if not O.dt > 0:
+            raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
+        self.model = WaterModel(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
+                                rebuild_interval, water_interval, compiled)
+        dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
+        self.forced = yade_io.Bodies(ids[dynamic])
+        self._dynamic = np.flatnonzero(dynamic)
+        self.F_const = np.zeros((len(self._dynamic), 2))
+        if buoyancy:
+            self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
+        self.forced.set_permanent_forces(self.F_const)
+        self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
+
+    def due(self, k):
+        """True when step k is a water step (every water_interval steps from the engine's creation)."""
+        return (k - self.k0) % self.model.water_interval == 0
+
+    def runner(self, label="water"):
+        """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. (Or, with no
+        PyRunner, call the engine before O.step() on the steps where ``due(O.iter)``: the same work,
+        since nothing moves the bodies between NewtonIntegrator and the next step's PyRunner.)"""
+        from engines import yade_io
+        return yade_io.py_runner(self.__call__, self.model.water_interval, label)
+
+    def __call__(self):
+        """One water step: rebuild at the first call at least rebuild_interval steps after the last
+        build, advance by water_interval x O.dt, write the forces."""
+        from yade import O
+        m = self.model
+        self.k = O.iter
+        xz = self.io.positions()
+        if self.k - self.k_built >= m.rebuild_interval:
+            m.rebuild(xz)
+            self.k_built = self.k
+        m.advance(m.water_interval * O.dt, xz)
+        self.forced.set_permanent_forces(self.F_const + m.F[self._dynamic])
+
+    def pressures(self):
+        """U (Np,) [N/m] of the pores at the current positions."""
+        return self.model.pressures(self.io.positions())
