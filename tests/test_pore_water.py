@@ -223,9 +223,10 @@ def test_eq45_46_running_averages_with_changing_areas():
 
 
 def test_rule_c_for_a_surface_pore():
-    """A surface pore without (a) or (b): the mean of its assigned neighbours with the outer face
-    counted as one more neighbour at U = 0 (the fast code's reading, docs/READINGS.md):
-    U = sum(U_nb) / (n_nb + 1). An inner pore gets the plain mean."""
+    """§3.4(2)(c): "その間隙と境界をともにするまわりのすべての図形の水圧の平均値" - the mean over the
+    surrounding figures (pores) sharing a boundary. The outside is not a figure: a surface pore
+    without (a) or (b) gets the plain mean of its neighbouring pores, as an inner pore does
+    (docs/READINGS.md D2), not sum / (n + 1) with the outside at U = 0."""
     xz, r, net = _random_network(n=100)
     n = net.n_pores
     U_old = np.linspace(10.0, 30.0, n)
@@ -237,7 +238,8 @@ def test_rule_c_for_a_surface_pore():
         assert counts["c"] == 1 and counts["a"] == n - 1
         nb = np.unique(np.concatenate([j[i == p], i[j == p]]))
         assert len(nb) >= 1
-        np.testing.assert_allclose(U[p], U_old[nb].sum() / (len(nb) + net.pore_surface[p]), rtol=1e-14)
+        np.testing.assert_allclose(U[p], U_old[nb].mean(), rtol=1e-14)
+        assert U[p] > U_old.min()      # all neighbours > 0: an outside at U = 0 would pull it lower
 
 
 def test_remesh_recomputes_water_from_eq32_and_books_the_change():
