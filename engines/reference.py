@@ -6,13 +6,13 @@ Independent of the fast modules: it imports nothing from engines/ but the record
 paper's variable names, one record per *ordered* pair (i, j) seen from element i (eq 2: alpha_ij),
 so Newton's third law is not built in but checked; pores are found by the paper's walk around
 the link graph and eq 33 is integrated arc by arc. Where the paper is silent or ambiguous the
-reading taken here is listed in docs/READINGS.md; where it differs from the fast code's, the
-fast code's reading is available as an option (``FAST_CODE_READINGS``) so that the cross-check
-can compare everything else to round-off and measure the effect of each disagreement.
+reading taken here is listed in docs/READINGS.md. The one place where the YADE path has used
+another reading, the wall kinematics, is an option (``readings``), so that the cross-check can
+compare everything else to round-off and measure the effect of the disagreement.
 
 Units are SI per unit thickness (SPEC §1): positions [m], forces [N], U and E_w [N/m], areas [m^2].
 Every floating-point state array has the dtype chosen by the caller (float32, float64, longdouble);
-only the pore *topology* (Delaunay candidates, faces) is decided in float64.
+only the pore *topology* (candidate links, faces) is decided in float64.
 
 Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_dem.py):
   a. du = x_t - x_{t-dt}, dpsi = psi_t - psi_{t-dt} (zero at k = 0).
@@ -27,8 +27,9 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_d
      with the area actually used (eq 45) and held until the next water step.
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17; eq 44 optional).
-  f. moving walls follow the input acceleration a(t_k) (§6.1: velocity and displacement by the
-     constant-acceleration method): x_w += v_w dt + a dt^2/2, v_w += a dt.
+  f. moving walls follow the input acceleration (§6.1: velocity and displacement by the
+     constant-(average-)acceleration method, ``WallMotion``): x_w += v_w dt + a_bar dt^2/2,
+     v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2.
   g. after the step, when (k + 1) % record_every == 0, a sample at t = (k + 1) dt: positions,
      block-mean U (eq 32 with the current W and the areas at the recorded positions), total water
      and the relative water-balance error.
@@ -36,7 +37,7 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_d
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import Delaunay, QhullError
+from scipy.spatial import ConvexHull, Delaunay, QhullError
 
 from engines.trajectory import Trajectory
 
@@ -44,17 +45,10 @@ G0 = 9.80665                 # standard gravity for records given in g [m/s^2]
 DEGENERATE_FRACTION = 1e-4   # a face with void area <= this x mean(pi r^2) at build is closed (no pore)
 PARTICLE, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3   # disc group codes of a packing
 
-# The readings of this reference (docs/READINGS.md) and those of the fast code where they differ.
-PAPER_READINGS = {
-    "record": "hold",                  # §6.1 等加速度法: a record sample holds until the next one
-    "wall_step": "constant_acceleration",   # x_w += v_w dt + a dt^2/2 (§6.1)
-    "rule_c_counts_outside": False,    # §3.4(2)(c): the mean over surrounding *pores* (図形) only
-}
-FAST_CODE_READINGS = {
-    "record": "linear",                # engines/pore_dem.py interpolates the record linearly
-    "wall_step": "symplectic_euler",   # v_w += a dt, then YADE moves x_w += v_w dt
-    "rule_c_counts_outside": True,     # engines/pore_water.py: the outer face counts as U = 0
-}
+# The reading of this reference where the YADE path has used another (docs/READINGS.md D1):
+# the wall kinematics, "average_acceleration" (the paper's) or "symplectic_euler" (WallMotion).
+WALL_STEPS = ("average_acceleration", "symplectic_euler")
+PAPER_READINGS = {"wall_step": "average_acceleration"}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -280,9 +274,10 @@ def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
 class Pores:
     """Topology of the pores between two rebuilds.
 
-    A pore is a bounded face of the planar graph of links (Delaunay edges of the centres passing
-    eq 28), found by the paper's walk (at each disc, turn to the next link clockwise), so its
-    boundary runs counter-clockwise with the pore on the left. Per pore (Np pores):
+    A pore is a bounded face of the planar graph of links (edges of the regular triangulation
+    passing eq 28, plus the eq 28 pairs it hides: ``build_pores``), found by the paper's walk (at
+    each disc, turn to the next link clockwise), so its boundary runs counter-clockwise with the
+    pore on the left. Per pore (Np pores):
       half-edges he_pore, he_a, he_b: boundary links a -> b;
       corners corner_pore, corner_disc, corner_prev, corner_next: disc d reached from prev, left to next;
       rattlers rattler_pore, rattler_disc: unlinked discs inside (their whole area is not void);
@@ -329,10 +324,102 @@ def corner_angles(x, disc, prev, nxt):
     return np.where(prev == nxt, two_pi, theta)
 
 
+def regular_triangles(x, r):
+    """Counter-clockwise triangles [[a, b, c], ...] of the regular (power) triangulation of the
+    discs: the lower convex hull of the centres lifted to (x, z, x^2 + z^2 - r^2) (READINGS D4).
+
+    Coordinates are taken relative to the mean centre and divided by the largest extent (the same
+    hull, better conditioned). A hull facet is lower when its unit outward normal has a lift
+    component below -1e-12 (the facets standing on collinear centres have 0). A disc whose lifted
+    point lies above the lower hull (an empty power cell) is in no triangle. If the lifted points
+    span no volume (three discs, or four cocircular equal ones) every triangulation of the centres
+    is regular: Delaunay's. Collinear centres: no triangles.
+    """
+    c = x - x.mean(axis=0)
+    size = float(np.max(np.abs(c)))
+    if not size > 0:
+        return []
+    c, rr = c / size, r / size
+    lifted = np.column_stack([c, c[:, 0] ** 2 + c[:, 1] ** 2 - rr**2])
+    try:
+        hull = ConvexHull(lifted)
+        simplices = hull.simplices[hull.equations[:, 2] < -1e-12].tolist()
+    except QhullError:
+        try:
+            simplices = Delaunay(x).simplices.tolist()
+        except QhullError:
+            return []
+    tris = []
+    for a, b, d in simplices:
+        area2 = (x[b, 0] - x[a, 0]) * (x[d, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[d, 0] - x[a, 0])
+        tris.append([a, b, d] if area2 > 0 else [a, d, b])
+    return tris
+
+
+def _turn(p, q, s):
+    """Twice the signed area of the triangle p, q, s: > 0 when s lies left of p -> q."""
+    return (q[0] - p[0]) * (s[1] - p[1]) - (q[1] - p[1]) * (s[0] - p[0])
+
+
+def _crosses(p, q, a, b):
+    """Segments p-q and a-b cross at a point inside both (no shared end, not collinear)."""
+    return (_turn(p, q, a) * _turn(p, q, b) < 0) and (_turn(a, b, p) * _turn(a, b, q) < 0)
+
+
+def insert_hidden_links(x, r, tris, reach, is_link):
+    """Add to the triangles' links every eq 28 pair (r_i + r_j + reach >= R_ij) of triangle
+    vertices that is not an edge and crosses no link, by flipping the edges it crosses
+    (READINGS D4). Pairs are taken from the closest gap R - r_i - r_j up, ties by index; a pair
+    whose segment runs through another centre is left out. Only non-link edges are flipped, so
+    no link is lost. Returns (triangles, pairs inserted). Brute force over the edges (a
+    reference, not a fast path)."""
+    pts = [tuple(p) for p in x.tolist()]
+    verts = np.array(sorted({v for t in tris for v in t}), int)
+    tri_of = {}                                   # directed edge (a, b) -> the third corner c of ccw (a, b, c)
+    for a, b, c in tris:
+        tri_of[(a, b)], tri_of[(b, c)], tri_of[(c, a)] = c, a, b
+    xv, rv = x[verts], r[verts]
+    gap = np.sqrt(((xv[:, None, :] - xv[None, :, :]) ** 2).sum(axis=2)) - rv[:, None] - rv[None, :]
+    iu, ju = np.nonzero(np.triu(gap <= reach, 1))
+    pairs = sorted((gap[a, b], verts[a], verts[b]) for a, b in zip(iu.tolist(), ju.tolist())
+                   if (verts[a], verts[b]) not in tri_of and (verts[b], verts[a]) not in tri_of)
+    inserted = 0
+    for _, k, l in pairs:
+        if (k, l) in tri_of:
+            continue                              # became an edge by an earlier insertion
+        P, Q = pts[k], pts[l]
+        if any(v not in (k, l) and _turn(P, Q, pts[v]) == 0 and
+               min(P[0], Q[0]) <= pts[v][0] <= max(P[0], Q[0]) and min(P[1], Q[1]) <= pts[v][1] <= max(P[1], Q[1])
+               for v in verts.tolist()):
+            continue                              # through another centre
+        crossed = [(a, b) for (a, b) in tri_of if a < b and _crosses(P, Q, pts[a], pts[b])]
+        if any(is_link(a, b) for a, b in crossed):
+            continue
+        queue = list(crossed)
+        while queue:                              # Lawson's flips towards k - l (Sloan 1993)
+            a, b = queue.pop(0)
+            c, d = tri_of[(a, b)], tri_of[(b, a)]     # (a, b, c) left of a -> b, (b, a, d) right
+            if not (_turn(pts[c], pts[d], pts[a]) * _turn(pts[c], pts[d], pts[b]) < 0
+                    and _turn(pts[a], pts[b], pts[c]) * _turn(pts[a], pts[b], pts[d]) < 0):
+                queue.append((a, b))              # quadrilateral a, d, b, c not convex: later
+                continue
+            for e in ((a, b), (b, c), (c, a), (b, a), (a, d), (d, b)):
+                del tri_of[e]
+            tri_of[(c, d)], tri_of[(d, b)], tri_of[(b, c)] = b, c, d      # triangle (c, d, b)
+            tri_of[(d, c)], tri_of[(c, a)], tri_of[(a, d)] = a, d, c      # triangle (d, c, a)
+            if {c, d} != {k, l} and _crosses(P, Q, pts[c], pts[d]):
+                queue.append((min(c, d), max(c, d)))
+        inserted += 1
+    out = [[a, b, c] for (a, b), c in tri_of.items() if a < b and a < c]
+    return out, inserted
+
+
 def build_pores(x, r, group, eps_m, l_m):
     """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], group codes.
 
-    The topology is decided in float64. Fewer than three discs or collinear centres: no pores.
+    Candidate links: the edges of the regular triangulation, then the eq 28 pairs it hides
+    (``insert_hidden_links``; READINGS D4). The topology is decided in float64. Fewer than three
+    discs or collinear centres: no pores.
     """
     x = np.asarray(x, np.float64)
     r = np.asarray(r, np.float64)
@@ -340,19 +427,13 @@ def build_pores(x, r, group, eps_m, l_m):
     a_min = DEGENERATE_FRACTION * float(np.mean(np.pi * r**2)) if n else 0.0
     if n < 3:
         return Pores(a_min=a_min)
-    try:
-        dl = Delaunay(x)
-    except QhullError:
-        return Pores(a_min=a_min)
-    tris = []
-    for t in dl.simplices.tolist():               # counter-clockwise corners
-        p0, p1, p2 = x[t[0]], x[t[1]], x[t[2]]
-        ccw = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]) > 0
-        tris.append(t if ccw else [t[0], t[2], t[1]])
 
     def is_link(a, b):                            # eq 28
         return r[a] + r[b] + eps_m + l_m >= np.hypot(*(x[b] - x[a]))
 
+    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link)
+    if not tris:
+        return Pores(a_min=a_min)
     edge_tri = {}                                 # directed edge -> triangle on its left
     for k, (a, b, c) in enumerate(tris):
         for e in ((a, b), (b, c), (c, a)):
@@ -405,10 +486,13 @@ def build_pores(x, r, group, eps_m, l_m):
             if len(faces) != 1:
                 raise RuntimeError(f"walk from {h0} crosses faces {faces}: links are not planar")
             cycles_of_face.setdefault(faces.pop(), []).append(cycle)
-    rattlers_of_face = {}
-    for d in range(n):
+    rattlers_of_face = {}     # unlinked discs: in the face of a triangle they are a corner of, or
+    for d in range(n):        # (empty power cell) of the first triangle that contains their centre
         if not around[d]:
             k = next((k for k, t in enumerate(tris) if d in t), None)
+            if k is None:
+                k = next((k for k, (a, b, c) in enumerate(tris) if min(
+                    _turn(x[a], x[b], x[d]), _turn(x[b], x[c], x[d]), _turn(x[c], x[a], x[d])) >= 0), None)
             if k is not None:
                 rattlers_of_face.setdefault(find(k), []).append(d)
 
@@ -639,24 +723,24 @@ class Water:
             self.surface_out += np.sum(q_surface) * h
             self.side_out += np.sum(q_side) * h
 
-    def remesh(self, new_pores, A_new, A_old, outside_counts=False):
+    def remesh(self, new_pores, A_new, A_old):
         """Move the water onto rebuilt pores keeping U continuous (§3.4(2)); W from eq 32.
         Returns the rule of each new pore."""
         U_old = pore_pressure(self.W, A_old, self.E_w)
-        U_new, rules = inherit_pressures(self.pores, U_old, A_old > self.pores.a_min, new_pores, outside_counts)
+        U_new, rules = inherit_pressures(self.pores, U_old, A_old > self.pores.a_min, new_pores)
         W_new = A_new * self.E_w / (self.E_w - np.asarray(U_new, self.dtype))   # eq 32 solved for W
         self.remesh_change += np.sum(W_new) - np.sum(self.W)
         self.pores, self.W, self.A_used, self.q_used = new_pores, W_new, A_new.copy(), None
         return rules
 
 
-def inherit_pressures(old, U_old, old_valid, new, outside_counts=False):
+def inherit_pressures(old, U_old, old_valid, new):
     """(U, rule) of each new pore by the rules of §3.4(2), in the project's reading:
     (a) the U of the old pore with the same vertex set; else (b) the mean U of the old pores whose
     vertex set contains or is contained in the new one (split / merge); else (c) the mean U of the
-    neighbouring new pores already assigned, in rounds until nothing changes (with
-    ``outside_counts``, the outer face counts as one more neighbour at U = 0 for a surface pore);
-    else (d) U = 0. Old pores pinched to A <= a_min pass nothing on."""
+    neighbouring new pores already assigned ("まわりのすべての図形": pores only, the outside is
+    not one; READINGS D2), in rounds until nothing changes; else (d) U = 0. Old pores pinched to
+    A <= a_min pass nothing on."""
     valid = [p for p in range(old.n_pores) if old_valid[p]]
     by_set = {old.vertex_sets[p]: p for p in valid}
     U, rule = [None] * new.n_pores, [""] * new.n_pores
@@ -672,7 +756,7 @@ def inherit_pressures(old, U_old, old_valid, new, outside_counts=False):
         for p in range(new.n_pores):
             known = [U[q] for q in new.neighbours[p] if U[q] is not None]
             if U[p] is None and known:
-                assign[p] = sum(known) / (len(known) + bool(outside_counts and new.surface[p]))
+                assign[p] = sum(known) / len(known)
         if not assign:
             break
         for p, u in assign.items():
@@ -686,14 +770,13 @@ def inherit_pressures(old, U_old, old_valid, new, outside_counts=False):
 # ------------------------------------------------------------------------------------------------
 # Input motion of the moving walls (§6.1)
 # ------------------------------------------------------------------------------------------------
-def input_acceleration(loading, record="hold"):
+def input_acceleration(loading):
     """a(t) [m/s^2] of the moving walls from the [loading] table, or None for no loading.
 
     cosine: amplitude cos(2 pi frequency t). record: a two-column file (time [s], acceleration in
-    record_units: g, gal or m/s2) rescaled by time_scale and amplitude_scale; between samples the
-    acceleration is held
-    (record = "hold", the constant-acceleration method of §6.1) or interpolated linearly
-    ("linear"); 0 after the last sample.
+    record_units: g, gal or m/s2) rescaled by time_scale and amplitude_scale, linear between
+    samples (a digital record samples a continuous motion; READINGS D1), 0 before the first and
+    after the last sample.
     """
     kind = loading["type"]
     if kind == "none":
@@ -705,13 +788,47 @@ def input_acceleration(loading, record="hold"):
     t_rec = data[:, 0] * loading["time_scale"]
     unit = {"g": G0, "gal": 0.01, "m/s2": 1.0}[loading.get("record_units", "g")]
     a_rec = data[:, 1] * unit * loading["amplitude_scale"]
-    if record == "linear":
-        return lambda t: float(np.interp(t, t_rec, a_rec, right=0.0))
+    return lambda t: float(np.interp(t, t_rec, a_rec, left=0.0, right=0.0))
 
-    def held(t):
-        k = int(np.searchsorted(t_rec, t, side="right")) - 1
-        return float(a_rec[k]) if 0 <= k < len(t_rec) - 1 or t == t_rec[-1] else 0.0
-    return held
+
+class WallMotion:
+    """Velocity v [m/s] of the walls that follow the input a(t), advanced one step at a time.
+
+    wall_step = "average_acceleration" (§6.1 "速度、変位を等加速度法で求める", read as the constant
+    average acceleration method, Newmark beta = 1/4, gamma = 1/2; READINGS D1): over step k the
+    acceleration is the mean of its ends, a_bar = (a(t_k) + a(t_k+1)) / 2, and
+        u_k+1 = u_k + v_k dt + a_bar dt^2 / 2,   v_k+1 = v_k + a_bar dt.
+    wall_step = "symplectic_euler" (the YADE path before it took this reading): v_k+1 = v_k + a(t_k) dt,
+    u_k+1 = u_k + v_k+1 dt.
+    """
+
+    def __init__(self, accel, dt, wall_step, dtype=np.float64):
+        if wall_step not in WALL_STEPS:
+            raise ValueError(f"wall_step must be one of {WALL_STEPS}, got {wall_step!r}")
+        self.accel, self.dt, self.wall_step, self.dtype = accel, dtype(dt), wall_step, dtype
+        self.v = dtype(0)
+
+    def step(self, k):
+        """The displacement du [m] of step k (t_k = k dt -> t_k+1); advances v."""
+        dt = self.dt
+        a0 = self.dtype(self.accel(k * float(dt)))
+        if self.wall_step == "symplectic_euler":
+            self.v = self.v + a0 * dt
+            return self.v * dt
+        a_bar = (a0 + self.dtype(self.accel((k + 1) * float(dt)))) / 2
+        du = self.v * dt + a_bar * dt * dt / 2
+        self.v = self.v + a_bar * dt
+        return du
+
+
+def wall_displacements(loading, dt, n_steps, wall_step):
+    """Displacements u(t_1) .. u(t_n) [m] (n_steps,) of the driven walls from rest (None without
+    loading): what the cross-check compares the YADE path's walls with to tell its reading."""
+    accel = input_acceleration(loading)
+    if accel is None:
+        return None
+    motion = WallMotion(accel, dt, wall_step)
+    return np.cumsum([motion.step(k) for k in range(n_steps)])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -733,7 +850,7 @@ class ReferenceModel:
 
     ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
     any object with xz (N, 2), r (N,), group (N,) and density_factor (N,); ``readings``: overrides of
-    PAPER_READINGS (e.g. FAST_CODE_READINGS). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
+    PAPER_READINGS (e.g. {"wall_step": "symplectic_euler"}). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
     psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]. ``contact`` (PairRecords),
     ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
     """
@@ -766,10 +883,10 @@ class ReferenceModel:
         if s.wet:
             self.weight[:, 1] += dt_(s.rho_w) * pi * self.r**2 * dt_(s.g)                    # eq 34b buoyancy
         self.contact = PairRecords(s, self.r, self.mobile, dt_)
-        self.accel = input_acceleration(s.loading, self.readings["record"])
+        accel = input_acceleration(s.loading)
+        self.walls = None if accel is None else WallMotion(accel, s.dt, self.readings["wall_step"], dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
-        self.moving = np.isin(self.group, moving) & (self.accel is not None)
-        self.wall_v = dt_(0)
+        self.moving = np.isin(self.group, moving) & (accel is not None)
         self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
         self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0),
                        "history": []}   # history: (step, rule counts) of every rebuild
@@ -788,8 +905,7 @@ class ReferenceModel:
     def rebuild(self):
         """New pores at the current positions, pressures inherited by §3.4(2)."""
         new = self._build()
-        rules = self.water.remesh(new, self._measure(new).void_area, self._measure().void_area,
-                                  self.readings["rule_c_counts_outside"])
+        rules = self.water.remesh(new, self._measure(new).void_area, self._measure().void_area)
         this = {r: rules.count(r) for r in "abcd"}
         for r, c in this.items():
             self.counts["remesh"][r] += c
@@ -827,14 +943,8 @@ class ReferenceModel:
         self.x_prev, self.psi_prev = self.x.copy(), self.psi.copy()
         self.x[m] += step_x
         self.psi[m] += step_psi
-        if self.accel is not None:                                          # f
-            a = self.dtype(self.accel(k * s.dt))
-            if self.readings["wall_step"] == "constant_acceleration":
-                self.x[self.moving, 0] += self.wall_v * dt + a * dt * dt / 2
-                self.wall_v += a * dt
-            else:
-                self.wall_v += a * dt
-                self.x[self.moving, 0] += self.wall_v * dt
+        if self.walls is not None:                                          # f
+            self.x[self.moving, 0] += self.walls.step(k)
         self.k += 1
 
     def block_pressures(self):

@@ -2,12 +2,14 @@
 
 Run:  yade -n -x yade_scripts/crosscheck.py --out DIR   -> DIR/crosscheck.json, exit 1 if a case fails.
 Importable headless: ``run_cases(yade_simulate, ref_simulate, ...)`` and ``precision_study`` take the
-``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments.
+``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments (the YADE
+side also gets ``hooks=``, the reference side ``readings=``).
 
-The reference runs with the fast code's readings where the two differ (engines.reference
-FAST_CODE_READINGS, docs/READINGS.md), so that everything else is compared to round-off; the effect
-of each disagreement is measured by running the reference with its own readings too
-(``reading_disagreements`` in crosscheck.json; reported, not judged).
+Where the YADE path moves the walls by another reading than the reference's (READINGS D1: before
+branch liq, symplectic Euler instead of the constant-average-acceleration method), the reading
+is told from the recorded wall positions (``wall_reading``) and the reference runs with it, so that
+everything else is compared to round-off; the effect of the disagreement is measured by running the
+reference with its own reading too (``reading_disagreements`` in crosscheck.json; reported, not judged).
 
 Contact cases (short, deterministic; every tolerance is stated with its reason in the case's ``why``):
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
@@ -36,8 +38,8 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
 from engines import scene as sc  # noqa: E402
-from engines.reference import (FAST_CODE_READINGS, PAPER_READINGS, porosity,  # noqa: E402
-                               simulate_reference)
+from engines.reference import (BOTTOM, PAPER_READINGS, WALL_STEPS, porosity, simulate_reference,  # noqa: E402
+                               wall_displacements)
 from engines.trajectory import Trajectory  # noqa: E402
 from packing.packing import Packing  # noqa: E402
 
@@ -210,12 +212,13 @@ TRAJ_TOL = 1e-9        # positions / mean radius while the runs are comparable
 PRESSURE_TOL = 1e-9    # block pressures / max |U| of the reference over the comparable window
 WATER_TOL = 1e-12      # each run's own water budget, relative to its initial water
 PERTURBATION = 1e-12   # of a mean radius, added to every particle's start to time the divergence
+WALL_TOL = 1e-9        # wall displacement / its largest value: the YADE path follows a wall reading
 MIN_WINDOW = 3         # samples the comparable window must hold for the case to check anything
 STAT_FACTOR, STAT_FLOOR = 4.0, 0.02   # statistics after divergence: see compare_statistics
 FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pressures {PRESSURE_TOL:g} of "
                f"max |U|, total water {TRAJ_TOL:g} of the initial: it changes only through the areas at a "
                "re-meshing, eq 32) compared up to the divergence time, when the reference "
-               f"started from x_0 + {PERTURBATION:g} r departs from the reference by {TRAJ_TOL:g} r: until then "
+               f"started from x_0 + {PERTURBATION:g} r departs from the reference by one of these tolerances: until then "
                "both paths differ only by round-off, which grows no faster than that perturbation; both "
                f"water budgets close to {WATER_TOL:g}; after the divergence, time means of block pressures "
                f"and porosity agree within {STAT_FACTOR:g} x the spread between the two reference runs "
@@ -226,15 +229,13 @@ FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pr
 @dataclass
 class FeatureCase:
     """A long run of one scene: ``build()`` -> (scene, packing); ``rules``: the re-meshing rules it
-    must fire (on the reference side); ``readings``: reference readings (engines.reference
-    PAPER_READINGS) that differ from the fast code's and whose effect this case measures."""
+    must fire (on the reference side)."""
 
     name: str
     build: object
     n_steps: int
     record_every: int
     rules: str = ""
-    readings: tuple = ()
     min_rebuilds: int = 20
 
 
@@ -282,20 +283,18 @@ def feature_cases():
     """Each feature of the model in at least one case of >= 20 pore rebuilds (see FEATURE_WHY)."""
     shaken = {"loading": {"type": "cosine", "moves": "box", "amplitude": 15.0, "frequency": 50.0}}
     return [
-        FeatureCase("settling_rules", settling_build(), 5000, 50, rules="abcd",
-                    readings=("rule_c_counts_outside",)),
+        FeatureCase("settling_rules", settling_build(), 5000, 50, rules="abcd"),
         FeatureCase("quicksand_smoothing", quicksand_build(water={"q_w": 5e-3, "smoothing": True},
                                                            numerics={"rebuild_interval": 100}), 2100, 50),
         FeatureCase("shaken_drained_wet_d", quicksand_build(
             water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
             contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
-            numerics={"rebuild_interval": 100, "water_interval": 2}, **shaken), 2100, 50,
-            readings=("wall_step",)),
+            numerics={"rebuild_interval": 100, "water_interval": 2}, **shaken), 2100, 50),
         FeatureCase("elcentro_column", quicksand_build(
             water={"q_w": 0.0, "E_w": 2400.0, "k1": 100.0, "k2": 100.0},
             loading={"type": "record", "record": ELCENTRO, "moves": "box", "time_scale": 0.001,
                      "amplitude_scale": 5.0},
-            numerics={"rebuild_interval": 100}), 2100, 50, readings=("record", "wall_step")),
+            numerics={"rebuild_interval": 100}), 2100, 50),
     ]
 
 
@@ -334,13 +333,21 @@ def yade_remesh_counter():
     return hook, counts
 
 
-def divergence(ta, tb, mean_r, tol=TRAJ_TOL):
-    """(index of the first sample where max |x_a - x_b| / mean_r > tol, its time); (n, inf) if never."""
-    _, xa, *_ = ta.arrays()
-    t, xb, *_ = tb.arrays()
-    d = np.max(np.abs(xa - xb), axis=(1, 2)) / mean_r
-    over = np.flatnonzero(d > tol)
-    return (int(over[0]), float(t[over[0]])) if len(over) else (len(t), float("inf"))
+def divergence(ta, tb, mean_r):
+    """(index of the first sample where the runs differ by more than a window tolerance, its time);
+    (n, inf) if never. Differences as in ``trajectory_diffs``: positions / mean_r > TRAJ_TOL, block
+    pressures / max |U_b| > PRESSURE_TOL, total water / W_b(0) > TRAJ_TOL (the water and pressures
+    jump at a rebuild by amounts that can be more sensitive to the positions than the positions are)."""
+    t, xa, Ua, Wa, _ = ta.arrays()
+    _, xb, Ub, Wb, _ = tb.arrays()
+    over = np.max(np.abs(xa - xb), axis=(1, 2)) / mean_r > TRAJ_TOL
+    if Ub.size and not np.all(np.isnan(Ub)):
+        with np.errstate(invalid="ignore"):
+            dU = np.nanmax(np.abs(Ua - Ub), axis=1, initial=0.0) / max(np.nanmax(np.abs(Ub)), TINY)
+        over |= (dU > PRESSURE_TOL) | (np.isnan(Ua) != np.isnan(Ub)).any(axis=1)
+        over |= np.abs(Wa - Wb) / Wb[0] > TRAJ_TOL
+    first = np.flatnonzero(over)
+    return (int(first[0]), float(t[first[0]])) if len(first) else (len(t), float("inf"))
 
 
 def rules_before(history, t_end, dt):
@@ -385,9 +392,31 @@ def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
     return out, ok
 
 
-def run_feature_case(case, yade_simulate, ref_simulate, paper_simulate=None):
-    """One FeatureCase: YADE, the reference, the reference perturbed, and (if ``paper_simulate``)
-    the reference with its own readings where they differ from the fast code's."""
+def wall_reading(traj, scene, pk):
+    """The wall kinematics (engines.reference WALL_STEPS) the run ``traj`` followed, told from its
+    bottom-wall positions: {"wall_step": name} of the reading they match to WALL_TOL of the largest
+    displacement, {} without loading. Raises ValueError (with each reading's error) when none
+    matches. The readings differ by ~a dt t / 2, 1e-4-1e-3 of the displacement in these cases."""
+    tables = scene.as_dict()
+    t, x, *_ = traj.arrays()
+    steps = np.rint(t / scene.numerics.dt).astype(int)
+    moved = x[:, pk.group == BOTTOM, 0] - pk.xz[pk.group == BOTTOM, 0]
+    errors = {}
+    for name in WALL_STEPS:
+        u = wall_displacements(tables["loading"], scene.numerics.dt, int(steps.max()), name)
+        if u is None:
+            return {}
+        expected = u[steps - 1][:, None]
+        errors[name] = float(np.max(np.abs(moved - expected)) / max(np.max(np.abs(expected)), TINY))
+        if errors[name] <= WALL_TOL:
+            return {"wall_step": name}
+    raise ValueError(f"the bottom wall follows none of the wall readings: relative errors {errors}")
+
+
+def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
+    """One FeatureCase: YADE, the reference (with the YADE path's wall reading, ``wall_reading``),
+    the reference perturbed, and (if ``measure_readings`` and the wall readings differ) the
+    reference with its own reading."""
     out = {"name": case.name, "passed": False, "why": FEATURE_WHY}
     try:
         scene, pk = case.build()
@@ -396,11 +425,13 @@ def run_feature_case(case, yade_simulate, ref_simulate, paper_simulate=None):
         t0 = time.time()
         ty = yade_simulate(scene, pk, case.n_steps, case.record_every, hooks=[hook])
         t1 = time.time()
-        tr = ref_simulate(scene, pk, case.n_steps, case.record_every)
+        readings = wall_reading(ty, scene, pk)
+        tr = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=readings)
         t2 = time.time()
         moved = pk.xz.copy()
         moved[pk.mobile] += PERTURBATION * mean_r
-        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every)
+        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
+                          readings=readings)
         t3 = time.time()
         rcounts = tr.info["counts"]
         ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
@@ -431,8 +462,10 @@ def run_feature_case(case, yade_simulate, ref_simulate, paper_simulate=None):
                            "yade": {k: v for k, v in ycounts.items() if k != "history"}},
                    statistics=stat_cmp, checks=checks,
                    seconds={"yade": t1 - t0, "ref": t2 - t1, "ref_perturbed": t3 - t2, "statistics": t4 - t3})
-        if paper_simulate is not None and case.readings:
-            out["reading_disagreements"] = reading_effect(case, scene, pk, tr, tp, paper_simulate)
+        out["yade_readings"] = readings
+        differ = {k: v for k, v in readings.items() if v != PAPER_READINGS[k]}
+        if measure_readings and differ:
+            out["reading_disagreements"] = reading_effect(case, scene, pk, tr, tp, ref_simulate, differ)
         out["passed"] = all(checks.values())
         if not out["passed"]:
             out["why"] = f"FAILED {', '.join(k for k, v in checks.items() if not v)}. ({FEATURE_WHY})"
@@ -441,19 +474,18 @@ def run_feature_case(case, yade_simulate, ref_simulate, paper_simulate=None):
     return out
 
 
-def reading_effect(case, scene, pk, tr, tp, paper_simulate):
-    """The reference with the paper readings ``case.readings`` (instead of the fast code's): when it
-    departs from the reference with the fast code's readings, and its statistics beside the spread."""
+def reading_effect(case, scene, pk, tr, tp, ref_simulate, differ):
+    """The reference with its own readings instead of the YADE path's ``differ``: when it departs
+    from the reference with the YADE path's readings, and its statistics beside the spread."""
     t0 = time.time()
-    readings = {**FAST_CODE_READINGS, **{k: PAPER_READINGS[k] for k in case.readings}}
-    ta = paper_simulate(scene, pk, case.n_steps, case.record_every, readings=readings)
+    ta = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=PAPER_READINGS)
     mean_r = float(np.mean(pk.r[pk.mobile]))
     n_div, t_div = divergence(ta, tr, mean_r)
     n_chaos, t_chaos = divergence(tp, tr, mean_r)
     start = min(n_chaos, len(tr.t) - 1)
     sa = statistics(ta, start, pk, scene)
     sr, sp = (statistics(tj, start, pk, scene) for tj in (tr, tp))
-    return {"readings": {k: {"paper": PAPER_READINGS[k], "fast_code": FAST_CODE_READINGS[k]} for k in case.readings},
+    return {"readings": {k: {"paper": PAPER_READINGS[k], "yade": v} for k, v in differ.items()},
             "departs_at_s": _finite(t_div), "chaotic_divergence_at_s": _finite(t_chaos),
             "max_position_diff_rel": float(np.max(np.abs(np.array(ta.xz) - np.array(tr.xz))) / mean_r),
             "counts_paper_readings": {k: v for k, v in ta.info["counts"].items() if k != "history"},
@@ -496,11 +528,13 @@ def summary(case_result):
     return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
-def run_cases(yade_simulate, ref_simulate, cases=None, log=None, features=None, paper_simulate=None):
+def run_cases(yade_simulate, ref_simulate=simulate_reference, cases=None, log=None, features=None,
+              measure_readings=False):
     """Run ``cases`` (default: the contact cases) and ``features`` (default: feature_cases()) in both
-    implementations: {"cases": [...], "feature_cases": [...], "passed": bool}. ``ref_simulate`` runs
-    the reference with the fast code's readings; ``paper_simulate(..., readings=)`` (optional) the
-    reference with its own, to measure each disagreement. ``log``: optional callable given a line per case."""
+    implementations: {"cases": [...], "feature_cases": [...], "passed": bool}. ``ref_simulate(...,
+    readings=)`` runs the reference (feature cases: with the YADE path's wall reading); with
+    ``measure_readings`` also with its own where they differ, to measure the disagreement.
+    ``log``: optional callable given a line per case."""
     cases = contact_cases() if cases is None else cases
     features = feature_cases() if features is None else features
     results, long = [], []
@@ -509,7 +543,7 @@ def run_cases(yade_simulate, ref_simulate, cases=None, log=None, features=None, 
         if log:
             log(summary(results[-1]))
     for c in features:
-        long.append(run_feature_case(c, yade_simulate, ref_simulate, paper_simulate))
+        long.append(run_feature_case(c, yade_simulate, ref_simulate, measure_readings))
         if log:
             log(feature_summary(long[-1]))
     return {"cases": results, "feature_cases": long,
@@ -531,12 +565,7 @@ def feature_summary(c):
     return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
-def reference_fast_readings(scene, packing, n_steps, record_every, dtype=np.float64):
-    """The reference with the fast code's readings (the comparisons of the cross-check)."""
-    return simulate_reference(scene, packing, n_steps, record_every, dtype, readings=FAST_CODE_READINGS)
-
-
-def precision_study(ref_simulate=reference_fast_readings, build=None, n_steps=2000, record_every=100):
+def precision_study(ref_simulate=simulate_reference, build=None, n_steps=2000, record_every=100):
     """The reference on quicksand_column in float32, float64 and longdouble: max position difference
     / mean radius and block-pressure differences (max |dU| [N/m] and relative to max |U|) against
     longdouble."""
@@ -583,8 +612,7 @@ def main(argv):
     args = ap.parse_args(argv)
     from engines.yade_coupling import simulate  # needs YADE: run under `yade -n -x`
     t0 = time.time()
-    result = run_cases(simulate, reference_fast_readings, log=lambda line: print(line, flush=True),
-                       paper_simulate=simulate_reference)
+    result = run_cases(simulate, log=lambda line: print(line, flush=True), measure_readings=True)
     if not args.skip_precision:
         try:
             result["precision"] = precision_study()
