@@ -1,10 +1,11 @@
 """Mutation testing of the core modules with mutmut (``make mutants``; not part of ``make test``).
 
-    out/venv-mutants/bin/python tests/mutants.py [--out out/mutants] [--max-children 2]
+    out/venv-mutants/bin/python tests/mutants.py [--out out/mutants] [--max-children 2] [--again]
 
-Copies the project into OUT/work, configures mutmut (setup.cfg) to mutate MODULES and to run the
-fast tests of TESTS (no YADE, no cross-check: mutmut runs, per mutant, only the tests that reach the
-mutated function), runs it niced, and writes OUT/summary.json:
+Copies the project into OUT/work, configures mutmut (setup.cfg) to mutate MODULES (the four core
+modules, judged, and EXTRA, reported) and to run the fast tests of TESTS (no YADE, no cross-check:
+mutmut collects which tests reach each function and runs, per mutant, only those, stopping at the
+first failure), runs it niced, and writes OUT/summary.json:
 
     {"modules": {path: {"total": n, "killed": k, "survived": s, "equivalent": e, "score": ...,
                         "not_checked": u}},
@@ -12,7 +13,9 @@ mutated function), runs it niced, and writes OUT/summary.json:
 
 and OUT/survivors.txt (each surviving mutant's diff, for review). A timed-out or crashed mutant
 counts as killed; a mutant no test reaches counts as survived; mutants an interrupted run did not
-reach are left out of the totals (``not_checked``). Mutants judged equivalent (they
+reach are left out of the totals (``not_checked``). ``--again`` keeps OUT/work and its results,
+copies the current sources and tests in, and runs only what needs it: mutants of changed functions,
+unchecked ones and the survivors (with the new tests). Mutants judged equivalent (they
 cannot change any result) are listed in tests/equivalent_mutants.txt, one per line as
 ``mutant-name  reason``; a listed mutant that was killed is reported as stale.
 mutmut must run from a virtual environment over Debian's Python with --system-site-packages, so
@@ -21,6 +24,7 @@ that YADE's NumPy and SciPy are the ones the tests use (see the Makefile's mutan
 import argparse
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -28,9 +32,10 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODULES = ["engines/pore_water.py", "engines/pore_geometry.py", "engines/contact.py", "engines/pore_dem.py"]
+EXTRA = ["engines/water_engine.py", "engines/paper_law.py"]
 TESTS = ["tests/test_pore_water.py", "tests/test_pore_geometry.py", "tests/test_contact.py",
          "tests/test_pore_dem.py", "tests/test_scene.py", "tests/test_pore_candidates.py",
-         "tests/test_remesh_transfer.py"]
+         "tests/test_remesh_transfer.py", "tests/test_kernels.py"]
 COPY = ["engines", "packing", "yade_scripts", "tests"]
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_mutants.txt")
 KILLED = {"killed", "timeout", "segfault"}
@@ -50,13 +55,14 @@ def read_equivalent(path=EQUIVALENT):
     return out
 
 
-def prepare(work, modules, tests):
-    """A fresh copy of the project in ``work`` with the mutmut configuration."""
-    if os.path.exists(work):
+def prepare(work, modules, tests, again=False):
+    """A copy of the project in ``work`` with the mutmut configuration (fresh, or with ``again``
+    over the previous copy, keeping mutmut's results in work/mutants)."""
+    if os.path.exists(work) and not again:
         shutil.rmtree(work)
-    os.makedirs(work)
+    os.makedirs(work, exist_ok=True)
     for d in COPY:
-        shutil.copytree(os.path.join(ROOT, d), os.path.join(work, d),
+        shutil.copytree(os.path.join(ROOT, d), os.path.join(work, d), dirs_exist_ok=True,
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     lines = ["[mutmut]", "source_paths=", *(f"    {m}" for m in modules), "also_copy=",
              *(f"    {d}" for d in COPY if d != "tests"), "pytest_add_cli_args_test_selection=",
@@ -64,6 +70,20 @@ def prepare(work, modules, tests):
              "    -p", "    no:warnings"]
     with open(os.path.join(work, "setup.cfg"), "w") as f:
         f.write("\n".join(lines) + "\n")
+
+
+PROGRESS = re.compile(r"[\u2800-\u28ff] \d+/\d+ [^\u2800-\u28ff\n]*")
+
+
+def run_mutmut(work, mutmut, max_children, names, log):
+    """``mutmut run`` niced (on ``names`` only, if given), its progress spinner cut to the last frame."""
+    run = subprocess.run(["nice", "-n", "10", mutmut, "run", "--max-children", str(max_children), *names],
+                         cwd=work, capture_output=True, text=True)
+    text = run.stdout + run.stderr
+    frames = PROGRESS.findall(text)
+    log.write(PROGRESS.sub("", text) + (f"\nlast progress: {frames[-1]}\n" if frames else ""))
+    if run.returncode not in (0, 1):
+        sys.exit(f"mutmut run failed ({run.returncode}); see {log.name}")
 
 
 def results(work, mutmut):
@@ -85,7 +105,8 @@ def module_of(name, modules):
     raise ValueError(f"mutant {name} is in none of {modules}")
 
 
-def summarise(status, modules, equivalent):
+def summarise(status, modules, equivalent, judged=MODULES):
+    """Counts and score per module; the overall score over the ``judged`` modules."""
     per = {m: {"total": 0, "killed": 0, "survived": 0, "equivalent": 0, "not_checked": 0} for m in modules}
     stale = []
     for name, state in status.items():
@@ -105,9 +126,10 @@ def summarise(status, modules, equivalent):
     for row in per.values():
         judged = row["total"] - row["equivalent"]
         row["score"] = row["killed"] / judged if judged else None
-    total = sum(r["total"] for r in per.values())
-    killed = sum(r["killed"] for r in per.values())
-    equiv = sum(r["equivalent"] for r in per.values())
+    rows = [r for m, r in per.items() if m in judged]
+    total = sum(r["total"] for r in rows)
+    killed = sum(r["killed"] for r in rows)
+    equiv = sum(r["equivalent"] for r in rows)
     return {"modules": per, "score": killed / (total - equiv) if total > equiv else None,
             "stale_equivalent": sorted(stale)}
 
@@ -116,8 +138,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "mutants"))
     ap.add_argument("--max-children", type=int, default=2, help="parallel mutant runs (the machine has 2 cores)")
-    ap.add_argument("--modules", nargs="+", default=MODULES, help="source files to mutate")
+    ap.add_argument("--modules", nargs="+", default=MODULES + EXTRA, help="source files to mutate")
     ap.add_argument("--report-only", action="store_true", help="summarise the last run in OUT/work again")
+    ap.add_argument("--again", action="store_true",
+                    help="keep the last run's results: re-test changed, unchecked and surviving mutants")
     args = ap.parse_args(argv)
     if args.max_children < 1:
         ap.error(f"--max-children must be >= 1, got {args.max_children}")
@@ -127,12 +151,16 @@ def main(argv=None):
     work = os.path.join(args.out, "work")
     t0 = time.time()
     if not args.report_only:
-        prepare(work, args.modules, TESTS)
-        with open(os.path.join(args.out, "run.log"), "w") as log:
-            run = subprocess.run(["nice", "-n", "10", mutmut, "run", "--max-children", str(args.max_children)],
-                                 cwd=work, stdout=log, stderr=subprocess.STDOUT)
-        if run.returncode not in (0, 1):
-            sys.exit(f"mutmut run failed ({run.returncode}); see {args.out}/run.log")
+        again = args.again and os.path.exists(os.path.join(work, "mutants"))
+        prepare(work, args.modules, TESTS, again)
+        with open(os.path.join(args.out, "run.log"), "a" if again else "w") as log:
+            run_mutmut(work, mutmut, args.max_children, [], log)   # new, changed and unchecked mutants
+            if again:
+                equivalent = read_equivalent()
+                left = sorted(n for n, st in results(work, mutmut).items()
+                              if st not in KILLED | {"not checked"} and n not in equivalent)
+                for k in range(0, len(left), 200):
+                    run_mutmut(work, mutmut, args.max_children, left[k:k + 200], log)
     status = results(work, mutmut)
     summary = summarise(status, args.modules, read_equivalent())
     summary["seconds"] = time.time() - t0
