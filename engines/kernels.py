@@ -282,7 +282,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints
     """Advance the water by h [s] at centres xz and recompute the pressure forces F (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
     n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
-    throat flows into q_prev), U at the measured areas (eq 32), ``pressure_forces``. The network's
+    throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
     arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (``pack``);
     "lam" gets the Gershgorin bound of the first and of the last flows, "balance" the water of this
     step. Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or
@@ -332,7 +332,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints
         bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
         if bad >= 0:
             return -1 - bad
-    pore_pressures(W, A_measured, wp[0], U)  # eq 32 at the measured (unsmoothed) areas
+    pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
     pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
     return n_sub
 

@@ -231,8 +231,8 @@ class PoreWater:
 
         A new pore takes (a) the U of the old pore with the same vertex set; else (b) the mean U
         of the old pores whose vertex set contains or is contained in its own (a split or merge);
-        else (c) the mean U of its already assigned neighbouring pores (the outer face counts as
-        U = 0 for a surface pore), repeated until nothing changes; else (d) U = 0. Old pores
+        else (c) the mean U of its already assigned neighbouring pores (the outside is not a pore
+        and does not count), repeated until nothing changes; else (d) U = 0. Old pores
         pinched at A <= a_min do not pass on their pressure.
         transfer = "paper": W is recomputed from U and the new A (eq 32).
         transfer = "conserving": W from ``conserving_water`` (needs xz); new pores that overlap no
@@ -284,7 +284,7 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
             near = [q for q in cands if _subset_or_superset(set(old_net.vertices_of(q).tolist()), mine)]
             if near:
                 U[p], rule[p] = float(np.mean(U_old[near])), "b"
-    # (c) mean of assigned neighbours, the outer face at U = 0 for surface pores
+    # (c) mean over the assigned neighbouring pores ("まわりのすべての図形"); the outside is not a pore
     i, j = np.unique(np.sort(new_net.throat_conns, axis=1), axis=0).T  # distinct neighbours
     while True:
         unset = np.isnan(U)
@@ -294,11 +294,10 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
         has = (~unset).astype(float)
         s = np.bincount(i, known[j], n_new) + np.bincount(j, known[i], n_new)
         c = np.bincount(i, has[j], n_new) + np.bincount(j, has[i], n_new)
-        c_tot = c + new_net.pore_surface
-        assign = unset & (c_tot > 0) & (c > 0)
+        assign = unset & (c > 0)
         if not assign.any():
             break
-        U[assign] = s[assign] / c_tot[assign]
+        U[assign] = s[assign] / c[assign]
         rule[assign] = "c"
     left = np.isnan(U)  # (d)
     U[left], rule[left] = 0.0, "d"

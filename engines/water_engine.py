@@ -114,7 +114,8 @@ class WaterModel:
         if not self.compiled:
             m = pg.measure(self.water.net, xz, self.r)
             self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
-            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(m.void_area), m)
+            A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
+            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
             return
         args = self.kernel_args(h)
         self.finish_kernel_step(h, kernels.water_step(xz, *args), args)

@@ -243,9 +243,10 @@ class YadeCoupling:
         return float(fn[sel].mean()) if sel.any() else 0.0
 
 
-def simulate(scene, packing, n_steps, record_every):
+def simulate(scene, packing, n_steps, record_every, hooks=()):
     """Run a scene in YADE and record a Trajectory after every ``record_every`` steps
-    (at t = (k + 1) dt); the recording contract is shared with engines.reference."""
+    (at t = (k + 1) dt); the recording contract is shared with engines.reference.
+    ``hooks``: called as hook(coupling) after each recorded chunk (the cross-check counts rules)."""
     cp = YadeCoupling(scene, packing)
     traj = Trajectory(info={"implementation": "yade", "law": scene.contact.law, "io": yade_io.BACKEND})
     steps_left = n_steps
@@ -253,6 +254,8 @@ def simulate(scene, packing, n_steps, record_every):
         chunk = min(record_every, steps_left)
         cp.run(chunk)
         steps_left -= chunk
+        for hook in hooks:
+            hook(cp)
         xz = cp.positions()
         w = cp.water
         traj.append(O.iter * scene.numerics.dt, xz, cp.block_pressures(xz),
