@@ -97,8 +97,8 @@ def record_acceleration(path, time_scale=1.0, amplitude_scale=1.0, units="g"):
 
 
 def input_acceleration(scene):
-    """a(t) [m/s^2] of a scene's [loading] table, or None for type = none. Drop-in for
-    engines.pore_dem.input_acceleration (which knows no record units)."""
+    """a(t) [m/s^2] of a scene's [loading] table, or None for type = none: the one input of the
+    YADE path (engines.pore_dem.PoreDEM, engines.yade_coupling) and of engines.preflight."""
     ld = scene.loading
     if ld.type == "none":
         return None

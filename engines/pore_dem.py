@@ -14,22 +14,27 @@ contract shared with the reference (engines/reference.py):
      recomputed then and held in between
   e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
      it lives in the law, computed in b's call and independent of d)
-  f. moving walls: v_w += a(t) dt
+  f. moving walls: the base motion (engines.ground_motion.BaseMotion, constant average
+     acceleration) is advanced from t to t + dt; ``wall_velocity`` = (u(t + dt) - u(t)) / dt is the
+     velocity the caller gives the driven walls for this step, so x += v dt lands them on u(t + dt)
+Side walls on springs ([loading] side_walls = "springs", Fig. 27): the side-wall discs move in x
+under the contact forces, the pore pressure forces of eq 33 (they bound pores like any disc) and
+the ties of engines.seismic_box (added to the law's forces in b through ``PaperLaw.extra_forces``,
+with the tie velocities du/dt of this step); the caller integrates them in x only.
 Gravity -m g and buoyancy +rho_w pi r^2 g (water scenes: the buoyant weight of eq 34b) are
 constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent forces).
 """
-import math
-
 import numpy as np
 
+from engines import ground_motion
 from engines import kernels
 from engines import pore_geometry as pg
 from engines.contact import critical_time_step
 from engines.paper_law import PaperLaw
+from engines.porosity import box_window, porosity
+from engines.seismic_box import SideWallTies
 from engines.trajectory import block_means
 from engines.water_engine import WaterModel
-
-G0 = 9.80665  # standard gravity for records given in g [m/s^2]
 
 
 def disc_masses(scene, packing):
@@ -45,6 +50,25 @@ def check_time_step(scene, mobile_mass):
     if dt > limit:
         raise ValueError(f"[numerics] dt = {dt:.3e} s exceeds the stability limit {limit:.3e} s "
                          f"(dt_safety x 2 sqrt(m_min/kn), eq 52)")
+
+
+def side_wall_ties(scene, packing):
+    """The Fig. 27 ties of the side-wall columns (engines.seismic_box.SideWallTies) when
+    [loading] side_walls = "springs", else None."""
+    if scene.loading.side_walls != "springs":
+        return None
+    c = scene.contact
+    return SideWallTies(packing.xz, packing.group, c.ks_wall, c.eta_s_wall)
+
+
+def check_tie_time_step(scene, ties, mass):
+    """Refuse dt above sqrt(m_min / k'_s) of the side-wall ties (engines.seismic_box)."""
+    if ties is None:
+        return
+    limit = ties.stable_time_step(mass)
+    if scene.numerics.dt > limit:
+        raise ValueError(f"[numerics] dt = {scene.numerics.dt:.3e} s exceeds the stability limit {limit:.3e} s of "
+                         f"the side-wall ties (sqrt(m_min / k's), k's = [contact] ks_wall = {ties.ks:.3g} N/m)")
 
 
 def moving_walls(scene, packing):
@@ -82,35 +106,27 @@ def block_pressures(water, xz, r, bounds):
     return block_means(pg.pore_centroids(net, xz)[:, 1], U, bounds)
 
 
-def porosity(scene, packing, xz):
-    """Void / polygon area of the pores of a freshly built network at xz (the same for dry and
-    wet scenes; eq 28 with the scene's l_m)."""
-    net = pg.build_pores(xz, packing.r, eps_m=scene.contact.eps_m, l_m=scene.water.l_m, walls=packing.group)
-    m = pg.measure(net, xz, packing.r)
-    total = m.polygon_area.sum()
-    return float(m.void_area.sum() / total) if total > 0 else np.nan
+def porosity_window(scene, packing):
+    """The fixed rectangle whose void fraction is the reported porosity ([output] porosity_window,
+    engines.porosity.box_window), or None for a packing without both side-wall columns."""
+    if not (np.any(packing.group == pg.WALL_LEFT) and np.any(packing.group == pg.WALL_RIGHT)):
+        return None
+    return box_window(packing, scene.output.porosity_window)
+
+
+def window_porosity(packing, window, xz, base_disp=0.0):
+    """Void fraction of ``window`` moved with the base by ``base_disp`` [m] around the particles
+    at xz (exact disc-rectangle areas; independent of the pore mesh); nan without a window."""
+    if window is None:
+        return np.nan
+    mob = packing.mobile
+    return porosity(xz[mob], packing.r[mob], window.shifted(base_disp))
 
 
 def kinetic_energy(mass, inertia, mobile, vel, omega):
     """Translational + rotational kinetic energy of the mobile discs [J per m]."""
     v2 = np.sum(vel**2, axis=1)
     return float(0.5 * np.sum(mass[mobile] * v2[mobile]) + 0.5 * np.sum(inertia[mobile] * omega[mobile] ** 2))
-
-
-def input_acceleration(scene):
-    """Horizontal acceleration a(t) [m/s^2] of the moving walls, or None without loading."""
-    ld = scene.loading
-    if ld.type == "none":
-        return None
-    if ld.type == "cosine":
-        a0, w = ld.amplitude, 2 * math.pi * ld.frequency
-        return lambda t: a0 * math.cos(w * t)  # a scalar: math is 10x faster than NumPy
-    try:
-        rec = np.loadtxt(ld.record, comments="#", ndmin=2)
-    except OSError as e:
-        raise ValueError(f"[loading] record: cannot read {ld.record}: {e}") from None
-    t_rec, a_rec = rec[:, 0] * ld.time_scale, rec[:, 1] * G0 * ld.amplitude_scale
-    return lambda t: float(np.interp(t, t_rec, a_rec, right=0.0))
 
 
 class PoreDEM:
@@ -132,9 +148,20 @@ class PoreDEM:
                              "moves x by v dt); the reference implements it")
         self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
         self.k = 0
-        self.accel = input_acceleration(scene)
+        accel = ground_motion.input_acceleration(scene)
+        self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
+        self.ties = side_wall_ties(scene, packing)
+        if self.ties is not None:
+            check_tie_time_step(scene, self.ties, self.mass)
+            self.law.extra_forces.append(self._tie_forces)
         self.water_model = water_model(scene, packing, compiled)
+
+    def _tie_forces(self, xz, du):
+        """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""
+        F = np.zeros_like(xz)
+        F[:, 0] = self.ties.forces(xz[:, 0], du[:, 0] / self.dt)
+        return F
 
     @property
     def water(self):
@@ -167,8 +194,8 @@ class PoreDEM:
         return F, fixes
 
     def _move_walls(self):
-        if self.accel is not None:                                      # f
-            self.wall_velocity += self.accel(self.k * self.dt) * self.dt
+        if self.base is not None:                                       # f
+            self.wall_velocity = self.base.step()
         self.k += 1
 
     # -- the same step as one compiled call (engines.kernels.dem_step) ----------------------------

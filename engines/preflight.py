@@ -1,20 +1,20 @@
 """Checks made before a run writes anything, and the scripts' argument parsing.
 
 ``preflight(scene, packing, out_dir)`` checks what can be known before the first step: the time
-step against eq 52 and against the explicit Darcy limit of the pores of the packing at the start,
-the duration, the loading record and the output directory. Each refusal raises InputError with
-one line naming the field or argument and the limit; the scripts print it and exit non-zero
-before the output directory exists. The engines keep their own checks at construction.
+step against eq 52, against the side-wall ties (Fig. 27) and against the explicit Darcy limit of
+the pores of the packing at the start, the duration, the loading record and the output directory.
+Each refusal raises InputError with one line naming the field or argument and the limit; the
+scripts print it and exit non-zero before the output directory exists. The engines keep their own
+checks at construction.
 
 ``ArgumentParser``, ``number`` and ``output_dir`` give the scripts one-line argument errors (exit
-status 2).
+status 2); ``scene_and_packing`` is their common start.
 """
 import argparse
 import math
 import os
+import sys
 import tempfile
-
-import numpy as np
 
 
 class InputError(ValueError):
@@ -105,6 +105,16 @@ def check_time_step(scene, packing):
                          f"kn = {scene.contact.kn:.3g} N/m)")
 
 
+def check_tie_time_step(scene, packing):
+    """dt <= sqrt(m_min / k'_s) of the side-wall ties ([loading] side_walls = "springs")."""
+    from engines import pore_dem
+
+    try:
+        pore_dem.check_tie_time_step(scene, pore_dem.side_wall_ties(scene, packing), pore_dem.disc_masses(scene, packing)[0])
+    except ValueError as e:
+        raise InputError(str(e)) from None
+
+
 def start_darcy_limit(scene, packing):
     """The explicit Darcy limit [s] of the water at the start: the pores of the packing built
     as the engine builds them, W = A (U = 0). None for a dry scene."""
@@ -142,17 +152,15 @@ def check_duration(scene):
 
 
 def check_record(scene):
-    """A loading record must be a readable two-column table."""
-    ld = scene.loading
-    if ld.type != "record":
+    """A loading record must be read by the engine's reader (engines.ground_motion.read_record:
+    two numeric columns, increasing time; errors name the file and line)."""
+    if scene.loading.type != "record":
         return
+    from engines.ground_motion import input_acceleration
     try:
-        rec = np.loadtxt(ld.record, comments="#", ndmin=2)
-    except (OSError, ValueError) as e:
-        raise InputError(f"[loading] record: cannot read {ld.record}: {e}") from None
-    if rec.shape[1] < 2 or len(rec) < 2:
-        raise InputError(f"[loading] record: {ld.record} needs two columns (time [s], acceleration [g]) "
-                         f"and two rows at least, got shape {rec.shape}")
+        input_acceleration(scene)
+    except ValueError as e:
+        raise InputError(str(e)) from None
 
 
 def check_engine_options(scene):
@@ -170,9 +178,27 @@ def preflight(scene, packing, out_dir):
     check_engine_options(scene)
     check_record(scene)
     check_time_step(scene, packing)
+    check_tie_time_step(scene, packing)
     check_darcy(scene, packing)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:
         return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
                 f"({scene.numerics.duration:g} s) and are skipped"]
     return []
+
+
+def scene_and_packing(make_scene, out_dir, check=None):
+    """A scene script's start: the scene ``make_scene()``, the script's own ``check(scene)``, the
+    scene's packing and ``preflight`` (its notes printed). Any ValueError (a bad scene, packing or
+    limit) exits with one line ``error: ...`` before anything is written. Returns (scene, packing)."""
+    try:
+        sc = make_scene()
+        if check is not None:
+            check(sc)
+        from packing.deposition import scene_packing
+        packing = scene_packing(sc)
+        for note in preflight(sc, packing, out_dir):
+            print(note)
+    except ValueError as e:
+        sys.exit(f"error: {e}")
+    return sc, packing

@@ -230,6 +230,9 @@ def _cross_checks(t, path):
     if not (len(win) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in win)
             and 0 <= win[0] < win[1]):
         raise SceneError(f"[output] porosity_window: expected [z0, z1] with 0 <= z0 < z1, got {win!r}")
+    if t["loading"]["side_walls"] == "springs" and c["law"] == "yade":
+        raise SceneError("[loading] side_walls = 'springs': the side-wall ties run in the paper's law engine; "
+                         "use [contact] law = 'paper'")
     if t["loading"]["side_walls"] == "springs" and t["loading"]["moves"] != "bottom":
         raise SceneError("[loading] side_walls = 'springs' needs moves = 'bottom' (the box moving as one has no springs)")
     if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):

@@ -23,10 +23,11 @@ import math
 
 import numpy as np
 from yade import O, utils
-from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, HarmonicMotionEngine, Ig2_Sphere_Sphere_ScGeom,
+from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom,
                           InsertionSortCollider, InteractionLoop, Ip2_ViscElMat_ViscElMat_ViscElPhys,
                           Law2_ScGeom_ViscElPhys_Basic, NewtonIntegrator, TranslationEngine, ViscElMat)
 
+from engines import ground_motion
 from engines import pore_dem
 from engines import pore_geometry as pg
 from engines import yade_io
@@ -36,6 +37,7 @@ from engines.trajectory import Trajectory
 from engines.water_engine import WaterEngine
 
 PER_STEP_CHUNK = 1000  # steps between checks of a per-step run (errors, Ctrl-C)
+X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
 
 
 def yade_law_material(scene):
@@ -58,20 +60,24 @@ def yade_law_material(scene):
                      density=scene.material.rho, label="discs")
 
 
-def build_bodies(scene, packing, material, radius_add=0.0, spin=False):
+def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=None):
     """Reset YADE and create one sphere per disc (radius r + radius_add) with per-unit-thickness
-    mass and inertia; returns the body ids (same order as packing)."""
+    mass and inertia; returns the body ids (same order as packing). ``x_only`` (N,) bool: wall
+    discs that are dynamic in x only (the side walls on springs, Fig. 27)."""
     O.reset()
     mat = O.materials.append(material)
     mass, inertia = disc_masses(scene, packing)
+    x_only = np.zeros(len(packing.r), bool) if x_only is None else x_only
     bodies = []
-    for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
-        b = utils.sphere((float(x), 0.0, float(z)), float(r + radius_add), fixed=not mob, material=mat,
+    for (x, z), r, mob, xo, m, I in zip(packing.xz, packing.r, packing.mobile, x_only, mass, inertia):
+        b = utils.sphere((float(x), 0.0, float(z)), float(r + radius_add), fixed=not (mob or xo), material=mat,
                          color=(0.6, 0.6, 0.6))
         b.state.mass = float(m)
         b.state.inertia = (float(I),) * 3
         if mob:
             b.state.blockedDOFs = "yXZ" if spin else "yXYZ"
+        elif xo:
+            b.state.blockedDOFs = X_ONLY
         bodies.append(b)
     ids = O.bodies.append(bodies)
     O.dt = scene.numerics.dt
@@ -91,11 +97,16 @@ class YadeCoupling:
         wet = scene.water.enabled
         self.core = self.water_engine = None
         if self.law == "paper":
-            self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"))
             self.core = PoreDEM(scene, packing, compiled)
+            ties = self.core.ties
+            x_only = ties.moving if ties is not None else None
+            self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
             self.engine = PaperLawEngine(self.ids, core=self.core)
-            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces
-                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[packing.mobile] ** 2 * g
+            for i in self.ids[x_only].tolist() if x_only is not None else ():
+                O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
+            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
+                dyn = self.engine._dynamic
+                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[dyn] ** 2 * g * packing.mobile[dyn]
             loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
         else:
             if scene.numerics.damping_eq44:
@@ -115,32 +126,27 @@ class YadeCoupling:
         walls = self._wall_motion()
         O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
         self.block_bounds = packing.block_bounds(scene.output.block_z)
+        self.window = pore_dem.porosity_window(scene, packing)
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
         if yade_io.BACKEND == "python":
             yade_io.freeze_gc()
 
     def _wall_motion(self):
-        """Engines moving the walls that follow the input ([loading]): a TranslationEngine whose
-        velocity the paper's law sets each step (v_w += a(t) dt, as the reference), or with
-        law = 'yade' a HarmonicMotionEngine for the cosine (the exact integral v = a0/w sin(w t),
-        no Python) and for a record a TranslationEngine updated between O.step calls."""
+        """A TranslationEngine moving the walls that follow the input ([loading] moves) at the
+        velocity of the base motion for each step (engines.ground_motion.BaseMotion, the one input
+        path): set by the paper's law's step (PoreDEM), or with law = 'yade' before each O.step."""
         moving = pore_dem.moving_walls(self.scene, self.packing)
-        self.wall_engine = self._wall_accel = None
+        self.wall_engine = self.base = None
         if not moving.any():
             return []
-        ids = self.ids[moving].tolist()
-        ld = self.scene.loading
-        if self.law == "yade" and ld.type == "cosine":
-            w = 2 * np.pi * ld.frequency
-            return [HarmonicMotionEngine(ids=ids, A=(ld.amplitude / w**2, 0, 0), f=(ld.frequency,) * 3, fi=(np.pi,) * 3)]
-        self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
+        self.wall_engine = TranslationEngine(ids=self.ids[moving].tolist(), translationAxis=(1, 0, 0), velocity=0.0)
         if self.law == "paper":
             core, eng = self.core, self.wall_engine
+            self.base = core.base
             self.engine.hooks.append(lambda: setattr(eng, "velocity", core.wall_velocity))
         else:
-            self._wall_accel = pore_dem.input_acceleration(self.scene)
-            self._wall_v = 0.0
+            self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene), self.scene.numerics.dt)
             self.per_step = True  # Python sets the velocity before each O.step
         return [self.wall_engine]
 
@@ -151,14 +157,13 @@ class YadeCoupling:
             self.engine.drive(n)
         elif not self.per_step and n > PER_STEP_CHUNK:
             O.run(int(n), True)
-        else:  # law = 'yade': the water engine on its steps, a record's wall velocity v_w += a(t) dt
-            water, accel, dt = self.water_engine, self._wall_accel, O.dt
+        else:  # law = 'yade': the water engine on its steps, the base velocity of the step
+            water, base = self.water_engine, self.base
             for _ in range(int(n)):
                 if water is not None and water.due(O.iter):
                     water()
-                if accel is not None:
-                    self._wall_v += accel(O.iter * dt) * dt
-                    self.wall_engine.velocity = self._wall_v
+                if base is not None:
+                    self.wall_engine.velocity = base.step()
                 O.step()
                 if errors:
                     break
@@ -210,7 +215,22 @@ class YadeCoupling:
         return pore_dem.block_pressures(self.water, xz, self.packing.r, self.block_bounds)
 
     def porosity(self, xz):
-        return pore_dem.porosity(self.scene, self.packing, xz)
+        """Void fraction of the fixed porosity window moved with the base (engines.porosity)."""
+        return pore_dem.window_porosity(self.packing, self.window, xz, self.base.disp if self.base else 0.0)
+
+    def base_motion(self):
+        """(acceleration [m/s^2], velocity [m/s], displacement [m]) of the driven base at O.iter dt."""
+        b = self.base
+        return (b.acc, b.vel, b.disp) if b is not None else (0.0, 0.0, 0.0)
+
+    def side_wall_shift(self, xz):
+        """Mean x displacement [m] of the left and the right side-wall column relative to the base
+        (the discs on springs; nan when the side walls are fixed)."""
+        ties = self.core.ties if self.core is not None else None
+        if ties is None:
+            return np.nan, np.nan
+        d = xz[:, 0] - self.packing.xz[:, 0] - self.base_motion()[2]
+        return tuple(float(np.mean(d[ties.columns[c][1:]])) if c in ties.columns else np.nan for c in ("left", "right"))
 
     def kinetic_energy(self):
         """Translational + rotational kinetic energy of the particles [J per m]."""

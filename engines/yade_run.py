@@ -29,7 +29,8 @@ class Recorder:
         self.n_blocks = len(cp.block_bounds)
         self.columns = (["t"] + [f"U_block{b + 1}" for b in range(self.n_blocks)] +
                         ["porosity", "kinetic_energy", "water_balance_error", "total_water", "n_pores",
-                         "fn_bottom_mean", "bed_top"])
+                         "fn_bottom_mean", "bed_top", "base_acc", "base_vel", "base_disp", "side_left_dx",
+                         "side_right_dx", "remesh_change"])
         self.file = open(os.path.join(out_dir, "history.csv"), "w", newline="")
         self.writer = csv.writer(self.file)
         self.writer.writerow(self.columns)
@@ -59,7 +60,8 @@ class Recorder:
         values = ([k * self.dt] + list(cp.block_pressures(xz)) +
                   [cp.porosity(xz), cp.kinetic_energy(), w.balance_error() if w else 0.0,
                    w.total_water() if w else 0.0, w.net.n_pores if w else 0,
-                   cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))])
+                   cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))] +
+                  list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0])
         self.writer.writerow([f"{v:.9g}" for v in values])
         self.file.flush()
 
@@ -105,7 +107,7 @@ def run_scene(scene, packing, out_dir, duration=None):
     print(f"[{scene.scene.name}] {int(packing.mobile.sum())} particles, {int((~packing.mobile).sum())} wall discs, "
           f"{cp.water.net.n_pores if cp.water else 0} pores, law = {scene.contact.law}, I/O {yade_io.BACKEND}, "
           f"dt = {scene.numerics.dt:g} s, {n_steps} steps -> {out_dir}", flush=True)
-    t0 = time.time()
+    t0, c0 = time.time(), time.process_time()
     status = "completed"
     try:
         cp.run(n_steps)
@@ -114,13 +116,20 @@ def run_scene(scene, packing, out_dir, duration=None):
         write_checkpoint(cp, os.path.join(out_dir, "checkpoint.npz"))
         raise
     finally:
-        wall = time.time() - t0
+        wall, cpu = time.time() - t0, time.process_time() - c0
         rec.close()
         summary = summarise(scene, packing, cp, n_steps, wall, status)
+        summary["cpu_seconds"] = cpu
         with open(os.path.join(out_dir, "summary.json"), "w") as f:
             json.dump(summary, f, indent=1)
         make_figures(scene, out_dir, rec.snapshots)
     return summary
+
+
+def done_line(summary):
+    """The one line a scene script prints at the end of a run."""
+    return (f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s ({summary['us_per_step']:.0f} us/step), "
+            f"water balance error {summary['water_balance_error']:.2e}")
 
 
 def summarise(scene, packing, cp, n_steps, wall, status):

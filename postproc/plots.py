@@ -154,16 +154,24 @@ def plot_snapshots(snaps, path, title, blocks=None):
     plt.close(fig)
 
 
+SNAPSHOT_COLUMNS = 3  # panels per row of a snapshot figure
+
+
 def snapshot_figure(snaps, title, blocks=None):
-    """One panel per snapshot with shared scales: pores coloured by U on one diverging scale
-    centred on 0 (one colour bar), normal-force widths, velocity arrows and axis limits. Titles
-    give each panel's own maxima; a key explains discs, walls, line widths and arrows.
-    ``blocks``: [(z0, z1)] [m] of the pressure blocks, drawn as brackets on the right."""
+    """One panel per snapshot (rows of SNAPSHOT_COLUMNS) with shared scales: pores coloured by U
+    on one diverging scale centred on 0 (one colour bar), normal-force widths, velocity arrows and
+    axis limits. Titles give each panel's own maxima; a key explains discs, walls, line widths and
+    arrows. ``blocks``: [(z0, z1)] [m] of the pressure blocks, drawn as brackets on the right."""
     n = len(snaps)
-    fig = plt.figure(figsize=(max(4.3 * n + 1.2, 8.6), 5.0), layout="constrained")
-    grid = fig.add_gridspec(2, n, height_ratios=(1, 0.12))
-    axes = [fig.add_subplot(grid[0, k]) for k in range(n)]
-    key_ax = fig.add_subplot(grid[1, :])
+    cols = min(n, SNAPSHOT_COLUMNS)
+    rows = -(-n // cols)
+    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])  # panel height / width of the scene
+    fig = plt.figure(figsize=(max(4.3 * cols + 1.2, 8.6), rows * (4.0 * aspect + 1.0) + 0.8), layout="constrained")
+    grid = fig.add_gridspec(rows + 1, cols, height_ratios=(1,) * rows + (0.12,))
+    axes = [fig.add_subplot(grid[k // cols, k % cols]) for k in range(n)]
+    key_ax = fig.add_subplot(grid[rows, :])
     key_ax.axis("off")
     Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
     u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
@@ -185,13 +193,11 @@ def snapshot_figure(snaps, title, blocks=None):
         if blocks:
             for k, (z0, z1) in enumerate(blocks):
                 ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
-    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
-    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
     pad = 0.3
     for k, ax in enumerate(axes):
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
         ax.set_ylim(lo[1] - pad, hi[1] + pad)
-        if k:
+        if k % cols:
             ax.set_ylabel("")
             ax.tick_params(labelleft=False)
     if colour_source is not None:
@@ -202,7 +208,7 @@ def snapshot_figure(snaps, title, blocks=None):
     if dense > 1:
         key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
                          label=f"dense top particle (density x {dense:g})"))
-    key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc (fixed)"))
+    key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
     key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N")
             for f in (f_max / 4, f_max)]
     if blocks:

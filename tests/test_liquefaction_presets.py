@@ -78,15 +78,18 @@ def test_the_seismic_packing():
 
 @pytest.mark.parametrize("case", [1, 6])
 def test_presets_build_in_the_current_engine(case):
-    """The water core builds on the preset (the seismic loading is wired in a later phase)."""
+    """The water core builds on the preset, with its base motion and side-wall ties."""
     sc = scenes.preset(f"liquefaction_case{case}")
     pk = Packing.load(sc.packing.file)
     dem = PoreDEM(sc, pk)
     assert dem.water.net.n_pores > 150 and dem.water.net.pore_surface.any()
+    assert dem.ties is not None and dem.ties.moving.sum() == 22
     bm = BaseMotion(input_acceleration(sc), sc.numerics.dt)
     for _ in range(10):
-        bm.step()
-    assert np.isfinite(bm.disp)
+        v = bm.step()
+        dem.step(pk.xz)
+        assert dem.wall_velocity == v and dem.base.disp == bm.disp
+    assert bm.disp > 0
 
 
 @pytest.mark.parametrize("over,match", [

@@ -13,7 +13,7 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser, number, output_dir, preflight  # noqa: E402
+from engines.preflight import ArgumentParser, number, output_dir, scene_and_packing  # noqa: E402
 
 
 def parse(argv):
@@ -36,20 +36,10 @@ def overrides_of(args):
 
 def main(argv):
     args = parse(argv)
-    try:  # bad scenes, packings and limits: one clear line, nothing written
-        overrides = overrides_of(args)
-        sc = scenes.load(args.scene, overrides) if args.scene else \
-            scenes.preset(f"quicksand_case{args.case or 1}", overrides)
-        from packing.deposition import scene_packing
-        packing = scene_packing(sc)
-        for note in preflight(sc, packing, args.out):
-            print(note)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
-    from engines.yade_run import run_scene
-    summary = run_scene(sc, packing, args.out)
-    print(f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s "
-          f"({summary['us_per_step']:.0f} us/step), water balance error {summary['water_balance_error']:.2e}")
+    sc, packing = scene_and_packing(lambda: scenes.load(args.scene, overrides_of(args)) if args.scene else
+                                    scenes.preset(f"quicksand_case{args.case or 1}", overrides_of(args)), args.out)
+    from engines.yade_run import done_line, run_scene
+    print(done_line(run_scene(sc, packing, args.out)))
 
 
 if __name__ == "__main__":

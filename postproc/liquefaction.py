@@ -1,0 +1,357 @@
+"""Figures and the comparison study of the seismic liquefaction cases (seed 000 §6, issue 11).
+
+They read what the runs write (postproc/run_files.py). ``run_figures(run_dir)`` draws one run's
+block pressures the way Fig. 35 and 37 present them (``blocks.png``: the blocks on the initial
+packing, the base input, then the block-mean U from the surface block 6 down to block 1 on one
+scale centred on 0); its snapshots (Fig. 36/38/43/45) and history panels are drawn by
+postproc.plots when the run ends. ``study(root)`` reads ROOT/case1 ... ROOT/case7 (and
+ROOT/case1-conserving, ROOT/case3-conserving when present) and writes ROOT/summary.json (per case:
+porosity change, mean and peak U per block, wall time, re-meshing water change; the drainage
+times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
+Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
+transfer comparison and ROOT/trends.md (the paper's trends against our numbers).
+
+    /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
+    /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
+"""
+import json
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import PatchCollection  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
+
+from postproc.plots import GROUP_COLOURS  # noqa: E402
+from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402
+
+PERIOD = 0.02        # the cosine's period [s] (50 Hz): the averaging window of the end values
+LOW_BLOCKS = 4       # blocks 1-4: below the two surface blocks, whose U drains to the surface (§6.2)
+CASES = {  # SPEC §2.5
+    1: "saturated, undrained, spring d, cosine",
+    2: "dry, spring d, cosine",
+    3: "saturated, drained sides (k3 = 1e3), spring d, cosine",
+    4: "saturated, undrained, elastic spring a, cosine",
+    5: "dry, elastic spring a, cosine",
+    6: "saturated, undrained, spring d, El Centro",
+    7: "dry, spring d, El Centro",
+}
+STUDY_FIGURES = {  # the paper's porosity figures: the cases drawn together
+    "fig40_porosity_cosine_spring_d.png": ("Fig. 40: cosine, hysteretic spring (d)", (1, 2, 3)),
+    "fig41_porosity_cosine_elastic.png": ("Fig. 41: cosine, elastic spring (a)", (4, 5)),
+    "fig46_porosity_elcentro_spring_d.png": ("Fig. 46: El Centro, hysteretic spring (d)", (6, 7)),
+}
+TRANSFER_CASES = (1, 3)
+
+
+def block_columns(history):
+    """The U_block columns in block order (1 = bottom)."""
+    return sorted((c for c in history if c.startswith("U_block")), key=lambda c: int(c[len("U_block"):]))
+
+
+# -- one run ------------------------------------------------------------------------------------------
+def draw_blocks_on_packing(ax, snap, bounds):
+    """Fig. 35: the discs at t = 0 with the z range of each pressure block shaded and numbered."""
+    xz, r = snap["xz"] * 1e3, snap["r"] * 1e3
+    ax.add_collection(PatchCollection([Circle(p, rr) for p, rr in zip(xz, r)],
+                                      facecolor=[GROUP_COLOURS[g] for g in snap["group"]], edgecolor="k", linewidth=0.3))
+    x0, x1 = (xz[:, 0] - r).min(), (xz[:, 0] + r).max()
+    top = (xz[:, 1] + r).max()
+    for k, (z0, z1) in enumerate(bounds):
+        z0, z1 = z0 * 1e3, min(z1 * 1e3, top)
+        ax.axhspan(z0, z1, color=f"C{k}", alpha=0.25, lw=0)
+        ax.text(x1 + 0.3, 0.5 * (z0 + z1), str(k + 1), color=f"C{k}", va="center", fontsize=10, weight="bold")
+    ax.set_xlim(x0 - 0.2, x1 + 1.2)
+    ax.set_ylim((xz[:, 1] - r).min() - 0.2, top + 0.3)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("z [mm]")
+    ax.set_title("Fig. 35: pressure blocks (t = 0)", fontsize=9)
+
+
+def blocks_figure(history, title, bounds=None, snap0=None):
+    """Fig. 37/39/42/44: Fig. 35 (the blocks on the initial packing) and the base acceleration and
+    displacement on top, then the block-mean excess pore pressure U [N/m] of blocks 6 (surface)
+    ... 1 (bottom), one panel each, on one scale symmetric about 0."""
+    cols = block_columns(history)
+    t = history["t"] * 1e3
+    n = len(cols)
+    fig = plt.figure(figsize=(11, 1.3 * n + 3.6), layout="constrained")
+    grid = fig.add_gridspec(n + 1, 2, width_ratios=(1.0, 1.6), height_ratios=(2.4,) + (1,) * n)
+    ax = fig.add_subplot(grid[0, 1])
+    axes = [fig.add_subplot(grid[k, :], sharex=ax) for k in range(1, n + 1)]
+    ax.plot(t, history["base_acc"] * 100, color="0.2", lw=0.8, label="base acceleration [gal]")
+    ax.set_ylabel("a [gal]")
+    ax.set_xlabel("t [ms]")
+    ax2 = ax.twinx()
+    ax2.plot(t, history["base_disp"] * 1e6, color="C3", lw=0.9, label="base displacement [µm]")
+    ax2.set_ylabel("u [µm]", color="C3")
+    ax.legend(handles=ax.get_lines() + ax2.get_lines(), fontsize=7.5, loc="lower center", ncol=2,
+              bbox_to_anchor=(0.5, 1.0), frameon=False)
+    ax.grid(alpha=0.3)
+    finite = np.concatenate([history[c][np.isfinite(history[c])] for c in cols] + [np.zeros(1)])
+    lim = 1.05 * max(np.abs(finite).max(), 1e-9)
+    for k, (a, c) in enumerate(zip(axes, reversed(cols))):
+        b = n - 1 - k
+        y = history[c]
+        a.plot(t, y, color=f"C{b}", lw=0.8)
+        a.axhline(0.0, color="0.3", lw=0.6)
+        a.set_ylim(-lim, lim)
+        ok = np.isfinite(y)
+        where = " (surface)" if b == n - 1 else " (bottom)" if b == 0 else ""
+        stats = f"mean {np.mean(y[ok]):.0f}, max {np.max(y[ok]):.0f} N/m" if ok.any() else "no pore"
+        a.text(0.005, 0.93, f"block {b + 1}{where}: {stats}", transform=a.transAxes, fontsize=7.5, va="top")
+        a.set_ylabel("U [N/m]")
+        a.grid(alpha=0.3)
+        if a is not axes[-1]:
+            a.tick_params(labelbottom=False)
+    axes[-1].set_xlabel("t [ms]")
+    if snap0 is not None and bounds:
+        draw_blocks_on_packing(fig.add_subplot(grid[0, 0]), snap0, bounds)
+    fig.suptitle(f"{title}: base input and block-mean excess pore pressure")
+    return fig
+
+
+def run_figures(run_dir):
+    """Draw blocks.png of a wet run (``blocks_figure``); returns the paths written."""
+    summary = read_summary(run_dir)
+    history = read_history(os.path.join(run_dir, "history.csv"))
+    params = summary.get("parameters", {})
+    if len(history.get("t", [])) < 2 or not params.get("water", {}).get("enabled", False):
+        return []
+    files = snapshot_files(run_dir)
+    snap0 = read_snapshot(files[0]) if files and float(read_snapshot(files[0])["t"]) == 0.0 else None
+    fig = blocks_figure(history, summary.get("scene", run_dir), summary.get("block_bounds_m"), snap0)
+    path = os.path.join(run_dir, "blocks.png")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [path]
+
+
+# -- the study ----------------------------------------------------------------------------------------
+def end_mean(t, y, window=PERIOD):
+    """Mean of y over the last ``window`` seconds (one input period: the oscillation averages out)."""
+    sel = (t >= t[-1] - window) & np.isfinite(y)
+    return float(np.mean(y[sel])) if sel.any() else float("nan")
+
+
+def dominant_period(t, y, t_from=PERIOD):
+    """Period [s] of the largest Fourier peak of y (mean and linear trend removed) after t_from."""
+    sel = (t >= t_from) & np.isfinite(y)
+    if sel.sum() < 16:
+        return float("nan")
+    tt, yy = t[sel], y[sel]
+    yy = yy - np.polyval(np.polyfit(tt, yy, 1), tt)
+    power = np.abs(np.fft.rfft(yy)) ** 2
+    freq = np.fft.rfftfreq(len(yy), tt[1] - tt[0])
+    k = 1 + int(np.argmax(power[1:]))
+    return float(1.0 / freq[k])
+
+
+def case_summary(run_dir):
+    """The study's numbers of one run (see the module docstring); None when the run is missing."""
+    summary = read_summary(run_dir)
+    hist_path = os.path.join(run_dir, "history.csv")
+    if not summary or not os.path.exists(hist_path):
+        return None
+    h = read_history(hist_path)
+    t, n = h["t"], h["porosity"]
+    out = {"scene": summary["scene"], "status": summary["status"], "t_end": float(t[-1]), "steps": summary["steps"],
+           "wall_seconds": summary["wall_seconds"], "cpu_seconds": summary.get("cpu_seconds"),
+           "us_per_step": summary["us_per_step"],
+           "porosity_initial": float(n[0]), "porosity_end": end_mean(t, n),
+           "porosity_change": end_mean(t, n) - float(n[0]), "porosity_min": float(np.nanmin(n)),
+           "porosity_max": float(np.nanmax(n)),
+           "base_peak_acc": float(np.abs(h["base_acc"]).max()),
+           "base_disp_range": [float(h["base_disp"].min()), float(h["base_disp"].max())],
+           "side_wall_shift_max": float(np.nanmax(np.abs(np.r_[h["side_left_dx"], h["side_right_dx"]])))
+           if np.isfinite(h["side_left_dx"]).any() else None,
+           "bed_top_change": float(h["bed_top"][-1] - h["bed_top"][0])}
+    wb = summary.get("water_balance")
+    if wb:
+        U = {}
+        for c in block_columns(h):
+            y = h[c]
+            ok = np.isfinite(y)
+            U[c] = {"mean": float(np.mean(y[ok])), "mean_last_period": end_mean(t, y), "max": float(np.max(y[ok])),
+                    "min": float(np.min(y[ok])), "peak_abs": float(np.max(np.abs(y[ok]))),
+                    "empty_fraction": float(1 - ok.mean())}
+        low = np.nanmean(np.column_stack([h[c] for c in block_columns(h)[:LOW_BLOCKS]]), axis=1)
+        out.update(U_blocks=U, U_low_mean=float(np.nanmean(low)), U_low_abs_mean=float(np.nanmean(np.abs(low))),
+                   U_low_std=float(np.nanstd(low)), U_low_end=end_mean(t, low),
+                   U_low_rise_first_period=end_mean(t[t <= PERIOD], low[t <= PERIOD], PERIOD / 4) - float(low[0]),
+                   U_low_dominant_period=dominant_period(t, low),
+                   transfer=summary["parameters"]["water"]["transfer"],
+                   water_initial=wb["initial"], remesh_water_change=wb["remesh_change"],
+                   remesh_water_change_rel=wb["remesh_change"] / wb["initial"],
+                   side_outflow=wb["side_outflow"], surface_outflow=wb["surface_outflow"],
+                   water_balance_error=summary["water_balance_error"], n_rebuilds=summary["n_rebuilds"])
+    return out
+
+
+def trends(cases):
+    """The paper's four observed trends (SPEC §2.5) against our numbers: a list of rows
+    {trend, paper, ours, holds}; rows whose cases are missing are left out."""
+    rows = []
+
+    def have(*k):
+        return all(k_ in cases for k_ in k)
+
+    for wet, dry, label in ((1, 2, "cosine"), (6, 7, "El Centro")):
+        if have(wet, dry):
+            dw, dd = cases[wet]["porosity_change"], cases[dry]["porosity_change"]
+            rows.append({"trend": f"dry settles more than saturated-undrained ({label}: case {dry} vs {wet})",
+                         "paper": "undrained ≈ constant volume; dry porosity falls with time (Fig. 40/46)",
+                         "ours": f"Δn = {dd:+.4f} dry vs {dw:+.4f} saturated",
+                         "holds": bool(dd < 0 and dd < dw and abs(dd) > 2 * abs(dw))})
+    if have(1, 3):
+        u1, u3 = cases[1]["U_low_abs_mean"], cases[3]["U_low_abs_mean"]
+        rows.append({"trend": "drained sides with high k keep |U| small (case 3 vs 1)",
+                     "paper": "U hardly rises in any block, stays near 0 (Fig. 39)",
+                     "ours": f"time-mean |U| of blocks 1-4: {u3:.1f} vs {u1:.1f} N/m (ratio {u3 / u1:.2f})",
+                     "holds": bool(u3 < 0.5 * u1)})
+    if have(3):
+        d1 = cases.get(1, {}).get("porosity_change", np.nan)
+        rows.append({"trend": "drained case lies between undrained and dry in porosity (case 3)",
+                     "paper": "intermediate (Fig. 40)",
+                     "ours": f"Δn = {cases[3]['porosity_change']:+.4f} (undrained {d1:+.4f}, dry "
+                             f"{cases.get(2, {}).get('porosity_change', np.nan):+.4f})",
+                     "holds": bool(have(1, 2) and min(d1, cases[2]["porosity_change"]) <= cases[3]["porosity_change"]
+                                   <= max(d1, cases[2]["porosity_change"]))})
+    if have(4, 5, 2):
+        d4, d5, d2 = (cases[k]["porosity_change"] for k in (4, 5, 2))
+        rows.append({"trend": "elastic springs keep porosity nearly constant (cases 4, 5 vs 2)",
+                     "paper": "porosity hardly changes, saturated or dry (Fig. 41)",
+                     "ours": f"Δn = {d4:+.4f} (4), {d5:+.4f} (5) vs {d2:+.4f} (2, spring d dry)",
+                     "holds": bool(max(abs(d4), abs(d5)) < 0.5 * abs(d2))})
+    if have(4, 1):
+        c4, c1 = cases[4], cases[1]
+        rows.append({"trend": "elastic springs: U oscillates about 0 (case 4)",
+                     "paper": "U oscillates near 0 in every block, with suction; no build-up (Fig. 42)",
+                     "ours": f"blocks 1-4: mean {c4['U_low_mean']:+.1f} N/m, std {c4['U_low_std']:.1f}, min "
+                             f"{min(v['min'] for v in c4['U_blocks'].values()):.0f} (case 1: mean "
+                             f"{c1['U_low_mean']:+.1f}, std {c1['U_low_std']:.1f})",
+                     "holds": bool(abs(c4["U_low_mean"]) < c4["U_low_std"] and abs(c4["U_low_mean"]) < 0.5 * abs(c1["U_low_mean"]))})
+    if have(1):
+        c1 = cases[1]
+        rows.append({"trend": "hysteretic springs: U builds up with the input period (case 1)",
+                     "paper": "U rises through the first cycle (0.02 s), then oscillates at the input period "
+                              "about a plateau (Fig. 37)",
+                     "ours": f"blocks 1-4: rise {c1['U_low_rise_first_period']:+.1f} N/m in the first 20 ms, "
+                             f"{c1['U_low_end']:+.1f} N/m over the last 20 ms; dominant period "
+                             f"{1e3 * c1['U_low_dominant_period']:.1f} ms",
+                     "holds": bool(c1["U_low_rise_first_period"] > 0 and c1["U_low_end"] > c1["U_low_std"] / 2
+                                   and abs(c1["U_low_dominant_period"] - PERIOD) < 0.25 * PERIOD)})
+    return rows
+
+
+def porosity_figure(runs, title):
+    """Porosity of the cases together (top), then the block pressures of each wet case."""
+    wet = [k for k, (h, s) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
+    fig, axes = plt.subplots(1 + len(wet), 1, figsize=(9, 3.2 + 2.3 * len(wet)), sharex=True,
+                             gridspec_kw={"height_ratios": [1.4] + [1] * len(wet)}, layout="constrained")
+    axes = np.atleast_1d(axes)
+    for k, (h, _) in runs.items():
+        axes[0].plot(h["t"] * 1e3, h["porosity"], label=f"case {k}: {CASES[k]}")
+    axes[0].set_ylabel("porosity of the window [-]")
+    axes[0].legend(fontsize=8)
+    axes[0].set_title(title)
+    lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
+    for ax, k in zip(axes[1:], wet):
+        h = runs[k][0]
+        ax.set_ylim(-1.05 * lim, 1.05 * lim)  # one scale for the wet cases, centred on U = 0
+        for b, c in enumerate(block_columns(h)):
+            ax.plot(h["t"] * 1e3, h[c], color=f"C{b}", lw=0.7, label=f"block {b + 1}")
+        ax.axhline(0.0, color="0.3", lw=0.6)
+        ax.set_ylabel(f"case {k}: U [N/m]")
+        ax.legend(fontsize=7, ncol=6, loc="upper left")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("t [ms]")
+    return fig
+
+
+def transfer_figure(pairs):
+    """Paper against conserving transfer: block 1-4 mean U and the cumulative re-meshing water
+    change, per case of ``pairs`` {case: (history paper, history conserving)}."""
+    fig, axes = plt.subplots(2, len(pairs), figsize=(6 * len(pairs), 6.5), sharex=True, squeeze=False,
+                             layout="constrained")
+    for col, (k, (hp, hc)) in enumerate(pairs.items()):
+        for h, name, style in ((hp, "paper", "-"), (hc, "conserving", "--")):
+            low = np.nanmean(np.column_stack([h[c] for c in block_columns(h)[:LOW_BLOCKS]]), axis=1)
+            axes[0, col].plot(h["t"] * 1e3, low, style, lw=0.8, label=f"transfer = {name}")
+            axes[1, col].plot(h["t"] * 1e3, h["remesh_change"] / h["total_water"][0], style, label=f"transfer = {name}")
+        axes[0, col].set_title(f"case {k}: {CASES[k]}", fontsize=9)
+        axes[0, col].set_ylabel("mean U of blocks 1-4 [N/m]")
+        axes[1, col].set_ylabel("re-meshing water change / initial water")
+        axes[1, col].set_xlabel("t [ms]")
+        for ax in axes[:, col]:
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8)
+            ax.axhline(0.0, color="0.3", lw=0.6)
+    return fig
+
+
+def trends_markdown(rows):
+    lines = ["| trend | the paper | ours | holds |", "|---|---|---|---|"]
+    lines += [f"| {r['trend']} | {r['paper']} | {r['ours']} | {'yes' if r['holds'] else 'no'} |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def study(root):
+    """Summaries, trends and the study figures of the runs under ``root``; returns the paths written."""
+    cases, runs, written = {}, {}, []
+    for k in CASES:
+        d = os.path.join(root, f"case{k}")
+        s = case_summary(d)
+        if s is not None:
+            cases[k] = s
+            runs[k] = (read_history(os.path.join(d, "history.csv")), read_summary(d))
+    conserving = {}
+    for k in TRANSFER_CASES:
+        s = case_summary(os.path.join(root, f"case{k}-conserving"))
+        if s is not None:
+            conserving[k] = s
+    rows = trends(cases)
+    drain = os.path.join(root, "drainage.json")
+    out = {"cases": {f"case{k}": v for k, v in cases.items()},
+           "drainage": json.load(open(drain)) if os.path.exists(drain) else None,
+           "conserving": {f"case{k}": v for k, v in conserving.items()},
+           "trends": rows, "paper_cpu_minutes": 330,
+           "notes": {"porosity_end": f"mean over the last {PERIOD:g} s (one input period)",
+                     "U_low": f"mean of the block means of blocks 1-{LOW_BLOCKS} (below the two surface blocks)"}}
+    path = os.path.join(root, "summary.json")
+    with open(path, "w") as f:
+        json.dump(out, f, indent=1)
+    written.append(path)
+    path = os.path.join(root, "trends.md")
+    with open(path, "w") as f:
+        f.write(trends_markdown(rows))
+    written.append(path)
+    for name, (title, ks) in STUDY_FIGURES.items():
+        have = {k: runs[k] for k in ks if k in runs}
+        if have:
+            fig = porosity_figure(have, title)
+            written.append(os.path.join(root, name))
+            fig.savefig(written[-1], dpi=110)
+            plt.close(fig)
+    pairs = {k: (runs[k][0], read_history(os.path.join(root, f"case{k}-conserving", "history.csv")))
+             for k in conserving if k in runs}
+    if pairs:
+        fig = transfer_figure(pairs)
+        written.append(os.path.join(root, "transfer_comparison.png"))
+        fig.savefig(written[-1], dpi=110)
+        plt.close(fig)
+    return written
+
+
+if __name__ == "__main__":
+    import sys
+    args = sys.argv[1:]
+    if not args or args[0] == "--study" and len(args) != 2:
+        sys.exit("usage: python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...] | --study ROOT")
+    paths = study(args[1]) if args[0] == "--study" else [p for run in args for p in run_figures(run)]
+    print("\n".join(paths))

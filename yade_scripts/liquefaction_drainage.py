@@ -1,0 +1,70 @@
+"""How fast the seismic box drains: a uniform excess pore pressure U0 in the still packing, the
+water advanced alone (engines.water_engine.WaterModel, the compiled kernels) with the surface at
+U = 0 and undrained (case 1) or drained (case 3) sides, at Table 5's permeabilities and at
+``--k-scale`` times them. Tells whether drained sides can keep U small within the 0.18-s run
+(docs/LIQUEFACTION.md, trend 2). No YADE:
+
+    /usr/bin/python3 yade_scripts/liquefaction_drainage.py --json out/liquefaction/drainage.json
+
+Writes {case: {k_scale: {"t": [...], "U_low": [...]}}}: the mean U of the pores in blocks 1-4 [N/m]
+at the times t [s].
+"""
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from engines import pore_geometry as pg  # noqa: E402
+from engines import scene as scenes  # noqa: E402
+from engines.pore_dem import water_model  # noqa: E402
+from engines.preflight import ArgumentParser, number  # noqa: E402
+from packing.packing import Packing  # noqa: E402
+
+TIMES = (0.02, 0.06, 0.18)  # one input period, a third of the run, the run [s]
+LOW_BLOCKS = 4
+
+
+def drainage(case, k_scale, U0=100.0, times=TIMES):
+    """Mean U [N/m] of the pores whose centroid lies in blocks 1-4 at ``times``, from U0 everywhere."""
+    sc = scenes.preset(f"liquefaction_case{case}")
+    w = sc.water
+    sc = sc.with_overrides({"water": {"k1": w.k1 * k_scale, "k2": w.k2 * k_scale, "k3": w.k3 * k_scale}})
+    pk = Packing.load(sc.packing.file)
+    wm = water_model(sc, pk)
+    water = wm.water
+    A = pg.measure(water.net, pk.xz, pk.r).void_area
+    water.W = A * sc.water.E_w / (sc.water.E_w - U0)  # eq 32 inverted: U = U0 in every pore
+    bounds = pk.block_bounds(sc.output.block_z)
+    cz = pg.pore_centroids(water.net, pk.xz)[:, 1]
+    low = (cz >= bounds[0][0]) & (cz < bounds[LOW_BLOCKS - 1][1])
+    dt, out, k = sc.numerics.dt, [], 0
+    for t in times:
+        while k < int(round(t / dt)):
+            wm.advance(dt, pk.xz)
+            k += 1
+        out.append(float(water.pressure(A)[low].mean()))
+    return out
+
+
+def main(argv):
+    ap = ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--json", required=True)
+    ap.add_argument("--k-scale", type=number(lo=0, lo_open=True), default=10.0,
+                    help="the second permeability factor tried (default 10)")
+    args = ap.parse_args(argv)
+    result = {}
+    for case in (1, 3):
+        result[f"case{case}"] = {}
+        for scale in (1.0, args.k_scale):
+            U = drainage(case, scale)
+            result[f"case{case}"][f"{scale:g}"] = {"t": list(TIMES), "U_low": U}
+            print(f"case {case}, k x {scale:g}: mean U of blocks 1-{LOW_BLOCKS} from 100 N/m: " +
+                  ", ".join(f"{u:.1f} at {t:g} s" for t, u in zip(TIMES, U)), flush=True)
+    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+    with open(args.json, "w") as f:
+        json.dump(result, f, indent=1)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
