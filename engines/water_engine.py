@@ -237,7 +237,11 @@ class WaterEngine:
             m.rebuild(xz)
             self.k_built = self.k
         m.advance(m.water_interval * O.dt, xz)
-        self.forced.set_permanent_forces(self.F_const + m.F[self._dynamic])
+        self.write_forces()
+
+    def write_forces(self):
+        """The permanent forces: the last water step's pressure forces plus buoyancy."""
+        self.forced.set_permanent_forces(self.F_const + self.model.F[self._dynamic])
 
     def pressures(self):
         """U (Np,) [N/m] of the pores at the current positions."""
