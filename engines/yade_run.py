@@ -244,9 +244,10 @@ class Run:
         self.rec.reopen(out_dir)
         self._last_checkpoint = time.time()
 
-    def go(self, overrides=None):
+    def go(self, overrides=None, figures=True):
         """Run to step n_steps (or until a signal or an error); write the checkpoint, summary and
-        figures. Returns the summary; re-raises an error after writing what it can."""
+        (when completed) the figures. Returns the summary; re-raises an error after writing what
+        it can."""
         cp, sc = self.cp, self.scene
         k0, t0, started = O.iter, time.time(), time.strftime("%Y-%m-%dT%H:%M:%S")
         print(f"[{sc.scene.name}] {int(cp.packing.mobile.sum())} particles, {int((~cp.packing.mobile).sum())} wall discs, "
@@ -271,7 +272,7 @@ class Run:
                 summary = self.summarise(status, signals.received)
                 with open(os.path.join(self.out, "summary.json"), "w") as f:
                     json.dump(summary, f, indent=1)
-                if status == "completed":
+                if status == "completed" and figures:
                     plots.figures_of_run(self.out)
         return summary
 
@@ -318,19 +319,20 @@ def clear_outputs(out_dir):
     shutil.rmtree(os.path.join(out_dir, "vtk"), ignore_errors=True)
 
 
-def run_scene(scene, packing, out_dir, duration=None):
-    """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs.
+def run_scene(scene, packing, out_dir, duration=None, figures=True):
+    """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs
+    (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later).
     Returns the summary ("status": completed or interrupted); re-raises an error after writing
     the history, summary and failure state."""
     os.makedirs(out_dir, exist_ok=True)
     clear_outputs(out_dir)
     duration = scene.numerics.duration if duration is None else duration
-    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt))).go(scene.overrides)
+    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt))).go(scene.overrides, figures)
 
 
-def resume_run(out_dir, duration=None):
+def resume_run(out_dir, duration=None, figures=True):
     """Continue the run in ``out_dir`` from its checkpoint, in place (history.csv appended), to its
     end or to ``duration`` [s]. Returns the summary like ``run_scene``."""
     run = checkpoint.load(os.path.join(out_dir, CHECKPOINT))
     run.reopen(out_dir, duration)
-    return run.go({"numerics": {"duration": duration}} if duration is not None else None)
+    return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures)
