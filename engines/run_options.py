@@ -99,7 +99,10 @@ def job_argv(ap, argv):
     """``argv``, or under yade-batch the job's table line as arguments (module docstring) before argv."""
     if batch_job() is None:
         return argv
+    import pickle
     from yade import O, utils
+    # readParamsFromTable adds to the variables an earlier call saved in O.tags: start empty
+    O.tags["pickledPythonVariablesDictionarytable"] = pickle.dumps({}, 0).decode("ascii")
     utils.readParamsFromTable(unknownOk=True)
     from yade.params import table
     values = {k: getattr(table, k) for k in table.__all__}
