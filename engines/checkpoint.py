@@ -12,8 +12,9 @@ One file, written atomically (a temporary file renamed over the old one), holdin
 
 Pickling the objects rather than listing their fields keeps whatever state an engine gains later
 in the checkpoint without extra work; completeness is tested by continuing a run and comparing it
-with one that was not stopped (tests/test_checkpoint.py). A closure in that state cannot be pickled:
-the error names it (make it a small class, as engines.ground_motion.Cosine). YADE objects that the
+with one that was not stopped (tests/test_checkpoint.py). A closure in that state cannot be pickled
+(make it a small class, as engines.ground_motion.Cosine): a run says so at its first checkpoint, at
+step 0, rather than when it is interrupted. YADE objects that the
 Python state refers to (a wall's engine) must be in O.engines: they are stored as their place
 there and bound to the loaded scene's engines on load. O.save does not keep YADE's permanent
 forces: whoever holds them sets them again after ``load`` (YadeCoupling.restore_forces).
@@ -71,7 +72,13 @@ def save(path, state, info=None):
     from yade import O
     folder = os.path.dirname(os.path.abspath(path))
     buf = io.BytesIO()
-    _Pickler(buf).dump(state)
+    try:
+        _Pickler(buf).dump(state)
+    except (pickle.PicklingError, TypeError, AttributeError) as e:
+        if str(e).startswith("checkpoint:"):
+            raise
+        raise pickle.PicklingError(f"checkpoint: the run's state holds an object that does not pickle ({e}); "
+                                   "a lambda or closure? make it a small class (as engines.ground_motion.Cosine)") from e
     fd, scene_file = tempfile.mkstemp(prefix=".checkpoint-", suffix=".yade.gz", dir=folder)
     os.close(fd)
     try:
@@ -85,6 +92,9 @@ def save(path, state, info=None):
     try:
         with os.fdopen(fd, "wb") as f:
             pickle.dump(payload, f, protocol=pickle.HIGHEST_PROTOCOL)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # as an ordinary file, not mkstemp's 0600
         os.replace(tmp, path)
     except BaseException:
         os.remove(tmp)

@@ -146,6 +146,12 @@ def test_a_complete_run_goes_on_to_a_later_end_and_checkpoints_periodically(pack
     assert_same_run(full_run, out)
 
 
+def test_state_that_does_not_pickle_is_refused_with_the_remedy(tmp_path):
+    with pytest.raises(Exception, match="does not pickle.*small class"):
+        checkpoint.save(str(tmp_path / "c.pkl"), {"input": lambda t: 2 * t})
+    assert os.listdir(tmp_path) == []
+
+
 # -- signals, through the script ------------------------------------------------------------------
 def interrupted_script_run(out, sig):
     """Start quicksand.py on the BASE scene, send ``sig`` once it has written three rows; returns
