@@ -220,9 +220,10 @@ class ContactLaw:
         return np.bincount(self.i[t], minlength=self.n) + np.bincount(self.j[t], minlength=self.n)
 
     def contact_pairs(self):
-        """(pairs (K, 2), normal force (K,) [N]) of the touching pairs, for plots."""
+        """(pairs (K, 2), normal force f_n (K,), elastic shear force e_s (K,) [N]) of the touching
+        pairs, for plots and VTK (e_s along t of eq 3b; the dashpot part d_s is not kept)."""
         t = self.touching
-        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy()
+        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy(), self.state[t, kernels.E_S].copy()
 
 
 def separation_adjustment(events, touch_count, vel, mass, mobile, e):

@@ -244,7 +244,11 @@ class WaterEngine:
             m.rebuild(xz)
             self.k_built = self.k
         m.advance(h, xz)
-        self.forced.set_permanent_forces(m.F, self._dynamic, self.F_const)
+        self.write_forces()
+
+    def write_forces(self):
+        """The permanent forces: the last water step's pressure forces plus buoyancy."""
+        self.forced.set_permanent_forces(self.model.F, self._dynamic, self.F_const)
 
     def pressures(self):
         """U (Np,) [N/m] of the pores at the current positions."""
