@@ -3,12 +3,13 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev \
+           python3-distributed python3-venv
 EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench bench-seismic packings liquefaction clean
+.PHONY: deps ext demo test bench bench-seismic packings biaxial liquefaction mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -36,6 +37,16 @@ test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q tests
 
+# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,750 mutants, about an hour on 2 busy cores):
+# out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
+MUTANT_VENV := $(OUT)/venv-mutants
+$(MUTANT_VENV)/bin/mutmut:
+	$(PY) -m venv --system-site-packages $(MUTANT_VENV)
+	$(MUTANT_VENV)/bin/pip install -q "mutmut==3.8.1"
+
+mutants: deps $(MUTANT_VENV)/bin/mutmut
+	$(MUTANT_VENV)/bin/python tests/mutants.py --out $(OUT)/mutants
+
 # Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
@@ -53,6 +64,12 @@ packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+
+# Seed 003 (hours on 2 cores, niced, resumable): biaxial tests of the paper's specimen, φ*(φe),
+# E50, eq 4-6 and their sensitivity, through the sweep runner. SCHEDULER=tcp://host:8786 runs the
+# jobs on a Dask cluster instead of the local cores.
+biaxial: deps
+	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 # Seismic liquefaction (seed 000 §6): the seven cases at the paper's settings (0.18 s, dt = 1e-6 s,
 # water every step; a few minutes each), cases 1 and 3 again with the water-conserving transfer,

@@ -60,6 +60,83 @@ def compare(scene, packing, steps, repeats):
     return out
 
 
+def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
+    """CPU microseconds per step of each part of a seismic step (medians of ``repeats`` runs of
+    ``calls`` calls), after ``warmup`` steps of the real run. Each part is timed alone, called
+    again and again at the same state (its cost, not its result, is what counts here): the
+    compiled kernels from Python (each includes numba's ~1 us call and argument overhead), the
+    bridge's read and write, the Python around one step (kernel_step_args, finish_kernel_step,
+    hooks), the rebuilds of the pair list and of the pores spread over the steps between them, and
+    YADE's own step (ForceResetter, TranslationEngine, NewtonIntegrator) last, on held forces."""
+    import numpy as np
+    from yade import O
+    from engines import kernels
+    from engines.yade_coupling import YadeCoupling
+
+    cp = YadeCoupling(scene, packing)
+    cp.run(warmup)
+    eng, core = cp.engine, cp.core
+    law, wm, c = core.law, core.water_model, core.law.contact
+    builds0, k0 = c.list_builds, O.iter
+    cp.run(2000)  # how often the pair list is rebuilt
+    list_builds_per_step = (c.list_builds - builds0) / (O.iter - k0)
+    xz = cp.positions()
+    due, law_args, water_args = core.kernel_step_args()
+    h = water_args[0]
+    F_out = np.zeros_like(eng.held)
+    part = wm._part
+    geometry = (xz, wm.r, net.links, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
+                net.corner_raw0, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m, part("poly"),
+                part("sect"), part("void"), part("length"), part("contact") > 0, part("theta"),
+                part("vec").reshape(-1, 2), part("phi"), part("cross")) if (net := wm.water.net) else ()
+    flow = (wm.water.W, part("void"), geometry[16], net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
+            net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
+            part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))
+    forces = (net.links, net.link_pores, wm.r, part("U"), part("length"), part("vec").reshape(-1, 2), np.zeros_like(wm.F),
+              part("Fj").reshape(-1, 2))
+    W0 = wm.water.W.copy()
+    parts = {
+        "law (kernels.law_step)": lambda: kernels.law_step(xz, *law_args),
+        "water (kernels.water_step)": lambda: kernels.water_step(xz, *water_args),
+        "  of which pore measure": lambda: kernels.measure(*geometry),
+        "  of which flows": lambda: kernels.darcy_flows(*flow),
+        "  of which pressure forces": lambda: kernels.pressure_forces(*forces),
+        "law + water + forces to write (kernels.dem_step)":
+            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args),
+        "read positions (bridge)": lambda: eng.io.positions(),
+        "write forces (bridge)": lambda: eng.forced.set_permanent_forces(F_out),
+        "Python around a step": lambda: (core.kernel_step_args(), core.law._fixes([], None), [f() for f in eng.hooks]),
+        "whole engine step (PaperLawEngine._kernel_work)": lambda: eng._kernel_work() or eng._work(eng._write_held),
+    }
+    out = {}
+    for name, fn in parts.items():
+        times = []
+        for _ in range(repeats):
+            c0 = time.process_time()
+            for _ in range(calls):
+                fn()
+            times.append(1e6 * (time.process_time() - c0) / calls)
+            wm.water.W[:] = W0  # the same state for every call
+        out[name] = float(np.median(times))
+    c0 = time.process_time()
+    for _ in range(20):
+        c.xz_list = xz + 1.0  # stale: rebuilt at the next call
+        c._update_list(xz)
+    out["pair-list rebuilds, spread"] = 1e6 * (time.process_time() - c0) / 20 * list_builds_per_step
+    c0 = time.process_time()
+    for _ in range(5):
+        wm.rebuild(xz)
+    out["pore rebuilds, spread"] = 1e6 * (time.process_time() - c0) / 5 / wm.rebuild_interval
+    times = []
+    for _ in range(repeats):
+        c0 = time.process_time()
+        for _ in range(calls // 4):
+            O.step()
+        times.append(1e6 * (time.process_time() - c0) / (calls // 4))
+    out["YADE's own step (O.step)"] = float(np.median(times))
+    return out
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", required=True)
@@ -67,6 +144,7 @@ def main(argv):
     ap.add_argument("--compare-steps", type=int, default=3000,
                     help="steps of the in-run comparison with YADE alone and the NumPy path (0: skip)")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--breakdown", type=int, default=1, help="1: time each part of a step alone (0: skip)")
     args = ap.parse_args(argv)
     scene = scenes.preset(PRESET)
     packing = Packing.load(scene.packing.file)
@@ -84,6 +162,8 @@ def main(argv):
            "scene": f"{PRESET} (side walls on springs, base driven by the cosine)"}
     if args.compare_steps:
         out["comparison"] = compare(scene, packing, args.compare_steps, args.repeats)
+    if args.breakdown:
+        out["breakdown_cpu_us"] = breakdown(scene, packing)
     print(json.dumps(out, indent=1))
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     with open(args.json, "w") as f:

@@ -94,6 +94,22 @@ class ContactLaw:
             self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
             self._spring = kernels.SPRING_CODE[settings.spring]
             self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
+            self._args = None
+
+    @property
+    def half_skin2(self):
+        """(skin / 2)^2 [m^2]: the list is rebuilt once a disc has moved that far (squared)."""
+        return (0.5 * self.skin) ** 2
+
+    def kernel_args(self, dt):
+        """The arguments of kernels.contact_forces after (xz, du, dpsi), for time step dt [s]."""
+        if self._prm[-1] != dt:
+            self._prm = kernels.contact_params(self.s, dt)
+            self._args = None
+        if self._args is None:
+            self._args = (self.r, self.i, self.j, self.state, self._prm, self._spring, self._F, self._M, self._acc,
+                          self._lost)
+        return self._args
 
     @property
     def touching(self):
@@ -105,15 +121,20 @@ class ContactLaw:
         return self.state[:, kernels.F_N]
 
     def _update_list(self, xz):
+        """Rebuild the pair list at xz if a disc has moved by half the skin since the last build:
+        the pairs with a mobile disc and R <= r_i + r_j + eps_m + skin, so that no other pair can
+        touch before the next build."""
         if self.xz_list is not None:
             if self.compiled:
                 moved = kernels.max_sq_displacement(xz, self.xz_list)
             else:
                 moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
-            if moved < (0.5 * self.skin) ** 2:
+            if moved < self.half_skin2:
                 return
         pairs = cKDTree(xz).query_pairs(self.reach + self.skin, output_type="ndarray").astype(np.int64)
-        pairs = pairs[self.mobile[pairs[:, 0]] | self.mobile[pairs[:, 1]]]
+        d = xz[pairs[:, 1]] - xz[pairs[:, 0]]
+        near = np.hypot(d[:, 0], d[:, 1]) <= self.r[pairs[:, 0]] + self.r[pairs[:, 1]] + self.s.eps_m + self.skin
+        pairs = pairs[near & (self.mobile[pairs[:, 0]] | self.mobile[pairs[:, 1]])]
         pairs.sort(axis=1)
         key_new = pairs[:, 0] * self.n + pairs[:, 1]
         order = np.argsort(key_new)
@@ -128,6 +149,7 @@ class ContactLaw:
         self.xz_list = xz.copy()
         self.list_builds += 1
         self._lost = np.zeros(len(pairs), np.int64)
+        self._args = None
 
     def forces(self, xz, du, dpsi, dt):
         """Contact forces (N, 2) [N] and moments (N,) [N m, counter-clockwise] at positions xz.
@@ -137,10 +159,7 @@ class ContactLaw:
         """
         self._update_list(xz)
         if self.compiled:
-            if self._prm[-1] != dt:
-                self._prm = kernels.contact_params(self.s, dt)
-            n_lost = kernels.contact_forces(xz, du, dpsi, self.r, self.i, self.j, self.state, self._prm, self._spring,
-                                            self._F, self._M, self._acc, self._lost)
+            n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
             return self._F, self._M, self._separations(xz, self._lost[:n_lost])
         s, r, i, j = self.s, self.r, self.i, self.j
         touching, u_n_old, e_n_old, e_s_old, vn_coll, _ = self.state.T
@@ -201,9 +220,10 @@ class ContactLaw:
         return np.bincount(self.i[t], minlength=self.n) + np.bincount(self.j[t], minlength=self.n)
 
     def contact_pairs(self):
-        """(pairs (K, 2), normal force (K,) [N]) of the touching pairs, for plots."""
+        """(pairs (K, 2), normal force f_n (K,), elastic shear force e_s (K,) [N]) of the touching
+        pairs, for plots and VTK (e_s along t of eq 3b; the dashpot part d_s is not kept)."""
         t = self.touching
-        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy()
+        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy(), self.state[t, kernels.E_S].copy()
 
 
 def separation_adjustment(events, touch_count, vel, mass, mobile, e):

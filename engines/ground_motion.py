@@ -31,6 +31,7 @@ Inputs:
 
 Units: SI; records given in g use g = 9.80665 m/s^2.
 """
+import math
 import os
 import re
 
@@ -40,10 +41,32 @@ G0 = 9.80665  # standard gravity [m/s^2]
 UNITS = {"g": G0, "gal": 0.01, "m/s2": 1.0}  # record acceleration unit -> m/s^2
 
 
+class Cosine:
+    """a(t) = amplitude cos(2 pi frequency t) [m/s^2] for amplitude [m/s^2] and frequency [Hz]; a
+    class rather than a closure, so that a run's state pickles (engines.checkpoint)."""
+
+    def __init__(self, amplitude, frequency):
+        self.amplitude, self.w = amplitude, 2 * np.pi * frequency
+
+    def __call__(self, t):
+        wt = self.w * t
+        return self.amplitude * (math.cos(wt) if isinstance(wt, float) else np.cos(wt))  # a scalar: math is 10x faster
+
+
+class Sampled:
+    """a(t) linear between samples (t_s, a_s), ``left`` before and ``right`` after them (None: the
+    end sample's value), as np.interp; picklable like Cosine."""
+
+    def __init__(self, t_s, a_s, left=0.0, right=0.0):
+        self.t_s, self.a_s, self.left, self.right = t_s, a_s, left, right
+
+    def __call__(self, t):
+        return np.interp(t, self.t_s, self.a_s, left=self.left, right=self.right)
+
+
 def cosine(amplitude, frequency):
     """a(t) = amplitude cos(2 pi frequency t) [m/s^2] for amplitude [m/s^2] and frequency [Hz]."""
-    w = 2 * np.pi * frequency
-    return lambda t: amplitude * np.cos(w * t)
+    return Cosine(amplitude, frequency)
 
 
 def read_record(path):
@@ -93,7 +116,7 @@ def record_acceleration(path, time_scale=1.0, amplitude_scale=1.0, units="g"):
         raise ValueError(f"amplitude_scale must be >= 0, got {amplitude_scale}")
     t, a = read_record(path)
     t_s, a_s = t * time_scale, a * UNITS[units] * amplitude_scale
-    return lambda tt: np.interp(tt, t_s, a_s, left=0.0, right=0.0)
+    return Sampled(t_s, a_s)
 
 
 def input_acceleration(scene):

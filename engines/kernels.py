@@ -10,6 +10,18 @@ reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
   darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
 
+and two per-step kernels chain them, so that a step costs one call from Python (each array passed to
+a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~60 arrays):
+
+  law_step          engines.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
+  water_step        engines.water_engine.WaterModel.advance  (measure, flows, update, eq 32, 33)
+  dem_step          engines.pore_dem.PoreDEM.step: law_step, water_step when due, the forces to write
+  water_forces_step engines.water_engine.WaterEngine: water_step and the forces to write
+
+``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
+functions of engines.yadebulk, passed as addresses (so that this module stays cacheable and free of
+YADE): read, step, write in one call.
+
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
 written into arrays the caller owns (allocated once per network or contact list). numba compiles on
@@ -19,6 +31,8 @@ import math
 
 import numba as nb
 import numpy as np
+from llvmlite import ir
+from numba.extending import intrinsic
 
 jit = nb.njit(cache=True, nogil=True)
 
@@ -55,6 +69,10 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
         new = now and not was
         dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
         dun = dux * nx + duz * nz                               # eq 3a
+        if not (now or was):  # apart before and now: no force, the state of a pair out of reach
+            state[k, U_N] += dun
+            state[k, E_N] = state[k, E_S] = state[k, F_N] = 0.0
+            continue
         dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]   # eq 3b
         u_n = delta if new else state[k, U_N] + dun
         if spring == 0:
@@ -113,6 +131,25 @@ def spin_update(omega, M, inertia, mobile, dt):
     for a in range(len(omega)):
         if mobile[a]:
             omega[a] += M[a] / inertia[a] * dt
+
+
+@jit
+def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+             r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+    """One step of PaperLaw: du = xz - xz_prev (eq 17), dpsi = omega dt, the contact forces F, M
+    (``contact_forces``, its arguments from r on), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
+    Returns the number of pairs that stopped touching (indices in ``lost``), or -1, having changed
+    nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
+    if max_sq_displacement(xz, xz_list) >= half_skin2:
+        return -1
+    for a in range(len(xz)):
+        du[a, 0] = xz[a, 0] - xz_prev[a, 0]
+        du[a, 1] = xz[a, 1] - xz_prev[a, 1]
+        dpsi[a] = omega[a] * dt
+    n_lost = contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    spin_update(omega, M, inertia, mobile, dt)
+    xz_prev[:] = xz
+    return n_lost
 
 
 @jit
@@ -208,6 +245,198 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
     balance[1] += s_s * h
     balance[2] += s_d * h
     return -1
+
+
+# The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
+# unboxes each array argument, ~0.2 us each): the parts in this order, each flattened.
+WATER_INTS = ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link", "throat_i", "throat_j",
+              "throat_link")
+WATER_FLOATS = ("corner_sign", "corner_raw0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
+                "bottom", "wp", "eps_m_a_min", "r",                                      # inputs
+                "poly", "sect", "void", "length", "contact", "theta", "vec", "phi", "cross",  # measure
+                "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",             # flows
+                "balance", "Fj", "lam")                                                  # update, forces
+
+
+def pack(parts):
+    """(buffer, offsets): the arrays ``parts`` flattened one after the other into one buffer; part k
+    is buffer[offsets[k]:offsets[k + 1]]."""
+    at = np.cumsum([0] + [np.size(p) for p in parts]).astype(np.int64)
+    return np.concatenate([np.ravel(p) for p in parts]), at
+
+
+@jit
+def _part(buf, at, k):
+    return buf[at[k]:at[k + 1]]
+
+
+@jit
+def _part2(buf, at, k):
+    """Part k as an (n, 2) array."""
+    p = buf[at[k]:at[k + 1]]
+    return p.reshape((len(p) // 2, 2))
+
+
+@jit
+def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """Advance the water by h [s] at centres xz and recompute the pressure forces F (N, 2) [N]
+    (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
+    n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
+    throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
+    arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (``pack``);
+    "lam" gets the Gershgorin bound of the first and of the last flows, "balance" the water of this
+    step. Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or
+    -1 - p when pore p would fall dry (W as after the previous sub-step)."""
+    links, link_pores = _part2(ints, i_at, 0), _part2(ints, i_at, 1)
+    c_pore, c_link, c_next = _part(ints, i_at, 2), _part(ints, i_at, 3), _part(ints, i_at, 4)
+    ti, tj, t_link = _part(ints, i_at, 5), _part(ints, i_at, 6), _part(ints, i_at, 7)
+    c_sign, c_raw0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part(floats, f_at, 1), _part(floats, f_at, 2),
+                                      _part(floats, f_at, 3))
+    rattler_area, surface, drained, bottom = (_part(floats, f_at, 4), _part(floats, f_at, 5), _part(floats, f_at, 6),
+                                              _part(floats, f_at, 7))
+    wp, eps_m, a_min, r = _part(floats, f_at, 8), floats[f_at[9]], floats[f_at[9] + 1], _part(floats, f_at, 10)
+    poly, sect, A_measured, length = (_part(floats, f_at, 11), _part(floats, f_at, 12), _part(floats, f_at, 13),
+                                      _part(floats, f_at, 14))
+    contact, theta, vec = _part(floats, f_at, 15), _part(floats, f_at, 16), _part2(floats, f_at, 17)
+    phi, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
+    q, q_s, q_d, q_in = _part(floats, f_at, 20), _part(floats, f_at, 21), _part(floats, f_at, 22), _part(floats, f_at, 23)
+    g, g_b, U = _part(floats, f_at, 24), _part(floats, f_at, 25), _part(floats, f_at, 26)
+    acc_i, acc_j, balance = _part(floats, f_at, 27), _part(floats, f_at, 28), _part(floats, f_at, 29)
+    Fj, lam = _part2(floats, f_at, 30), _part(floats, f_at, 31)
+
+    measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, A_measured, length, contact, theta, vec, phi, cross)
+    A = A_measured
+    if smoothing:  # eq 45
+        for p in range(len(A_prev)):
+            A_prev[p] = 0.5 * (A_prev[p] + A_measured[p])
+        A = A_prev
+    flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
+    lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
+    limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
+    n_sub = 1
+    if h > limit:
+        if not substep:
+            return 0
+        n_sub = int(math.ceil(h / limit))
+    balance[:] = 0.0
+    for sub in range(n_sub):
+        if sub > 0:
+            lam[1] = darcy_flows(W, A, contact, *flow)
+        if smoothing:  # eq 46
+            for t in range(len(q)):
+                if has_q_prev:
+                    q[t] = 0.5 * (q_prev[t] + q[t])
+                q_prev[t] = q[t]
+            has_q_prev = True
+        bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
+        if bad >= 0:
+            return -1 - bad
+    pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
+    pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
+    return n_sub
+
+
+LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
+
+
+@jit
+def dem_step(xz, F_out, rows, held, water_due,
+             xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
+             acc_j, lost,
+             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at):
+    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (its arguments from xz_prev
+    to lost), ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water),
+    then F_out = (F + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
+    answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list is stale."""
+    n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+                      r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    if n_lost == LIST_STALE:
+        return n_lost, 0
+    n_sub = 1
+    if water_due:
+        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at)
+    wet = len(F_water) > 0
+    for k in range(len(rows)):
+        a = rows[k]
+        for c in range(2):
+            f = F[a, c] + F_water[a, c] if wet else F[a, c]
+            F_out[k, c] = f + held[k, c]
+    return n_lost, n_sub
+
+
+@jit
+def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at,
+                      floats, f_at):
+    """``water_step`` (arguments from h on), then F_out = held + F[rows] (n, 2) [N], the forces to
+    write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n) when it failed."""
+    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at)
+    for k in range(len(rows)):
+        F_out[k, 0] = held[k, 0] + F[rows[k], 0]
+        F_out[k, 1] = held[k, 1] + F[rows[k], 1]
+    return (n_sub if n_sub > 0 else -1), n_sub
+
+
+@intrinsic
+def _c_bulk_call(typingctx, address, ids, n, data):
+    """(*address)(ids, n, data) for the C function int64 f(const int64 *ids, int64 n, double *data)
+    at the integer ``address`` (engines.yadebulk's bulk functions), ids and data addresses too."""
+    def codegen(context, builder, signature, args):
+        i64, ptr = ir.IntType(64), ir.IntType(8).as_pointer()
+        fn = builder.inttoptr(args[0], ir.FunctionType(i64, [ptr, i64, ptr]).as_pointer())
+        return builder.call(fn, [builder.inttoptr(args[1], ptr), args[2], builder.inttoptr(args[3], ptr)])
+    return nb.types.int64(address, ids, n, data), codegen
+
+
+@jit
+def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
+    """get_pos(ids_in -> xz), dem_step(xz, F_out, *args), set_perm(ids_out <- F_out) if its status
+    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
+    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = dem_step(xz, F_out, *args)
+    if status >= 0:
+        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
+    return rc, status, info
+
+
+@jit
+def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
+    """As dem_step_bulk_io for water_forces_step."""
+    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = water_forces_step(xz, F_out, *args)
+    if status >= 0:
+        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
+    return rc, status, info
+
+
+@jit
+def read_bulk_io(get_pos, ids, xz):
+    """get_pos(ids -> xz): the bridge's position read; returns its error code."""
+    return _c_bulk_call(get_pos, ids.ctypes.data, ids.size, xz.ctypes.data)
+
+
+@jit
+def write_rows_bulk_io(set_perm, ids, F, rows, add, out):
+    """out = F[rows] + add, then set_perm(ids <- out): the bridge's permanent-force write of
+    some rows of F plus held forces; returns its error code."""
+    for k in range(len(rows)):
+        out[k, 0] = F[rows[k], 0] + add[k, 0]
+        out[k, 1] = F[rows[k], 1] + add[k, 1]
+    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, out.ctypes.data)
+
+
+with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}
+
+
+def dry_water_args():
+    """Arguments of dem_step from h on for a scene without water."""
+    no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
+    return 0.0, no_f, no_f, no_f, False, False, False, np.zeros((0, 2)), no_i, np.zeros(1, np.int64), no_f, \
+        np.zeros(1, np.int64)
 
 
 @jit

@@ -32,29 +32,59 @@ class PaperLaw:
         self.omega = np.zeros(n)
         self.du = np.zeros((n, 2))
         self.xz_prev = None
+        self._dpsi = np.zeros(n)  # omega dt, scratch of the compiled step
         self.extra_forces = []
 
     def step(self, xz, vel=None):
         """Forces (N, 2) [N] at centres xz (N, 2) of this step and {disc: new velocity (2,)} of the
-        discs that became free (eq 18-24); ``vel`` (N, 2) the velocities if known, else du/dt."""
+        discs that became free (eq 18-24); ``vel`` (N, 2) the velocities if known, else du/dt.
+        Compiled, the forces are a buffer that the next step overwrites."""
+        if self.compiled:
+            F, separations = self._step_compiled(xz)
+        else:
+            F, separations = self._step_numpy(xz)
+        fixes = self._fixes(separations, vel)
+        for extra in self.extra_forces:
+            F = F + extra(xz, self.du)
+        return F, fixes
+
+    def _fixes(self, separations, vel):
+        s = self.settings
+        if not (separations and s.separation_adjustment):
+            return {}
+        v = self.du / self.dt if vel is None else vel
+        return separation_adjustment(separations, self.contact.touch_count(), v, self.mass, self.mobile, s.restitution)
+
+    def _step_numpy(self, xz):
         dt = self.dt
         self.du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev  # eq 17
         F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
-        fixes = {}
-        s = self.settings
-        if separations and s.separation_adjustment:
-            v = self.du / dt if vel is None else vel
-            fixes = separation_adjustment(separations, self.contact.touch_count(), v, self.mass, self.mobile,
-                                          s.restitution)
-        if self.compiled:
-            kernels.spin_update(self.omega, M, self.inertia, self.mobile, dt)
-        else:
-            mob = self.mobile
-            self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
-        for extra in self.extra_forces:
-            F = F + extra(xz, self.du)
+        mob = self.mobile
+        self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
         self.xz_prev = xz
-        return F, fixes
+        return F, separations
+
+    def _step_compiled(self, xz):
+        """kernels.law_step: the same arithmetic as _step_numpy; du and xz_prev are updated in place."""
+        if self.xz_prev is None:  # du = 0 at the first step
+            self.xz_prev = np.array(xz, float)
+            self.contact._update_list(xz)
+        while True:
+            n_lost = kernels.law_step(xz, *self.kernel_args())
+            if n_lost >= 0:
+                return self.contact._F, self.finish_kernel_step(xz, n_lost)
+            self.contact._update_list(xz)
+
+    def kernel_args(self):
+        """The arguments of kernels.law_step after xz (compiled, after the first step)."""
+        c = self.contact
+        return (self.xz_prev, c.xz_list, c.half_skin2, self.omega, self._dpsi, self.du, self.inertia, self.mobile,
+                self.dt) + c.kernel_args(self.dt)
+
+    def finish_kernel_step(self, xz, n_lost):
+        """The SeparationEvents of a law_step at xz that returned n_lost."""
+        c = self.contact
+        return c._separations(xz, c._lost[:n_lost]) if n_lost else []
 
 
 class PaperLawEngine:
@@ -95,8 +125,10 @@ class PaperLawEngine:
         self._dynamic = np.flatnonzero(dynamic)
         self.forced = yade_io.Bodies(self.io.ids[dynamic])
         self.held = np.zeros((len(self._dynamic), 2))  # forces added in drive mode [N]
+        self._xz = np.zeros((self.io.n, 2))  # positions read and forces written by _kernel_work
+        self._F_out = np.zeros((len(self._dynamic), 2))
         self.hooks = []
-        self._set_velocities = yade_io.set_velocities
+        self._set_velocities, self._run_kernel = yade_io.set_velocities, yade_io.run_kernel
 
     def runner(self, label="paperLaw"):
         from engines import yade_io
@@ -104,7 +136,10 @@ class PaperLawEngine:
 
     def _work(self, write):
         F, fixes = self.core.step(self.io.positions())
-        write(F[self._dynamic])
+        write(F)
+        self._after(fixes)
+
+    def _after(self, fixes):
         if fixes:
             disc = np.fromiter(fixes, np.int64)
             self._set_velocities(self.io.ids[disc], np.array([fixes[d] for d in disc.tolist()]))
@@ -112,17 +147,41 @@ class PaperLawEngine:
             hook()
 
     def __call__(self):
-        self._work(self.forced.add_forces)
+        self._work(self._add)
+
+    def _add(self, F):
+        self.forced.add_forces(F[self._dynamic])
 
     def drive(self, n, stop=None):
-        """n steps: this engine's work, then O.step(); ``stop()`` true ends early."""
+        """n steps: this engine's work, then O.step(); ``stop()`` true ends early. A core that
+        offers ``kernel_step_args`` (PoreDEM) does the step in one compiled call where it can."""
         from yade import O
         write = self._write_held
+        fused = self._kernel_work if hasattr(self.core, "kernel_step_args") else None
         for _ in range(int(n)):
-            self._work(write)
+            if fused is None or not fused():
+                self._work(write)
             O.step()
             if stop is not None and stop():
                 break
 
+    def _kernel_work(self):
+        """This step as kernels.dem_step between a position read and the force write (one compiled
+        call with the bridge; engines.yade_io.run_kernel). False when the step needs ``_work``."""
+        core = self.core
+        while True:
+            args = core.kernel_step_args()
+            if args is None:
+                return False
+            due, law_args, water_args = args
+            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out,
+                                             self._dynamic, self.held, due, *law_args, *water_args)
+            if n_lost != kernels.LIST_STALE:
+                break
+            core.law.contact._update_list(self._xz)
+        fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args)
+        self._after(fixes)
+        return True
+
     def _write_held(self, F):
-        self.forced.set_permanent_forces(F + self.held)
+        self.forced.set_permanent_forces(F, self._dynamic, self.held)

@@ -120,21 +120,21 @@ class Model:
         reference: (N, 2) initial positions (x, z) [m].
         kinds: (N,) `Kind` of every particle.
         potential: the pair potential shared by all particles.
-        on_axis: (N,) bool, particles on a mirror-symmetry axis. A half model carries half of the
-            full energy, so a pair with both ends on the axis (shared by both halves) counts 1/2.
+
+    Every pair counts once with full weight, as in eq 6 (the paper's half specimen of §4 is such a
+    model: it sums eq 6 over its own particles, pairs on the symmetry axis included).
     """
 
     reference: np.ndarray
     kinds: np.ndarray
     potential: Potential
-    on_axis: np.ndarray
 
     def __post_init__(self):
         _check_finite("reference", self.reference)
         n = len(self.reference)
-        if np.shape(self.reference) != (n, 2) or np.shape(self.kinds) != (n,) or np.shape(self.on_axis) != (n,):
-            raise ValueError(f"reference must be (N, 2) and kinds, on_axis (N,), got shapes "
-                             f"{np.shape(self.reference)}, {np.shape(self.kinds)}, {np.shape(self.on_axis)}")
+        if np.shape(self.reference) != (n, 2) or np.shape(self.kinds) != (n,):
+            raise ValueError(f"reference must be (N, 2) and kinds (N,), got shapes "
+                             f"{np.shape(self.reference)}, {np.shape(self.kinds)}")
         gap, _ = cKDTree(self.reference).query(self.reference, k=2)
         if n > 1 and np.min(gap[:, 1]) <= 0:
             raise ValueError(f"reference: particle spacing must be > 0, got {np.min(gap[:, 1])!r} "
@@ -148,11 +148,10 @@ class Model:
 
 @dataclass(frozen=True)
 class Pairs:
-    """Interacting pairs (i < j) with their weights (1, or 1/2 for axis-axis pairs)."""
+    """Interacting pairs (i < j) of eq 6."""
 
     i: np.ndarray
     j: np.ndarray
-    weight: np.ndarray
 
 
 def find_pairs(positions, model):
@@ -163,16 +162,14 @@ def find_pairs(positions, model):
     keep = np.linalg.norm(positions[j] - positions[i], axis=1) < model.potential.DL
     boundary = model.kinds >= Kind.MOVING
     keep &= ~(boundary[i] & boundary[j])
-    i, j = i[keep], j[keep]
-    weight = np.where(model.on_axis[i] & model.on_axis[j], 0.5, 1.0)
-    return Pairs(i, j, weight)
+    return Pairs(i[keep], j[keep])
 
 
 def _pair_terms(positions, pairs, pot):
-    """Distance l [m] and w f (x_j - x_i)/l [N/m] per pair: its share of ∂U/∂x_i (eq 8)."""
+    """Distance l [m] and f (x_j - x_i)/l [N/m] per pair: its share of ∂U/∂x_i (eq 8)."""
     d = positions[pairs.j] - positions[pairs.i]
     l = np.linalg.norm(d, axis=1)
-    return l, (pairs.weight * pair_force(l, pot) / l)[:, None] * d
+    return l, (pair_force(l, pot) / l)[:, None] * d
 
 
 def total_energy(positions, forces, free, pairs, pot, origin=0.0):
@@ -186,7 +183,7 @@ def total_energy(positions, forces, free, pairs, pot, origin=0.0):
     """
     l = np.linalg.norm(positions[pairs.j] - positions[pairs.i], axis=1)
     work = np.sum((forces * (positions - origin))[free])
-    return np.sum(pairs.weight * pair_energy(l, pot)) - work  # eq 6
+    return np.sum(pair_energy(l, pot)) - work  # eq 6
 
 
 def energy_gradient(positions, forces, pairs, pot):
@@ -371,3 +368,79 @@ def run_path(model, steps: Sequence[Step], settings,
     strain, stress = np.array(response[1:]).T
     last = increments[-1]
     return Path(increments, strain, stress, last.yielded, last.reason)
+
+
+@dataclass
+class LimitLoad:
+    """Yield under load control: the largest load [Pa] with an equilibrium on the branch followed
+    continuously from the unloaded state (beyond it the particles snap: the nearby minimum of U
+    disappears or jumps), converged in the load increment.
+
+    Attributes:
+        found: False when no yield was met up to the search's largest load.
+        load: the last stable load [Pa] (signed like the loads searched).
+        strain: the caller's strain at that load [-].
+        increment: the `Increment` solved at that load.
+        refinements: [(load increment [Pa], last stable load [Pa])], one per halving.
+        strain_path, stress_path: the stable states met on the way, in load order.
+        reason: why the next increment failed.
+    """
+
+    found: bool
+    load: float
+    strain: float
+    increment: Increment
+    refinements: list
+    strain_path: np.ndarray
+    stress_path: np.ndarray
+    reason: str
+
+
+JUMP_RATIO = 2.0   # an increment whose move per unit load exceeds this x the previous one's is a snap
+
+
+def limit_load(model, step_at: Callable[[float], Step], measure, settings, h0, max_load,
+               rel_tol=0.02, max_halvings=10):
+    """March the load by h0 [Pa] from 0 until an increment fails, then halve the increment and march
+    on from the last stable state, until the last stable load moves by less than ``rel_tol`` of
+    itself (and the increment is below that too).
+
+    An increment fails when the minimiser finds no minimum inside the trust box, or when its largest
+    move per unit load exceeds JUMP_RATIO x that of the increment before: on the equilibrium branch
+    moves shrink with the increment, across a snap-through they do not, so the limit found depends
+    neither on h0 nor on the trust box. ``step_at(load)`` gives the `Step` of a load; ``measure``
+    as in `run_path`.
+    """
+    visited = []
+
+    def march(state, load, h, last, rate):
+        while abs(load + h) <= abs(max_load) * (1 + 1e-12):
+            step = step_at(load + h)
+            inc = solve_increment(model, state, step.forces, step.prescribed, settings)
+            new_rate = inc.max_move / abs(h)
+            if not inc.yielded and rate is not None and new_rate > JUMP_RATIO * rate:
+                inc.reason = (f"snap: the move per unit load jumped {new_rate / rate:.1f}x "
+                              f"(largest move {inc.max_move:.3g} m)")
+            if inc.yielded or inc.reason:
+                return load, state, last, rate, inc.reason
+            load, state, last, rate = load + h, inc.positions, inc, new_rate
+            visited.append((load, measure(inc)))
+        return load, state, last, rate, ""
+
+    h = h0
+    load, state, last, rate, reason = march(model.reference, 0.0, h, None, None)
+    if last is None:
+        raise ValueError(f"no equilibrium at the first load increment {h0} Pa: {reason}")
+    refinements = [(h, load)]
+    for _ in range(max_halvings if reason else 0):
+        h /= 2
+        new_load, state, last, rate, reason = march(state, load, h, last, rate)
+        moved, load = abs(new_load - load), new_load
+        refinements.append((h, load))
+        if moved < rel_tol * abs(load) and abs(h) < rel_tol * abs(load):
+            break
+    visited.sort(key=lambda v: abs(v[0]))
+    strain, _ = measure(last)
+    path = np.array([m for _, m in visited])
+    return LimitLoad(bool(reason), float(load), float(strain), last, refinements,
+                     path[:, 0], path[:, 1], reason)

@@ -27,6 +27,7 @@ constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent
 import numpy as np
 
 from engines import ground_motion
+from engines import kernels
 from engines import pore_geometry as pg
 from engines.contact import critical_time_step
 from engines.paper_law import PaperLaw
@@ -189,7 +190,34 @@ class PoreDEM:
         if self.water_model is not None:                                # d
             self.water_model.step(self.k, xz)
             F = F + self.water_model.F
+        self._move_walls()
+        return F, fixes
+
+    def _move_walls(self):
         if self.base is not None:                                       # f
             self.wall_velocity = self.base.step()
         self.k += 1
-        return F, fixes
+
+    # -- the same step as one compiled call (engines.kernels.dem_step) ----------------------------
+    def kernel_step_args(self):
+        """(water due, law_step's arguments, water_step's) for kernels.dem_step at step k, or None
+        when this step needs the general ``step`` (NumPy path, first step, extra forces, a rebuild
+        of the pores)."""
+        law, wm = self.law, self.water_model
+        if not law.compiled or law.xz_prev is None or law.extra_forces:
+            return None
+        if wm is None:
+            return False, law.kernel_args(), kernels.dry_water_args()
+        if self.k > 0 and self.k % wm.rebuild_interval == 0:
+            return None
+        return self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt)
+
+    def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
+        """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
+        kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
+        due, _, water_args = args
+        fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
+        if due:
+            self.water_model.finish_kernel_step(water_args[0], n_sub, water_args)
+        self._move_walls()
+        return fixes

@@ -8,7 +8,8 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   of the lifted points (x, z, x^2 + z^2 - r^2). Where one of its edges that is not a link hides an
   eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
   can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
-  *every eq 28 pair that crosses no link is a link*. ``candidates="delaunay"`` gives the previous
+  *every eq 28 pair that crosses no link is a link*; of two such pairs that cross each other,
+  the one with the smaller gap R - r_i - r_j is put in first. ``candidates="delaunay"`` gives the previous
   candidate set (Delaunay edges of the centres, no insertion), kept for comparison.
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
   it (triangles joined across non-link edges). The unbounded outer face is not a pore.
@@ -335,7 +336,8 @@ class _FlipTriangulation:
 
 def insert_missing_links(xz, r, tri, reach):
     """Make every eq 28 pair between triangulation vertices that crosses no link an edge (and so a
-    link), by edge flips. Only edges that are not links are flipped, so no link is lost.
+    link), by edge flips, the pairs in order of their gap R - r_i - r_j (then of their indices).
+    Only edges that are not links are flipped, so no link is lost.
 
     Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m].
     """
@@ -347,6 +349,8 @@ def insert_missing_links(xz, r, tri, reach):
     missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
     if not len(missing):
         return tri, 0
+    d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
+    missing = missing[np.lexsort((missing[:, 1], missing[:, 0], np.hypot(d[:, 0], d[:, 1]) - r[missing].sum(axis=1)))]
     ft = _FlipTriangulation(xz, tri)
     rr = r.tolist()
 

@@ -126,6 +126,7 @@ class PoreWater:
         self.q_prev = None
         self.balance = WaterBalance(initial=float(self.W.sum()))
         self.remesh_counts = {}
+        self.rule = np.zeros(net.n_pores, np.int8)  # per pore: 0 built with the network, 1-4 inherited by rule (a)-(d)
 
     # -- state -----------------------------------------------------------------------------------
     def pressure(self, A):
@@ -231,8 +232,8 @@ class PoreWater:
 
         A new pore takes (a) the U of the old pore with the same vertex set; else (b) the mean U
         of the old pores whose vertex set contains or is contained in its own (a split or merge);
-        else (c) the mean U of its already assigned neighbouring pores (the outer face counts as
-        U = 0 for a surface pore), repeated until nothing changes; else (d) U = 0. Old pores
+        else (c) the mean U of its already assigned neighbouring pores (the outside is not a pore
+        and does not count), repeated until nothing changes; else (d) U = 0. Old pores
         pinched at A <= a_min do not pass on their pressure.
         transfer = "paper": W is recomputed from U and the new A (eq 32).
         transfer = "conserving": W from ``conserving_water`` (needs xz); new pores that overlap no
@@ -240,7 +241,8 @@ class PoreWater:
         Returns the counts per rule.
         """
         U_old = pressure(self.W, A_old, self.settings.E_w)
-        U_new, counts = inherit_pressures(self.net, U_old, A_old > self.net.a_min, new_net)
+        U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net)
+        counts = rule_counts(rule)
         A_new = np.asarray(A_new, float)
         if self.settings.transfer == "conserving":
             if xz is None:
@@ -252,8 +254,11 @@ class PoreWater:
             W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
         self.balance.remesh_change += float(W_new.sum() - self.W.sum())
         self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
-        self.remesh_counts = counts
+        self.remesh_counts, self.rule = counts, rule
         return counts
+
+
+RULES = "abcd"  # PoreWater.rule codes 1-4; 0: built with the network
 
 
 def inherit_pressures(old_net, U_old, old_valid, new_net):
@@ -261,9 +266,20 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
 
     Returns (U_new (Np_new,), counts dict rule -> number of pores).
     """
+    U, rule = pressures_by_rule(old_net, U_old, old_valid, new_net)
+    return U, rule_counts(rule)
+
+
+def rule_counts(rule):
+    """{"a": n, ..., "d": n} of rule codes 1-4."""
+    return {name: int(np.sum(rule == k)) for k, name in enumerate(RULES, 1)}
+
+
+def pressures_by_rule(old_net, U_old, old_valid, new_net):
+    """(U_new (Np_new,), rule code 1-4 of (a)-(d) (Np_new,) int8): see ``inherit_pressures``."""
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
-    rule = np.full(n_new, "", dtype=object)
+    rule = np.zeros(n_new, np.int8)
     # (a) the same vertex set: equal signatures (pore_geometry._mix64)
     valid = np.flatnonzero(old_valid)
     order = valid[np.argsort(old_net.pore_signature[valid], kind="stable")]
@@ -271,7 +287,7 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
     pos = np.minimum(np.searchsorted(sorted_sig, new_net.pore_signature), max(len(order) - 1, 0))
     if len(order):
         same = sorted_sig[pos] == new_net.pore_signature
-        U[same], rule[same] = U_old[order[pos[same]]], "a"
+        U[same], rule[same] = U_old[order[pos[same]]], 1
     todo = np.flatnonzero(np.isnan(U))
     if len(todo):  # (b) split or merge: old vertex set contains or is contained in the new one
         by_vertex = {}
@@ -283,8 +299,8 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
             cands = {q for v in mine for q in by_vertex.get(v, ())}
             near = [q for q in cands if _subset_or_superset(set(old_net.vertices_of(q).tolist()), mine)]
             if near:
-                U[p], rule[p] = float(np.mean(U_old[near])), "b"
-    # (c) mean of assigned neighbours, the outer face at U = 0 for surface pores
+                U[p], rule[p] = float(np.mean(U_old[near])), 2
+    # (c) mean over the assigned neighbouring pores ("まわりのすべての図形"); the outside is not a pore
     i, j = np.unique(np.sort(new_net.throat_conns, axis=1), axis=0).T  # distinct neighbours
     while True:
         unset = np.isnan(U)
@@ -294,16 +310,14 @@ def inherit_pressures(old_net, U_old, old_valid, new_net):
         has = (~unset).astype(float)
         s = np.bincount(i, known[j], n_new) + np.bincount(j, known[i], n_new)
         c = np.bincount(i, has[j], n_new) + np.bincount(j, has[i], n_new)
-        c_tot = c + new_net.pore_surface
-        assign = unset & (c_tot > 0) & (c > 0)
+        assign = unset & (c > 0)
         if not assign.any():
             break
-        U[assign] = s[assign] / c_tot[assign]
-        rule[assign] = "c"
+        U[assign] = s[assign] / c[assign]
+        rule[assign] = 3
     left = np.isnan(U)  # (d)
-    U[left], rule[left] = 0.0, "d"
-    counts = {k: int(np.sum(rule == k)) for k in "abcd"}
-    return U, counts
+    U[left], rule[left] = 0.0, 4
+    return U, rule
 
 
 def _subset_or_superset(a, b):

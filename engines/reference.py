@@ -1,28 +1,35 @@
 """A slow, literal NumPy reference of the seed-000 model (Tarumi & Hakuno), for cross-checks.
 
-Written from the paper's equations and the project's documented conventions (SPEC §2, the module
-docstrings of engines.contact, engines.pore_geometry, engines.pore_water), WITHOUT importing those
-modules, so that a bug in the fast core or the YADE path does not hide in the reference too.
-Clarity over speed: the contact law runs over every disc pair, pores are found by the paper's
-walk around the link graph, pressure forces are the arc integrals of eq 33 pore by pore.
+Independent of the fast modules: it imports nothing from engines/ but the recording contract
+(engines/trajectory.py). Its settings are read straight from the scene's tables (a plain dict,
+``scene.as_dict()``), its contact law is written from eq 1-13, 18-27 and SPEC §2.1 with the
+paper's variable names, one record per *ordered* pair (i, j) seen from element i (eq 2: alpha_ij),
+so Newton's third law is not built in but checked; pores are found by the paper's walk around
+the link graph and eq 33 is integrated arc by arc. Where the paper is silent or ambiguous the
+reading taken here is listed in docs/READINGS.md. The one place where the YADE path has used
+another reading, the wall kinematics, is an option (``readings``), so that the cross-check can
+compare everything else to round-off and measure the effect of the disagreement.
 
 Units are SI per unit thickness (SPEC §1): positions [m], forces [N], U and E_w [N/m], areas [m^2].
 Every floating-point state array has the dtype chosen by the caller (float32, float64, longdouble);
-only the pore *topology* (Delaunay candidates, faces) is decided in float64.
+only the pore *topology* (candidate links, faces) is decided in float64.
 
 Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_dem.py):
   a. du = x_t - x_{t-dt}, dpsi = psi_t - psi_{t-dt} (zero at k = 0).
-  b. contact forces, eq 1-13, 26-27 (``ContactState.forces``).
-  c. velocity adjustment of particles that became free, eq 18-24 (``separation_adjustment``),
-     on the velocities v = du/dt; the adjusted velocity replaces v before step e.
-  d. water (scene.water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
+  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``).
+  c. velocity adjustment of particles that became free, eq 18-24 (``adjust_free_particles``),
+     on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
+     velocity replaces v before step e.
+  d. water (water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
      k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
      advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
-     x_t (eq 32, 38-43), then the pressure forces (eq 33) are recomputed from the new U = eq 32(W, A(x_t))
-     and held until the next water step.
+     x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
+     with the area actually used (eq 45) and held until the next water step.
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17; eq 44 optional).
-  f. moving walls: v_w += a(t) dt, x_w += v_w dt; other walls stay put.
+  f. moving walls follow the input acceleration (§6.1: velocity and displacement by the
+     constant-(average-)acceleration method, ``WallMotion``): x_w += v_w dt + a_bar dt^2/2,
+     v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2.
   g. after the step, when (k + 1) % record_every == 0, a sample at t = (k + 1) dt: positions,
      block-mean U (eq 32 with the current W and the areas at the recorded positions), total water
      and the relative water-balance error.
@@ -30,189 +37,234 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_d
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import Delaunay, QhullError
+from scipy.spatial import ConvexHull, Delaunay, QhullError
 
 from engines.trajectory import Trajectory
 
 G0 = 9.80665                 # standard gravity for records given in g [m/s^2]
 DEGENERATE_FRACTION = 1e-4   # a face with void area <= this x mean(pi r^2) at build is closed (no pore)
-PARTICLE, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3   # Packing.group codes
+PARTICLE, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3   # disc group codes of a packing
+
+# The reading of this reference where the YADE path has used another (docs/READINGS.md D1):
+# the wall kinematics, "average_acceleration" (the paper's) or "symplectic_euler" (WallMotion).
+WALL_STEPS = ("average_acceleration", "symplectic_euler")
+PAPER_READINGS = {"wall_step": "average_acceleration"}
 
 
 # ------------------------------------------------------------------------------------------------
-# Contact law (eq 1-13, 26-27)
+# Settings: read from the scene's tables (a plain dict of dicts)
 # ------------------------------------------------------------------------------------------------
-class ContactState:
-    """The contact law over every pair of discs except wall-wall pairs (no neighbour list).
+@dataclass(frozen=True)
+class Settings:
+    """Every constant the reference uses, flat, with the paper's names (SI, per unit thickness)."""
 
-    Per pair (i, j), i < j, with n from i to j: touching (delta = r_i + r_j + eps_m - R >= 0,
-    eq 1, 26), the accumulated approach u_n [m], the elastic forces e_n, e_s [N] after eq 6, 10, 11,
-    and the approach velocity at first touch vn_coll [m/s] (eq 20-21) for eq 19.
+    spring: str
+    kn: float
+    eta_n: float
+    ks: float
+    eta_s: float
+    mu: float
+    e: float                # restitution of eq 19
+    f_max: float
+    eps_m: float
+    adjust: bool            # eq 18-24 on/off
+    rho: float
+    rho_w: float
+    g: float
+    wet: bool
+    E_w: float
+    k1: float
+    k2: float
+    k3: float
+    q_w: float
+    drained: bool
+    l_m: float
+    smoothing: bool
+    substep: bool
+    loading: dict
+    dt: float
+    dt_safety: float
+    rebuild_interval: int
+    water_interval: int
+    eq44: bool
+    block_z: list
+
+
+def read_settings(tables):
+    """Settings from a scene's tables ({table: {field: value}}, e.g. ``scene.as_dict()``)."""
+    c, w, m, n = tables["contact"], tables["water"], tables["material"], tables["numerics"]
+    return Settings(
+        spring=c["spring"], kn=c["kn"], eta_n=c["eta_n"], ks=c["ks"], eta_s=c["eta_s"], mu=c["mu"],
+        e=c["restitution"], f_max=c["f_max"], eps_m=c["eps_m"], adjust=c["separation_adjustment"],
+        rho=m["rho"], rho_w=m["rho_w"], g=m["g"], wet=w["enabled"], E_w=w["E_w"], k1=w["k1"], k2=w["k2"],
+        k3=w["k3"], q_w=w["q_w"], drained=w["sides"] == "drained", l_m=w["l_m"], smoothing=w["smoothing"],
+        substep=w["substep"], loading=dict(tables["loading"]), dt=n["dt"], dt_safety=n["dt_safety"],
+        rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"], eq44=n["damping_eq44"],
+        block_z=[list(b) for b in tables["output"]["block_z"]])
+
+
+# ------------------------------------------------------------------------------------------------
+# Contact law (eq 1-13, 25-27): one record per ordered pair (i, j), seen from element i
+# ------------------------------------------------------------------------------------------------
+class PairRecords:
+    """The quantities of eq 1-13 for every ordered pair (i, j), i a particle and j any other disc.
+
+    Record p is pair (I[p], J[p]); its force acts on element I[p] only, so the force on i is the sum
+    over the records of i (the Sigma of eq 13) and Newton's third law holds only because record
+    (j, i) computes the mirror value. Per record: in_contact (eq 1a, 26), e_n and e_s [N] (eq 5a,
+    9a after eq 6, 10, 11, 27), the displacement eps [m] of the elastic spring (c) (eq 25), and
+    Vn_ij [m/s], the approach velocity at collision (eq 20-21).
     """
 
-    def __init__(self, settings, r, group, dtype):
-        self.s = settings
-        self.dtype = dtype
+    def __init__(self, s, r, mobile, dtype):
         n = len(r)
-        i, j = np.triu_indices(n, 1)
-        keep = (group[i] == PARTICLE) | (group[j] == PARTICLE)  # wall-wall pairs are ignored
-        self.i, self.j = i[keep], j[keep]
-        self.r = np.asarray(r, dtype)
-        m = len(self.i)
-        self.touching = np.zeros(m, bool)
-        self.u_n = np.zeros(m, dtype)
-        self.e_n = np.zeros(m, dtype)
-        self.e_s = np.zeros(m, dtype)
-        self.f_n = np.zeros(m, dtype)
-        self.vn_coll = np.zeros(m, dtype)
-        self.kn, self.eta_n, self.ks, self.eta_s = (dtype(v) for v in (settings.kn, settings.eta_n, settings.ks, settings.eta_s))
-        self.mu, self.f_max, self.eps_m = dtype(settings.mu), dtype(settings.f_max), dtype(settings.eps_m)
+        self.I, self.J = np.nonzero(np.asarray(mobile)[:, None] & ~np.eye(n, dtype=bool))
+        self.s, self.dtype, self.n = s, dtype, n
+        self.r_i, self.r_j = np.asarray(r, dtype)[self.I], np.asarray(r, dtype)[self.J]
+        self.kn, self.eta_n, self.ks, self.eta_s, self.mu, self.f_max, self.eps_m = (
+            dtype(v) for v in (s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m))
+        self.first = np.flatnonzero(np.r_[True, self.I[1:] != self.I[:-1]]) if len(self.I) else self.I
+        m = len(self.I)
+        self.in_contact = np.zeros(m, bool)
+        self.e_n, self.e_s, self.eps, self.Vn_ij = (np.zeros(m, dtype) for _ in range(4))
 
     def forces(self, x, du, dpsi, dt):
-        """Contact forces (N, 2) [N] and moments (N,) [N m, counter-clockwise] at positions x.
+        """Forces (N, 2) [N], moments Fm (N,) [N m, counter-clockwise] on the elements (eq 13), and
+        the records that were in contact at t - dt and are not at t: {i: [(j, n_ij, Vn_ij)]},
+        n_ij = (cos alpha_ij, sin alpha_ij) the unit normal from i to j."""
+        I, J, z = self.I, self.J, self.dtype(0)
+        R_ij = np.sqrt((x[I, 0] - x[J, 0]) ** 2 + (x[I, 1] - x[J, 1]) ** 2)   # eq 1b
+        sin_a = -(x[I, 1] - x[J, 1]) / R_ij                                   # eq 2a
+        cos_a = -(x[I, 0] - x[J, 0]) / R_ij                                   # eq 2b
+        touching = self.r_i + self.r_j + self.eps_m >= R_ij                   # eq 1a, 26
+        collision = touching & ~self.in_contact
+        du_rel, dw_rel = du[I, 0] - du[J, 0], du[I, 1] - du[J, 1]
+        du_n = du_rel * cos_a + dw_rel * sin_a                                # eq 3a (approach > 0)
+        du_s = -du_rel * sin_a + dw_rel * cos_a + (self.r_i * dpsi[I] + self.r_j * dpsi[J])  # eq 3b
 
-        du (N, 2) [m] and dpsi (N,) [rad] are the increments of the last step (eq 17); du/dt are
-        the velocities. Returns (F, M, events), events = [(i, j, n, Vn_ij)] for the pairs that
-        touched at the previous step and do not now (n the unit vector from i to j, Vn_ij the
-        approach velocity at their first touch, eq 20-21).
-        """
-        i, j, r, dtype = self.i, self.j, self.r, self.dtype
-        dx = x[j, 0] - x[i, 0]
-        dz = x[j, 1] - x[i, 1]
-        R = np.sqrt(dx * dx + dz * dz)                      # eq 1b
-        cos_a, sin_a = dx / R, dz / R                       # eq 2: cos a = -(x_i - x_j)/R
-        delta = r[i] + r[j] + self.eps_m - R
-        now = delta >= 0                                    # eq 1a, 26
-        new = now & ~self.touching
-        dui = du[i] - du[j]
-        dun = dui[:, 0] * cos_a + dui[:, 1] * sin_a                                   # eq 3a
-        dus = -dui[:, 0] * sin_a + dui[:, 1] * cos_a + r[i] * dpsi[i] + r[j] * dpsi[j]  # eq 3b
-
-        u_n = np.where(new, delta, self.u_n + dun)          # the overlap, from first touch on
+        overlap = self.r_i + self.r_j + self.eps_m - R_ij      # eq 25-26: the displacement at first touch
         spring = self.s.spring
-        if spring in ("a", "b"):
-            e_n = self.kn * u_n                             # eq 4a, 5a, 25
-        elif spring == "c":
-            e_n = np.minimum(self.kn * u_n, self.f_max)     # eq 27 on the elastic path
-        else:
-            e_n = np.minimum(np.where(new, self.kn * delta, self.e_n + self.kn * dun), self.f_max)  # eq 5a, 27
-        d_n = self.eta_n * dun / dt                         # eq 4b, 5b
-        e_s = np.where(new, dtype(0), self.e_s) + self.ks * dus   # eq 8a, 9a
-        d_s = self.eta_s * dus / dt                         # eq 8b, 9b
+        if spring == "c":     # nonlinear elastic: f = min(kn eps, f_max) on one path (SPEC §2.1)
+            eps = np.where(collision, overlap, self.eps + du_n)
+            e_n = np.minimum(self.kn * eps, self.f_max)
+        else:                 # eq 4a, 5a incrementally, from kn eps at collision (eq 25)
+            eps = self.eps
+            e_n = np.where(collision, self.kn * overlap, self.e_n + self.kn * du_n)
+            if spring == "d":
+                e_n = np.minimum(e_n, self.f_max)                             # eq 27
+        d_n = self.eta_n * du_n / dt                                          # eq 4b, 5b
+        e_s = np.where(collision, z, self.e_s) + self.ks * du_s               # eq 8a, 9a
+        d_s = self.eta_s * du_s / dt                                          # eq 8b, 9b
+        tension = (e_n < 0) | ~touching
+        e_n, d_n = np.where(tension, z, e_n), np.where(tension, z, d_n)       # eq 6
+        e_s, d_s = np.where(tension, z, e_s), np.where(tension, z, d_s)       # eq 10
+        sliding = np.abs(e_s) > self.mu * e_n
+        e_s = np.where(sliding, self.mu * e_n * np.sign(e_s), e_s)            # eq 11a
+        d_s = np.where(sliding, z, d_s)                                       # eq 11b
+        f_n, f_s = e_n + d_n, e_s + d_s                                       # eq 7, 12
 
-        off = (e_n < 0) | ~now                              # eq 6, 10 (and nothing out of reach)
-        e_n, d_n = np.where(off, dtype(0), e_n), np.where(off, dtype(0), d_n)
-        e_s, d_s = np.where(off, dtype(0), e_s), np.where(off, dtype(0), d_s)
-        slip = np.abs(e_s) > self.mu * e_n                  # eq 11
-        e_s = np.where(slip, self.mu * e_n * np.sign(e_s), e_s)
-        d_s = np.where(slip, dtype(0), d_s)
-        f_n, f_s = e_n + d_n, e_s + d_s                     # eq 7, 12
+        F = np.zeros((self.n, 2), self.dtype)
+        Fm = np.zeros(self.n, self.dtype)
+        if len(I):                          # the records of element i are contiguous: sum each run
+            owner = I[self.first]
+            F[owner, 0] = np.add.reduceat(-f_n * cos_a + f_s * sin_a, self.first)   # eq 13a
+            F[owner, 1] = np.add.reduceat(-f_n * sin_a - f_s * cos_a, self.first)   # eq 13b
+            Fm[owner] = -self.r_i[self.first] * np.add.reduceat(f_s, self.first)   # eq 13c
+        left = {}
+        for p in np.flatnonzero(self.in_contact & ~touching):
+            left.setdefault(int(I[p]), []).append((int(J[p]), np.array([cos_a[p], sin_a[p]]), self.Vn_ij[p]))
 
-        n = len(r)
-        fx = -f_n * cos_a + f_s * sin_a                     # eq 13a, on i
-        fz = -f_n * sin_a - f_s * cos_a                     # eq 13b, on i
-        F = np.zeros((n, 2), dtype)
-        M = np.zeros(n, dtype)
-        np.add.at(F[:, 0], i, fx)
-        np.add.at(F[:, 1], i, fz)
-        np.add.at(F[:, 0], j, -fx)                          # j gets the opposite force
-        np.add.at(F[:, 1], j, -fz)
-        np.add.at(M, i, -r[i] * f_s)                        # eq 13c
-        np.add.at(M, j, -r[j] * f_s)
+        V = du / dt                                                           # eq 17
+        Vn_i = V[I, 0] * cos_a + V[I, 1] * sin_a                              # eq 20a
+        Vn_j = -V[J, 0] * cos_a - V[J, 1] * sin_a                             # eq 20b
+        self.Vn_ij = np.where(collision, Vn_i + Vn_j, np.where(touching, self.Vn_ij, z))   # eq 21
+        self.in_contact = touching
+        self.e_n, self.e_s = np.where(touching, e_n, z), np.where(touching, e_s, z)
+        self.eps = np.where(touching, eps, z)
+        self.f_n = np.where(touching, f_n, z)
+        return F, Fm, left
 
-        events = [(int(i[p]), int(j[p]), np.array([cos_a[p], sin_a[p]]), self.vn_coll[p])
-                  for p in np.flatnonzero(self.touching & ~now)]
-        v = du / dt
-        vn_i = v[i, 0] * cos_a + v[i, 1] * sin_a            # eq 20a
-        vn_j = -v[j, 0] * cos_a - v[j, 1] * sin_a           # eq 20b
-        zero = dtype(0)
-        self.vn_coll = np.where(new, vn_i + vn_j, np.where(now, self.vn_coll, zero))   # eq 21, at first touch
-        self.touching = now
-        self.u_n = np.where(now, u_n, zero)
-        self.e_n = np.where(now, e_n, zero)
-        self.e_s = np.where(now, e_s, zero)
-        self.f_n = np.where(now, f_n, zero)
-        return F, M, events
-
-    def touch_count(self, n):
-        """Number of partners each disc touches now."""
-        t = self.touching
-        return np.bincount(self.i[t], minlength=n) + np.bincount(self.j[t], minlength=n)
+    def contacts_of(self):
+        """Number of elements each element touches now (walls: 0, they carry no records)."""
+        return np.bincount(self.I[self.in_contact], minlength=self.n)
 
 
 # ------------------------------------------------------------------------------------------------
-# Velocity adjustment at separation (eq 18-24, Fig. 3)
+# Velocity adjustment at separation (§2.2(1), eq 18-24, Fig. 3)
 # ------------------------------------------------------------------------------------------------
-def separation_adjustment(events, touching_now, v, mass, mobile, e):
-    """New velocities {disc: (2,) [m/s]} of particles that became free this step (eq 18-24).
+def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
+    """New velocities {i: V''_i (2,)} of the particles that became free (eq 18-24).
 
-    ``events``: (i, j, n, Vn_ij) for each pair that touched at the previous step and does not now,
-    n the unit vector from i to j at separation and Vn_ij the approach velocity at first touch.
-    ``touching_now`` (N,) bool; ``v`` (N, 2) current velocities du/dt; ``e`` the restitution.
-
-    Vn_a = v_a . n_ab, Vn_b = -v_b . n_ab (eq 20, approach positive); a pair is adjusted only when
-    it separates faster than restitution allows, -(Vn'_a + Vn'_b) > e Vn_ab > 0 (eq 18).
-      (d) a and b were touching only each other and both are free: Rk_a, Rk_b from
-          Rk_a Vn'_a + Rk_b Vn'_b = -e Vn_ab (eq 24a) and the normal momentum of the pair at
-          separation kept (eq 24b), then eq 23 for both.
-      otherwise, in rounds: a free disc is adjusted against its *reference* partners - discs that are
-      not free (walls, discs still touching), or free discs adjusted in an earlier round - with
-      Rk_a = (-e Vn_ab - Vn'_b)/Vn'_a (eq 22), the smallest Rk_a of those pairs and eq 23 along that
-      pair's normal: (a) one partner, (b) several, (c) a free partner with other, non-free partners
-      is adjusted first (round 1) and the disc that left only it follows against its new velocity.
-    Free discs with no reference (a free cluster of three or more) are not adjusted.
+    ``left``: {i: [(j, n_ij, Vn_ij)]} the elements particle i touched at t - dt and not at t;
+    ``n_contacts`` (N,) elements each particle touches at t; ``V`` (N, 2) velocities (the primed
+    values at separation); ``e`` the restitution. Vn'_i = V'_i . n_ij, Vn'_j = -V'_j . n_ij (eq 20).
+    A separation is adjusted only when it is faster than eq 19 allows: -(Vn'_i + Vn'_j) > e Vn_ij > 0
+    (the problem eq 18 names). A particle i is free when it touches nothing at t. Patterns (Fig. 3):
+      (d) i and j both free and each left only the other: eq 24a with the pair's normal momentum at
+          separation kept (eq 24b), eq 23 for both;
+      (a) i left one element j that is not free (a wall, or j still touches others): Rk_i of eq 22
+          and eq 23; (b) i left several such elements: the smallest Rk_i, along that pair's normal;
+      (c) a partner j is free too but left others as well: j is settled first against the elements
+          that are not free, then i against the new velocity of j.
+    ``counts``: optional dict pattern -> number of particles adjusted, updated in place.
     """
-    left = {}
-    for i, j, n, vn in events:
-        left.setdefault(i, []).append((j, n, vn))
-        left.setdefault(j, []).append((i, -n, vn))
-    free = {d for d in left if mobile[d] and not touching_now[d]}
-    vel = {d: np.array(v[d]) for d in left}
-    done = set()
+    free = {i for i in left if n_contacts[i] == 0}
+    Vnew = {i: np.array(V[i]) for i in left}
+    for i, lst in left.items():
+        for j, _, _ in lst:
+            Vnew.setdefault(j, np.array(V[j]))
+    settled, out = set(), {}
 
-    def normal_velocities(a, b, n):
-        return vel[a] @ n, -(vel[b] @ n)            # eq 20
+    def gate(Vn_i, Vn_j, Vn_ij):
+        return -(Vn_i + Vn_j) > e * Vn_ij > 0                                  # eq 18-19
 
-    for a in sorted(free):                           # (d)
-        if a in done or len(left[a]) != 1:
+    for i in sorted(free):                                                     # (d)
+        if len(left[i]) != 1 or i in settled:
             continue
-        b, n, vn = left[a][0]
-        if b not in free or len(left[b]) != 1:
+        j, n, Vn_ij = left[i][0]
+        if j not in free or len(left[j]) != 1:
             continue
-        done |= {a, b}
-        vn_a, vn_b = normal_velocities(a, b, n)
-        if not -(vn_a + vn_b) > e * vn > 0:          # eq 18
+        settled |= {i, j}
+        Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
+        if not gate(Vn_i, Vn_j, Vn_ij):
             continue
-        target = -e * vn                             # eq 19: Vn''_ab
-        p = mass[a] * vn_a - mass[b] * vn_b          # eq 24b
-        new_a = (p + mass[b] * target) / (mass[a] + mass[b])   # Rk_a Vn'_a
-        new_b = target - new_a                       # eq 24a: Rk_b Vn'_b
-        vel[a] = vel[a] - (vn_a - new_a) * n         # eq 23 for a
-        vel[b] = vel[b] + (vn_b - new_b) * n         # eq 23 for b (its normal is -n)
+        target = -e * Vn_ij                                                    # eq 19: Vn''_ij
+        momentum = mass[i] * Vn_i - mass[j] * Vn_j                             # eq 24b, left side
+        X = (momentum + mass[j] * target) / (mass[i] + mass[j])                # Rk_i Vn'_i
+        Y = target - X                                                         # eq 24a: Rk_j Vn'_j
+        Vnew[i] = Vnew[i] - (Vn_i - X) * n                                     # eq 23
+        Vnew[j] = Vnew[j] + (Vn_j - Y) * n
+        out[i], out[j] = Vnew[i], Vnew[j]
+        if counts is not None:
+            counts["d"] = counts.get("d", 0) + 2
 
-    while True:                                      # (a), (b), then (c)
-        ref = lambda d: d not in free or d in done
-        ready = [a for a in sorted(free - done) if any(ref(b) for b, _, _ in left[a])]
+    pending = set(free) - settled                                              # (a), (b), (c)
+    while pending:
+        ready = [i for i in sorted(pending) if any(j not in pending for j, _, _ in left[i])]
         if not ready:
-            break
-        adjusted = {}
-        for a in ready:
+            break                                 # a free cluster with no settled element: left as is
+        new = {}
+        for i in ready:
             best = None
-            for b, n, vn in left[a]:
-                if not ref(b):
+            for j, n, Vn_ij in left[i]:
+                if j in pending:
                     continue
-                vn_a, vn_b = normal_velocities(a, b, n)
-                if vn_a == 0 or not -(vn_a + vn_b) > e * vn > 0:   # eq 18
+                Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
+                if Vn_i == 0 or not gate(Vn_i, Vn_j, Vn_ij):
                     continue
-                rk = (-e * vn - vn_b) / vn_a                         # eq 22
-                if best is None or rk < best[0]:
-                    best = (rk, vn_a, n)
+                Rk_i = (-e * Vn_ij - Vn_j) / Vn_i                              # eq 22
+                if best is None or Rk_i < best[0]:
+                    best = (Rk_i, Vn_i, n)
             if best is not None:
-                rk, vn_a, n = best
-                adjusted[a] = vel[a] - (1 - rk) * vn_a * n           # eq 23
-        vel.update(adjusted)
-        done |= set(ready)
-    return {d: vel[d] for d in done if mobile[d]}
+                Rk_i, Vn_i, n = best
+                new[i] = Vnew[i] - (1 - Rk_i) * Vn_i * n                       # eq 23
+                if counts is not None:
+                    pattern = "c" if any(j in free for j, _, _ in left[i]) else ("a" if len(left[i]) == 1 else "b")
+                    counts[pattern] = counts.get(pattern, 0) + 1
+        Vnew.update(new)
+        out.update(new)
+        pending -= set(ready)
+    return out
 
 
 # ------------------------------------------------------------------------------------------------
@@ -222,15 +274,15 @@ def separation_adjustment(events, touching_now, v, mass, mobile, e):
 class Pores:
     """Topology of the pores between two rebuilds.
 
-    A pore is a bounded face of the planar graph of links (Delaunay edges of the centres passing
-    eq 28), found by the paper's walk (at each disc, turn to the next link clockwise), so its
-    boundary runs counter-clockwise with the pore on the left. Per pore (Np pores):
+    A pore is a bounded face of the planar graph of links (edges of the regular triangulation
+    passing eq 28, plus the eq 28 pairs it hides: ``build_pores``), found by the paper's walk (at
+    each disc, turn to the next link clockwise), so its boundary runs counter-clockwise with the
+    pore on the left. Per pore (Np pores):
       half-edges he_pore, he_a, he_b: boundary links a -> b;
       corners corner_pore, corner_disc, corner_prev, corner_next: disc d reached from prev, left to next;
       rattlers rattler_pore, rattler_disc: unlinked discs inside (their whole area is not void);
       vertex_sets (frozenset of discs), surface / bottom / side (bool arrays), neighbours (sets).
-    Links (L, 2) i < j with the pore on their left / right of i -> j (-1: outer or closed face);
-    throats (T, 2) pairs of distinct pores sharing link throat_link (T,).
+    Links (L, 2) i < j; throats (T, 2) pairs of distinct pores sharing link throat_link (T,).
     a_min: faces with void area <= a_min at build are closed (not pores); pores whose area falls
     to <= a_min later keep their water but exchange none.
     """
@@ -272,10 +324,102 @@ def corner_angles(x, disc, prev, nxt):
     return np.where(prev == nxt, two_pi, theta)
 
 
-def build_pores(x, r, group, eps_m, l_m):
-    """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], Packing groups.
+def regular_triangles(x, r):
+    """Counter-clockwise triangles [[a, b, c], ...] of the regular (power) triangulation of the
+    discs: the lower convex hull of the centres lifted to (x, z, x^2 + z^2 - r^2) (READINGS D4).
 
-    The topology is decided in float64. Fewer than three discs or collinear centres: no pores.
+    Coordinates are taken relative to the mean centre and divided by the largest extent (the same
+    hull, better conditioned). A hull facet is lower when its unit outward normal has a lift
+    component below -1e-12 (the facets standing on collinear centres have 0). A disc whose lifted
+    point lies above the lower hull (an empty power cell) is in no triangle. If the lifted points
+    span no volume (three discs, or four cocircular equal ones) every triangulation of the centres
+    is regular: Delaunay's. Collinear centres: no triangles.
+    """
+    c = x - x.mean(axis=0)
+    size = float(np.max(np.abs(c)))
+    if not size > 0:
+        return []
+    c, rr = c / size, r / size
+    lifted = np.column_stack([c, c[:, 0] ** 2 + c[:, 1] ** 2 - rr**2])
+    try:
+        hull = ConvexHull(lifted)
+        simplices = hull.simplices[hull.equations[:, 2] < -1e-12].tolist()
+    except QhullError:
+        try:
+            simplices = Delaunay(x).simplices.tolist()
+        except QhullError:
+            return []
+    tris = []
+    for a, b, d in simplices:
+        area2 = (x[b, 0] - x[a, 0]) * (x[d, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[d, 0] - x[a, 0])
+        tris.append([a, b, d] if area2 > 0 else [a, d, b])
+    return tris
+
+
+def _turn(p, q, s):
+    """Twice the signed area of the triangle p, q, s: > 0 when s lies left of p -> q."""
+    return (q[0] - p[0]) * (s[1] - p[1]) - (q[1] - p[1]) * (s[0] - p[0])
+
+
+def _crosses(p, q, a, b):
+    """Segments p-q and a-b cross at a point inside both (no shared end, not collinear)."""
+    return (_turn(p, q, a) * _turn(p, q, b) < 0) and (_turn(a, b, p) * _turn(a, b, q) < 0)
+
+
+def insert_hidden_links(x, r, tris, reach, is_link):
+    """Add to the triangles' links every eq 28 pair (r_i + r_j + reach >= R_ij) of triangle
+    vertices that is not an edge and crosses no link, by flipping the edges it crosses
+    (READINGS D4). Pairs are taken from the closest gap R - r_i - r_j up, ties by index; a pair
+    whose segment runs through another centre is left out. Only non-link edges are flipped, so
+    no link is lost. Returns (triangles, pairs inserted). Brute force over the edges (a
+    reference, not a fast path)."""
+    pts = [tuple(p) for p in x.tolist()]
+    verts = np.array(sorted({v for t in tris for v in t}), int)
+    tri_of = {}                                   # directed edge (a, b) -> the third corner c of ccw (a, b, c)
+    for a, b, c in tris:
+        tri_of[(a, b)], tri_of[(b, c)], tri_of[(c, a)] = c, a, b
+    xv, rv = x[verts], r[verts]
+    gap = np.sqrt(((xv[:, None, :] - xv[None, :, :]) ** 2).sum(axis=2)) - rv[:, None] - rv[None, :]
+    iu, ju = np.nonzero(np.triu(gap <= reach, 1))
+    pairs = sorted((gap[a, b], verts[a], verts[b]) for a, b in zip(iu.tolist(), ju.tolist())
+                   if (verts[a], verts[b]) not in tri_of and (verts[b], verts[a]) not in tri_of)
+    inserted = 0
+    for _, k, l in pairs:
+        if (k, l) in tri_of:
+            continue                              # became an edge by an earlier insertion
+        P, Q = pts[k], pts[l]
+        if any(v not in (k, l) and _turn(P, Q, pts[v]) == 0 and
+               min(P[0], Q[0]) <= pts[v][0] <= max(P[0], Q[0]) and min(P[1], Q[1]) <= pts[v][1] <= max(P[1], Q[1])
+               for v in verts.tolist()):
+            continue                              # through another centre
+        crossed = [(a, b) for (a, b) in tri_of if a < b and _crosses(P, Q, pts[a], pts[b])]
+        if any(is_link(a, b) for a, b in crossed):
+            continue
+        queue = list(crossed)
+        while queue:                              # Lawson's flips towards k - l (Sloan 1993)
+            a, b = queue.pop(0)
+            c, d = tri_of[(a, b)], tri_of[(b, a)]     # (a, b, c) left of a -> b, (b, a, d) right
+            if not (_turn(pts[c], pts[d], pts[a]) * _turn(pts[c], pts[d], pts[b]) < 0
+                    and _turn(pts[a], pts[b], pts[c]) * _turn(pts[a], pts[b], pts[d]) < 0):
+                queue.append((a, b))              # quadrilateral a, d, b, c not convex: later
+                continue
+            for e in ((a, b), (b, c), (c, a), (b, a), (a, d), (d, b)):
+                del tri_of[e]
+            tri_of[(c, d)], tri_of[(d, b)], tri_of[(b, c)] = b, c, d      # triangle (c, d, b)
+            tri_of[(d, c)], tri_of[(c, a)], tri_of[(a, d)] = a, d, c      # triangle (d, c, a)
+            if {c, d} != {k, l} and _crosses(P, Q, pts[c], pts[d]):
+                queue.append((min(c, d), max(c, d)))
+        inserted += 1
+    out = [[a, b, c] for (a, b), c in tri_of.items() if a < b and a < c]
+    return out, inserted
+
+
+def build_pores(x, r, group, eps_m, l_m):
+    """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], group codes.
+
+    Candidate links: the edges of the regular triangulation, then the eq 28 pairs it hides
+    (``insert_hidden_links``; READINGS D4). The topology is decided in float64. Fewer than three
+    discs or collinear centres: no pores.
     """
     x = np.asarray(x, np.float64)
     r = np.asarray(r, np.float64)
@@ -283,19 +427,13 @@ def build_pores(x, r, group, eps_m, l_m):
     a_min = DEGENERATE_FRACTION * float(np.mean(np.pi * r**2)) if n else 0.0
     if n < 3:
         return Pores(a_min=a_min)
-    try:
-        dl = Delaunay(x)
-    except QhullError:
-        return Pores(a_min=a_min)
-    tris = []
-    for t in dl.simplices.tolist():               # counter-clockwise corners
-        p0, p1, p2 = x[t[0]], x[t[1]], x[t[2]]
-        ccw = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]) > 0
-        tris.append(t if ccw else [t[0], t[2], t[1]])
 
     def is_link(a, b):                            # eq 28
         return r[a] + r[b] + eps_m + l_m >= np.hypot(*(x[b] - x[a]))
 
+    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link)
+    if not tris:
+        return Pores(a_min=a_min)
     edge_tri = {}                                 # directed edge -> triangle on its left
     for k, (a, b, c) in enumerate(tris):
         for e in ((a, b), (b, c), (c, a)):
@@ -348,10 +486,13 @@ def build_pores(x, r, group, eps_m, l_m):
             if len(faces) != 1:
                 raise RuntimeError(f"walk from {h0} crosses faces {faces}: links are not planar")
             cycles_of_face.setdefault(faces.pop(), []).append(cycle)
-    rattlers_of_face = {}
-    for d in range(n):
+    rattlers_of_face = {}     # unlinked discs: in the face of a triangle they are a corner of, or
+    for d in range(n):        # (empty power cell) of the first triangle that contains their centre
         if not around[d]:
             k = next((k for k, t in enumerate(tris) if d in t), None)
+            if k is None:
+                k = next((k for k, (a, b, c) in enumerate(tris) if min(
+                    _turn(x[a], x[b], x[d]), _turn(x[b], x[c], x[d]), _turn(x[c], x[a], x[d])) >= 0), None)
             if k is not None:
                 rattlers_of_face.setdefault(find(k), []).append(d)
 
@@ -432,7 +573,7 @@ def _corners(cycles):
 class PoreGeometry:
     """Pores measured at one set of positions: polygon area, void area A (eq 29) [m^2] per pore,
     interior angle per corner [rad], area-weighted polygon centroid (Np, 2) [m], and per link its
-    length R [m] and contact state (eq 43b: r_k + r_l + eps_m >= R)."""
+    contact state (eq 43b: r_k + r_l + eps_m >= R)."""
 
     polygon_area: np.ndarray
     void_area: np.ndarray
@@ -488,6 +629,14 @@ def pressure_forces(pores, x, r, U, theta):
     return F
 
 
+def porosity(x, r, group, eps_m, l_m):
+    """Void over polygon area of the pores of a network built at x (eq 28-29), nan without pores."""
+    pores = build_pores(x, r, group, eps_m, l_m)
+    geo = measure(pores, np.asarray(x, np.float64), np.asarray(r, np.float64), eps_m)
+    total = float(np.sum(geo.polygon_area))
+    return float(np.sum(geo.void_area)) / total if total > 0 else np.nan
+
+
 # ------------------------------------------------------------------------------------------------
 # Pore water (§3.2-3.4, eq 32-46)
 # ------------------------------------------------------------------------------------------------
@@ -499,10 +648,9 @@ def pore_pressure(W, A, E_w):
 class Water:
     """Water areas W (Np,) [m^2] of the pores and their cumulative budget [m^2]."""
 
-    def __init__(self, pores, A, settings, dtype):
-        self.pores, self.s, self.dtype = pores, settings, dtype
-        self.E_w, self.k1, self.k2, self.k3, self.q_w = (dtype(v) for v in (settings.E_w, settings.k1,
-                                                                              settings.k2, settings.k3, settings.q_w))
+    def __init__(self, pores, A, s, dtype):
+        self.pores, self.s, self.dtype = pores, s, dtype
+        self.E_w, self.k1, self.k2, self.k3, self.q_w = (dtype(v) for v in (s.E_w, s.k1, s.k2, s.k3, s.q_w))
         self.W = A.copy()                                   # after packing: W = A, U = 0
         self.initial = np.sum(self.W)                       # the budget [m^2], in the run's dtype too
         self.inflow = self.surface_out = self.side_out = self.remesh_change = dtype(0)
@@ -529,9 +677,9 @@ class Water:
         A_pq = W[p] * W[q] / np.where(both, A[p] + A[q], 1)                 # eq 40 (W_i W_j, not W' W_j)
         i_pq = (U[p] - U[q]) / E_w                                           # eq 39
         q_t = np.where(both, k * A_pq * i_pq, zero)                          # eq 41
-        drained = pores.side if self.s.sides == "drained" else np.zeros_like(pores.side)
+        drained = pores.side if self.s.drained else np.zeros_like(pores.side)
         q_surface = np.where(open_ & pores.surface, self.k1 * W * U / E_w, zero)   # outside at U = 0
-        q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)
+        q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)            # §6.1: outside 0, k3
         q_in = np.where(pores.bottom, self.q_w, zero)                        # §5.1
         # explicit stability (Gershgorin): dt <= 2 / max (2 sum g + g_b) / c, c = W^2 / (E_w A)
         g = np.where(both, k * A_pq / E_w, zero)
@@ -543,11 +691,15 @@ class Water:
         limit = 2 / float(np.max(rate)) if pores.n_pores and np.max(rate) > 0 else np.inf
         return q_t, q_surface, q_side, q_in, limit
 
+    def used_area(self, A):
+        """The area of eq 45, [A]_t = ([A]_{t-dt} + [A']_t) / 2 with smoothing, else A' itself."""
+        if self.s.smoothing:
+            self.A_used = (self.A_used + A) / 2
+            return self.A_used
+        return A
+
     def advance(self, dt, A, contact):
-        """Advance W by dt [s] at void areas A and link states (eq 42); eq 45-46 if smoothing."""
-        if self.s.smoothing:                                # eq 45: [A]_t = ([A]_{t-dt} + [A']_t) / 2
-            A = (self.A_used + A) / 2
-            self.A_used = A
+        """Advance W by dt [s] at the area actually used A (eq 45) and link states (eq 42, 46)."""
         flows = self.flows(A, contact)
         n_sub = 1
         if dt > flows[4]:
@@ -572,69 +724,142 @@ class Water:
             self.side_out += np.sum(q_side) * h
 
     def remesh(self, new_pores, A_new, A_old):
-        """Move the water onto rebuilt pores keeping U continuous (§3.4(2)); W from eq 32."""
+        """Move the water onto rebuilt pores keeping U continuous (§3.4(2)); W from eq 32.
+        Returns the rule of each new pore."""
         U_old = pore_pressure(self.W, A_old, self.E_w)
-        U_new = inherit_pressures(self.pores, U_old, A_old > self.pores.a_min, new_pores)
+        U_new, rules = inherit_pressures(self.pores, U_old, A_old > self.pores.a_min, new_pores)
         W_new = A_new * self.E_w / (self.E_w - np.asarray(U_new, self.dtype))   # eq 32 solved for W
         self.remesh_change += np.sum(W_new) - np.sum(self.W)
         self.pores, self.W, self.A_used, self.q_used = new_pores, W_new, A_new.copy(), None
+        return rules
 
 
 def inherit_pressures(old, U_old, old_valid, new):
-    """U of each new pore by the rules of §3.4(2), in the project's reading:
+    """(U, rule) of each new pore by the rules of §3.4(2), in the project's reading:
     (a) the U of the old pore with the same vertex set; else (b) the mean U of the old pores whose
     vertex set contains or is contained in the new one (split / merge); else (c) the mean U of the
-    neighbouring new pores already assigned (the outer face counts as one neighbour at U = 0 for a
-    surface pore), in rounds until nothing changes; else (d) U = 0. Old pores pinched to A <= a_min
-    pass nothing on."""
+    neighbouring new pores already assigned ("まわりのすべての図形": pores only, the outside is
+    not one; READINGS D2), in rounds until nothing changes; else (d) U = 0. Old pores pinched to
+    A <= a_min pass nothing on."""
     valid = [p for p in range(old.n_pores) if old_valid[p]]
     by_set = {old.vertex_sets[p]: p for p in valid}
-    U = [None] * new.n_pores
+    U, rule = [None] * new.n_pores, [""] * new.n_pores
     for p, vs in enumerate(new.vertex_sets):
         if vs in by_set:                                                    # (a)
-            U[p] = float(U_old[by_set[vs]])
+            U[p], rule[p] = float(U_old[by_set[vs]]), "a"
             continue
         near = [q for q in valid if old.vertex_sets[q] <= vs or vs <= old.vertex_sets[q]]
         if near:                                                            # (b)
-            U[p] = float(np.mean([float(U_old[q]) for q in near]))
+            U[p], rule[p] = float(np.mean([float(U_old[q]) for q in near])), "b"
     while True:                                                             # (c)
         assign = {}
         for p in range(new.n_pores):
             known = [U[q] for q in new.neighbours[p] if U[q] is not None]
             if U[p] is None and known:
-                assign[p] = sum(known) / (len(known) + bool(new.surface[p]))
+                assign[p] = sum(known) / len(known)
         if not assign:
             break
         for p, u in assign.items():
-            U[p] = u
-    return [0.0 if u is None else u for u in U]                             # (d)
+            U[p], rule[p] = u, "c"
+    for p in range(new.n_pores):                                            # (d)
+        if U[p] is None:
+            U[p], rule[p] = 0.0, "d"
+    return U, rule
+
+
+# ------------------------------------------------------------------------------------------------
+# Input motion of the moving walls (§6.1)
+# ------------------------------------------------------------------------------------------------
+def input_acceleration(loading):
+    """a(t) [m/s^2] of the moving walls from the [loading] table, or None for no loading.
+
+    cosine: amplitude cos(2 pi frequency t). record: a two-column file (time [s], acceleration in
+    record_units: g, gal or m/s2) rescaled by time_scale and amplitude_scale, linear between
+    samples (a digital record samples a continuous motion; READINGS D1), 0 before the first and
+    after the last sample.
+    """
+    kind = loading["type"]
+    if kind == "none":
+        return None
+    if kind == "cosine":
+        A, f = loading["amplitude"], loading["frequency"]
+        return lambda t: A * np.cos(2 * np.pi * f * t)
+    data = np.loadtxt(loading["record"], comments="#", ndmin=2)
+    t_rec = data[:, 0] * loading["time_scale"]
+    unit = {"g": G0, "gal": 0.01, "m/s2": 1.0}[loading.get("record_units", "g")]
+    a_rec = data[:, 1] * unit * loading["amplitude_scale"]
+    return lambda t: float(np.interp(t, t_rec, a_rec, left=0.0, right=0.0))
+
+
+class WallMotion:
+    """Velocity v [m/s] of the walls that follow the input a(t), advanced one step at a time.
+
+    wall_step = "average_acceleration" (§6.1 "速度、変位を等加速度法で求める", read as the constant
+    average acceleration method, Newmark beta = 1/4, gamma = 1/2; READINGS D1): over step k the
+    acceleration is the mean of its ends, a_bar = (a(t_k) + a(t_k+1)) / 2, and
+        u_k+1 = u_k + v_k dt + a_bar dt^2 / 2,   v_k+1 = v_k + a_bar dt.
+    wall_step = "symplectic_euler" (the YADE path before it took this reading): v_k+1 = v_k + a(t_k) dt,
+    u_k+1 = u_k + v_k+1 dt.
+    """
+
+    def __init__(self, accel, dt, wall_step, dtype=np.float64):
+        if wall_step not in WALL_STEPS:
+            raise ValueError(f"wall_step must be one of {WALL_STEPS}, got {wall_step!r}")
+        self.accel, self.dt, self.wall_step, self.dtype = accel, dtype(dt), wall_step, dtype
+        self.v = dtype(0)
+
+    def step(self, k):
+        """The displacement du [m] of step k (t_k = k dt -> t_k+1); advances v."""
+        dt = self.dt
+        a0 = self.dtype(self.accel(k * float(dt)))
+        if self.wall_step == "symplectic_euler":
+            self.v = self.v + a0 * dt
+            return self.v * dt
+        a_bar = (a0 + self.dtype(self.accel((k + 1) * float(dt)))) / 2
+        du = self.v * dt + a_bar * dt * dt / 2
+        self.v = self.v + a_bar * dt
+        return du
+
+
+def wall_displacements(loading, dt, n_steps, wall_step):
+    """Displacements u(t_1) .. u(t_n) [m] (n_steps,) of the driven walls from rest (None without
+    loading): what the cross-check compares the YADE path's walls with to tell its reading."""
+    accel = input_acceleration(loading)
+    if accel is None:
+        return None
+    motion = WallMotion(accel, dt, wall_step)
+    return np.cumsum([motion.step(k) for k in range(n_steps)])
 
 
 # ------------------------------------------------------------------------------------------------
 # The model
 # ------------------------------------------------------------------------------------------------
-def input_acceleration(loading):
-    """a(t) [m/s^2] of the moving walls: amplitude cos(2 pi f t), or the record (time * time_scale,
-    acc_g * G0 * amplitude_scale) interpolated linearly (0 after its end); None for no loading."""
-    if loading.type == "none":
-        return None
-    if loading.type == "cosine":
-        return lambda t: loading.amplitude * np.cos(2 * np.pi * loading.frequency * t)
-    rec = np.loadtxt(loading.record, comments="#", ndmin=2)
-    t_rec, a_rec = rec[:, 0] * loading.time_scale, rec[:, 1] * G0 * loading.amplitude_scale
-    return lambda t: float(np.interp(t, t_rec, a_rec, right=0.0))
+def block_bounds(xz, r, group, block_z):
+    """Absolute [z0, z1) of the output blocks given as fractions of the bed height: from the top of
+    the bottom-wall discs (or the lowest particle bottom without them) to the highest particle top."""
+    xz, r, group = np.asarray(xz, float), np.asarray(r, float), np.asarray(group)
+    bottom = group == BOTTOM
+    z_bed = np.max(xz[bottom, 1] + r[bottom]) if bottom.any() else np.min(xz[:, 1] - r)
+    mob = group == PARTICLE
+    h = np.max(xz[mob, 1] + r[mob]) - z_bed
+    return [(z_bed + a * h, z_bed + b * h) for a, b in block_z]
 
 
 class ReferenceModel:
     """State of one run of the reference; ``step`` advances it by one dt (see the module docstring).
 
-    Attributes in the run's dtype: x, v (N, 2) [m, m/s], psi, omega (N,) [rad, rad/s], mass,
-    inertia (N,) [kg/m, kg m]. ``contact`` (ContactState), ``pores`` / ``water`` (None when dry).
+    ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
+    any object with xz (N, 2), r (N,), group (N,) and density_factor (N,); ``readings``: overrides of
+    PAPER_READINGS (e.g. {"wall_step": "symplectic_euler"}). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
+    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]. ``contact`` (PairRecords),
+    ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
     """
 
-    def __init__(self, scene, packing, dtype=np.float64):
-        dt_ = np.dtype(dtype).type
-        self.dtype, self.scene, self.packing = dt_, scene, packing
+    def __init__(self, tables, packing, dtype=np.float64, readings=None):
+        tables = tables if isinstance(tables, dict) else tables.as_dict()
+        s = self.s = read_settings(tables)
+        self.readings = {**PAPER_READINGS, **(readings or {})}
+        dt_ = self.dtype = np.dtype(dtype).type
         self.group = np.asarray(packing.group)
         self.mobile = self.group == PARTICLE
         self.r = np.asarray(packing.r, dt_)
@@ -644,74 +869,82 @@ class ReferenceModel:
         self.psi = np.zeros_like(self.r)
         self.psi_prev = self.psi.copy()
         self.omega = np.zeros_like(self.r)
-        self.dt = dt_(scene.numerics.dt)
+        self.dt = dt_(s.dt)
         self.k = 0
         pi = 2 * np.arctan2(dt_(1), dt_(0))
-        mat = scene.material
-        self.mass = dt_(mat.rho) * np.asarray(packing.density_factor, dt_) * pi * self.r**2   # eq 15a per unit thickness
-        self.inertia = self.mass * self.r**2 / 2                                                # eq 15b
+        self.mass = dt_(s.rho) * np.asarray(packing.density_factor, dt_) * pi * self.r**2   # eq 15a per unit thickness
+        self.inertia = self.mass * self.r**2 / 2                                              # eq 15b
         if self.mobile.any():
-            limit = scene.numerics.dt_safety * 2 * np.sqrt(float(self.mass[self.mobile].min()) / scene.contact.kn)
-            if scene.numerics.dt > limit:
-                raise ValueError(f"[numerics] dt = {scene.numerics.dt:.3e} s exceeds dt_safety x 2 sqrt(m_min/kn) = {limit:.3e} s (eq 52)")
+            limit = s.dt_safety * 2 * np.sqrt(float(self.mass[self.mobile].min()) / s.kn)
+            if s.dt > limit:
+                raise ValueError(f"[numerics] dt = {s.dt:.3e} s exceeds dt_safety x 2 sqrt(m_min/kn) = {limit:.3e} s (eq 52)")
         self.weight = np.zeros_like(self.x)
-        self.weight[:, 1] = -self.mass * dt_(mat.g)
-        if scene.water.enabled:
-            self.weight[:, 1] += dt_(mat.rho_w) * pi * self.r**2 * dt_(mat.g)              # eq 34b buoyancy
-        self.contact = ContactState(scene.contact_settings(), self.r, self.group, dt_)
-        self.accel = input_acceleration(scene.loading)
-        moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[scene.loading.moves]
-        self.moving = np.isin(self.group, moving) & (self.accel is not None)
-        self.wall_v = dt_(0)
-        self.bounds = packing.block_bounds(scene.output.block_z)
+        self.weight[:, 1] = -self.mass * dt_(s.g)
+        if s.wet:
+            self.weight[:, 1] += dt_(s.rho_w) * pi * self.r**2 * dt_(s.g)                    # eq 34b buoyancy
+        self.contact = PairRecords(s, self.r, self.mobile, dt_)
+        accel = input_acceleration(s.loading)
+        self.walls = None if accel is None else WallMotion(accel, s.dt, self.readings["wall_step"], dt_)
+        moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
+        self.moving = np.isin(self.group, moving) & (accel is not None)
+        self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
+        self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0),
+                       "history": []}   # history: (step, rule counts) of every rebuild
         self.pores = self.water = None
         self.F_pressure = np.zeros_like(self.x)
-        if scene.water.enabled:
+        if s.wet:
             self.pores = self._build()
-            A = self._measure().void_area
-            self.water = Water(self.pores, A, scene.water, dt_)
+            self.water = Water(self.pores, self._measure().void_area, s, dt_)
 
     def _build(self):
-        return build_pores(self.x, self.r, self.group, self.scene.contact.eps_m, self.scene.water.l_m)
+        return build_pores(self.x, self.r, self.group, self.s.eps_m, self.s.l_m)
 
     def _measure(self, pores=None):
-        return measure(self.pores if pores is None else pores, self.x, self.r, self.scene.contact.eps_m)
+        return measure(self.pores if pores is None else pores, self.x, self.r, self.s.eps_m)
+
+    def rebuild(self):
+        """New pores at the current positions, pressures inherited by §3.4(2)."""
+        new = self._build()
+        rules = self.water.remesh(new, self._measure(new).void_area, self._measure().void_area)
+        this = {r: rules.count(r) for r in "abcd"}
+        for r, c in this.items():
+            self.counts["remesh"][r] += c
+        self.counts["history"].append((self.k, this))
+        self.counts["rebuilds"] += 1
+        self.pores = new
 
     def step(self):
         """One DEM step k at t = k dt (a-f of the module docstring)."""
-        num, dt, k = self.scene.numerics, self.dt, self.k
+        s, dt, k = self.s, self.dt, self.k
         du = self.x - self.x_prev                                           # a
         dpsi = self.psi - self.psi_prev
-        F, M, events = self.contact.forces(self.x, du, dpsi, dt)            # b
-        cs = self.scene.contact
-        if cs.separation_adjustment and events:                             # c
-            fixes = separation_adjustment(events, self.contact.touch_count(len(self.r)) > 0, du / dt,
-                                          self.mass, self.mobile, self.dtype(cs.restitution))
+        F, M, left = self.contact.forces(self.x, du, dpsi, dt)              # b
+        if s.adjust and left:                                               # c
+            fixes = adjust_free_particles(left, self.contact.contacts_of(), du / dt, self.mass,
+                                          self.dtype(s.e), self.counts["separation"])
             for d, vel in fixes.items():
                 self.v[d] = vel
         if self.water is not None:                                          # d
-            if k > 0 and k % num.rebuild_interval == 0:
-                new = self._build()
-                self.water.remesh(new, self._measure(new).void_area, self._measure().void_area)
-                self.pores = new
-            if k % num.water_interval == 0:
+            if k > 0 and k % s.rebuild_interval == 0:
+                self.rebuild()
+            if k % s.water_interval == 0:
                 geo = self._measure()
-                self.water.advance(num.water_interval * self.scene.numerics.dt, geo.void_area, geo.link_contact)
-                U = pore_pressure(self.water.W, geo.void_area, self.water.E_w)
+                A = self.water.used_area(geo.void_area)                     # eq 45
+                self.water.advance(s.water_interval * s.dt, A, geo.link_contact)
+                U = pore_pressure(self.water.W, A, self.water.E_w)
                 self.F_pressure = pressure_forces(self.pores, self.x, self.r, U, geo.corner_angle)
         F = F + self.F_pressure + self.weight                               # e
         m = self.mobile
         self.v[m] += F[m] / self.mass[m, None] * dt                         # eq 14, 16
         self.omega[m] += M[m] / self.inertia[m] * dt
         step_x, step_psi = self.v[m] * dt, self.omega[m] * dt               # eq 17
-        if num.damping_eq44:
+        if s.eq44:
             step_x, step_psi = (du[m] + step_x) / 2, (dpsi[m] + step_psi) / 2   # eq 44
         self.x_prev, self.psi_prev = self.x.copy(), self.psi.copy()
         self.x[m] += step_x
         self.psi[m] += step_psi
-        if self.accel is not None:                                          # f
-            self.wall_v += self.dtype(self.accel(k * self.scene.numerics.dt)) * dt
-            self.x[self.moving, 0] += self.wall_v * dt
+        if self.walls is not None:                                          # f
+            self.x[self.moving, 0] += self.walls.step(k)
         self.k += 1
 
     def block_pressures(self):
@@ -731,17 +964,20 @@ class ReferenceModel:
     def record(self, traj):
         """Append the current state to a Trajectory (t = k dt after k steps)."""
         w = self.water
-        traj.append(self.k * self.scene.numerics.dt, self.x, self.block_pressures(),
+        traj.append(self.k * self.s.dt, self.x, self.block_pressures(),
                     w.total() if w else np.nan, w.balance_error() if w else np.nan)
 
 
-def simulate_reference(scene, packing, n_steps, record_every, dtype=np.float64):
-    """Run ``scene`` from ``packing`` for n_steps and record a Trajectory after every
-    ``record_every`` steps (at t = (k + 1) dt); the contract shared with engines.yade_coupling."""
-    model = ReferenceModel(scene, packing, dtype)
-    traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name})
+def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64, readings=None):
+    """Run the scene ``tables`` (or a Scene) from ``packing`` for n_steps and record a Trajectory
+    after every ``record_every`` steps (at t = (k + 1) dt); the contract shared with
+    engines.yade_coupling. ``traj.info["counts"]`` holds the re-meshing and separation counts."""
+    model = ReferenceModel(tables, packing, dtype, readings)
+    traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name,
+                            "readings": dict(model.readings)})
     for k in range(n_steps):
         model.step()
         if (k + 1) % record_every == 0:
             model.record(traj)
+    traj.info["counts"] = model.counts
     return traj

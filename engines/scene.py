@@ -116,6 +116,11 @@ SCHEMA = {
         "progress_seconds": (float, 10.0, POS, "wall seconds between progress lines"),
         # issue 11
         "porosity_window": (list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.porosity)"),
+        # issue 13: ParaView, checkpoints, headline results
+        "vtk": (bool, False, None, "write a ParaView time series to DIR/vtk/ during the run (postproc.vtk: discs, contact forces, pores)"),
+        "vtk_interval": (int, 0, (0, math.inf), "steps between VTK frames; 0: at the snapshot_times"),
+        "checkpoint_seconds": (float, 600.0, POS, "wall seconds between checkpoints during a run (one is also written at the start, at the end and on an interrupt)"),
+        "heave_rise": (float, 0.45e-3, POS, "rise of the bed top (highest particle top) above its initial height that marks the heave time in summary.json [m]"),
     },
 }
 

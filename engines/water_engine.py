@@ -67,30 +67,29 @@ class WaterModel:
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls)
 
     def _buffers(self):
-        """Arrays of the current network for the kernels (allocated once per rebuild)."""
+        """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
         net, n = self.water.net, len(self.r)
-        n_p, n_l, n_t = net.n_pores, len(net.links), len(net.throat_conns)
-        c = np.ascontiguousarray
+        n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
         surface, drained, bottom = self.water._boundary_masks()
-        # outputs of kernels.measure: polygon, sector and void areas, link length and contact state,
-        # corner angles, link vectors, and two scratch arrays
-        self._meas = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
-                      np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
-        # outputs of kernels.darcy_flows: q, q_s, q_d, q_in, g, g_b, U, and two scratch arrays
-        self._flow = (np.zeros(n_t), np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_t)) + \
-            tuple(np.zeros(n_p) for _ in range(4))
-        q, q_s, q_d, q_in, _, _, U, acc_i, acc_j = self._flow
-        ti, tj, t_link = c(net.throat_conns[:, 0]), c(net.throat_conns[:, 1]), c(net.throat_link)
-        self._balance = np.zeros(3)
-        # the argument lists of the kernels after their leading per-call arguments
-        self._measure_args = (c(net.links), c(net.corner_pore), c(net.corner_sign), c(net.corner_link),
-                              c(net.corner_next_link), c(net.corner_raw0), c(net.corner_theta0), c(net.corner_r2),
-                              c(net.rattler_area), self.eps_m) + self._meas
-        self._flow_args = ((ti, tj, t_link, net.a_min, surface.astype(float), drained.astype(float),
-                            bottom.astype(float), self.wp) + self._flow)
-        self._update_args = (ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, self._balance)
-        self._force_args = (c(net.links), c(net.link_pores), self.r, U, self._meas[3], self._meas[6], self.F,
-                            np.zeros((n, 2)))
+        ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
+                "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
+                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
+        floats = {"corner_sign": net.corner_sign, "corner_raw0": net.corner_raw0, "corner_theta0": net.corner_theta0,
+                  "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
+                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m_a_min": [self.eps_m, net.a_min],
+                  "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
+                  "lam": np.zeros(2)}  # the rest: outputs and scratch of the kernels, by length
+        for names, size in (("poly sect void", n_p), ("length contact phi cross", n_l), ("theta", n_k),
+                            ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
+            floats.update((name, np.zeros(size)) for name in names.split())
+        self._ints, self._i_at = kernels.pack([np.asarray(ints[k], np.int64) for k in kernels.WATER_INTS])
+        self._floats, self._f_at = kernels.pack([np.asarray(floats[k], float) for k in kernels.WATER_FLOATS])
+        self._q_prev = np.zeros(n_t)  # eq 46 running throat flows, while PoreWater.q_prev is None
+
+    def _part(self, name):
+        """A view of the part ``name`` of the float buffer of kernels.water_step."""
+        k = kernels.WATER_FLOATS.index(name)
+        return self._floats[self._f_at[k]:self._f_at[k + 1]]
 
     # -- per step ---------------------------------------------------------------------------------
     def step(self, k, xz):
@@ -115,37 +114,36 @@ class WaterModel:
         if not self.compiled:
             m = pg.measure(self.water.net, xz, self.r)
             self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
-            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(m.void_area), m)
+            A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
+            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
             return
+        args = self.kernel_args(h)
+        self.finish_kernel_step(h, kernels.water_step(xz, *args), args)
+
+    def kernel_args(self, h):
+        """The arguments of kernels.water_step after xz, for a water step of h [s] (compiled)."""
         w, s = self.water, self.settings
-        kernels.measure(xz, self.r, *self._measure_args)
-        A = A_measured = self._meas[2]
-        contact = self._meas[4]
-        if s.smoothing:  # eq 45
-            A = 0.5 * (w.A_prev + A)
-            w.A_prev = A
-        lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
-        self.last_limit = 2.0 / lam if lam > 0 else np.inf
-        n_sub = self._substeps(h)
-        q = self._flow[0]
-        self._balance[:] = 0.0
-        for sub in range(n_sub):
-            if sub > 0:
-                lam = kernels.darcy_flows(w.W, A, contact, *self._flow_args)
-            if s.smoothing:  # eq 46
-                if w.q_prev is not None:
-                    q[:] = 0.5 * (w.q_prev + q)
-                w.q_prev = q.copy()
-            bad = kernels.darcy_update(w.W, h / n_sub, *self._update_args)
-            if bad >= 0:
-                raise DarcyStabilityError(f"water area of pore {bad} would fall to <= 0 in a step of {h / n_sub:.3e} s")
-        self.last_limit = 2.0 / lam if lam > 0 else np.inf  # at the last sub-step, as PoreWater reports it
+        q_prev = self._q_prev if w.q_prev is None else w.q_prev
+        return (h, w.W, w.A_prev, q_prev, s.smoothing, s.substep, w.q_prev is not None, self.F,
+                self._ints, self._i_at, self._floats, self._f_at)
+
+    def finish_kernel_step(self, h, n_sub, args):
+        """Book a water_step(xz, *args) that returned n_sub: the Darcy limit, sub-steps, balance;
+        raise DarcyStabilityError if it refused or a pore fell dry."""
+        w = self.water
+        if self.settings.smoothing:
+            w.q_prev = args[3]
+        first, last = (2.0 / lam if lam > 0 else np.inf for lam in self._part("lam").tolist())
+        self.last_limit = first
+        n = 1 if n_sub == 1 else self._substeps(h)  # raises above the limit without settings.substep
+        if n_sub < 0:
+            raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of {h / n:.3e} s")
+        self.last_limit = last  # at the last sub-step, as PoreWater reports it
+        inflow, surface, side = self._part("balance").tolist()
         b = w.balance
-        b.inflow += self._balance[0]
-        b.surface_outflow += self._balance[1]
-        b.side_outflow += self._balance[2]
-        kernels.pore_pressures(w.W, A_measured, s.E_w, self._flow[6])  # eq 32 at the measured (unsmoothed) areas
-        kernels.pressure_forces(*self._force_args)
+        b.inflow += inflow
+        b.surface_outflow += surface
+        b.side_outflow += side
 
     def _substeps(self, h):
         """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
@@ -213,6 +211,8 @@ class WaterEngine:
         if buoyancy:
             self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
         self.forced.set_permanent_forces(self.F_const)
+        self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
+        self._run_kernel = yade_io.run_kernel
         self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
 
     def due(self, k):
@@ -232,12 +232,23 @@ class WaterEngine:
         from yade import O
         m = self.model
         self.k = O.iter
+        h = m.water_interval * O.dt
+        if m.compiled and self.k - self.k_built < m.rebuild_interval:  # read, water, write: one compiled call
+            args = m.kernel_args(h)
+            _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
+                                        self._dynamic, self.F_const, *args)
+            m.finish_kernel_step(h, n_sub, args)
+            return
         xz = self.io.positions()
         if self.k - self.k_built >= m.rebuild_interval:
             m.rebuild(xz)
             self.k_built = self.k
-        m.advance(m.water_interval * O.dt, xz)
-        self.forced.set_permanent_forces(self.F_const + m.F[self._dynamic])
+        m.advance(h, xz)
+        self.write_forces()
+
+    def write_forces(self):
+        """The permanent forces: the last water step's pressure forces plus buoyancy."""
+        self.forced.set_permanent_forces(self.model.F, self._dynamic, self.F_const)
 
     def pressures(self):
         """U (Np,) [N/m] of the pores at the current positions."""

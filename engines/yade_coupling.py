@@ -15,11 +15,14 @@ PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python a
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
-of O.step() calls where Python works every step, or O.run for chunks without per-step Python;
-Ctrl-C stops between steps.
+of O.step() calls where Python works every step, or of O.run in YADE's thread for chunks without
+per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every POLL_SECONDS) and
+returns early when it is true (engines.yade_run: SIGINT, SIGTERM). The coupling pickles whole into
+a checkpoint (engines.checkpoint): keep closures out of its state.
 """
 import copy
 import math
+import time
 
 import numpy as np
 from yade import O, utils
@@ -36,7 +39,8 @@ from engines.pore_dem import PoreDEM, disc_masses
 from engines.trajectory import Trajectory
 from engines.water_engine import WaterEngine
 
-PER_STEP_CHUNK = 1000  # steps between checks of a per-step run (errors, Ctrl-C)
+PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
+POLL_SECONDS = 0.02  # how often a chunk run by O.run in YADE's thread checks stop()
 X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
 
 
@@ -142,21 +146,26 @@ class YadeCoupling:
             return []
         self.wall_engine = TranslationEngine(ids=self.ids[moving].tolist(), translationAxis=(1, 0, 0), velocity=0.0)
         if self.law == "paper":
-            core, eng = self.core, self.wall_engine
-            self.base = core.base
-            self.engine.hooks.append(lambda: setattr(eng, "velocity", core.wall_velocity))
+            self.base = self.core.base
+            self.engine.hooks.append(WallVelocity(self.wall_engine, self.core))
         else:
             self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene), self.scene.numerics.dt)
             self.per_step = True  # Python sets the velocity before each O.step
         return [self.wall_engine]
 
     # -- running ------------------------------------------------------------------------------------
-    def _advance(self, n):
+    def _advance(self, n, stop):
         errors = yade_io.ERRORS
         if self.law == "paper":
-            self.engine.drive(n)
+            self.engine.drive(n, stop)
         elif not self.per_step and n > PER_STEP_CHUNK:
-            O.run(int(n), True)
+            O.run(int(n))  # in YADE's thread: this one polls stop()
+            while O.running:
+                if stop():
+                    O.pause()
+                    break
+                time.sleep(POLL_SECONDS)
+            O.wait()
         else:  # law = 'yade': the water engine on its steps, the base velocity of the step
             water, base = self.water_engine, self.base
             for _ in range(int(n)):
@@ -165,14 +174,17 @@ class YadeCoupling:
                 if base is not None:
                     self.wall_engine.velocity = base.step()
                 O.step()
-                if errors:
+                if errors or stop():
                     break
         yade_io.raise_pending()
 
-    def run(self, n_steps):
-        """Run n_steps DEM steps. The hooks are called as hook(self) whenever O.iter is a multiple of
-        ``run_every`` or one of ``stops`` (the start and the end included), once per step index.
-        An error inside an engine stops YADE and is re-raised here."""
+    def run(self, n_steps, stop=None):
+        """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
+        asked after every step) turned true first. The hooks are called as hook(self) whenever
+        O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
+        once per step index, before the step. An error inside an engine stops YADE and is
+        re-raised here."""
+        stop = stop or _never
         end = O.iter + int(n_steps)
         while True:
             k = O.iter
@@ -182,11 +194,20 @@ class YadeCoupling:
                 for hook in self.hooks:
                     hook(self)
             if k >= end:
-                return
+                return True
+            if stop():
+                return False
             nxt = min([end] + [s for s in self.stops if s > k])
             if self.run_every:
                 nxt = min(nxt, (k // self.run_every + 1) * self.run_every)
-            self._advance(min(nxt - k, PER_STEP_CHUNK) if self.per_step else nxt - k)
+            self._advance(min(nxt - k, PER_STEP_CHUNK) if self.per_step else nxt - k, stop)
+
+    def restore_forces(self):
+        """After a checkpoint's O.load: YADE's permanent forces, which O.save does not keep."""
+        if self.water_engine is not None:
+            self.water_engine.write_forces()
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
 
     # -- observations ------------------------------------------------------------------------------
     @property
@@ -238,23 +259,30 @@ class YadeCoupling:
         return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
 
     def contact_pairs(self, xz):
-        """(pairs (K, 2) disc indices, normal force (K,) [N]) of the pairs touching at centres xz
-        (the current ones); the paper's law is evaluated on a copy, its state is left as it is."""
+        """(pairs (K, 2) disc indices, normal force (K,), elastic shear force (K,) [N]) of the pairs
+        touching at centres xz (the current ones). The shear force is signed along t of eq 3b
+        (counter-clockwise about i), without its dashpot part, as YADE's phys.shearForce. The
+        paper's law is evaluated on a copy, its state is left as it is."""
         if self.core is not None:
             law = copy.deepcopy(self.core.law)
             law.step(xz)
             return law.contact.contact_pairs()
         index = {i: k for k, i in enumerate(self.ids.tolist())}
-        pairs, fn = [], []
+        pairs, fn, fs = [], [], []
         for inter in O.interactions:
             if inter.isReal and inter.id1 in index and inter.id2 in index:
-                pairs.append((index[inter.id1], index[inter.id2]))
+                i, j = index[inter.id1], index[inter.id2]
+                pairs.append((i, j))
                 fn.append(inter.phys.normalForce.norm())
-        return np.array(pairs, np.int64).reshape(-1, 2), np.array(fn)
+                d = xz[j] - xz[i]
+                t = np.array([-d[1], d[0]]) / np.hypot(*d)  # (-sin a, cos a)
+                s = inter.phys.shearForce  # YADE's force on id2; eq 13 puts -f_s t on i, so +f_s t on j
+                fs.append(s[0] * t[0] + s[2] * t[1])
+        return np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
 
     def bottom_normal_force(self, xz):
         """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
-        pairs, fn = self.contact_pairs(xz)
+        pairs, fn, _ = self.contact_pairs(xz)
         if len(fn) == 0:
             return 0.0
         zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])
@@ -263,9 +291,10 @@ class YadeCoupling:
         return float(fn[sel].mean()) if sel.any() else 0.0
 
 
-def simulate(scene, packing, n_steps, record_every):
+def simulate(scene, packing, n_steps, record_every, hooks=()):
     """Run a scene in YADE and record a Trajectory after every ``record_every`` steps
-    (at t = (k + 1) dt); the recording contract is shared with engines.reference."""
+    (at t = (k + 1) dt); the recording contract is shared with engines.reference.
+    ``hooks``: called as hook(coupling) after each recorded chunk (the cross-check counts rules)."""
     cp = YadeCoupling(scene, packing)
     traj = Trajectory(info={"implementation": "yade", "law": scene.contact.law, "io": yade_io.BACKEND})
     steps_left = n_steps
@@ -273,8 +302,25 @@ def simulate(scene, packing, n_steps, record_every):
         chunk = min(record_every, steps_left)
         cp.run(chunk)
         steps_left -= chunk
+        for hook in hooks:
+            hook(cp)
         xz = cp.positions()
         w = cp.water
         traj.append(O.iter * scene.numerics.dt, xz, cp.block_pressures(xz),
                     w.total_water() if w else np.nan, w.balance_error() if w else np.nan)
     return traj
+
+
+def _never():
+    return False
+
+
+class WallVelocity:
+    """PaperLawEngine hook: the wall engine's velocity follows the core's wall velocity (a class,
+    not a closure, so that the coupling pickles)."""
+
+    def __init__(self, wall_engine, core):
+        self.wall_engine, self.core = wall_engine, core
+
+    def __call__(self):
+        self.wall_engine.velocity = self.core.wall_velocity

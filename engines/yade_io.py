@@ -14,6 +14,7 @@ The backend is chosen once, at import:
 Set the environment variable PORE_DEM_IO=python to force the Python backend (benchmarks, tests).
 """
 import builtins
+import ctypes
 import gc
 import os
 import traceback
@@ -21,6 +22,8 @@ import traceback
 import numpy as np
 from yade import O, utils
 from yade.wrapper import PyRunner
+
+from engines import kernels
 
 
 def _load_bulk():
@@ -35,6 +38,8 @@ def _load_bulk():
 
 _BULK = _load_bulk()
 BACKEND = "yadebulk" if _BULK is not None else "python"
+if _BULK is not None:  # addresses of the bridge's position read and permanent-force write, for kernels
+    _GET_POS, _SET_PERM = (ctypes.cast(f, ctypes.c_void_p).value for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz))
 
 
 class Bodies:
@@ -44,17 +49,18 @@ class Bodies:
         self.ids = np.ascontiguousarray(ids, np.int64)
         self.id_list = self.ids.tolist()
         self.n = len(self.ids)
-        self._xz = np.zeros((self.n, 2))
         self._row = np.zeros((self.n, 3))  # x, y = 0, z rows for the Python API
+        self._F = np.zeros((self.n, 2))  # forces being written
+        self._all, self._zero = np.arange(self.n), np.zeros((self.n, 2))
         self._index = None  # position of each id in coordsAndDisplacements' lists
         self._n_listed = -1
 
     # -- reads -----------------------------------------------------------------------------------
     def positions(self):
         """Centres (n, 2) [m]; a new array."""
+        out = np.empty((self.n, 2))
         if _BULK is not None:
-            out = np.empty((self.n, 2))
-            _BULK.get_pos_xz(self.ids, out)
+            _check(kernels.read_bulk_io(_GET_POS, self.ids, out), self.ids)
             return out
         x = utils.coordsAndDisplacements(0)[0]
         z = utils.coordsAndDisplacements(2)[0]
@@ -64,7 +70,6 @@ class Bodies:
             if np.any(self._index >= len(existing)) or np.any(existing[np.minimum(self._index, len(existing) - 1)] != self.ids):
                 raise ValueError("yade_io: some of the engine's body ids do not exist in O.bodies")
             self._n_listed = len(x)
-        out = np.empty((self.n, 2))
         out[:, 0] = np.asarray(x)[self._index]
         out[:, 1] = np.asarray(z)[self._index]
         return out
@@ -103,12 +108,41 @@ class Bodies:
         else:
             list(map(O.forces.addF, self.id_list, self._rows(F)))
 
-    def set_permanent_forces(self, F):
-        """O.forces.setPermF for every body, F (n, 2) [N] (held until set again)."""
+    def set_permanent_forces(self, F, rows=None, add=None):
+        """O.forces.setPermF for every body (held until set again): F (n, 2) [N], or with ``rows``
+        (n,) F[rows] + add, F (m, 2) over some larger set of which these bodies are the rows."""
+        if rows is None:
+            rows, add = self._all, self._zero
         if _BULK is not None:
-            _BULK.set_perm_force_xz(self.ids, np.ascontiguousarray(F, float))
+            _check(kernels.write_rows_bulk_io(_SET_PERM, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
+                   self.ids)
         else:
-            list(map(O.forces.setPermF, self.id_list, self._rows(F)))
+            np.add(F[rows], add, out=self._F)
+            list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
+
+
+def run_kernel(kernel, reader, xz, writer, out, *args):
+    """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
+    into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
+    (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one compiled
+    call (engines.kernels.with_bulk_io). Returns (status, info)."""
+    if _BULK is None:
+        xz[:] = reader.positions()
+        status, info = kernel(xz, out, *args)
+        if status >= 0:
+            writer.set_permanent_forces(out)
+        return status, info
+    rc, status, info = kernels.with_bulk_io[kernel](_GET_POS, _SET_PERM, reader.ids, xz, writer.ids, out, *args)
+    _check(rc, reader.ids if status < 0 else writer.ids)
+    return status, info
+
+
+def _check(rc, ids):
+    """Raise on a bridge function's error code (engines.yadebulk)."""
+    if rc > 0:
+        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
+    if rc < 0:
+        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
 
 
 def freeze_gc():

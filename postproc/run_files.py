@@ -22,8 +22,8 @@ def snapshot_files(run_dir):
 
 
 def read_snapshot(path):
-    """One snapshot as a dict of arrays (t, xz, r, group, density_factor, vel, pairs, f_n and,
-    with water, tri, tri_pore, U)."""
+    """One snapshot as a dict of arrays (t, xz, r, group, density_factor, vel, pairs, f_n, f_s
+    and, with water, tri, tri_pore, U, W, A, rule; engines.yade_run.snapshot_data)."""
     with np.load(path, allow_pickle=False) as z:
         return dict(z)
 
@@ -35,3 +35,25 @@ def read_summary(run_dir):
         return {}
     with open(path) as f:
         return json.load(f)
+
+
+def headline_results(history, heave_rise):
+    """The headline numbers of a run from its history ({column: array}) for summary.json:
+    per pressure block the peak of its mean excess pore pressure U [N/m] and when; the heave time:
+    the first row whose bed top (highest particle top) lies ``heave_rise`` [m] or more above that
+    of the first row (None if it never does); the porosity of the last row. {} without rows."""
+    t = history.get("t", np.zeros(0))
+    if not len(t):
+        return {}
+    peaks = {}
+    for name in sorted(c for c in history if c.startswith("U_block")):
+        u = history[name]
+        ok = np.flatnonzero(np.isfinite(u))
+        k = ok[np.argmax(u[ok])] if len(ok) else None
+        peaks[name] = None if k is None else {"U_max_N_per_m": float(u[k]), "t_s": float(t[k])}
+    bed = history["bed_top"]
+    risen = np.flatnonzero(bed - bed[0] >= heave_rise)
+    return {"peak_block_pressures": peaks,
+            "heave_rise_m": heave_rise, "bed_top_initial_m": float(bed[0]), "bed_top_max_m": float(bed.max()),
+            "heave_time_s": float(t[risen[0]]) if len(risen) else None,
+            "porosity_last_row": float(history["porosity"][-1]), "t_last_row_s": float(t[-1])}

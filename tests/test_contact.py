@@ -136,3 +136,116 @@ def test_separation_pattern_c_partner_first():
     # approach velocity after = v_a . n - v_b . n = -e Vn at collision
     assert fix[1][0] - 0.0 == pytest.approx(-e * 2.0)  # j leaves the wall k
     assert fix[0][0] - fix[1][0] == pytest.approx(-e * 1.0)  # i leaves the adjusted j
+
+
+def test_touching_pairs_counts_and_forces_for_plots():
+    """Three discs in a row, the middle one overlapping both neighbours, a fourth far away: two
+    touching pairs with their normal forces kn x overlap, counts 1, 2, 1, 0."""
+    r = np.full(4, 1e-3)
+    xz = np.array([[0.0, 0.0], [2e-3 - 1e-6, 0.0], [4e-3 - 3e-6, 0.0], [10e-3, 0.0]])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0), r, mobile=np.ones(4, bool))
+    law.forces(xz, np.zeros((4, 2)), np.zeros(4), 1e-6)
+    np.testing.assert_array_equal(law.touch_count(), [1, 2, 1, 0])
+    pairs, fn = law.contact_pairs()
+    order = np.argsort(pairs[:, 0])
+    np.testing.assert_array_equal(pairs[order], [[0, 1], [1, 2]])
+    np.testing.assert_allclose(fn[order], [1.0, 2.0], rtol=1e-9)
+
+
+def test_forces_do_not_depend_on_the_neighbour_list_bookkeeping():
+    """The Verlet list is bookkeeping: a law whose list is rebuilt as discs drift (default skin) gives
+    the same forces, step by step, as one whose list never needs rebuilding (a skin wider than the
+    box), while the whole cluster drifts by many skins, pairs slide (history in e_s, spring d's
+    e_n), separate and a far disc arrives and touches."""
+    rng = np.random.default_rng(3)
+    n = 12
+    r = 1e-3 * (0.8 + 0.2 * rng.random(n))
+    base = np.column_stack([np.arange(n) % 4 * 1.8e-3, np.arange(n) // 4 * 1.8e-3]) + 2e-5 * rng.standard_normal((n, 2))
+    base[-1] = [12e-3, 1.8e-3]                   # far away at first, it comes in from the right
+    s = ContactSettings(spring="d", kn=1e6, eta_n=0.5, ks=5e5, eta_s=0.2, mu=0.4, f_max=0.8)
+    lazy = ContactLaw(s, r, mobile=np.ones(n, bool))
+    wide = ContactLaw(s, r, mobile=np.ones(n, bool), skin=1.0)
+    x_prev, dt = base.copy(), 1e-6
+    for k in range(120):
+        xz = base + [-1e-4 * k, 3e-5 * k]        # drift: 12 mm left over the run, many skins
+        xz = xz + 2e-5 * np.column_stack([np.sin(0.1 * k + np.arange(n)), np.cos(0.13 * k + 2 * np.arange(n))])
+        xz[-1, 0] -= 0.8e-4 * k                  # the far disc closes in
+        du = xz - x_prev
+        Fa, Ma, sa = lazy.forces(xz, du, np.zeros(n), dt)
+        Fb, Mb, sb = wide.forces(xz, du, np.zeros(n), dt)
+        np.testing.assert_allclose(Fa, Fb, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(Ma, Mb, rtol=1e-12, atol=1e-15)
+        assert sorted((e.i, e.j) for e in sa) == sorted((e.i, e.j) for e in sb)
+        x_prev = xz
+    assert lazy.list_builds > 5 and wide.list_builds == 1
+    assert wide.touch_count()[-1] > 0            # the far disc did arrive
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_an_approaching_disc_is_never_missed(direction):
+    """A disc closing in on a fixed one from three skins beyond reach, in steps of 0.3 skin from
+    either side: it touches at the same step, with the same force, as with a list that holds every pair."""
+    r = np.array([1e-3, 1e-3])
+    s = ContactSettings(spring="a", kn=1e6, eta_n=0.0, ks=0.0, eta_s=0.0)
+    lazy = ContactLaw(s, r, mobile=np.array([True, False]))
+    wide = ContactLaw(s, r, mobile=np.array([True, False]), skin=1.0)
+    step = 0.3 * lazy.skin
+    start = 2e-3 + 3 * lazy.skin
+    x_prev = None
+    for k in range(20):
+        xz = np.array([[direction * (start - k * step), 0.0], [0.0, 0.0]])
+        du = np.zeros_like(xz) if x_prev is None else xz - x_prev
+        Fa, _, _ = lazy.forces(xz, du, np.zeros(2), 1e-6)
+        Fb, _, _ = wide.forces(xz, du, np.zeros(2), 1e-6)
+        np.testing.assert_array_equal(Fa, Fb)
+        x_prev = xz
+    assert wide.touch_count()[0] == 1 and abs(Fa[0, 0]) > 0
+
+
+@pytest.mark.parametrize("spring", ["a", "b", "c", "d"])
+def test_contact_law_and_separation_adjustment_match_the_reference(spring):
+    """Eq 1-13, 25-27 and 18-24 against the independent reference (engines/reference.py: one record
+    per ordered pair, written from the paper) along a run of colliding, sliding, rolling and
+    separating discs (dashpots, friction cap, every spring): the same forces and moments on every
+    particle and the same adjusted velocities, step by step."""
+    from engines import reference as ref
+    from engines import scene as sc
+    from packing.packing import Packing
+
+    rng = np.random.default_rng({"a": 1, "b": 2, "c": 3, "d": 4}[spring])
+    n = 14
+    r = 1e-3 * (0.7 + 0.3 * rng.random(n))
+    xz = np.column_stack([np.arange(n) % 4 * 2.05e-3, np.arange(n) // 4 * 2.05e-3])
+    group = np.zeros(n, int)
+    group[[0, 3]] = 1                                   # two fixed discs
+    tables = sc.validate({"scene": {"name": "t"}, "material": {"g": 0.0}, "water": {"enabled": False},
+                          "contact": {"spring": spring, "kn": 1e7, "eta_n": 2.0, "ks": 4e6, "eta_s": 0.7, "mu": 0.3,
+                                      "f_max": 0.6, "eps_m": 2e-5 if spring == "b" else 0.0, "restitution": 0.001},
+                          "numerics": {"dt": 2e-7}}).as_dict()
+    model = ref.ReferenceModel(tables, Packing(xz, r, group, np.ones(n)))
+    mobile = group == 0
+    model.v[mobile] = 2.0 * rng.standard_normal((mobile.sum(), 2))
+    model.omega[mobile] = 300.0 * rng.standard_normal(mobile.sum())
+    c = tables["contact"]
+    law = ContactLaw(ContactSettings(**{k: c[k] for k in ("spring", "kn", "eta_n", "ks", "eta_s", "mu", "restitution",
+                                                           "f_max", "eps_m", "separation_adjustment")}), r, mobile)
+    records = ref.PairRecords(model.s, model.r, mobile, np.float64)
+    dt, adjusted, touched = model.dt, 0, 0
+    for _ in range(1500 if spring in "ab" else 600):
+        du, dpsi = model.x - model.x_prev, model.psi - model.psi_prev
+        F, M, separations = law.forces(model.x, du, dpsi, dt)
+        F_ref, M_ref, left = records.forces(model.x, du, dpsi, dt)
+        scale = max(np.abs(F_ref).max(), 1e-3)
+        np.testing.assert_allclose(F[mobile], F_ref[mobile], rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(M[mobile], M_ref[mobile], rtol=0, atol=1e-9 * scale * r.max())
+        touched += int(law.touching.sum())
+        if separations:
+            fixes = separation_adjustment(separations, law.touch_count(), du / dt, model.mass, mobile, c["restitution"])
+            fixes_ref = ref.adjust_free_particles(left, records.contacts_of(), du / dt, model.mass, c["restitution"])
+            assert sorted(k for k in fixes if not np.array_equal(fixes[k], (du / dt)[k])) == sorted(fixes_ref)
+            for k, v in fixes_ref.items():
+                np.testing.assert_allclose(fixes[k], v, rtol=1e-9, atol=1e-12)
+            adjusted += len(fixes_ref)
+        model.step()
+    assert touched > 100
+    assert adjusted > 0 or spring in "cd"    # the capped springs absorb so much that no disc flies free

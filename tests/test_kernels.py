@@ -9,6 +9,7 @@ import pytest
 from engines import kernels
 from engines import pore_geometry as pg
 from engines.contact import ContactLaw, ContactSettings
+from engines.paper_law import PaperLaw
 from engines.pore_water import PoreWater, WaterSettings
 from engines.water_engine import WaterModel
 from packing.layouts import hex_lattice, random_discs
@@ -66,6 +67,30 @@ def test_contact_law_compiled_equals_numpy(spring):
     assert laws[0].touching.sum() > 50 and n_sep > 10  # the test went through contacts and separations
     if spring in ("c", "d"):
         assert np.any(laws[0].state[:, kernels.E_N] == s.f_max)  # and the cap
+
+
+def test_paper_law_step_compiled_equals_numpy():
+    """PaperLaw.step (kernels.law_step: du, pair list, forces, spin in one call) against the NumPy
+    path over moving discs: forces, spins, increments and the velocity fixes of eq 18-24, through
+    rebuilds of the pair list."""
+    xz, r, walls, rng = _column(seed=5)
+    mobile = walls == 0
+    mass = np.pi * r**2
+    s = ContactSettings(spring="d", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0, eps_m=0.01)
+    laws = [PaperLaw(s, r, mobile, mass, 0.5 * mass * r**2, 1e-3, compiled=c) for c in (False, True)]
+    x = xz.copy()
+    n_fixes = 0
+    for step in range(40):
+        x = x + 0.02 * rng.standard_normal(x.shape) * mobile[:, None]
+        (F0, fix0), (F1, fix1) = (law.step(x.copy()) for law in laws)
+        assert_close(F1, F0, f"F at step {step}")
+        assert_close(laws[1].omega, laws[0].omega, f"omega at step {step}")
+        assert_close(laws[1].du, laws[0].du, f"du at step {step}")
+        assert sorted(fix1) == sorted(fix0)
+        for d in fix0:
+            assert_close(fix1[d], fix0[d], f"velocity fix of disc {d}")
+        n_fixes += len(fix0)
+    assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
 
 
 def _kernel_measure(net, xz, r):

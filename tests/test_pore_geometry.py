@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from engines import pore_geometry as pg
+from engines import reference as ref
 from packing.layouts import hex_lattice, random_discs, square_lattice
 
 
@@ -53,23 +54,28 @@ def test_euler_formula_random_packing():
     assert net.n_pores > 100
 
 
-def _shoelace(xz, cycle):
-    p = xz[cycle]
-    return 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+def _reference_pores(xz, r, l_m, walls=None):
+    """The reference's pores (engines/reference.py: its own Delaunay candidates, union-find faces
+    and the paper's walk over its own link lists), keyed by vertex set."""
+    group = np.zeros(len(r), int) if walls is None else walls
+    pores = ref.build_pores(xz, r, group, 0.0, l_m)
+    return pores, {vs: p for p, vs in enumerate(pores.vertex_sets)}
 
 
-def test_areas_against_independent_walk():
-    """Polygon area from triangles equals the shoelace area of the paper's clockwise walk, and
-    void + disc area inside the linked region = the region's area; full discs inside sum to pi r^2."""
+def test_areas_against_the_reference_walk():
+    """Every pore of build_pores is a pore of the reference's independent walk with the same vertex
+    set, polygon area and void area (eq 29), rattlers and islands included."""
     rng = np.random.default_rng(2)
     xz, r = random_discs(200, rng)
     net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
     m = pg.measure(net, xz, r)
-    # an island inside a pore is walked clockwise: its shoelace area is negative and subtracts
-    walk = np.array([sum(_shoelace(xz, c) for c in pg.pore_polygon(net, p)) for p in range(net.n_pores)])
-    np.testing.assert_allclose(walk, m.polygon_area, rtol=1e-10, atol=1e-15)
-    region = walk.sum()
-    np.testing.assert_allclose(m.void_area.sum() + m.sector_area.sum(), region, rtol=1e-12)
+    rp, by_set = _reference_pores(xz, r, 0.7 * r.mean())
+    geo = ref.measure(rp, xz, r, 0.0)
+    assert net.n_pores == rp.n_pores > 100
+    for p in range(net.n_pores):
+        q = by_set[frozenset(net.vertices_of(p).tolist())]
+        assert m.polygon_area[p] == pytest.approx(geo.polygon_area[q], rel=1e-10, abs=1e-15)
+        assert m.void_area[p] == pytest.approx(geo.void_area[q], rel=1e-9, abs=1e-13)
     # discs whose every surrounding face is a pore lie wholly inside the region: 2 pi of angles
     total = np.zeros(len(r))
     for corners in pg.interior_angles(net, m).values():
@@ -78,6 +84,42 @@ def test_areas_against_independent_walk():
     inner = np.isclose(total, 2 * np.pi, rtol=1e-9)
     assert inner.sum() > 50
     assert np.all(total <= 2 * np.pi + 1e-9)
+
+
+def _arc_forces(U, r, a1, a2, n=64):
+    """-U r times the integral of the outward normal (cos a, sin a) over each arc a1 -> a2 (a2 > a1),
+    by n-point Gauss-Legendre quadrature: the left-hand side of eq 33 integrated numerically. (K, 2)."""
+    t, w = np.polynomial.legendre.leggauss(n)
+    half = 0.5 * (a2 - a1)
+    a = half[:, None] * t + (0.5 * (a2 + a1))[:, None]
+    return -(U * r * half)[:, None] * np.column_stack([np.cos(a) @ w, np.sin(a) @ w])
+
+
+@pytest.mark.parametrize("seed", [3, 8])
+def test_eq33_against_arc_integrals_with_non_uniform_pressure(seed):
+    """Random U per pore: the force on every disc equals the sum over the pores around it of the
+    numerically integrated pressure on its arc inside each pore. The arcs come from the reference's
+    independent walk (corner disc d, the arc from the direction d -> next counter-clockwise over the
+    interior angle), not from the telescoped sum that pressure_forces uses."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(150, rng)
+    l_m = 0.7 * r.mean()
+    net = pg.build_pores(xz, r, l_m=l_m)
+    m = pg.measure(net, xz, r)
+    U = rng.uniform(-50.0, 200.0, net.n_pores)
+    F = pg.pressure_forces(net, r, U, m)
+    rp, by_set = _reference_pores(xz, r, l_m)
+    U_ref = np.empty(rp.n_pores)
+    for p in range(net.n_pores):
+        U_ref[by_set[frozenset(net.vertices_of(p).tolist())]] = U[p]
+    d, nxt = rp.corner_disc, rp.corner_next
+    theta = ref.corner_angles(xz, d, rp.corner_prev, nxt)
+    a1 = np.arctan2(xz[nxt, 1] - xz[d, 1], xz[nxt, 0] - xz[d, 0])
+    expected = np.zeros_like(xz)
+    np.add.at(expected, d, _arc_forces(U_ref[rp.corner_pore], r[d], a1, a1 + theta))
+    scale = np.abs(U).max() * r.max()
+    np.testing.assert_allclose(F, expected, rtol=0, atol=1e-12 * scale)
+    assert np.abs(F).max() > 0.1 * scale  # the pressures are far from uniform: real forces
 
 
 def test_measure_matches_triangles_after_motion():
@@ -90,19 +132,6 @@ def test_measure_matches_triangles_after_motion():
         xz = xz + 0.02 * r.mean() * rng.standard_normal(xz.shape)
         m = pg.measure(net, xz, r)
         np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
-
-
-def test_uniform_pressure_gives_zero_force_on_inner_discs():
-    rng = np.random.default_rng(3)
-    xz, r = random_discs(200, rng)
-    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
-    F = pg.pressure_forces(net, r, np.full(net.n_pores, 123.0), pg.measure(net, xz, r))
-    outer_disc = np.zeros(len(r), bool)
-    on_outer = (net.link_pores == pg.OUTER).any(axis=1)
-    outer_disc[net.links[on_outer].ravel()] = True
-    inner = ~outer_disc
-    assert inner.sum() > 50
-    assert np.abs(F[inner]).max() < 1e-12 * 123.0 * r.max()
 
 
 def test_eq33_single_arc():
@@ -203,3 +232,110 @@ def test_bad_input_names_the_field(kw, field):
         args["r"] = np.ones(len(args["xz"]))
     with pytest.raises(ValueError, match=field):
         pg.build_pores(**args)
+
+
+@pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
+                                np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
+def test_a_network_without_pores_is_well_formed_and_usable(xz):
+    """Degenerate inputs give a network with every array empty and correctly shaped, the scene's
+    eps_m, l_m and the closure area a_min = 1e-4 mean(pi r^2), on which the water and force code
+    run without special cases."""
+    from engines.pore_water import PoreWater, WaterSettings
+    r = np.full(len(xz), 0.5)
+    net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.1, walls=np.full(len(xz), pg.WALL_BOTTOM))
+    assert (net.n_discs, net.n_pores, net.n_closed, net.eps_m, net.l_m) == (len(xz), 0, 0, 0.01, 0.1)
+    assert net.a_min == pytest.approx(1e-4 * np.pi * 0.25 if len(xz) else 0.0)
+    for name in ("links", "link_pores", "throat_conns"):
+        assert getattr(net, name).shape == (0, 2), name
+    assert net.tri.shape == (0, 3) and net.pore_vertex_ptr.tolist() == [0]
+    for name in ("tri_pore", "throat_link", "pore_surface", "pore_vertex_idx", "pore_signature", "he_org",
+                 "he_dst", "he_left", "he_next", "corner_pore", "corner_disc", "corner_link",
+                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "corner_raw0", "rattler_area"):
+        assert getattr(net, name).shape == (0,), name
+    assert sorted(net.pore_touches) == ["bottom", "left", "right"]
+    assert all(v.shape == (0,) and v.dtype == bool for v in net.pore_touches.values())
+    assert (net.pore_surface.dtype, net.pore_vertex_ptr.dtype, net.pore_signature.dtype) == (bool, np.int64, np.uint64)
+    m = pg.measure(net, xz, r)
+    assert pg.pore_centroids(net, xz).shape == (0, 2)
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1.0))
+    w.advance(1.0, m.void_area, m.link_contact)
+    assert w.darcy_limit(m.void_area, m.link_contact) == np.inf and w.total_water() == 0.0
+
+
+def test_centroids_and_polygons_of_a_square_lattice():
+    """Each pore of a square lattice (spacing a) is its cell: the walk visits its 4 corners
+    counter-clockwise (positive shoelace area a^2) and the area-weighted centroid is the cell centre."""
+    a = 2.05
+    xz = square_lattice(5, 4, a, origin=(3.0, -1.0))
+    r = np.ones(len(xz))
+    net = pg.build_pores(xz, r, l_m=0.1)
+    cen = pg.pore_centroids(net, xz)
+    for p in range(net.n_pores):
+        (cycle,) = pg.pore_polygon(net, p)
+        corners = xz[cycle]
+        assert len(cycle) == 4 and set(cycle) == set(net.vertices_of(p).tolist())
+        shoelace = 0.5 * np.sum(corners[:, 0] * np.roll(corners[:, 1], -1) - np.roll(corners[:, 0], -1) * corners[:, 1])
+        assert shoelace == pytest.approx(a * a, rel=1e-12)
+        np.testing.assert_allclose(cen[p], corners.mean(axis=0), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(pg.void_area_by_triangles(net, xz, r), a * a - np.pi, rtol=1e-12)
+
+
+def test_link_state_counts_eps_m_as_contact():
+    """Eq 43 with eps_m > 0: a link whose gap is below eps_m is a contact (k2); above it, not."""
+    r = np.ones(3)
+    xz = np.array([[0.0, 0.0], [2.03, 0.0], [1.0, 1.75]])   # gaps 0.03 (0-1), 0.016 (0-2), 0.031 (1-2)
+    net = pg.build_pores(xz, r, eps_m=0.02, l_m=0.2)
+    m = pg.measure(net, xz, r)
+    state = {tuple(l): c for l, c in zip(net.links.tolist(), m.link_contact)}
+    gaps = {k: np.hypot(*(xz[k[1]] - xz[k[0]])) - 2.0 for k in state}
+    assert state == {k: g <= 0.02 for k, g in gaps.items()}
+    assert sorted(state.values()) == [False, False, True]
+
+
+def test_pore_signatures_identify_vertex_sets():
+    """Different vertex sets have different signatures (rule (a) relies on it), here for every pore
+    of a random packing against every other; a rebuild at the same positions gives the same ones;
+    the keys of the discs are distinct."""
+    rng = np.random.default_rng(9)
+    xz, r = random_discs(400, rng)
+    net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
+    sets = [frozenset(net.vertices_of(p).tolist()) for p in range(net.n_pores)]
+    sig = net.pore_signature.tolist()
+    assert len(set(sets)) == len(sets) == len(set(sig))
+    again = pg.build_pores(xz + 1e-9, r, l_m=0.7 * r.mean())
+    assert {frozenset(again.vertices_of(p).tolist()): s for p, s in enumerate(again.pore_signature.tolist())} == dict(zip(sets, sig))
+    keys = pg._mix64(np.arange(100000))
+    assert len(np.unique(keys)) == 100000
+
+
+def test_interior_angles_of_every_pore_walk_sum_to_k_minus_2_pi():
+    """The closed walk around a pore with K corners turns through (K - 2) pi of interior angles
+    (eq 29), dangling links included (2 pi at the tip, the base disc met twice and summed)."""
+    rng = np.random.default_rng(14)
+    xz, r = random_discs(300, rng)
+    keep = rng.random(len(r)) > 0.35                # holes: dangling links and pinches appear
+    xz, r = xz[keep], r[keep]
+    net = pg.build_pores(xz, r, l_m=0.9 * r.mean())
+    m = pg.measure(net, xz, r)
+    angles = pg.interior_angles(net, m)
+    repeated = 0
+    for p in range(net.n_pores):
+        cycles = pg.pore_polygon(net, p)
+        if len(cycles) != 1:
+            continue
+        k = len(cycles[0])
+        repeated += k > len(set(cycles[0]))
+        assert sum(angles[p].values()) == pytest.approx((k - 2) * np.pi, rel=1e-9)
+    assert repeated > 0
+
+
+def test_the_outer_boundary_of_a_pore_with_an_island_comes_first():
+    """A ring of 8 linked discs around a linked pair that touches none of them: one pore whose walk
+    has two cycles, the ring's (8 corners) first, then the island's (2), clockwise (negative area)."""
+    ring = 6.0 * np.array([[np.cos(a), np.sin(a)] for a in np.arange(8) * np.pi / 4])
+    xz = np.vstack([ring, [[-0.8, 0.0], [0.8, 0.0]]])
+    r = np.concatenate([np.full(8, 2.2), [0.7, 0.7]])
+    net = pg.build_pores(xz, r, l_m=0.3)
+    assert net.n_pores == 1
+    cycles = pg.pore_polygon(net, 0)
+    assert [len(c) for c in cycles] == [8, 2] and set(cycles[1]) == {8, 9}

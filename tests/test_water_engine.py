@@ -76,7 +76,9 @@ def test_dry_yade_law_scene_runs_no_python_engine(packing):
     cp = YadeCoupling(wet, packing)  # the water engine is called before O.step on its steps
     assert not any(isinstance(e, PyRunner) for e in O.engines)
     calls = []
-    cp.water_engine.model.advance = lambda h, xz: calls.append(O.iter)
+    model = cp.water_engine.model
+    water_step = model.kernel_args  # called once per water step (in one compiled call with the bridge)
+    model.kernel_args = lambda h: (calls.append(O.iter), water_step(h))[1]
     cp.run(35)
     assert calls == [0, 10, 20, 30]
 
@@ -104,3 +106,30 @@ def test_yade_law_head_on_collision_matches_the_paper_law():
     before = slice(0, touched[-1])  # up to the last sample with A and B in contact
     assert np.max(np.abs(x_y[before] - x_r[before])) / R < 1e-3
     assert abs(restitution(ty) - restitution(tr)) < 0.02 * restitution(tr)
+
+
+@pytest.mark.parametrize("law_override", [{}, {"water": {"enabled": False}}])
+def test_paper_law_one_call_step_equals_the_general_path(packing, law_override):
+    """PaperLawEngine.drive runs kernels.dem_step (read, law, water, write in one call) where it
+    can; the general path (PoreDEM.step between yade_io calls) gives the same run, bit for bit,
+    through pair-list and pore rebuilds and steps without water."""
+    from yade import O
+    over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
+    over.update(law_override)
+    sc = scenes.preset("quicksand_case1", over)
+    runs = []
+    for fused in (True, False):
+        cp = YadeCoupling(sc, packing)
+        cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
+        if not fused:
+            cp.core.kernel_step_args = lambda: None
+        cp.run(200)
+        runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
+                     None if cp.water is None else cp.water.W.copy(), O.iter))
+    (x1, v1, w1, b1, W1, k1), (x0, v0, w0, b0, W0, k0) = runs
+    assert k1 == k0 == 200 and b1 == b0 > 5
+    np.testing.assert_array_equal(x1, x0)
+    np.testing.assert_array_equal(v1, v0)
+    np.testing.assert_array_equal(w1, w0)
+    if W0 is not None:
+        np.testing.assert_array_equal(W1, W0)

@@ -29,26 +29,23 @@ def test_bodies_have_per_unit_thickness_mass(packing):
     assert O.bodies[i].state.inertia[1] == pytest.approx(0.5 * m * packing.r[i] ** 2, rel=1e-12)
 
 
-def test_without_inflow_the_deposit_stays_at_rest(packing):
-    sc = scenes.preset("quicksand_case1", {"water": {"q_w": 0.0}})
-    traj = simulate(sc, packing, 3000, 1000)
-    t, xz, U, water, err = traj.arrays()
-    # the denser top discs (marked after deposition) settle by ~1e-3 r in the first ms, then stop;
-    # with inflow the same discs move by ~0.35 r in this time (next test)
-    moved = np.abs(xz[-1] - packing.xz).max() / packing.r.mean()
-    creep = np.abs(xz[-1] - xz[-2]).max() / packing.r.mean()
-    assert moved < 5e-3 and creep < 1e-3, (moved, creep)  # inflow: ~0.15 r per ms
-    assert np.nanmax(np.abs(U)) < 1e-3 * sc.water.E_w
-    assert err[-1] < 1e-12
-
-
-def test_with_inflow_the_bottom_block_rises_first(packing):
-    sc = scenes.preset("quicksand_case1")
-    traj = simulate(sc, packing, 2000, 500)
-    t, xz, U, water, err = traj.arrays()
-    assert U[-1, 0] > 50.0 and U[-1, 0] > 20 * abs(U[-1, 1])
-    assert np.all(U[:, 0] < sc.water.E_w)  # eq 32 bounds it
+def test_inflow_lifts_the_bed_and_raises_the_bottom_pressure_first(packing):
+    """§5.2, Fig. 21: with inflow the bottom block's pressure rises at once and leads the surface
+    block, bounded by E_w (eq 32), and the water gained is the inflow less the surface outflow
+    (the budget closes to round-off). Without inflow the same deposit stays put: its pressures and
+    displacements are a small fraction (< 5 %) of those the inflow causes in the same time."""
+    n = 2000
+    wet = simulate(scenes.preset("quicksand_case1"), packing, n, 500)
+    still = simulate(scenes.preset("quicksand_case1", {"water": {"q_w": 0.0}}), packing, n, 500)
+    t, xz, U, water, err = wet.arrays()
+    assert np.all(U[:, 0] > U[:, 1]) and np.all(U[:, 0] > 0)
+    assert np.all(U < scenes.preset("quicksand_case1").water.E_w)
     assert water[-1] > water[0] and err.max() < 1e-11
+    _, xz0, U0, _, err0 = still.arrays()
+    moved = np.abs(xz[-1] - packing.xz).max()
+    assert np.abs(xz0[-1] - packing.xz).max() < 0.05 * moved
+    assert np.nanmax(np.abs(U0)) < 0.05 * U[-1, 0]
+    assert err0.max() < 1e-12
 
 
 def test_a_dry_scene_runs_no_water_code(packing, monkeypatch):
@@ -77,8 +74,10 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
     with pytest.raises(RuntimeError, match="simulated crash"):
         run_scene(bad, packing, str(tmp_path / "bad"), duration=0.003)
     rows = open(tmp_path / "bad" / "history.csv").read().strip().splitlines()
-    assert len(rows) == 1 + 51 and os.path.exists  # rows at k = 0, 50, ..., 2500 (before step 2500 crashed)(tmp_path / "bad" / "checkpoint.npz")
-    assert "failed" in json.load(open(tmp_path / "bad" / "summary.json"))["status"]
+    assert len(rows) == 1 + 51  # rows at k = 0, 50, ..., 2500 (before step 2500 crashed)
+    assert os.path.exists(tmp_path / "bad" / "failure_state.npz") and os.path.exists(tmp_path / "bad" / "checkpoint.pkl")
+    summary = json.load(open(tmp_path / "bad" / "summary.json"))
+    assert "failed" in summary["status"] and summary["checkpoint"]["step"] == 0  # the one written at the start
 
 
 def test_deposit_and_cut(packing):

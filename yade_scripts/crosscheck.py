@@ -1,16 +1,27 @@
 """Cross-check of the YADE path (engines.yade_coupling) against the NumPy reference (engines.reference).
 
 Run:  yade -n -x yade_scripts/crosscheck.py --out DIR   -> DIR/crosscheck.json, exit 1 if a case fails.
-Importable headless: ``run_cases(yade_simulate, ref_simulate, cases)`` and ``precision_study`` take the
-two ``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments.
+Importable headless: ``run_cases(yade_simulate, ref_simulate, ...)`` and ``precision_study`` take the
+``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments (the YADE
+side also gets ``hooks=``, the reference side ``readings=``).
 
-Cases (every tolerance is stated with its reason in the case's ``why``):
+Where the YADE path moves the walls by another reading than the reference's (READINGS D1: before
+branch liq, symplectic Euler instead of the constant-average-acceleration method), the reading
+is told from the recorded wall positions (``wall_reading``) and the reference runs with it, so that
+everything else is compared to round-off; the effect of the disagreement is measured by running the
+reference with its own reading too (``reading_disagreements`` in crosscheck.json; reported, not judged).
+
+Contact cases (short, deterministic; every tolerance is stated with its reason in the case's ``why``):
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
   head_on_adjusted         the same with the separation adjustment: -Vn''/Vn = e (pattern d, eq 24)
   pressed_release_a..d     a disc pressed into a fixed wall disc and released, per spring of Fig. 5
-  quicksand_column         the quick-sand preset with inflow, 2,000 steps
-  shaken_column            the same column saturated, box shaken by a cosine, no inflow, 2,000 steps
-and the precision study: the reference runs quicksand_column in float32, float64 and longdouble.
+Feature cases (2,100-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
+  settling_rules           loose discs falling into a wet box under 1000 m/s^2: re-meshing rules a-d
+  quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
+  shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
+                           eps_m > 0, water_interval 2, smoothing
+  elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
+and the precision study: the reference runs the quick-sand preset in float32, float64 and longdouble.
 """
 import argparse
 import json
@@ -27,7 +38,9 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
 from engines import scene as sc  # noqa: E402
-from engines.reference import simulate_reference  # noqa: E402
+from engines.reference import (BOTTOM, PAPER_READINGS, WALL_STEPS, porosity, simulate_reference,  # noqa: E402
+                               wall_displacements)
+from engines.trajectory import Trajectory  # noqa: E402
 from packing.packing import Packing  # noqa: E402
 
 R = 0.45e-3            # disc radius of the contact cases [m]
@@ -49,7 +62,6 @@ class Case:
     tolerances: dict
     why: str
     analyze: object
-    perturb: bool = False   # also run the reference from x_0 + 1e-12 r to measure round-off amplification
 
 
 # -- metrics ------------------------------------------------------------------------------------------
@@ -195,7 +207,38 @@ def contact_cases():
     return [collision_case(False), collision_case(True)] + [pressed_case(s) for s in "abcd"]
 
 
-# -- column cases ---------------------------------------------------------------------------------------
+# -- feature cases: long runs over every feature of the model -----------------------------------------
+TRAJ_TOL = 1e-9        # positions / mean radius while the runs are comparable
+PRESSURE_TOL = 1e-9    # block pressures / max |U| of the reference over the comparable window
+WATER_TOL = 1e-12      # each run's own water budget, relative to its initial water
+PERTURBATION = 1e-12   # of a mean radius, added to every particle's start to time the divergence
+WALL_TOL = 1e-9        # wall displacement / its largest value: the YADE path follows a wall reading
+MIN_WINDOW = 3         # samples the comparable window must hold for the case to check anything
+STAT_FACTOR, STAT_FLOOR = 4.0, 0.02   # statistics after divergence: see compare_statistics
+FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pressures {PRESSURE_TOL:g} of "
+               f"max |U|, total water {TRAJ_TOL:g} of the initial: it changes only through the areas at a "
+               "re-meshing, eq 32) compared up to the divergence time, when the reference "
+               f"started from x_0 + {PERTURBATION:g} r departs from the reference by one of these tolerances: until then "
+               "both paths differ only by round-off, which grows no faster than that perturbation; both "
+               f"water budgets close to {WATER_TOL:g}; after the divergence, time means of block pressures "
+               f"and porosity agree within {STAT_FACTOR:g} x the spread between the two reference runs "
+               f"(at least {STAT_FLOOR:g} of their scale); re-meshing rule counts agree rebuild by rebuild "
+               f"before the divergence. Every rule the case is built for must fire. {ROUNDOFF_WHY}")
+
+
+@dataclass
+class FeatureCase:
+    """A long run of one scene: ``build()`` -> (scene, packing); ``rules``: the re-meshing rules it
+    must fire (on the reference side)."""
+
+    name: str
+    build: object
+    n_steps: int
+    record_every: int
+    rules: str = ""
+    min_rebuilds: int = 20
+
+
 def quicksand_build(**overrides):
     """The quicksand_case1 preset (with ``overrides``) and its packing (packing.deposition.scene_packing)."""
     def build():
@@ -208,27 +251,247 @@ def quicksand_build(**overrides):
     return build
 
 
-def column_case(name, packing, scene, n_steps, record_every, build=None):
-    """A wet column compared sample by sample; ``packing``/``scene`` or a ``build`` callable."""
-    def analyze(ty, tr, scene, pk):
-        m = trajectory_diffs(ty, tr, float(np.mean(pk.r)))
-        m["balance_error_yade"] = float(np.nanmax(ty.arrays()[4]))
-        m["balance_error_ref"] = float(np.nanmax(tr.arrays()[4]))
-        return m
-
-    return Case(name, build or (lambda: (scene, packing)), n_steps, record_every,
-                {"max_position_diff_rel": 1e-9, "pressure_rel_diff": 1e-9, "water_rel_diff": 1e-12,
-                 "balance_error_yade": 1e-12, "balance_error_ref": 1e-12},
-                f"positions and block pressures 1e-9 relative: {ROUNDOFF_WHY}; a settled column over "
-                "2,000 steps (2 ms) amplifies that by far less than 1e7 (see roundoff_amplification: the "
-                "growth of a 1e-12 r perturbation of x_0 in the reference). Water: both budgets close to "
-                "round-off (1e-12), the totals agree to 1e-12 of the initial water", analyze, perturb=True)
+def settling_box(seed=3, nx=8, nz=8, spacing=2.2 * R):
+    """Particles on a jittered hexagonal lattice with gaps about l_m wide, radii 0.8-1 R, in a box of
+    wall discs (bottom row, side columns; open top): under strong gravity they fall, collide and
+    link up, so pores appear, split, merge and flip, and isolated ones form (rules a-d)."""
+    rng = np.random.default_rng(seed)
+    xz = np.array([[spacing * (i + 0.5 * (j % 2)), spacing * np.sqrt(3) / 2 * j] for j in range(nz) for i in range(nx)])
+    col, row = np.arange(len(xz)) % nx, np.arange(len(xz)) // nx
+    group = np.where(row == 0, 1, np.where(col == 0, 2, np.where(col == nx - 1, 3, 0)))
+    mob = group == 0
+    r = np.where(mob, R * (0.8 + 0.2 * rng.random(len(xz))), R)
+    xz[mob] += 0.1 * R * rng.standard_normal((int(mob.sum()), 2))
+    return Packing(xz, r, group, np.ones(len(xz)))
 
 
-def column_cases():
-    return [column_case("quicksand_column", None, None, 2000, 100, quicksand_build()),
-            column_case("shaken_column", None, None, 2000, 100,
-                        quicksand_build(loading={"type": "cosine", "moves": "box"}, water={"q_w": 0.0}))]
+def settling_build(**overrides):
+    def build():
+        raw = {"scene": {"name": "settling_box"}, "material": {"g": 1000.0},
+               "water": {"enabled": True, "q_w": 0.0, "k1": 200.0, "k2": 2.0, "E_w": 240.0},
+               "numerics": {"dt": 1e-6, "rebuild_interval": 100}}
+        for table, fields in overrides.items():
+            raw.setdefault(table, {}).update(fields)
+        return sc.validate(raw), settling_box()
+    return build
+
+
+ELCENTRO = os.path.join(sc.SCENE_DIR, "elcentro_ns_1940.txt")   # the 1940 N-S record, in g
+
+
+def feature_cases():
+    """Each feature of the model in at least one case of >= 20 pore rebuilds (see FEATURE_WHY)."""
+    shaken = {"loading": {"type": "cosine", "moves": "box", "amplitude": 15.0, "frequency": 50.0}}
+    return [
+        FeatureCase("settling_rules", settling_build(), 5000, 50, rules="abcd"),
+        FeatureCase("quicksand_smoothing", quicksand_build(water={"q_w": 5e-3, "smoothing": True},
+                                                           numerics={"rebuild_interval": 100}), 2100, 50),
+        FeatureCase("shaken_drained_wet_d", quicksand_build(
+            water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
+            contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
+            numerics={"rebuild_interval": 100, "water_interval": 2}, **shaken), 2100, 50),
+        FeatureCase("elcentro_column", quicksand_build(
+            water={"q_w": 0.0, "E_w": 2400.0, "k1": 100.0, "k2": 100.0},
+            loading={"type": "record", "record": ELCENTRO, "moves": "box", "time_scale": 0.001,
+                     "amplitude_scale": 5.0},
+            numerics={"rebuild_interval": 100}), 2100, 50),
+    ]
+
+
+def features_of(scene):
+    """What a scene exercises, for crosscheck.json."""
+    w, c, n, ld = scene.water, scene.contact, scene.numerics, scene.loading
+    out = {"spring": c.spring, "eps_m": c.eps_m, "separation_adjustment": c.separation_adjustment,
+           "water": w.enabled, "rebuild_interval": n.rebuild_interval}
+    if w.enabled:
+        out.update(inflow_q_w=w.q_w, smoothing_eq45_46=w.smoothing, sides=w.sides,
+                   k3=w.k3 if w.sides == "drained" else None, water_interval=n.water_interval)
+    if ld.type == "cosine":
+        out["input"] = f"cosine {ld.amplitude} m/s^2 at {ld.frequency} Hz, moves {ld.moves}"
+    elif ld.type == "record":
+        out["input"] = (f"record {os.path.basename(ld.record)} x time {ld.time_scale} x amplitude "
+                        f"{ld.amplitude_scale}, moves {ld.moves}")
+    return out
+
+
+def yade_remesh_counter():
+    """A hook of yade_coupling.simulate (called after each recorded chunk, so at most one rebuild
+    in between when record_every <= rebuild_interval) counting the fast code's re-meshing rules
+    per rebuild; (hook, counts). Rebuild n happens at step n x rebuild_interval."""
+    counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "history": [], "separation": None}
+
+    def hook(cp):
+        model = cp.water_model
+        if model is not None and model.n_rebuilds > counts["rebuilds"]:
+            if model.n_rebuilds > counts["rebuilds"] + 1:
+                raise RuntimeError("more than one rebuild between two hook calls: record_every > rebuild_interval")
+            counts["rebuilds"] = model.n_rebuilds
+            this = {r: int(model.water.remesh_counts.get(r, 0)) for r in "abcd"}
+            for r, v in this.items():
+                counts["remesh"][r] += v
+            counts["history"].append((model.n_rebuilds * model.rebuild_interval, this))
+    return hook, counts
+
+
+def divergence(ta, tb, mean_r):
+    """(index of the first sample where the runs differ by more than a window tolerance, its time);
+    (n, inf) if never. Differences as in ``trajectory_diffs``: positions / mean_r > TRAJ_TOL, block
+    pressures / max |U_b| > PRESSURE_TOL, total water / W_b(0) > TRAJ_TOL (the water and pressures
+    jump at a rebuild by amounts that can be more sensitive to the positions than the positions are)."""
+    t, xa, Ua, Wa, _ = ta.arrays()
+    _, xb, Ub, Wb, _ = tb.arrays()
+    over = np.max(np.abs(xa - xb), axis=(1, 2)) / mean_r > TRAJ_TOL
+    if Ub.size and not np.all(np.isnan(Ub)):
+        with np.errstate(invalid="ignore"):
+            dU = np.nanmax(np.abs(Ua - Ub), axis=1, initial=0.0) / max(np.nanmax(np.abs(Ub)), TINY)
+        over |= (dU > PRESSURE_TOL) | (np.isnan(Ua) != np.isnan(Ub)).any(axis=1)
+        over |= np.abs(Wa - Wb) / Wb[0] > TRAJ_TOL
+    first = np.flatnonzero(over)
+    return (int(first[0]), float(t[first[0]])) if len(first) else (len(t), float("inf"))
+
+
+def rules_before(history, t_end, dt):
+    """[(step, {rule: count})] of the rebuilds at times before t_end [s]."""
+    return [(int(k), {r: int(n) for r, n in c.items()}) for k, c in history if k * dt < t_end]
+
+
+def compare_window(ty, tr, n, mean_r):
+    """Trajectory differences over the first n samples (trajectory_diffs restricted to them)."""
+    cut = lambda tj: Trajectory(t=tj.t[:n], xz=tj.xz[:n], block_U=tj.block_U[:n], water=tj.water[:n],
+                                balance_error=tj.balance_error[:n])
+    return trajectory_diffs(cut(ty), cut(tr), mean_r)
+
+
+def statistics(traj, start, pk, scene):
+    """Time means over the samples from ``start`` on: block pressures (B,) [N/m] and porosity."""
+    _, xz, U, *_ = traj.arrays()
+    if start >= len(xz):
+        return None
+    c, w = scene.contact, scene.water
+    por = [porosity(x, pk.r, pk.group, c.eps_m, w.l_m) for x in xz[start:]]
+    with np.errstate(all="ignore"):
+        return {"block_U": np.nanmean(U[start:], axis=0) if w.enabled else np.array([]), "porosity": float(np.nanmean(por))}
+
+
+def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
+    """|S_y - S_r| against the chaotic spread |S_p - S_r| of each statistic (y: the run judged,
+    r: the reference, p: the reference perturbed): pass when within STAT_FACTOR x that spread or
+    STAT_FLOOR x the statistic's scale."""
+    out, ok = {}, True
+    for key in ("block_U", "porosity"):
+        y, r, p = (np.atleast_1d(np.asarray(v[key], float)) for v in (sy, sr, sp))
+        if not y.size:
+            continue
+        scale = max(np.nanmax(np.abs(r)), TINY) if key == "porosity" else max(np.nanmax(np.abs(r)), 1.0)
+        allowed = np.maximum(STAT_FACTOR * np.abs(p - r), STAT_FLOOR * scale)
+        diff = np.abs(y - r)
+        good = bool(np.all(np.isnan(diff) == np.isnan(allowed)) and np.all((diff <= allowed) | np.isnan(diff)))
+        out[key] = {names[0]: y.tolist(), names[1]: r.tolist(), names[2]: p.tolist(),
+                    "diff": diff.tolist(), "allowed": allowed.tolist(), "passed": good}
+        ok &= good
+    return out, ok
+
+
+def wall_reading(traj, scene, pk):
+    """The wall kinematics (engines.reference WALL_STEPS) the run ``traj`` followed, told from its
+    bottom-wall positions: {"wall_step": name} of the reading they match to WALL_TOL of the largest
+    displacement, {} without loading. Raises ValueError (with each reading's error) when none
+    matches. The readings differ by ~a dt t / 2, 1e-4-1e-3 of the displacement in these cases."""
+    tables = scene.as_dict()
+    t, x, *_ = traj.arrays()
+    steps = np.rint(t / scene.numerics.dt).astype(int)
+    moved = x[:, pk.group == BOTTOM, 0] - pk.xz[pk.group == BOTTOM, 0]
+    errors = {}
+    for name in WALL_STEPS:
+        u = wall_displacements(tables["loading"], scene.numerics.dt, int(steps.max()), name)
+        if u is None:
+            return {}
+        expected = u[steps - 1][:, None]
+        errors[name] = float(np.max(np.abs(moved - expected)) / max(np.max(np.abs(expected)), TINY))
+        if errors[name] <= WALL_TOL:
+            return {"wall_step": name}
+    raise ValueError(f"the bottom wall follows none of the wall readings: relative errors {errors}")
+
+
+def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
+    """One FeatureCase: YADE, the reference (with the YADE path's wall reading, ``wall_reading``),
+    the reference perturbed, and (if ``measure_readings`` and the wall readings differ) the
+    reference with its own reading."""
+    out = {"name": case.name, "passed": False, "why": FEATURE_WHY}
+    try:
+        scene, pk = case.build()
+        mean_r = float(np.mean(pk.r[pk.mobile]))
+        hook, ycounts = yade_remesh_counter()
+        t0 = time.time()
+        ty = yade_simulate(scene, pk, case.n_steps, case.record_every, hooks=[hook])
+        t1 = time.time()
+        readings = wall_reading(ty, scene, pk)
+        tr = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=readings)
+        t2 = time.time()
+        moved = pk.xz.copy()
+        moved[pk.mobile] += PERTURBATION * mean_r
+        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
+                          readings=readings)
+        t3 = time.time()
+        rcounts = tr.info["counts"]
+        ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
+        n_win, t_div = divergence(tp, tr, mean_r)
+        win = compare_window(ty, tr, n_win, mean_r) if n_win else {}
+        same_rules = (rules_before(ycounts["history"], t_div, scene.numerics.dt)
+                      == rules_before(rcounts["history"], t_div, scene.numerics.dt))
+        stats = [statistics(tj, n_win, pk, scene) for tj in (ty, tr, tp)]
+        stat_cmp, stat_ok = compare_statistics(*stats) if stats[0] is not None else ({}, True)
+        t4 = time.time()
+        balance = {"yade": float(np.nanmax(ty.arrays()[4])), "ref": float(np.nanmax(tr.arrays()[4]))}
+        checks = {
+            "window_samples": n_win >= MIN_WINDOW,
+            "positions_in_window": win.get("max_position_diff_rel", np.inf) <= TRAJ_TOL,
+            "pressures_in_window": win.get("pressure_rel_diff", 0.0) <= PRESSURE_TOL,
+            "water_in_window": win.get("water_rel_diff", 0.0) <= TRAJ_TOL,
+            "balance": not scene.water.enabled or max(balance.values()) <= WATER_TOL,
+            "rules_rebuild_by_rebuild_in_window": same_rules,
+            "statistics_after_divergence": stat_ok,
+            "rebuilds": not scene.water.enabled or rcounts["rebuilds"] >= case.min_rebuilds,
+            "rules_fired": all(rcounts["remesh"][r] > 0 for r in case.rules),
+        }
+        out.update(features=features_of(scene), n_steps=case.n_steps, record_every=case.record_every,
+                   divergence_time_s=_finite(t_div), window_samples=n_win, window=win, balance_error=balance,
+                   perturbation_growth=float(np.max(np.abs(np.array(tp.xz) - np.array(tr.xz)))
+                                             / (PERTURBATION * mean_r)),
+                   counts={"ref": {k: v for k, v in rcounts.items() if k != "history"},
+                           "yade": {k: v for k, v in ycounts.items() if k != "history"}},
+                   statistics=stat_cmp, checks=checks,
+                   seconds={"yade": t1 - t0, "ref": t2 - t1, "ref_perturbed": t3 - t2, "statistics": t4 - t3})
+        out["yade_readings"] = readings
+        differ = {k: v for k, v in readings.items() if v != PAPER_READINGS[k]}
+        if measure_readings and differ:
+            out["reading_disagreements"] = reading_effect(case, scene, pk, tr, tp, ref_simulate, differ)
+        out["passed"] = all(checks.values())
+        if not out["passed"]:
+            out["why"] = f"FAILED {', '.join(k for k, v in checks.items() if not v)}. ({FEATURE_WHY})"
+    except Exception as e:  # a case that cannot run fails, with the reason
+        out["why"] = f"{type(e).__name__}: {e}. ({FEATURE_WHY})"
+    return out
+
+
+def reading_effect(case, scene, pk, tr, tp, ref_simulate, differ):
+    """The reference with its own readings instead of the YADE path's ``differ``: when it departs
+    from the reference with the YADE path's readings, and its statistics beside the spread."""
+    t0 = time.time()
+    ta = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=PAPER_READINGS)
+    mean_r = float(np.mean(pk.r[pk.mobile]))
+    n_div, t_div = divergence(ta, tr, mean_r)
+    n_chaos, t_chaos = divergence(tp, tr, mean_r)
+    start = min(n_chaos, len(tr.t) - 1)
+    sa = statistics(ta, start, pk, scene)
+    sr, sp = (statistics(tj, start, pk, scene) for tj in (tr, tp))
+    return {"readings": {k: {"paper": PAPER_READINGS[k], "yade": v} for k, v in differ.items()},
+            "departs_at_s": _finite(t_div), "chaotic_divergence_at_s": _finite(t_chaos),
+            "max_position_diff_rel": float(np.max(np.abs(np.array(ta.xz) - np.array(tr.xz))) / mean_r),
+            "counts_paper_readings": {k: v for k, v in ta.info["counts"].items() if k != "history"},
+            "statistics_from_chaotic_divergence_on": compare_statistics(
+                sa, sr, sp, ("paper_readings", "fast_readings", "fast_readings_perturbed"))[0] if sa else {},
+            "seconds": time.time() - t0}
 
 
 # -- running ------------------------------------------------------------------------------------------
@@ -246,13 +509,6 @@ def run_case(case, yade_simulate, ref_simulate):
         tr = ref_simulate(scene, pk, case.n_steps, case.record_every)
         t2 = time.time()
         metrics = case.analyze(ty, tr, scene, pk)
-        if case.perturb:
-            moved = pk.xz.copy()
-            mean_r = float(np.mean(pk.r))
-            moved[pk.mobile] += 1e-12 * mean_r
-            tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every)
-            diff = trajectory_diffs(tp, tr, mean_r)["max_position_diff_rel"]
-            metrics["roundoff_amplification"] = diff / 1e-12
         metrics.update(seconds_yade=t1 - t0, seconds_ref=t2 - t1)
     except Exception as e:  # a case that cannot run fails, with the reason
         out["why"] = f"{type(e).__name__}: {e}. ({case.why})"
@@ -272,16 +528,41 @@ def summary(case_result):
     return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
-def run_cases(yade_simulate, ref_simulate, cases=None, log=None):
-    """Run ``cases`` (default: all) in both implementations: {"cases": [...], "passed": bool}.
-    ``log``: optional callable given a summary line per case."""
-    cases = contact_cases() + column_cases() if cases is None else cases
-    results = []
+def run_cases(yade_simulate, ref_simulate=simulate_reference, cases=None, log=None, features=None,
+              measure_readings=False):
+    """Run ``cases`` (default: the contact cases) and ``features`` (default: feature_cases()) in both
+    implementations: {"cases": [...], "feature_cases": [...], "passed": bool}. ``ref_simulate(...,
+    readings=)`` runs the reference (feature cases: with the YADE path's wall reading); with
+    ``measure_readings`` also with its own where they differ, to measure the disagreement.
+    ``log``: optional callable given a line per case."""
+    cases = contact_cases() if cases is None else cases
+    features = feature_cases() if features is None else features
+    results, long = [], []
     for c in cases:
         results.append(run_case(c, yade_simulate, ref_simulate))
         if log:
             log(summary(results[-1]))
-    return {"cases": results, "passed": all(r["passed"] for r in results)}
+    for c in features:
+        long.append(run_feature_case(c, yade_simulate, ref_simulate, measure_readings))
+        if log:
+            log(feature_summary(long[-1]))
+    return {"cases": results, "feature_cases": long,
+            "passed": all(r["passed"] for r in results) and all(r["passed"] for r in long)}
+
+
+def feature_summary(c):
+    """One line per feature case: divergence time, window, rule counts, cost."""
+    if "checks" not in c:
+        return f"FAIL {c['name']}: {c['why']}"
+    rc = c["counts"]["ref"]
+    line = (f"{'ok  ' if c['passed'] else 'FAIL'} {c['name']}: diverges at {c['divergence_time_s']} s "
+            f"({c['window_samples']} samples compared, max dx/r {c['window'].get('max_position_diff_rel', float('nan')):.2g}), "
+            f"rebuilds {rc['rebuilds']}, rules {rc['remesh']}, separations {rc['separation']}, "
+            f"seconds {', '.join(f'{k} {v:.1f}' for k, v in c['seconds'].items())}")
+    if "reading_disagreements" in c:
+        d = c["reading_disagreements"]
+        line += f"\n     paper readings {list(d['readings'])}: depart at {d['departs_at_s']} s, max dx/r {d['max_position_diff_rel']:.2g}"
+    return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
 def precision_study(ref_simulate=simulate_reference, build=None, n_steps=2000, record_every=100):
@@ -330,13 +611,15 @@ def main(argv):
     ap.add_argument("--skip-precision", action="store_true", help="leave out the float32/longdouble study")
     args = ap.parse_args(argv)
     from engines.yade_coupling import simulate  # needs YADE: run under `yade -n -x`
-    result = run_cases(simulate, simulate_reference, log=lambda line: print(line, flush=True))
+    t0 = time.time()
+    result = run_cases(simulate, log=lambda line: print(line, flush=True), measure_readings=True)
     if not args.skip_precision:
         try:
             result["precision"] = precision_study()
         except Exception as e:
             result["precision"] = {"error": f"{type(e).__name__}: {e}"}
         print("precision:", json.dumps(result["precision"], indent=1), flush=True)
+    result["seconds"] = time.time() - t0
     path = write_json(result, args.out)
     print(f"wrote {path}; {'all cases passed' if result['passed'] else 'SOME CASES FAILED'}")
     return 0 if result["passed"] else 1

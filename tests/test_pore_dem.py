@@ -1,0 +1,285 @@
+"""One model step without YADE (engines/pore_dem.py): masses, input motion, the order of a step
+(rebuilds, water steps, held pressure forces, eq 45 in the forces), observations. No YADE.
+Runs both the compiled kernels and the readable NumPy path where the water is involved."""
+import numpy as np
+import pytest
+
+from engines import pore_geometry as pg
+from engines import scene as sc
+from engines import pore_dem
+from engines.pore_dem import PoreDEM, disc_masses, input_acceleration, moving_walls
+from packing.layouts import hex_lattice
+from packing.packing import Packing
+
+R = 0.45e-3
+
+
+def scene(**tables):
+    raw = {"scene": {"name": "t"}, "material": {"g": 0.0}, "water": {"enabled": False},
+           "contact": {"separation_adjustment": False}, "numerics": {"dt": 1e-7}}
+    for table, fields in tables.items():
+        raw.setdefault(table, {}).update(fields)
+    return sc.validate(raw)
+
+
+def wet_box(seed=2, jitter=0.0):
+    """Particles on a hexagonal lattice (centres moved by up to ``jitter`` R) with random radii
+    0.85-0.95 R in a box of wall discs, open at the top."""
+    rng = np.random.default_rng(seed)
+    xz = hex_lattice(7, 6, 2 * R)
+    col, row = np.arange(len(xz)) % 7, np.arange(len(xz)) // 7
+    group = np.where(row == 0, pg.WALL_BOTTOM, np.where(col == 0, pg.WALL_LEFT, np.where(col == 6, pg.WALL_RIGHT, 0)))
+    r = np.where(group == 0, R * (0.85 + 0.1 * rng.random(len(xz))), R)
+    xz[group == 0] += jitter * R * rng.uniform(-1, 1, (int(np.sum(group == 0)), 2))
+    return Packing(xz, r, group, np.where(row == 5, 5.0, 1.0))
+
+
+def test_masses_per_unit_thickness():
+    """SPEC §1 (eq 15a's r^3 is a typo): m = rho f pi r^2, I = m r^2 / 2."""
+    pk = Packing(np.array([[0.0, 0.0], [1e-3, 0.0]]), [0.4e-3, 0.5e-3], [0, 1], [5.0, 1.0])
+    m, inertia = disc_masses(scene(material={"rho": 2000.0}), pk)
+    np.testing.assert_allclose(m, 2000.0 * np.array([5.0, 1.0]) * np.pi * np.array([0.4e-3, 0.5e-3]) ** 2, rtol=1e-15)
+    np.testing.assert_allclose(inertia, m * np.array([0.4e-3, 0.5e-3]) ** 2 / 2, rtol=1e-15)
+
+
+def test_input_acceleration_cosine_and_record(tmp_path):
+    a = input_acceleration(scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0}))
+    assert a(0.0) == 15.0 and a(0.005) == pytest.approx(0.0, abs=1e-12) and a(0.01) == pytest.approx(-15.0)
+    rec = tmp_path / "rec.txt"
+    rec.write_text("# t [s], a [g]\n0.0 0.0\n0.02 0.5\n0.04 -0.25\n")
+    a = input_acceleration(scene(loading={"type": "record", "record": str(rec), "time_scale": 0.5, "amplitude_scale": 2.0}))
+    g0 = 9.80665
+    assert a(0.005) == pytest.approx(0.5 * 2.0 * 0.5 * g0, rel=1e-12)   # halfway to the 2nd sample at t = 0.01
+    assert a(0.01) == pytest.approx(2.0 * 0.5 * g0, rel=1e-12)
+    assert a(0.02) == pytest.approx(-2.0 * 0.25 * g0, rel=1e-12)
+    assert a(0.03) == 0.0                                               # after the record
+    assert input_acceleration(scene()) is None
+    one = tmp_path / "one.txt"
+    one.write_text("0.0 0.2\n")                                        # a record of one sample
+    a = input_acceleration(scene(loading={"type": "record", "record": str(one)}))
+    assert a(0.0) == pytest.approx(0.2 * g0) and a(1.0) == 0.0
+    with pytest.raises(ValueError, match=r"\[loading\] record"):
+        input_acceleration(scene(loading={"type": "record", "record": str(tmp_path / "missing.txt")}))
+
+
+def test_wall_velocity_integrates_the_input():
+    s = scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0, "moves": "box"},
+              numerics={"dt": 1e-6})
+    pk = wet_box()
+    core = PoreDEM(s, pk)
+    np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
+    for _ in range(30):
+        core.step(pk.xz)
+    expected = sum(15.0 * np.cos(2 * np.pi * 50.0 * k * 1e-6) * 1e-6 for k in range(30))
+    assert core.wall_velocity == pytest.approx(expected, rel=1e-13)
+    np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
+    assert not moving_walls(scene(), pk).any()
+
+
+def test_bad_numerics_are_refused():
+    pk = wet_box()
+    with pytest.raises(ValueError, match=r"\[numerics\] dt"):
+        PoreDEM(scene(numerics={"dt": 1e-3}), pk)
+    with pytest.raises(ValueError, match="damping_eq44"):
+        PoreDEM(scene(numerics={"damping_eq44": True}), pk)
+
+
+def wet_scene(rebuild_interval=4, **water):
+    return scene(water={"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, **water},
+                 numerics={"dt": 1e-6, "rebuild_interval": rebuild_interval, "water_interval": 3})
+
+
+def moving_positions(pk, k):
+    """A smooth made-up motion of the particles (walls fixed), the same for every run."""
+    xz = pk.xz.copy()
+    mob = pk.mobile
+    phase = np.arange(len(xz))[mob]
+    xz[mob, 0] += 2e-3 * R * k * np.sin(phase)
+    xz[mob, 1] += 2e-3 * R * k * np.cos(1.3 * phase)
+    return xz
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_step_order_rebuilds_water_steps_and_held_forces(compiled):
+    """Rebuilds at k > 0, k % rebuild_interval == 0; water advanced only at k % water_interval == 0
+    and by water_interval dt; the pressure forces of eq 33 recomputed then and held in between."""
+    pk = wet_box()
+    core = PoreDEM(wet_scene(q_w=1e-4), pk, compiled)
+    dry = PoreDEM(scene(numerics={"dt": 1e-6}), pk, compiled)
+    W_seen, F_seen = [], []
+    for k in range(10):
+        xz = moving_positions(pk, k)
+        F, _ = core.step(xz)
+        W_seen.append(core.water.total_water())
+        F_seen.append(core.water_model.F.copy())
+        np.testing.assert_allclose(F, dry.step(xz)[0] + core.water_model.F, rtol=1e-13, atol=1e-18)  # law + water
+        assert core.water_model.n_rebuilds == k // 4
+    water_steps = [k for k in range(10) if k % 3 == 0]
+    for k in range(1, 10):
+        if k in water_steps or k % 4 != 0:    # (a rebuild may recompute W by eq 32: either way)
+            assert (W_seen[k] != W_seen[k - 1]) == (k in water_steps), k
+        assert np.array_equal(F_seen[k], F_seen[k - 1]) == (k not in water_steps), k
+    n_bottom = int(np.sum(core.water.net.pore_touches["bottom"]))
+    assert core.water.balance.inflow == pytest.approx(len(water_steps) * 3 * 1e-6 * 1e-4 * n_bottom, rel=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_pressure_forces_use_the_area_of_eq45(compiled):
+    """With smoothing the forces of eq 33 come from U of eq 32 at the area actually used
+    ([A]_t = ([A]_{t-dt} + A'_t)/2), the same U that drives the flows."""
+    pk = wet_box()
+    s = wet_scene(rebuild_interval=1000, smoothing=True)
+    core = PoreDEM(s, pk, compiled)
+    A_used = pg.measure(core.water.net, pk.xz, core.r).void_area
+    for k in range(3):
+        xz = moving_positions(pk, 3 * k)
+        core.step(xz)
+        m = pg.measure(core.water.net, xz, core.r)
+        A_used = (A_used + m.void_area) / 2
+        expected = pg.pressure_forces(core.water.net, core.r, core.water.pressure(A_used), m)
+        np.testing.assert_allclose(core.water_model.F, expected, rtol=1e-12, atol=1e-18)
+        core.step(xz)
+        core.step(xz)   # two steps without a water step: the force is held
+    raw = pg.pressure_forces(core.water.net, core.r, core.water.pressure(m.void_area), m)
+    assert np.abs(raw - core.water_model.F).max() > 1e-6 * np.abs(raw).max()   # smoothing made a difference
+
+
+def test_dry_scene_has_no_water_and_nan_pressures():
+    pk = wet_box()
+    s = scene()
+    core = PoreDEM(s, pk)
+    assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
+    assert pore_dem.water_model(s, pk) is None
+    bounds = pk.block_bounds(s.output.block_z)
+    assert np.all(np.isnan(pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)))
+    F, fixes = core.step(pk.xz)
+    assert np.all(np.isfinite(F)) and fixes == {}
+
+
+def test_block_pressures_are_means_of_the_pores_in_each_block():
+    pk = wet_box()
+    s = wet_scene()
+    core = PoreDEM(s, pk)
+    rng = np.random.default_rng(0)
+    core.water.W = core.water.W * (1 + 0.1 * rng.random(core.water.net.n_pores))
+    net, m, U = pore_dem.pore_state(core.water, pk.xz, pk.r)
+    np.testing.assert_allclose(m.void_area, pg.measure(net, pk.xz, pk.r).void_area, rtol=1e-15)
+    np.testing.assert_allclose(U, s.water.E_w * (1 - m.void_area / core.water.W), rtol=1e-12)   # eq 32
+    cz = pg.pore_centroids(net, pk.xz)[:, 1]
+    bounds = pk.block_bounds(s.output.block_z)
+    got = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert len(got) == len(bounds)
+    for (z0, z1), g in zip(bounds, got):
+        sel = (cz >= z0) & (cz < z1)
+        assert sel.any() and g == pytest.approx(U[sel].mean(), rel=1e-14)
+
+
+def test_porosity_of_a_hexagonal_lattice_is_exact():
+    """Void / polygon area of the pores of a touching hexagonal lattice: 1 - pi / (2 sqrt 3)."""
+    xz = hex_lattice(6, 5, 2 * R)
+    pk = Packing(xz, np.full(len(xz), R), np.zeros(len(xz), int), np.ones(len(xz)))
+    assert pore_dem.porosity(scene(), pk, xz) == pytest.approx(1 - np.pi / (2 * np.sqrt(3)), rel=1e-12)
+    far = Packing(np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, R), [0, 0], [1.0, 1.0])
+    assert np.isnan(pore_dem.porosity(scene(), far, far.xz))   # no pore: no porosity
+
+
+def test_kinetic_energy_with_spin_of_the_mobile_discs():
+    """1/2 m v^2 + 1/2 I omega^2 summed over the particles only (walls excluded)."""
+    mass, inertia = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
+    mobile = np.array([False, True, True])
+    vel = np.array([[9.0, 9.0], [3.0, 4.0], [0.0, -2.0]])
+    omega = np.array([5.0, 7.0, -1.0])
+    expected = 0.5 * (2.0 * 25.0 + 3.0 * 4.0) + 0.5 * (0.2 * 49.0 + 0.3 * 1.0)
+    assert pore_dem.kinetic_energy(mass, inertia, mobile, vel, omega) == pytest.approx(expected, rel=1e-15)
+
+
+def test_a_disc_pressed_into_a_wall_feels_the_spring():
+    """A free disc overlapping a bottom wall disc by 1e-7 m: the step's force is kn x overlap
+    upwards (spring a, no dashpot at rest), the pair is listed with that normal force."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    F, _ = core.step(pk.xz)
+    assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
+    pairs, fn = core.contact.contact_pairs()
+    assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
+    moved = pk.xz.copy()
+    moved[1, 1] += 3e-9
+    core.step(moved)
+    np.testing.assert_allclose(core.du, [[0.0, 0.0], [0.0, 3e-9]], atol=1e-20)   # eq 17: du of the step
+
+
+def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
+    """Eq 18-23 through the step: a disc that hit a wall disc at 0.1 m/s and leaves it at 0.1 m/s
+    comes back with -Vn''/Vn = e."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    xz = pk.xz.copy()
+    core.step(xz.copy())
+    xz[1, 1] = 2 * R - 5e-9                 # approach at 0.1 m/s: contact
+    _, fixes = core.step(xz.copy())
+    assert fixes == {}
+    xz[1, 1] = 2 * R + 5e-9                 # leave at 0.1 m/s: free again
+    _, fixes = core.step(xz.copy())
+    assert set(fixes) == {1}
+    np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6)
+    # the caller's velocities, when given, are the ones adjusted (YADE's state.vel instead of du/dt)
+    twin = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        twin.step(np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes = twin.step(xz.copy(), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+@pytest.mark.parametrize("variant", ["inflow_smoothing", "shaken_drained_d"])
+def test_steps_match_the_reference_without_yade(variant):
+    """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
+    x += v dt, walls at the input velocity, adjusted velocities set before) follows the independent
+    reference (with PoreDEM's wall kinematics, READINGS D1) disc by disc: contact law, spin,
+    separation adjustment, pore rebuilds, water steps every water_interval, smoothing, drained
+    sides, inflow and input."""
+    from engines import reference as ref
+    water = {"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, "l_m": 1.3e-4}
+    if variant == "inflow_smoothing":
+        tables = dict(water={**water, "q_w": 2e-3, "smoothing": True}, contact={"spring": "c", "separation_adjustment": True})
+        loading = {}
+    else:
+        tables = dict(water={**water, "sides": "drained", "k3": 500.0},
+                      contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
+        loading = {"type": "cosine", "amplitude": 30.0, "frequency": 200.0, "moves": "box"}
+    s = scene(material={"g": 1000.0}, loading=loading, numerics={"dt": 1e-6, "rebuild_interval": 25, "water_interval": 2},
+              **tables)
+    pk = wet_box(seed=5, jitter=0.05)
+    core = PoreDEM(s, pk)
+    moving = moving_walls(s, pk)
+    model = ref.ReferenceModel(s.as_dict(), pk, readings={"wall_step": "symplectic_euler"})  # PoreDEM.wall_velocity
+    m, _ = disc_masses(s, pk)
+    mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
+    up = s.material.rho_w * np.pi * pk.r**2 * g
+    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
+    moved = 0.0
+    for _ in range(400):
+        F, fixes = core.step(x.copy())
+        for d, vel in fixes.items():
+            v[d] = vel
+        v[mob, 0] += F[mob, 0] / m[mob] * dt
+        v[mob, 1] += ((F[mob, 1] + up[mob]) / m[mob] - g) * dt
+        v[moving] = [core.wall_velocity, 0.0]
+        step = mob | moving
+        x[step] += v[step] * dt
+        model.step()
+        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
+        np.testing.assert_allclose(core.omega[mob], model.omega[mob], rtol=1e-9, atol=1e-9 * np.abs(model.omega).max())
+        moved = max(moved, np.abs(x - pk.xz).max())
+    np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
+    assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
+    assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
+
+
+def test_rebuild_every_step_when_asked():
+    pk = wet_box()
+    core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}), pk)
+    for k in range(4):
+        core.step(moving_positions(pk, k))
+    assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)

@@ -1,0 +1,410 @@
+"""`make biaxial`: seed 003's study (Murakami et al. §3) through the sweep runner.
+
+    /usr/bin/python3 yade_scripts/biaxial_study.py --out out/biaxial [--workers 2] [--scheduler ADDR]
+                     [--parts main,rate,dt,discs,stiffness,sideload,stability,calibration] [--seeds 1,2,3]
+                     [--analyse-only] [--quick]
+
+Runs yade_scripts/biaxial.py jobs (one directory each under OUT/runs/, resumable) on the paper's
+specimen (Table 1: 1000 discs; Table 2: kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, Δt = 0.5e-4 s,
+100 %/min), every point on 3 packings (seeds):
+    main        φe = 5, 10, 15° × σ3 = 100, 200, 300, 400 Pa (Fig. 9–12, 15, 19–21)
+    rate        axial strain rate 25, 50, 100, 200, 400 %/min at φe = 10°, σ3 = 200 Pa (Fig. 5)
+    dt          Δt = 0.25e-4, 0.5e-4, 1e-4 s in the test (packed at 0.5e-4) (Fig. 6)
+    discs       125, 250, 500, 1000 discs (Fig. 7–8)
+    stiffness   kn ×0.5, ×2 and ks/kn ×0.5, ×2 (Fig. 13–14, 17)
+    sideload    φe = 15° with σ3 on every side disc's diameter (the paper's words read literally)
+    stability   time steps and contact widths at which a packed specimen stays at rest
+                (yade_scripts/biaxial_stability.py on the reference packing of the first seed)
+    calibration target φ*, E50 → φe, kn (eq 5–6) → the biaxial test again (yade_scripts/calibrate.py)
+then writes into OUT: study.json (every number), fit.json (the eq 2/4 curves calibrate.py reads),
+table.md (side by side with the paper, and the time steps) and the figures fig05_strain_rate.png, fig06_dt.png,
+fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png, fig13_kn.png, fig14_ks.png,
+fig18_sigma3_over_kn.png,
+fig15_e50_sigma3.png, fig19_eq4.png, fig20_21_A_m.png.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+import numpy as np  # noqa: E402
+
+from engines.biaxial import Curve, mohr_coulomb_fit  # noqa: E402
+from engines.calibration import Calibration, eq4_e50, fit_eq4  # noqa: E402
+from yade_scripts.sweep import Job, run_sweep  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIAXIAL = os.path.join(ROOT, "yade_scripts", "biaxial.py")
+STABILITY = os.path.join(ROOT, "yade_scripts", "biaxial_stability.py")
+PARTS = ("main", "rate", "dt", "discs", "stiffness", "sideload", "stability", "calibration")
+PHI_E = (5.0, 10.0, 15.0)
+SIGMA3 = (100.0, 200.0, 300.0, 400.0)
+KN = 1e8
+KS = 0.25
+SENS_PHI, SENS_SIGMA3, SENS_STRAIN = 10.0, 200.0, 4.0  # the paper's sensitivity runs (§3(1)–(2), Fig. 13–14)
+RATES = (25.0, 50.0, 200.0, 400.0)                       # %/min, besides the reference 100
+DTS = (2.5e-5, 1e-4)                                     # s, besides the reference 0.5e-4
+DISCS = (125, 250, 500)                                  # besides the reference 1000
+KNS = (0.5e8, 2e8)
+KSS = (0.125, 0.5)
+PAPER = {"phi_star_deg": {15.0: 27.4}, "c_star_pa": {15.0: 0.4}, "peak_deviator_200_pa": {5.0: 140.0, 10.0: 240.0, 15.0: 330.0}}
+CALIBRATION_TARGET_SIGMA3 = 250.0  # Pa: between the study's σ3, so the round trip interpolates in σ3 too
+
+
+QUICK = {"n_discs": 150, "max_strain": 1.5, "strain_rate": 400.0}  # --quick: a pipeline check, not a result
+
+
+def biaxial_job(name, yade=("yade", "-n"), quick=False, **options):
+    """A biaxial.py job; options by their long names (phi_e=10 → --phi-e 10). ``quick`` puts
+    QUICK's small specimen, short test and fast rate in place of the paper's where the job
+    does not study that knob."""
+    if quick:
+        options = {**options, **{k: v for k, v in QUICK.items() if k not in options or k == "max_strain"}}
+    argv = [*yade, "-x", BIAXIAL, "--out", "{out}"]
+    for k, v in options.items():
+        argv += ["--" + k.replace("_", "-"), ",".join(f"{x:g}" for x in v) if isinstance(v, (tuple, list)) else f"{v:g}"
+                 if isinstance(v, float) else str(v)]
+    return Job(name, argv)
+
+
+def sensitivity(seed, quick=False, **changes):
+    """A φe = 10°, σ3 = 200 Pa run to 4 % with one knob changed from the paper's values."""
+    opts = dict(phi_e=SENS_PHI, sigma3=SENS_SIGMA3, max_strain=SENS_STRAIN, seed=seed)
+    opts.update(changes)
+    return biaxial_job(sensitivity_name(seed, **changes), quick=quick, **opts)
+
+
+def sensitivity_name(seed, **changes):
+    label = "_".join(f"{k}{v:g}" if isinstance(v, float) else f"{k}{v}" for k, v in changes.items()) or "reference"
+    return f"sens_{label}_seed{seed}"
+
+
+def stage1_jobs(parts, seeds, quick=False):
+    """All jobs that do not need the study's results, longest first."""
+    jobs = []
+    sens = lambda s, **c: sensitivity(s, quick=quick, **c)  # noqa: E731
+    if "rate" in parts:
+        jobs += [sens(s, strain_rate=r) for r in RATES[:2] for s in seeds]
+    if "main" in parts:
+        jobs += [biaxial_job(f"main_phi{p:g}_seed{s}", quick=quick, phi_e=p, sigma3=SIGMA3, max_strain=5.0, seed=s)
+                 for p in PHI_E for s in seeds]
+    if "sideload" in parts:
+        jobs += [biaxial_job(f"sideload_diameter_seed{s}", quick=quick, phi_e=15.0, sigma3=(100.0, 400.0),
+                             max_strain=5.0, side_load="diameter", seed=s) for s in seeds]
+    if parts & {"rate", "dt", "discs", "stiffness", "stability"}:
+        jobs += [sens(s) for s in seeds]
+    if "dt" in parts:
+        jobs += [sens(s, dt=dt, packing_dt=5e-5) for dt in DTS for s in seeds]
+    if "stiffness" in parts:
+        jobs += [sens(s, kn=k) for k in KNS for s in seeds] + [sens(s, ks_ratio=k) for k in KSS for s in seeds]
+    if "rate" in parts:
+        jobs += [sens(s, strain_rate=r) for r in RATES[2:] for s in seeds]
+    if "discs" in parts:
+        jobs += [sens(s, n_discs=n) for n in DISCS for s in seeds]
+    return jobs
+
+
+def stability_job(runs, seed):
+    """biaxial_stability.py on the reference packing of ``seed`` (it must have run)."""
+    block = os.path.join(os.path.abspath(runs), sensitivity_name(seed), f"packing_sigma3_{SENS_SIGMA3:g}")
+    return Job("stability", ("yade", "-n", "-x", STABILITY, "--block", block, "--out", "{out}"))
+
+
+# ---- reading the runs ------------------------------------------------------------------------
+
+def read_run(runs, name):
+    """(summary, {σ3: Curve}) of a finished run, or (None, {}) if it failed without results."""
+    path = os.path.join(runs, name)
+    try:
+        with open(os.path.join(path, "summary.json")) as f:
+            summary = json.load(f)
+    except OSError:
+        return None, {}
+    d = np.loadtxt(os.path.join(path, "curves.csv"), delimiter=",", skiprows=1, ndmin=2)
+    curves = {}
+    for s3 in np.unique(d[:, 0]):
+        m = d[:, 0] == s3
+        curves[float(s3)] = Curve(float(s3), d[m, 1], d[m, 3], d[m, 4], d[m, 5], d[m, 6] - d[m, 1])
+    return summary, curves
+
+
+def job_status(runs, name):
+    try:
+        with open(os.path.join(runs, name, "job.json")) as f:
+            rec = json.load(f)
+    except OSError:
+        return {"status": "missing"}
+    return {k: rec.get(k) for k in ("status", "wall_s", "stderr_tail")}
+
+
+def _mean_sd(values):
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], float)
+    if len(v) == 0:
+        return {"mean": None, "sd": None, "n": 0, "values": []}
+    return {"mean": float(v.mean()), "sd": float(v.std(ddof=1)) if len(v) > 1 else 0.0, "n": int(len(v)),
+            "values": v.tolist()}
+
+
+def analyse_main(runs, seeds):
+    """φ*, c*, peaks and E50 per φe and seed; the eq 4 fits."""
+    out = {"per_phi_e": {}, "points": [], "fits": {}, "rows": []}
+    for p in PHI_E:
+        per = {"phi_star_deg": [], "c_star_pa": [], "peak": {s3: [] for s3 in SIGMA3}, "e50": {s3: [] for s3 in SIGMA3},
+               "peak_strain": {s3: [] for s3 in SIGMA3}, "peak_at_end": 0, "curves": {}}
+        for s in seeds:
+            summary, curves = read_run(runs, f"main_phi{p:g}_seed{s}")
+            if summary is None or "error" in summary:
+                continue
+            s3s = sorted(curves)
+            phi, c_star = mohr_coulomb_fit(s3s, [s3 + curves[s3].peak()[1] for s3 in s3s])
+            per["phi_star_deg"].append(phi)
+            per["c_star_pa"].append(c_star)
+            out["rows"].append({"phi_e_deg": p, "seed": s, "phi_star_deg": phi, "c_star_pa": c_star})
+            per["curves"][s] = curves
+            for s3, c in sorted(curves.items()):  # peak and E50 from the records (engines.biaxial)
+                eps_f, q_f = c.peak()
+                per["peak"][s3].append(q_f)
+                per["e50"][s3].append(c.e50())
+                per["peak_strain"][s3].append(eps_f)
+                per["peak_at_end"] += int(eps_f >= c.strain[-1] - 0.001)
+                out["points"].append({"phi_e_deg": p, "seed": s, "sigma3_pa": s3, "kn": KN, "e50_pa": c.e50(),
+                                      "peak_deviator_pa": q_f})
+        pts = [x for x in out["points"] if x["phi_e_deg"] == p]
+        if len(pts) >= 2:
+            out["fits"][p] = fit_eq4([x["sigma3_pa"] for x in pts], [x["kn"] for x in pts], [x["e50_pa"] for x in pts])
+        out["per_phi_e"][p] = per
+    return out
+
+
+def analyse_sensitivity(runs, seeds):
+    """Peak, E50 and φ (line through the origin, c* = 0) at σ3 = 200 Pa for each knob's value."""
+    groups = {"strain_rate_pct_min": ("strain_rate", RATES, 100.0), "dt_s": ("dt", DTS, 5e-5),
+              "n_discs": ("n_discs", DISCS, 1000), "kn_pa_per_m": ("kn", KNS, KN), "ks_ratio": ("ks_ratio", KSS, KS)}
+    out = {}
+    for label, (opt, values, ref) in groups.items():
+        res = {}
+        for v in sorted((*values, ref)):
+            cells = {"peak_deviator_pa": [], "e50_pa": [], "phi0_deg": [], "failed": [], "curves": [], "wall_s": []}
+            for s in seeds:
+                changes = {} if v == ref else {opt: v, **({"packing_dt": 5e-5} if opt == "dt" else {})}
+                name = sensitivity_name(s, **changes)
+                summary, curves = read_run(runs, name)
+                st = job_status(runs, name)
+                if st["status"] != "ok" or summary is None or "error" in summary:
+                    cells["failed"].append({"seed": s, "status": st["status"],
+                                            "reason": (st.get("stderr_tail") or "").strip().splitlines()[-1:]})
+                    continue
+                c = curves[SENS_SIGMA3]
+                q_f = c.peak()[1]
+                cells["peak_deviator_pa"].append(q_f)
+                cells["e50_pa"].append(c.e50())
+                cells["phi0_deg"].append(math.degrees(math.asin(q_f / (q_f + 2 * SENS_SIGMA3))))  # c* = 0
+                cells["curves"].append(c)
+                cells["wall_s"].append(summary["wall_s"])
+            res[v] = cells
+        out[label] = res
+    return out
+
+
+# ---- the study -------------------------------------------------------------------------------
+
+def calibration_from(main):
+    """fit.json: φ*(φe) means and A(φe), m(φe) (eq 2, 4) from the main grid."""
+    pe = [p for p in PHI_E if p in main["fits"] and main["per_phi_e"][p]["phi_star_deg"]]
+    return Calibration(pe, [float(np.mean(main["per_phi_e"][p]["phi_star_deg"])) for p in pe],
+                       [main["fits"][p][0] for p in pe], [main["fits"][p][1] for p in pe], KN, KS)
+
+
+def calibration_target(cal):
+    """A target inside the studied range and off its grid: φ* halfway between the φe = 10° and
+    15° grounds, and the E50 at σ3 = 250 Pa that eq 4 gives there for kn = 1.5e8 Pa/m."""
+    phi_star = 0.5 * (cal.phi_star[-2] + cal.phi_star[-1])
+    A, m = cal.eq4_at(cal.phi_e_for(phi_star))
+    return phi_star, float(eq4_e50(CALIBRATION_TARGET_SIGMA3, 1.5e8, A, m)), CALIBRATION_TARGET_SIGMA3
+
+
+def _num(x, fmt="{:.1f}"):
+    return "–" if x is None else fmt.format(x)
+
+
+def write_table(study, path):
+    """The side-by-side table with the paper (markdown)."""
+    m, sens, cal = study["main"], study["sensitivity"], study.get("calibration")
+    lines = ["| quantity | paper | this model (mean ± s.d. over packings) |", "|---|---|---|"]
+    p15 = m["phi_star_deg"].get("15.0", m["phi_star_deg"].get(15.0))
+    c15 = m["c_star_pa"].get("15.0", m["c_star_pa"].get(15.0))
+    if p15:
+        lines.append(f"| φ* at φe = 15° | 27.4° | {p15['mean']:.1f}° ± {p15['sd']:.1f}° (n = {p15['n']}) |")
+        lines.append(f"| c* at φe = 15° | 0.4 Pa | {c15['mean']:.1f} ± {c15['sd']:.1f} Pa |")
+    for p, paper in PAPER["peak_deviator_200_pa"].items():
+        q = m["peak_deviator_pa"].get(f"{p}", {}).get("200.0")
+        if q:
+            lines.append(f"| peak deviator, σ3 = 200 Pa, φe = {p:g}° | ≈ {paper:g} Pa | {q['mean']:.0f} ± {q['sd']:.0f} Pa |")
+    for p in PHI_E:
+        v = m["phi_star_deg"].get(f"{p}")
+        if v:
+            lines.append(f"| φ* at φe = {p:g}° (Fig. 12) | rises with φe | {v['mean']:.1f}° ± {v['sd']:.1f}° |")
+    for label, key in (("kn", "kn_pa_per_m"), ("ks/kn", "ks_ratio")):
+        g = sens.get(key, {})
+        cells = [f"{label} = {float(v):g}: {c['phi0']['mean']:.1f}°" for v, c in g.items() if c["phi0"]["mean"] is not None]
+        if cells:
+            lines.append(f"| φ (σ3 = 200 Pa, c* = 0), {label} ×0.5–2 (Fig. 13–14) | hardly changes | {'; '.join(cells)} |")
+    if cal and cal.get("verified"):
+        v = cal["verified"]
+        lines.append(f"| calibration round trip: φ* | within 10 % | target {cal['target']['phi_star_deg']:.2f}°, "
+                     f"got {v['phi_star_deg']['mean']:.2f}° ({100 * v['phi_star_error']:+.1f} %) |")
+        lines.append(f"| calibration round trip: E50 at σ3 = {cal['target']['sigma3_pa']:g} Pa | within 10 % | "
+                     f"target {cal['target']['e50_pa']:.4g} Pa, got {v['e50_pa']['mean']:.4g} Pa "
+                     f"({100 * v['e50_error']:+.1f} %) |")
+    if study.get("stability"):
+        st = study["stability"]
+        lines += ["", f"Time steps ({st['n_discs']} discs packed at 0.5e-4 s, left at rest {st['rest_time_s']:g} s):", "",
+                  "| contact width / harmonic-mean radius | kn [Pa/m] | ks/kn | Δt [s] | unbalanced force ratio | "
+                  "σ change over the last half | outcome |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {c['width_factor']:g} | {c['kn_pa_per_m']:.0e} | {c['ks_ratio']:g} | {c['dt_s']:.2e} | "
+                  f"{c['unbalanced']:.1e} | {100 * c['stress_change']:.2f} % | {c['outcome']} |" for c in st["cases"]]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return "\n".join(lines)
+
+
+def figures(out, main, sens):
+    from postproc.biaxial_plots import (plot_A_m, plot_e50_sigma3, plot_eq4, plot_phi_star, plot_sensitivity,
+                                        plot_sigma3_kn_collapse, plot_study_curves)
+
+    if main["rows"]:
+        plot_phi_star(main["rows"], {15.0: 27.4}, os.path.join(out, "fig12_phi_star.png"))
+        plot_e50_sigma3(main["points"], os.path.join(out, "fig15_e50_sigma3.png"))
+        plot_study_curves(main["per_phi_e"], os.path.join(out, "fig09_11_curves.png"))
+    if main["fits"]:
+        kn_points = [{"phi_e_deg": SENS_PHI, "sigma3_pa": SENS_SIGMA3, "kn": float(k), "e50_pa": e}
+                     for k, c in sens["kn_pa_per_m"].items() for e in c["e50_pa"] if float(k) != KN]
+        plot_eq4(main["points"], main["fits"], os.path.join(out, "fig19_eq4.png"), extra=kn_points)
+        plot_A_m(main["fits"], os.path.join(out, "fig20_21_A_m.png"))
+    pairs = {}  # Fig. 18: the kn runs at σ3 = 200 Pa against the main grid's φe = 10° at the same σ3/kn
+    for kn, s3 in ((2e8, 100.0), (0.5e8, 400.0)):
+        main_curves = [c[s3] for c in main["per_phi_e"].get(SENS_PHI, {}).get("curves", {}).values() if s3 in c]
+        kn_curves = sens["kn_pa_per_m"].get(kn, {}).get("curves", [])
+        if main_curves and kn_curves:
+            pairs[s3 / KN] = {f"kn = {KN:.0e}, σ3 = {s3:g} Pa": main_curves,
+                              f"kn = {kn:.0e}, σ3 = {SENS_SIGMA3:g} Pa": kn_curves}
+    if pairs:
+        plot_sigma3_kn_collapse(pairs, os.path.join(out, "fig18_sigma3_over_kn.png"))
+    for key, fname, title, label in [
+            ("strain_rate_pct_min", "fig05_strain_rate.png", "axial strain rate (Fig. 5)", "strain rate [%/min]"),
+            ("dt_s", "fig06_dt.png", "time step (Fig. 6)", "Δt [s]"),
+            ("n_discs", "fig08_discs.png", "number of discs (Fig. 8)", "discs"),
+            ("kn_pa_per_m", "fig13_kn.png", "kn (Fig. 13)", "kn [Pa/m]"),
+            ("ks_ratio", "fig14_ks.png", "ks/kn (Fig. 14)", "ks/kn")]:
+        groups = {float(v): c["curves"] for v, c in sens[key].items() if c["curves"]}
+        failed = {float(v): len(c["failed"]) for v, c in sens[key].items() if c["failed"]}
+        if groups:
+            plot_sensitivity(groups, os.path.join(out, fname),
+                             f"φe = {SENS_PHI:g}°, σ3 = {SENS_SIGMA3:g} Pa: {title}", label, failed)
+
+
+def summarise(main, sens, seeds):
+    """study.json's numbers (curves left out)."""
+    m = {"phi_star_deg": {}, "c_star_pa": {}, "peak_deviator_pa": {}, "e50_pa": {}, "peak_strain": {}, "eq4": {},
+         "peaks_at_end_of_test": {}}
+    for p, per in main["per_phi_e"].items():
+        m["phi_star_deg"][f"{p}"] = _mean_sd(per["phi_star_deg"])
+        m["c_star_pa"][f"{p}"] = _mean_sd(per["c_star_pa"])
+        m["peak_deviator_pa"][f"{p}"] = {f"{s3}": _mean_sd(v) for s3, v in per["peak"].items()}
+        m["e50_pa"][f"{p}"] = {f"{s3}": _mean_sd(v) for s3, v in per["e50"].items()}
+        m["peak_strain"][f"{p}"] = {f"{s3}": _mean_sd(v) for s3, v in per["peak_strain"].items()}
+        m["peaks_at_end_of_test"][f"{p}"] = per["peak_at_end"]
+        if p in main["fits"]:
+            m["eq4"][f"{p}"] = {"A": main["fits"][p][0], "m": main["fits"][p][1]}
+    s = {}
+    for key, res in sens.items():
+        s[key] = {f"{v:g}": {"peak_deviator_pa": _mean_sd(c["peak_deviator_pa"]), "e50_pa": _mean_sd(c["e50_pa"]),
+                             "phi0": _mean_sd(c["phi0_deg"]), "wall_s": _mean_sd(c["wall_s"]), "failed": c["failed"]}
+                  for v, c in res.items()}
+    return {"seeds": list(seeds), "main": m, "sensitivity": s}
+
+
+def timing(runs):
+    """Cost of the runs: wall seconds per job, and per test the time per step (1000 discs)."""
+    jobs, per_step = {}, []
+    for name in sorted(os.listdir(runs)) if os.path.isdir(runs) else []:
+        rec = job_status(runs, name)
+        if rec["status"] in ("ok", "failed") and rec.get("wall_s") is not None:
+            jobs[name] = rec["wall_s"]
+        summary, _ = read_run(runs, name)
+        if summary and summary["parameters"]["n_discs"] == 1000:
+            per_step += [1e6 * q["wall_s"] / q["steps"] for q in summary["per_sigma3"]]  # equilibrium + test
+    main = [w for n, w in jobs.items() if n.startswith("main_")]
+    return {"jobs": len(jobs), "cpu_h": sum(jobs.values()) / 3600, "main_job_wall_s": _mean_sd(main),
+            "us_per_step_1000_discs": _mean_sd(per_step), "wall_s": jobs}
+
+
+def calibration_round_trip(runs, cal, seeds, workers, scheduler, run=True, quick=False):
+    """eq 5–6 for calibration_target, the verification runs (unless ``run`` is False: read what
+    is there), and the record comparing what they give with the target."""
+    from yade_scripts.calibrate import verification_jobs, verify
+
+    target = calibration_target(cal)
+    phi_e, kn = cal.invert(*target)
+    jobs = verification_jobs(phi_e, kn, target[2], seeds, prefix="calibration", quick=quick)
+    if run:
+        run_sweep(jobs, runs, workers=workers, scheduler=scheduler)
+    rec = verify(runs, jobs, target)
+    rec.update(target={"phi_star_deg": target[0], "e50_pa": target[1], "sigma3_pa": target[2]},
+               inverted={"phi_e_deg": phi_e, "kn_pa_per_m": kn})
+    return rec
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default="out/biaxial", help="output directory (runs in OUT/runs)")
+    ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
+    ap.add_argument("--scheduler", help="Dask scheduler address: run the jobs on that cluster")
+    ap.add_argument("--parts", default=",".join(PARTS), help="comma-separated parts of the study (default: all)")
+    ap.add_argument("--seeds", default="1,2,3", help="packings per point (placement seeds)")
+    ap.add_argument("--analyse-only", action="store_true", help="do not run anything, analyse what is there")
+    ap.add_argument("--quick", action="store_true",
+                    help="150 discs, 1.5 %% strain, 400 %%/min: checks the pipeline in minutes (numbers meaningless)")
+    a = ap.parse_args(argv)
+    parts = set(a.parts.split(","))
+    unknown = parts - set(PARTS)
+    if unknown:
+        ap.error(f"--parts: unknown {', '.join(sorted(unknown))}")
+    seeds = [int(s) for s in a.seeds.split(",")]
+    runs = os.path.join(a.out, "runs")
+    if not a.analyse_only:
+        jobs = stage1_jobs(parts, seeds, a.quick)
+        run_sweep(jobs, runs, workers=a.workers, scheduler=a.scheduler)
+        if "stability" in parts:
+            run_sweep([stability_job(runs, seeds[0])], runs, workers=a.workers, scheduler=a.scheduler)
+    main_res = analyse_main(runs, seeds)
+    sens = analyse_sensitivity(runs, seeds)
+    study = summarise(main_res, sens, seeds)
+    study["timing"] = timing(runs)
+    try:
+        with open(os.path.join(runs, "stability", "stability.json")) as f:
+            study["stability"] = json.load(f)
+    except OSError:
+        pass
+    if len(main_res["fits"]) >= 2:
+        cal = calibration_from(main_res)
+        cal.save(os.path.join(a.out, "fit.json"))
+        study["fit"] = {"phi_e": cal.phi_e, "phi_star": cal.phi_star, "A": cal.A, "m": cal.m, "kn": cal.kn}
+        if "calibration" in parts:
+            try:
+                study["calibration"] = calibration_round_trip(runs, cal, seeds, a.workers, a.scheduler,
+                                                              run=not a.analyse_only, quick=a.quick)
+            except ValueError as e:
+                study["calibration"] = {"error": str(e)}
+    figures(a.out, main_res, sens)
+    with open(os.path.join(a.out, "study.json"), "w") as f:
+        json.dump(study, f, indent=1)
+    print(write_table(study, os.path.join(a.out, "table.md")))
+
+
+if __name__ == "__main__":
+    main()
