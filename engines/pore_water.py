@@ -80,6 +80,10 @@ class WaterBalance:
     surface_outflow: float = 0.0
     side_outflow: float = 0.0
     remesh_change: float = 0.0   # W recomputed from inherited U and new A at re-meshing (eq 32)
+    # the part of remesh_change that is excess water X = W - A = W U / E_w (the water that carries
+    # the pressure): what the transfer rule itself creates or destroys, without the void gained or
+    # lost where the covered region changes (a free surface moving), which holds water at U = 0
+    remesh_excess_change: float = 0.0
 
     def expected(self):
         return self.initial + self.inflow - self.surface_outflow - self.side_outflow + self.remesh_change
@@ -253,6 +257,7 @@ class PoreWater:
         else:
             W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
         self.balance.remesh_change += float(W_new.sum() - self.W.sum())
+        self.balance.remesh_excess_change += float((W_new - A_new).sum() - (self.W - A_old).sum())
         self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
         self.remesh_counts, self.rule = counts, rule
         return counts

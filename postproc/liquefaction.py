@@ -197,6 +197,9 @@ def case_summary(run_dir):
                    transfer=summary["parameters"]["water"]["transfer"],
                    water_initial=wb["initial"], remesh_water_change=wb["remesh_change"],
                    remesh_water_change_rel=wb["remesh_change"] / wb["initial"],
+                   remesh_excess_change=wb.get("remesh_excess_change"),
+                   remesh_excess_change_rel=wb["remesh_excess_change"] / wb["initial"]
+                   if "remesh_excess_change" in wb else None,
                    side_outflow=wb["side_outflow"], surface_outflow=wb["surface_outflow"],
                    water_balance_error=summary["water_balance_error"], n_rebuilds=summary["n_rebuilds"])
     return out

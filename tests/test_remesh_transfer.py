@@ -50,6 +50,7 @@ def test_conserving_transfer_conserves_water_to_round_off():
     assert counts["unmatched"] == 0 and counts["a"] < new.n_pores  # many pores changed
     assert abs(w.total_water() - before) < 1e-13 * before
     assert abs(w.balance.remesh_change) < 1e-13 * before
+    assert abs(w.balance.remesh_excess_change) < 1e-13 * before
     assert w.balance_error() < 1e-13
     assert np.all(w.W > 0)
 
@@ -60,6 +61,20 @@ def test_paper_rule_creates_or_destroys_water_and_reports_it_exactly():
     assert abs(change) > 1e-6 * before
     assert w.balance.remesh_change == pytest.approx(change, rel=1e-12)
     assert w.balance_error() < 1e-13
+
+
+def test_remesh_excess_change_is_the_change_without_the_void_change():
+    """remesh_excess_change = change of sum(W - A): the total change less the change of the void."""
+    seen = []
+
+    def W_of(A):
+        seen.append(A.copy())
+        return A * (1 + 0.1 * np.random.default_rng(9).random(len(A)))
+
+    w, before, counts, old, new, A_new = _remesh("paper", W_of=W_of)
+    void_change = A_new.sum() - seen[0].sum()
+    assert abs(w.balance.remesh_excess_change) > 1e-6 * before
+    assert w.balance.remesh_excess_change == pytest.approx(w.total_water() - before - void_change, rel=1e-9)
 
 
 def test_conserving_transfer_keeps_a_uniform_pressure():
