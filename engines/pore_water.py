@@ -81,9 +81,13 @@ class WaterBalance:
     side_outflow: float = 0.0
     remesh_change: float = 0.0   # W recomputed from inherited U and new A at re-meshing (eq 32)
     # the part of remesh_change that is excess water X = W - A = W U / E_w (the water that carries
-    # the pressure): what the transfer rule itself creates or destroys, without the void gained or
-    # lost where the covered region changes (a free surface moving), which holds water at U = 0
+    # the pressure), without the void gained or lost where the covered region changes (a free
+    # surface moving), which holds water at U = 0
     remesh_excess_change: float = 0.0
+    # of which at the edges: X of the new pores that overlap no old pore less X of the old pores
+    # that overlap no new one (known when remesh gets the positions); the rest, where old and new
+    # pores cover the same ground, is what the transfer rule itself creates (conserving: none)
+    remesh_excess_edge: float = 0.0
 
     def expected(self):
         return self.initial + self.inflow - self.surface_outflow - self.side_outflow + self.remesh_change
@@ -247,17 +251,23 @@ class PoreWater:
         U_old = pressure(self.W, A_old, self.settings.E_w)
         U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net)
         counts = rule_counts(rule)
-        A_new = np.asarray(A_new, float)
+        A_new, A_old = np.asarray(A_new, float), np.asarray(A_old, float)
+        overlaps = None if xz is None else pg.pore_overlaps(self.net, new_net, xz)
         if self.settings.transfer == "conserving":
             if xz is None:
                 raise ValueError("transfer = 'conserving' needs the positions xz at re-meshing")
-            W_new, matched = conserving_water(self.net, self.W, np.asarray(A_old, float), new_net, A_new, xz)
+            W_new, matched = conserving_water(self.net, self.W, A_old, new_net, A_new, xz, overlaps)
             W_new[~matched] = water_from_pressure(U_new[~matched], A_new[~matched], self.settings.E_w)
             counts["unmatched"] = int((~matched).sum())
         else:
             W_new = water_from_pressure(U_new, A_new, self.settings.E_w)
         self.balance.remesh_change += float(W_new.sum() - self.W.sum())
-        self.balance.remesh_excess_change += float((W_new - A_new).sum() - (self.W - A_old).sum())
+        X_old, X_new = self.W - A_old, W_new - A_new
+        self.balance.remesh_excess_change += float(X_new.sum() - X_old.sum())
+        if overlaps is not None:
+            new_on = np.bincount(overlaps[1], minlength=new_net.n_pores) > 0
+            old_on = np.bincount(overlaps[0], minlength=self.net.n_pores) > 0
+            self.balance.remesh_excess_edge += float(X_new[~new_on].sum() - X_old[~old_on].sum())
         self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
         self.remesh_counts, self.rule = counts, rule
         return counts
@@ -332,7 +342,7 @@ def _subset_or_superset(a, b):
 SINKHORN_TOL, SINKHORN_MAX_ITER = 1e-13, 500
 
 
-def conserving_water(old_net, W_old, A_old, new_net, A_new, xz):
+def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     """Water of the new pores from the water of the old ones, conserved (module docstring).
 
     O_pq: polygon overlap of old pore p and new pore q (pore_geometry.pore_overlaps). The void of
@@ -344,10 +354,11 @@ def conserving_water(old_net, W_old, A_old, new_net, A_new, xz):
     W_q = A_q + sum_p X_p V_pq / sum_q V_pq. So a uniform pressure stays uniform, and the total
     water changes only by the void gained or lost at the edges of the covered region (at U = 0)
     and by the water of old pores that no new pore overlaps.
+    ``overlaps``: pore_overlaps(old_net, new_net, xz) when the caller has it.
     Returns (W_new (Np_new,), matched (Np_new,) bool: the pore overlaps some old pore; W_new is
     nan where it does not). Raises ValueError if a new pore would get no water (W <= 0).
     """
-    p, q, o = pg.pore_overlaps(old_net, new_net, xz)
+    p, q, o = pg.pore_overlaps(old_net, new_net, xz) if overlaps is None else overlaps
     n_old, n_new = old_net.n_pores, new_net.n_pores
     W_new = np.full(n_new, np.nan)
     matched = np.zeros(n_new, bool)

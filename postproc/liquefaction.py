@@ -200,6 +200,7 @@ def case_summary(run_dir):
                    remesh_excess_change=wb.get("remesh_excess_change"),
                    remesh_excess_change_rel=wb["remesh_excess_change"] / wb["initial"]
                    if "remesh_excess_change" in wb else None,
+                   remesh_excess_edge=wb.get("remesh_excess_edge"),
                    side_outflow=wb["side_outflow"], surface_outflow=wb["surface_outflow"],
                    water_balance_error=summary["water_balance_error"], n_rebuilds=summary["n_rebuilds"])
     return out
@@ -266,9 +267,14 @@ def trends(cases, drainage=None):
     return rows
 
 
-def porosity_figure(runs, title):
-    """Porosity of the cases together (top), then the block pressures of each wet case."""
-    wet = [k for k, (h, s) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
+def _wet(runs):
+    return [k for k, (h, s) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
+
+
+def porosity_figure(runs, title, n_lim=None, u_lim=None):
+    """Porosity of the cases together (top), then the block pressures of each wet case; n_lim
+    (low, high) and u_lim (U from -u_lim to u_lim) give several figures the same axes."""
+    wet = _wet(runs)
     fig, axes = plt.subplots(1 + len(wet), 1, figsize=(9, 3.2 + 2.3 * len(wet)), sharex=True,
                              gridspec_kw={"height_ratios": [1.4] + [1] * len(wet)}, layout="constrained")
     axes = np.atleast_1d(axes)
@@ -277,7 +283,9 @@ def porosity_figure(runs, title):
     axes[0].set_ylabel("porosity of the window [-]")
     axes[0].legend(fontsize=8)
     axes[0].set_title(title)
-    lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
+    if n_lim:
+        axes[0].set_ylim(*n_lim)
+    lim = u_lim or max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
     for ax, k in zip(axes[1:], wet):
         h = runs[k][0]
         ax.set_ylim(-1.05 * lim, 1.05 * lim)  # one scale for the wet cases, centred on U = 0
@@ -350,10 +358,14 @@ def study(root):
     with open(path, "w") as f:
         f.write(trends_markdown(rows))
     written.append(path)
+    n_all = np.concatenate([h["porosity"] for h, _ in runs.values()]) if runs else np.zeros(1)
+    pad = 0.05 * (np.nanmax(n_all) - np.nanmin(n_all) + 1e-9)
+    n_lim = (np.nanmin(n_all) - pad, np.nanmax(n_all) + pad)  # Fig. 40, 41, 46 on the same axes
+    u_lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in _wet(runs) for c in block_columns(runs[k][0])] + [1e-9])
     for name, (title, ks) in STUDY_FIGURES.items():
         have = {k: runs[k] for k in ks if k in runs}
         if have:
-            fig = porosity_figure(have, title)
+            fig = porosity_figure(have, title, n_lim, u_lim)
             written.append(os.path.join(root, name))
             fig.savefig(written[-1], dpi=110)
             plt.close(fig)
