@@ -303,7 +303,7 @@ def porosity_figure(runs, title, n_lim=None, u_lim=None):
 def transfer_figure(pairs):
     """Paper against conserving transfer: block 1-4 mean U and the cumulative re-meshing water
     change, per case of ``pairs`` {case: (history paper, history conserving)}."""
-    fig, axes = plt.subplots(2, len(pairs), figsize=(6 * len(pairs), 6.5), sharex=True, squeeze=False,
+    fig, axes = plt.subplots(2, len(pairs), figsize=(6 * len(pairs), 6.5), sharex=True, sharey="row", squeeze=False,
                              layout="constrained")
     for col, (k, (hp, hc)) in enumerate(pairs.items()):
         for h, name, style in ((hp, "paper", "-"), (hc, "conserving", "--")):
@@ -312,7 +312,7 @@ def transfer_figure(pairs):
             axes[1, col].plot(h["t"] * 1e3, h["remesh_change"] / h["total_water"][0], style, label=f"transfer = {name}")
         axes[0, col].set_title(f"case {k}: {CASES[k]}", fontsize=9)
         axes[0, col].set_ylabel("mean U of blocks 1-4 [N/m]")
-        axes[1, col].set_ylabel("re-meshing water change / initial water")
+        axes[1, col].set_ylabel("re-meshing water change / initial water\n(cumulative, edges included)")
         axes[1, col].set_xlabel("t [ms]")
         for ax in axes[:, col]:
             ax.grid(alpha=0.3)
