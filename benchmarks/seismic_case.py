@@ -81,7 +81,7 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     cp.run(2000)  # how often the pair list is rebuilt
     list_builds_per_step = (c.list_builds - builds0) / (O.iter - k0)
     xz = cp.positions()
-    due, law_args, water_args = core.kernel_step_args()
+    due, law_args, water_args, tie_args = core.kernel_step_args()
     h = water_args[0]
     F_out = np.zeros_like(eng.held)
     part = wm._part
@@ -97,15 +97,19 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     W0 = wm.water.W.copy()
     parts = {
         "law (kernels.law_step)": lambda: kernels.law_step(xz, *law_args),
+        "side-wall ties (kernels.tie_forces)": lambda: kernels.tie_forces(xz, law.du, law.dt, *tie_args),
+        "side-wall ties, NumPy path (SideWallTies.forces)": lambda: core._tie_forces(xz, law.du),
         "water (kernels.water_step)": lambda: kernels.water_step(xz, *water_args),
         "  of which pore measure": lambda: kernels.measure(*geometry),
         "  of which flows": lambda: kernels.darcy_flows(*flow),
         "  of which pressure forces": lambda: kernels.pressure_forces(*forces),
-        "law + water + forces to write (kernels.dem_step)":
-            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args),
+        "law + ties + water + forces to write (kernels.dem_step)":
+            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args, *tie_args),
         "read positions (bridge)": lambda: eng.io.positions(),
         "write forces (bridge)": lambda: eng.forced.set_permanent_forces(F_out),
         "Python around a step": lambda: (core.kernel_step_args(), core.law._fixes([], None), [f() for f in eng.hooks]),
+        "  of which base motion and wall velocity (BaseMotion.step, hook)":
+            lambda: (core.base.step(), [f() for f in eng.hooks]),
         "whole engine step (PaperLawEngine._kernel_work)": lambda: eng._kernel_work() or eng._work(eng._write_held),
     }
     out = {}
