@@ -9,8 +9,10 @@ saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 ga
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}}: the comparison times YADE alone on the same discs (fixed walls), our step
-with the compiled kernels and with the NumPy path, interleaved in the same run (ratios hold on a
-shared machine; absolute times do not).
+with the compiled kernels (one compiled call a step: kernels.dem_step), with the compiled kernels
+on the general path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and
+with the NumPy path, interleaved in the same run (ratios hold on a shared machine; absolute times
+do not).
 """
 import argparse
 import json
@@ -31,7 +33,8 @@ PRESET = "liquefaction_case1"
 
 def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
-    + eps_m/2, no Python), our step with the compiled kernels and with the NumPy path, interleaved;
+    + eps_m/2, no Python), our step with the compiled kernels in one call, on the general path and
+    with the NumPy path, interleaved;
     medians of wall and CPU microseconds per step and their ratios to YADE alone."""
     import numpy as np
     from benchmarks.floor import native_floor, run_steps
@@ -41,8 +44,13 @@ def compare(scene, packing, steps, repeats):
         native_floor(scene, packing)
         return run_steps
 
+    def general_path():  # no one-call step (how this scene ran while its side-wall ties were NumPy)
+        cp = YadeCoupling(scene, packing)
+        cp.core.kernel_step_args = lambda: None
+        return cp.run
+
     setups = {"yade_alone": floor, "compiled": lambda: YadeCoupling(scene, packing).run,
-              "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
+              "compiled_general_path": general_path, "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
     wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
     for _ in range(repeats):
         for name, setup in setups.items():
