@@ -344,7 +344,7 @@ LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
 
 @jit
 def tie_forces(xz, du, dt, pairs, rest, prm, T):
-    """x-forces T[0] (N,) [N] of the side-wall ties (SideWallTies.forces) at centres xz (N, 2) with
+    """x-forces T[0] (N,) [N] of the side-wall ties (engines.seismic_box) at centres xz (N, 2) with
     velocities du / dt: tie t pulls its upper disc pairs[t, 1] by f = -k's [(x_u - x_l) - rest[t]]
     - eta's (v_u - v_l) and its lower disc pairs[t, 0] by -f; prm = (k's, eta's); T (2, N), T[1]
     is scratch."""
@@ -383,11 +383,12 @@ def dem_step(xz, F_out, rows, held, water_due,
     wet = len(F_water) > 0
     for k in range(len(rows)):
         a = rows[k]
-        for c in range(2):
-            f = F[a, c] + T[0, a] if tied and c == 0 else F[a, c]
-            if wet:
-                f = f + F_water[a, c]
-            F_out[k, c] = f + held[k, c]
+        fx, fz = F[a, 0], F[a, 1]
+        if tied:
+            fx = fx + T[0, a]
+        if wet:
+            fx, fz = fx + F_water[a, 0], fz + F_water[a, 1]
+        F_out[k, 0], F_out[k, 1] = fx + held[k, 0], fz + held[k, 1]
     return n_lost, n_sub
 
 

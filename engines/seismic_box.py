@@ -56,7 +56,7 @@ class SideWallTies:
     def kernel_args(self):
         """The arguments of engines.kernels.tie_forces from pairs on: (lower, upper) pairs (M, 2),
         rest (M,), (k'_s, eta'_s) and the (2, N) force buffer."""
-        return np.stack([self.lower, self.upper], axis=1), self.rest.copy(), np.array([self.ks, self.eta]), \
+        return np.stack([self.lower, self.upper], axis=1), self.rest, np.array([self.ks, self.eta]), \
             np.zeros((2, self.n))
 
     def tie_forces(self, x, vx):
