@@ -4,6 +4,7 @@ import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing)
 
 from engines import scene as scenes
+from engines.pore_dem import side_wall_ties
 from engines.yade_coupling import YadeCoupling, simulate
 from engines.reference import simulate_reference
 from packing.deposition import scene_packing
@@ -165,5 +166,5 @@ def test_seismic_one_call_step_with_side_wall_ties_equals_the_general_path():
     runs, fused_steps = _fused_and_general(sc, packing)
     _assert_same_runs(runs)
     assert fused_steps > 150
-    side = YadeCoupling(sc, packing).core.ties.moving
+    side = side_wall_ties(sc, packing).moving
     assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)
