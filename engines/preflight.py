@@ -172,7 +172,10 @@ def check_engine_options(scene):
 def preflight(scene, packing, out_dir):
     """Every check of a run that can be made before its first step; raises InputError.
 
-    Returns notes (one line each) on what the run will silently skip, for the script to print."""
+    Returns notes (one line each) on what the run will silently skip, for the script to print.
+    A dt = "auto" is checked as it will be chosen (engines.time_step)."""
+    from engines.time_step import resolve_dt
+    scene = resolve_dt(scene, packing, log=None)
     check_output_dir(out_dir)
     check_duration(scene)
     check_engine_options(scene)
