@@ -2,9 +2,10 @@
 
 A run is *refused* when preflight (engines.preflight) refuses it before the first step, with a
 message naming the limit; otherwise it is *bounded* when it ran to the end with finite positions,
-its kinetic energy stayed within KE_FACTOR x that of the same scene at its preset numerics over
-the same window (plus KE_SLACK of the scene's potential energy scale, so that a still baseline
-does not make any motion "unbounded"), its particles stayed within the box (ESCAPE_RADII radii
+its kinetic energy stayed within KE_FACTOR x that of its reference (the same setting at a finer
+dt over the same window, so that physics that moves the discs hard is not taken for an
+instability; plus KE_SLACK of the scene's potential energy scale, so that a still reference does
+not make any motion "unbounded"), its particles stayed within the box (ESCAPE_RADII radii
 above the initial bed top, above the bottom wall, between the side walls) and its water balance
 error stayed below BALANCE_TOL; else *unbounded* (with the reason). An error raised by an engine
 during the run (a Darcy limit reached as the pores changed) is *unbounded* too: the user was not
@@ -45,7 +46,7 @@ def classify(ke_max, ke_base, scale, finite, escaped, balance_error, error=None)
         return "unbounded", f"{escaped} particle(s) left the box"
     bound = KE_FACTOR * ke_base + KE_SLACK * scale
     if not ke_max <= bound:
-        return "unbounded", f"kinetic energy {ke_max:.3g} J/m > {bound:.3g} J/m ({KE_FACTOR:g} x the preset's)"
+        return "unbounded", f"kinetic energy {ke_max:.3g} J/m > {bound:.3g} J/m ({KE_FACTOR:g} x the reference's)"
     if not balance_error <= BALANCE_TOL:
         return "unbounded", f"water balance error {balance_error:.3g} > {BALANCE_TOL:g}"
     return "bounded", ""

@@ -88,6 +88,13 @@ def water_stiffness_limit(net, A, r, E_w, mass, mobile):
     return float(np.min(2 * np.sqrt(m[has] / k[has]))) if has.any() else math.inf
 
 
+def start_pores(scene, packing):
+    """(network, measures, PoreWater) of the pores at the start (W = A), as the engines build them."""
+    net = pg.build_pores(packing.xz, packing.r, eps_m=scene.contact.eps_m, l_m=scene.water.l_m, walls=packing.group)
+    m = pg.measure(net, packing.xz, packing.r)
+    return net, m, PoreWater(net, m.void_area, scene.water_settings())
+
+
 def limits(scene, packing):
     """{name: limit [s]} of the scene at the start (module docstring); darcy_check is the engines'
     Gershgorin check of the water step, per DEM step (divided by water_interval)."""
@@ -99,13 +106,10 @@ def limits(scene, packing):
     ties = side_wall_ties(scene, packing)
     if ties is not None:
         out["ties"] = ties.stable_time_step(mass)
-    settings = scene.water_settings()
-    if settings is not None:
-        net = pg.build_pores(packing.xz, packing.r, eps_m=scene.contact.eps_m, l_m=scene.water.l_m, walls=packing.group)
-        m = pg.measure(net, packing.xz, packing.r)
-        water = PoreWater(net, m.void_area, settings)
+    if scene.water.enabled:
+        net, m, water = start_pores(scene, packing)
         M = scene.numerics.water_interval
-        out["water_stiffness"] = water_stiffness_limit(net, m.void_area, packing.r, settings.E_w, mass, mob)
+        out["water_stiffness"] = water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w, mass, mob)
         out["darcy"] = darcy_limit(water, m.void_area, m.link_contact) / M
         out["darcy_check"] = water.darcy_limit(m.void_area, m.link_contact) / M
     return out

@@ -152,6 +152,8 @@ def test_scene_schema_takes_auto_and_refuses_other_words():
     ({"numerics": {"dt": 1.05 * 3.2565e-5}}, "eq 52"),
     ({"water": {"k1": 1e6}}, "Darcy limit"),
     ({"water": {"k2": 1e6}}, "Darcy limit"),
+    ({"water": {"E_w": 2.4e8}}, "water-stiffness limit"),
+    ({"water": {"E_w": 2.4e5}, "numerics": {"dt": 3.2e-5}}, "water-stiffness limit"),
 ])
 def test_extremes_are_refused_with_the_limit_named(qs, tmp_path, over, limit):
     sc, pk = qs
