@@ -42,6 +42,7 @@ def map_points():
     pts += [(QS, "E_w", e, {"water": {"E_w": e}}) for e in (24.0, 2.4e3, 2.4e4, 2.4e5, 2.4e6, 2.4e7, 2.4e8)]
     pts += [(QS, "E_w", e, {"water": {"E_w": e}, "numerics": {"dt": 1e-5, "rebuild_interval": 100}})
             for e in (2.4e4, 2.4e5, 2.4e6)]
+    pts += [(QS, "E_w", 2.4e4, {"water": {"E_w": 2.4e4, "substep": True}, "numerics": {"dt": 1e-5, "rebuild_interval": 100}})]
     pts += [(QS, "k1", k, {"water": {"k1": k}}) for k in (0.0, 1e3, 1e4, 1e5, 1e6)]
     pts += [(QS, "k1", 1e6, {"water": {"k1": 1e6, "substep": True}})]
     pts += [(QS, "k2", k, {"water": {"k2": k}}) for k in (0.0, 1e3, 1e5, 1e6)]
@@ -95,8 +96,13 @@ def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=output_dir, default=os.path.join("out", "stability"))
     ap.add_argument("--window", type=float, default=0.003, help="simulated seconds per point (dt points: 0.01)")
+    ap.add_argument("--plot-only", action="store_true", help="redraw OUT/map.png from OUT/map.json")
     a = ap.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
+    if a.plot_only:
+        with open(os.path.join(a.out, "map.json")) as f:
+            print("figure:", figure(json.load(f)["points"], os.path.join(a.out, "map.png")))
+        return
     points = []
     for case, knob, value, over in map_points():
         sc0 = scenes.preset(case, {"output": {"progress_seconds": 1e9}})
@@ -121,7 +127,7 @@ def main(argv):
                  "window_s": window, "overrides": over, **rec}
         points.append(point)
         print(f"{case} {knob} = {value:g}: {point['outcome']} {point['reason'][:150]} (ke ratio "
-              f"{point.get('ke_ratio', np.nan):.3g}, reference {point.get('reference', {}).get('reason', '')[:80]})", flush=True)
+              f"{point.get('ke_ratio', np.nan):.3g}, reference {(point.get('reference', {}).get('reason') or '')[:80]})", flush=True)
     doc = {"points": points, "reference_divisor": REF_DIVISOR,
            "criteria": {"ke_factor": st.KE_FACTOR, "ke_slack": st.KE_SLACK, "escape_radii": st.ESCAPE_RADII,
                         "balance_tol": st.BALANCE_TOL}}
@@ -137,7 +143,7 @@ MARKERS = {QS: "o", LIQ: "s"}
 
 
 def figure(points, path):
-    """One panel per knob: the peak kinetic energy over the preset's (log), coloured by outcome;
+    """One panel per knob: the peak kinetic energy over its reference's (log), coloured by outcome;
     refused points drawn on the panel's top edge."""
     import matplotlib
     matplotlib.use("Agg")
@@ -166,14 +172,14 @@ def figure(points, path):
             ax.set_xscale("log")
         ax.set_xlabel({"dt/dt_crit": "dt / dt_crit (eq 52)", "E_w": "E_w [N/m]", "k1": "k1 [1/s] (0 drawn at 0.1)",
                        "k2": "k2 [1/s] (0 drawn at 0.1)", "eps_m": "eps_m [m]", "f_max": "f_max [N]"}[knob])
-        ax.set_ylabel("peak kinetic energy / preset's")
+        ax.set_ylabel("peak kinetic energy / reference's")
         ax.set_title(knob + " (refused: top edge)", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
     for ax in axes.flat[len(knobs):]:
         ax.axis("off")
     handles = [plt.Line2D([], [], ls="", marker="o", color=c, mec="k", label=o) for o, c in COLORS.items()]
     handles += [plt.Line2D([], [], ls="", marker=m, color="w", mec="k", label=c) for c, m in MARKERS.items()]
-    handles += [plt.Line2D([], [], ls=":", color="0.5", label="10x the preset's (bound)")]
+    handles += [plt.Line2D([], [], ls=":", color="0.5", label="bound: 10x the reference's (dt / 4; dt points: the preset)")]
     fig.legend(handles=handles, loc="lower center", ncol=6, fontsize=9)
     fig.suptitle("Stability map: short runs at the extremes (quick-sand case 1; dt also on the seismic box)")
     fig.tight_layout(rect=(0, 0.05, 1, 0.96))
