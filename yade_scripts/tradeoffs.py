@@ -34,6 +34,8 @@ import numpy as np  # noqa: E402
 RECORD = 5e-4      # s between samples of the histories (a multiple of every dt below)
 REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
 STARTS = 5
+REFERENCE_DT = 5e-7
+PAPER_DT = 1e-6
 
 # Per case: the window, the reference, the paper's settings, the base the other knobs are swept
 # around (a fast dt, rebuilds every 1 ms) and the knobs. Overrides are {"table.field": value}.
@@ -51,10 +53,12 @@ CASES = {
                         "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
                         "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
                         "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
+    # the fast setting over the whole 0.18 s against the paper's settings as the reference
+    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT,
+                                "fast_dt": 2e-5, "defaults": []},
     "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
 }
-REFERENCE_DT = 5e-7
-PAPER_DT = 1e-6
+CASES["liquefaction_case1_full"]["defaults"] = CASES["liquefaction_case1"]["defaults"][:1]
 
 
 def dt_settings(dt):
@@ -69,7 +73,7 @@ def settings_of(case, knob, value):
     spec = CASES[case]
     base = dt_settings(spec["fast_dt"])
     if knob == "reference":
-        return dt_settings(REFERENCE_DT), "yade"
+        return dt_settings(spec.get("reference_dt", REFERENCE_DT)), "yade"
     if knob == "dt":
         return dt_settings(value), "yade"
     if knob == "water_interval":
@@ -93,7 +97,7 @@ def settings_of(case, knob, value):
 
 PRIORITY = (("reference", "dt", "water_interval", "rebuild_period"),
             ("smoothing", "transfer", "E_w_scale", "precision", "law", "defaults"))
-LAST = ("liquefaction_case4",)  # run after every knob of the other cases
+LAST = ("liquefaction_case1_full", "liquefaction_case4")  # run after every knob of the other cases
 
 
 def points(cases=None):
@@ -110,7 +114,7 @@ def points(cases=None):
                 continue
             for knob in knobs:
                 if knob == "reference":
-                    out.append((case, knob, REFERENCE_DT))
+                    out.append((case, knob, spec.get("reference_dt", REFERENCE_DT)))
                 else:
                     out += [(case, knob, v) for v in spec.get(knob, [])]
     return out
@@ -218,7 +222,7 @@ def study_jobs(out, cases=None, starts=STARTS, yade_args=("-n", "-j", "1")):
     for case, knob, value in points(cases):
         over, program = settings_of(case, knob, value)
         name = job_name(case, knob, value)
-        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run", "--case", case,
+        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run", "--case", CASES[case].get("preset", case),
                 "--window", repr(CASES[case]["window"]), "--starts", str(starts), "--out", "{out}"]
         for k, v in over.items():
             argv += ["--set", f"{k}={json.dumps(v)}"]
