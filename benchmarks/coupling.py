@@ -109,9 +109,12 @@ def main(argv):
     ap.add_argument("--steps", type=float, default=4.8e6, help="bodies x steps per timed run")
     args = ap.parse_args(argv)
     results = []
+    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     for n in args.sizes:
         steps = int(max(1000, args.steps / n))  # >= 1000: a pore rebuild falls in every run
         results.append(bench_size(n, steps, args.repeats, lambda s: print(s, flush=True)))
+        with open(args.json, "w") as f:  # after each size: a long run stopped keeps the sizes done
+            json.dump({"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results}, f, indent=1)
     keys = ["yade_alone_us"] + list(COLUMNS)
     print(f"I/O backend: {yade_io.BACKEND}; us/step (ratio to yade_alone), medians of {args.repeats}; "
           f"one shared machine: noisy")
@@ -120,9 +123,6 @@ def main(argv):
         for row in results:
             a = get(row, "yade_alone_us")
             print(f"{'':>4} {row['n_bodies']:7d} " + " ".join(f"{get(row, k):9.1f} ({get(row, k) / a:5.2f})" for k in keys))
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump({"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results}, f, indent=1)
 
 
 if __name__ == "__main__":

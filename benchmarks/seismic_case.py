@@ -9,8 +9,10 @@ saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 ga
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}}: the comparison times YADE alone on the same discs (fixed walls), our step
-with the compiled kernels and with the NumPy path, interleaved in the same run (ratios hold on a
-shared machine; absolute times do not).
+with the compiled kernels (one compiled call a step: kernels.dem_step), with the compiled kernels
+on the general path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and
+with the NumPy path, interleaved in the same run (ratios hold on a shared machine; absolute times
+do not).
 """
 import argparse
 import json
@@ -31,7 +33,8 @@ PRESET = "liquefaction_case1"
 
 def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
-    + eps_m/2, no Python), our step with the compiled kernels and with the NumPy path, interleaved;
+    + eps_m/2, no Python), our step with the compiled kernels in one call, on the general path and
+    with the NumPy path, interleaved;
     medians of wall and CPU microseconds per step and their ratios to YADE alone."""
     import numpy as np
     from benchmarks.floor import native_floor, run_steps
@@ -41,8 +44,13 @@ def compare(scene, packing, steps, repeats):
         native_floor(scene, packing)
         return run_steps
 
+    def general_path():  # no one-call step (how this scene ran while its side-wall ties were NumPy)
+        cp = YadeCoupling(scene, packing)
+        cp.core.kernel_step_args = lambda: None
+        return cp.run
+
     setups = {"yade_alone": floor, "compiled": lambda: YadeCoupling(scene, packing).run,
-              "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
+              "compiled_general_path": general_path, "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
     wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
     for _ in range(repeats):
         for name, setup in setups.items():
@@ -81,7 +89,7 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     cp.run(2000)  # how often the pair list is rebuilt
     list_builds_per_step = (c.list_builds - builds0) / (O.iter - k0)
     xz = cp.positions()
-    due, law_args, water_args = core.kernel_step_args()
+    due, law_args, water_args, tie_args = core.kernel_step_args()
     h = water_args[0]
     F_out = np.zeros_like(eng.held)
     part = wm._part
@@ -97,15 +105,19 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     W0 = wm.water.W.copy()
     parts = {
         "law (kernels.law_step)": lambda: kernels.law_step(xz, *law_args),
+        "side-wall ties (kernels.tie_forces)": lambda: kernels.tie_forces(xz, law.du, law.dt, *tie_args),
+        "side-wall ties, NumPy path (SideWallTies.forces)": lambda: core._tie_forces(xz, law.du),
         "water (kernels.water_step)": lambda: kernels.water_step(xz, *water_args),
         "  of which pore measure": lambda: kernels.measure(*geometry),
         "  of which flows": lambda: kernels.darcy_flows(*flow),
         "  of which pressure forces": lambda: kernels.pressure_forces(*forces),
-        "law + water + forces to write (kernels.dem_step)":
-            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args),
+        "law + ties + water + forces to write (kernels.dem_step)":
+            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args, *tie_args),
         "read positions (bridge)": lambda: eng.io.positions(),
         "write forces (bridge)": lambda: eng.forced.set_permanent_forces(F_out),
         "Python around a step": lambda: (core.kernel_step_args(), core.law._fixes([], None), [f() for f in eng.hooks]),
+        "  of which base motion and wall velocity (BaseMotion.step, hook)":
+            lambda: (core.base.step(), [f() for f in eng.hooks]),
         "whole engine step (PaperLawEngine._kernel_work)": lambda: eng._kernel_work() or eng._work(eng._write_held),
     }
     out = {}

@@ -9,13 +9,15 @@ reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
   darcy_flows       engines.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
   darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
+  tie_forces        engines.seismic_box.SideWallTies.forces    (Fig. 27, the side-wall springs)
 
 and two per-step kernels chain them, so that a step costs one call from Python (each array passed to
 a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~60 arrays):
 
   law_step          engines.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.water_engine.WaterModel.advance  (measure, flows, update, eq 32, 33)
-  dem_step          engines.pore_dem.PoreDEM.step: law_step, water_step when due, the forces to write
+  dem_step          engines.pore_dem.PoreDEM.step: law_step, tie_forces, water_step when due, the
+                    forces to write
   water_forces_step engines.water_engine.WaterEngine: water_step and the forces to write
 
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
@@ -341,27 +343,52 @@ LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
 
 
 @jit
+def tie_forces(xz, du, dt, pairs, rest, prm, T):
+    """x-forces T[0] (N,) [N] of the side-wall ties (engines.seismic_box) at centres xz (N, 2) with
+    velocities du / dt: tie t pulls its upper disc pairs[t, 1] by f = -k's [(x_u - x_l) - rest[t]]
+    - eta's (v_u - v_l) and its lower disc pairs[t, 0] by -f; prm = (k's, eta's); T (2, N), T[1]
+    is scratch."""
+    ks, eta = prm[0], prm[1]
+    T[:] = 0.0
+    for t in range(len(rest)):
+        lo, up = pairs[t, 0], pairs[t, 1]
+        f = -ks * ((xz[up, 0] - xz[lo, 0]) - rest[t]) - eta * (du[up, 0] / dt - du[lo, 0] / dt)
+        T[0, up] += f
+        T[1, lo] += f
+    for a in range(T.shape[1]):
+        T[0, a] -= T[1, a]
+
+
+@jit
 def dem_step(xz, F_out, rows, held, water_due,
              xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
              acc_j, lost,
-             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at):
+             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+             tie_pairs, tie_rest, tie_prm, T):
     """One step of PoreDEM (its order a-e) without Python: ``law_step`` (its arguments from xz_prev
-    to lost), ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water),
-    then F_out = (F + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
+    to lost), ``tie_forces`` of the side walls (from tie_pairs on; no ties: empty arrays),
+    ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water), then
+    F_out = (F + T + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
     answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list is stale."""
     n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
                       r, pi, pj, state, prm, spring, F, M, acc_j, lost)
     if n_lost == LIST_STALE:
         return n_lost, 0
+    tied = len(tie_rest) > 0
+    if tied:
+        tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T)
     n_sub = 1
     if water_due:
         n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at)
     wet = len(F_water) > 0
     for k in range(len(rows)):
         a = rows[k]
-        for c in range(2):
-            f = F[a, c] + F_water[a, c] if wet else F[a, c]
-            F_out[k, c] = f + held[k, c]
+        fx, fz = F[a, 0], F[a, 1]
+        if tied:
+            fx = fx + T[0, a]
+        if wet:
+            fx, fz = fx + F_water[a, 0], fz + F_water[a, 1]
+        F_out[k, 0], F_out[k, 1] = fx + held[k, 0], fz + held[k, 1]
     return n_lost, n_sub
 
 
@@ -433,10 +460,15 @@ with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step
 
 
 def dry_water_args():
-    """Arguments of dem_step from h on for a scene without water."""
+    """Arguments of dem_step from h to f_at for a scene without water."""
     no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
     return 0.0, no_f, no_f, no_f, False, False, False, np.zeros((0, 2)), no_i, np.zeros(1, np.int64), no_f, \
         np.zeros(1, np.int64)
+
+
+def no_tie_args():
+    """Arguments of dem_step from tie_pairs on for a scene without side-wall ties."""
+    return np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(2), np.zeros((2, 0))
 
 
 @jit

@@ -5,10 +5,7 @@ separation or the paper's incremental tangential spring with rolling, so this la
 engine: ``PaperLaw`` is the per-step work without YADE (engines.contact's ContactLaw, compiled
 by default), ``PaperLawEngine`` the YADE object that reads the centres in bulk, calls it and adds
 the forces. The discs' spin about y is integrated here (eq 14c, 16c); YADE only translates them.
-
-Hook for the seismic box (Fig. 27): ``PaperLaw.extra_forces`` is a list of callables
-f(xz, du) -> (N, 2) forces [N] added to the contact forces each step (e.g. the side-wall springs
-k's, eta's between neighbouring side-wall discs, from engines.seismic_box).
+The side-wall springs of the seismic box (Fig. 27) are added by engines.pore_dem.PoreDEM.
 """
 import numpy as np
 
@@ -33,7 +30,6 @@ class PaperLaw:
         self.du = np.zeros((n, 2))
         self.xz_prev = None
         self._dpsi = np.zeros(n)  # omega dt, scratch of the compiled step
-        self.extra_forces = []
 
     def step(self, xz, vel=None):
         """Forces (N, 2) [N] at centres xz (N, 2) of this step and {disc: new velocity (2,)} of the
@@ -43,10 +39,7 @@ class PaperLaw:
             F, separations = self._step_compiled(xz)
         else:
             F, separations = self._step_numpy(xz)
-        fixes = self._fixes(separations, vel)
-        for extra in self.extra_forces:
-            F = F + extra(xz, self.du)
-        return F, fixes
+        return F, self._fixes(separations, vel)
 
     def _fixes(self, separations, vel):
         s = self.settings
@@ -173,9 +166,9 @@ class PaperLawEngine:
             args = core.kernel_step_args()
             if args is None:
                 return False
-            due, law_args, water_args = args
+            due, law_args, water_args, tie_args = args
             n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out,
-                                             self._dynamic, self.held, due, *law_args, *water_args)
+                                             self._dynamic, self.held, due, *law_args, *water_args, *tie_args)
             if n_lost != kernels.LIST_STALE:
                 break
             core.law.contact._update_list(self._xz)

@@ -19,8 +19,8 @@ contract shared with the reference (engines/reference.py):
      velocity the caller gives the driven walls for this step, so x += v dt lands them on u(t + dt)
 Side walls on springs ([loading] side_walls = "springs", Fig. 27): the side-wall discs move in x
 under the contact forces, the pore pressure forces of eq 33 (they bound pores like any disc) and
-the ties of engines.seismic_box (added to the law's forces in b through ``PaperLaw.extra_forces``,
-with the tie velocities du/dt of this step); the caller integrates them in x only.
+the ties of engines.seismic_box (added to the law's forces in b, with the tie velocities du/dt of
+this step); the caller integrates them in x only.
 Gravity -m g and buoyancy +rho_w pi r^2 g (water scenes: the buoyant weight of eq 34b) are
 constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent forces).
 """
@@ -154,7 +154,7 @@ class PoreDEM:
         self.ties = side_wall_ties(scene, packing)
         if self.ties is not None:
             check_tie_time_step(scene, self.ties, self.mass)
-            self.law.extra_forces.append(self._tie_forces)
+        self._tie_args = kernels.no_tie_args() if self.ties is None else self.ties.kernel_args()
         self.water_model = water_model(scene, packing, compiled)
 
     def _tie_forces(self, xz, du):
@@ -187,6 +187,8 @@ class PoreDEM:
         ``vel`` (N, 2): current velocities if the caller has them; else du/dt is used.
         """
         F, fixes = self.law.step(xz, vel)                               # a, b, c, e
+        if self.ties is not None:                                       # b: side-wall ties
+            F = F + self._tie_forces(xz, self.law.du)
         if self.water_model is not None:                                # d
             self.water_model.step(self.k, xz)
             F = F + self.water_model.F
@@ -200,22 +202,23 @@ class PoreDEM:
 
     # -- the same step as one compiled call (engines.kernels.dem_step) ----------------------------
     def kernel_step_args(self):
-        """(water due, law_step's arguments, water_step's) for kernels.dem_step at step k, or None
-        when this step needs the general ``step`` (NumPy path, first step, extra forces, a rebuild
-        of the pores)."""
+        """(water due, law_step's arguments, water_step's, tie_forces') for kernels.dem_step at
+        step k, or None when this step needs the general ``step`` (NumPy path, first step, a
+        rebuild of the pores)."""
         law, wm = self.law, self.water_model
-        if not law.compiled or law.xz_prev is None or law.extra_forces:
+        if not law.compiled or law.xz_prev is None:
             return None
         if wm is None:
-            return False, law.kernel_args(), kernels.dry_water_args()
+            return False, law.kernel_args(), kernels.dry_water_args(), self._tie_args
         if self.k > 0 and self.k % wm.rebuild_interval == 0:
             return None
-        return self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt)
+        return (self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt),
+                self._tie_args)
 
     def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
         """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
         kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
-        due, _, water_args = args
+        due, _, water_args, _ = args
         fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
         if due:
             self.water_model.finish_kernel_step(water_args[0], n_sub, water_args)

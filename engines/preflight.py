@@ -8,12 +8,11 @@ scripts print it and exit non-zero before the output directory exists. The engin
 checks at construction.
 
 ``ArgumentParser``, ``number`` and ``output_dir`` give the scripts one-line argument errors (exit
-status 2); ``scene_and_packing`` is their common start.
+status 2).
 """
 import argparse
 import math
 import os
-import sys
 import tempfile
 
 
@@ -202,20 +201,3 @@ def preflight(scene, packing, out_dir):
         return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
                 f"({scene.numerics.duration:g} s) and are skipped"]
     return []
-
-
-def scene_and_packing(make_scene, out_dir, check=None):
-    """A scene script's start: the scene ``make_scene()``, the script's own ``check(scene)``, the
-    scene's packing and ``preflight`` (its notes printed). Any ValueError (a bad scene, packing or
-    limit) exits with one line ``error: ...`` before anything is written. Returns (scene, packing)."""
-    try:
-        sc = make_scene()
-        if check is not None:
-            check(sc)
-        from packing.deposition import scene_packing
-        packing = scene_packing(sc)
-        for note in preflight(sc, packing, out_dir):
-            print(note)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
-    return sc, packing

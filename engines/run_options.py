@@ -125,12 +125,13 @@ def job_argv(ap, argv):
 
 
 # -- running --------------------------------------------------------------------------------------
-def run_script(ap, args, load_scene, scene_given=False):
+def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None):
     """Check, then run or resume, printing one line at the end; exits non-zero on refused input
     (one line, nothing written) and with 128 + the signal's number after an interrupt.
 
     ``load_scene(overrides)`` -> Scene; ``scene_given``: the script's own scene options were used
-    (they conflict with --resume)."""
+    (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
+    ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     if args.resume:
         given = [f"--{k}" for k in ("out", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
         if given:
@@ -142,6 +143,8 @@ def run_script(ap, args, load_scene, scene_given=False):
             check_resume(args.resume, args.duration)
         else:
             sc = load_scene(overrides_of(args))
+            if check is not None:
+                check(sc)
             from packing.deposition import scene_packing
             packing = scene_packing(sc)
             for note in preflight(sc, packing, args.out):
@@ -165,6 +168,9 @@ def run_script(ap, args, load_scene, scene_given=False):
         # everything is written and closed: skip the interpreter's and YADE's teardown (about 1 s
         # on a busy 2-core machine), so that the process ends within a fraction of a second
         os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
+    if figures is not None:
+        for path in figures(out):
+            print("figure:", path)
     print(yade_run.done_line(summary))
 
 

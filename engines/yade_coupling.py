@@ -15,8 +15,8 @@ PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python a
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
-of O.step() calls where Python works every step, or of O.run in YADE's thread for chunks without
-per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every POLL_SECONDS) and
+of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
+without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk) and
 returns early when it is true (engines.yade_run: SIGINT, SIGTERM). The coupling pickles whole into
 a checkpoint (engines.checkpoint): keep closures out of its state.
 """
@@ -40,7 +40,7 @@ from engines.trajectory import Trajectory
 from engines.water_engine import WaterEngine
 
 PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
-POLL_SECONDS = 0.02  # how often a chunk run by O.run in YADE's thread checks stop()
+CHUNK_SECONDS = 0.2    # wall time of one blocking O.run (a stop's latency; each call costs YADE ~4 ms of waiting)
 X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
 
 
@@ -133,6 +133,7 @@ class YadeCoupling:
         self.window = pore_dem.porosity_window(scene, packing)
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
+        self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
         if yade_io.BACKEND == "python":
             yade_io.freeze_gc()
 
@@ -159,13 +160,14 @@ class YadeCoupling:
         if self.law == "paper":
             self.engine.drive(n, stop)
         elif not self.per_step and n > PER_STEP_CHUNK:
-            O.run(int(n))  # in YADE's thread: this one polls stop()
-            while O.running:
-                if stop():
-                    O.pause()
-                    break
-                time.sleep(POLL_SECONDS)
-            O.wait()
+            done = 0
+            while done < n and not stop():  # blocking chunks: YADE is idle whenever Python looks
+                m = min(int(n) - done, self._chunk)
+                t0 = time.perf_counter()
+                O.run(m, True)
+                done += m
+                if m == self._chunk:
+                    self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), PER_STEP_CHUNK), 1e6))
         else:  # law = 'yade': the water engine on its steps, the base velocity of the step
             water, base = self.water_engine, self.base
             for _ in range(int(n)):

@@ -11,7 +11,9 @@ from engines import pore_geometry as pg
 from engines.contact import ContactLaw, ContactSettings
 from engines.paper_law import PaperLaw
 from engines.pore_water import PoreWater, WaterSettings
+from engines.seismic_box import SideWallTies
 from engines.water_engine import WaterModel
+from packing.deposition import wall_box
 from packing.layouts import hex_lattice, random_discs
 
 RTOL = 1e-12
@@ -175,6 +177,23 @@ def test_water_model_compiled_equals_numpy(case):
         assert models[1].substeps_max > 1
     if case == "inflow_drained":
         assert models[1].water.balance.side_outflow > 0 and models[1].water.balance.inflow > 0
+
+
+def test_tie_forces_compiled_equals_numpy():
+    """kernels.tie_forces against SideWallTies.forces: the seismic box's columns moved and moving
+    at random (a tie's stretch, its dashpot, a disc with two ties, the corners' reactions)."""
+    xz, group = wall_box(25, 12, 0.55e-3)
+    ties = SideWallTies(xz, group, 1.5e5, 0.6)
+    rng = np.random.default_rng(7)
+    dt = 1e-6
+    pairs, rest, prm, T = ties.kernel_args()
+    for _ in range(5):
+        x = xz + 1e-5 * rng.standard_normal(xz.shape)
+        du = 1e-7 * rng.standard_normal(xz.shape)
+        kernels.tie_forces(x, du, dt, pairs, rest, prm, T)
+        F = ties.forces(x[:, 0], du[:, 0] / dt)
+        assert_close(T[0], F, "tie forces")
+        assert np.count_nonzero(F) == np.count_nonzero(ties.moving) + 2  # the columns and their corners
 
 
 def test_refuses_a_water_step_above_the_darcy_limit():

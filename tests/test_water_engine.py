@@ -4,9 +4,11 @@ import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing)
 
 from engines import scene as scenes
+from engines.pore_dem import side_wall_ties
 from engines.yade_coupling import YadeCoupling, simulate
 from engines.reference import simulate_reference
 from packing.deposition import scene_packing
+from packing.packing import Packing
 
 
 @pytest.fixture(scope="module")
@@ -108,28 +110,61 @@ def test_yade_law_head_on_collision_matches_the_paper_law():
     assert abs(restitution(ty) - restitution(tr)) < 0.02 * restitution(tr)
 
 
-@pytest.mark.parametrize("law_override", [{}, {"water": {"enabled": False}}])
-def test_paper_law_one_call_step_equals_the_general_path(packing, law_override):
-    """PaperLawEngine.drive runs kernels.dem_step (read, law, water, write in one call) where it
-    can; the general path (PoreDEM.step between yade_io calls) gives the same run, bit for bit,
-    through pair-list and pore rebuilds and steps without water."""
+def _fused_and_general(sc, packing, n=200):
+    """The same run of n steps through PaperLawEngine.drive with kernels.dem_step where it can and
+    through the general path only: (x, v, omega, pair-list builds, W, O.iter) of each, and the
+    number of steps the first took in one call."""
     from yade import O
-    over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
-    over.update(law_override)
-    sc = scenes.preset("quicksand_case1", over)
-    runs = []
+    runs, fused_steps = [], 0
     for fused in (True, False):
         cp = YadeCoupling(sc, packing)
         cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
-        if not fused:
+        step_args = cp.core.kernel_step_args
+        if fused:
+            def counted():
+                nonlocal fused_steps
+                args = step_args()
+                fused_steps += args is not None
+                return args
+            cp.core.kernel_step_args = counted
+        else:
             cp.core.kernel_step_args = lambda: None
-        cp.run(200)
+        cp.run(n)
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
+    return runs, fused_steps
+
+
+def _assert_same_runs(runs, n=200):
     (x1, v1, w1, b1, W1, k1), (x0, v0, w0, b0, W0, k0) = runs
-    assert k1 == k0 == 200 and b1 == b0 > 5
+    assert k1 == k0 == n and b1 == b0 > 5
     np.testing.assert_array_equal(x1, x0)
     np.testing.assert_array_equal(v1, v0)
     np.testing.assert_array_equal(w1, w0)
     if W0 is not None:
         np.testing.assert_array_equal(W1, W0)
+
+
+@pytest.mark.parametrize("law_override", [{}, {"water": {"enabled": False}}])
+def test_paper_law_one_call_step_equals_the_general_path(packing, law_override):
+    """PaperLawEngine.drive runs kernels.dem_step (read, law, water, write in one call) where it
+    can; the general path (PoreDEM.step between yade_io calls) gives the same run, bit for bit,
+    through pair-list and pore rebuilds and steps without water."""
+    over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
+    over.update(law_override)
+    runs, fused_steps = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
+    _assert_same_runs(runs)
+    assert fused_steps > 150
+
+
+def test_seismic_one_call_step_with_side_wall_ties_equals_the_general_path():
+    """The seismic box (liquefaction_case1: base shaken, side walls on the springs of Fig. 27)
+    takes the one-call step too (kernels.tie_forces inside dem_step), and the run is bit for bit
+    that of the general path (SideWallTies.forces in NumPy), the side walls moving."""
+    sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 60, "water_interval": 3}})
+    packing = Packing.load(sc.packing.file)
+    runs, fused_steps = _fused_and_general(sc, packing)
+    _assert_same_runs(runs)
+    assert fused_steps > 150
+    side = side_wall_ties(sc, packing).moving
+    assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)

@@ -218,7 +218,8 @@ STAT_FACTOR, STAT_FLOOR = 4.0, 0.02   # statistics after divergence: see compare
 FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pressures {PRESSURE_TOL:g} of "
                f"max |U|, total water {TRAJ_TOL:g} of the initial: it changes only through the areas at a "
                "re-meshing, eq 32) compared up to the divergence time, when the reference "
-               f"started from x_0 + {PERTURBATION:g} r departs from the reference by one of these tolerances: until then "
+               f"started from x_0 + {PERTURBATION:g} r departs from the reference by {TRAJ_TOL:g} in positions / mean "
+               "radius, block pressures / E_w or total water / initial water: until then "
                "both paths differ only by round-off, which grows no faster than that perturbation; both "
                f"water budgets close to {WATER_TOL:g}; after the divergence, time means of block pressures "
                f"and porosity agree within {STAT_FACTOR:g} x the spread between the two reference runs "
@@ -333,18 +334,19 @@ def yade_remesh_counter():
     return hook, counts
 
 
-def divergence(ta, tb, mean_r):
-    """(index of the first sample where the runs differ by more than a window tolerance, its time);
-    (n, inf) if never. Differences as in ``trajectory_diffs``: positions / mean_r > TRAJ_TOL, block
-    pressures / max |U_b| > PRESSURE_TOL, total water / W_b(0) > TRAJ_TOL (the water and pressures
-    jump at a rebuild by amounts that can be more sensitive to the positions than the positions are)."""
+def divergence(ta, tb, mean_r, E_w):
+    """(index of the first sample where the runs differ by more than TRAJ_TOL, its time); (n, inf)
+    if never. Differences: positions / mean_r, block pressures / E_w (U / E_w = W/A - 1, the water's
+    strain, follows the areas as the positions do; relative to max |U| it would magnify round-off
+    by E_w / max |U|, 4e3 in a still column), total water / W_b(0) (the water and pressures jump at
+    a rebuild by amounts that can be more sensitive to the positions than the positions are)."""
     t, xa, Ua, Wa, _ = ta.arrays()
     _, xb, Ub, Wb, _ = tb.arrays()
     over = np.max(np.abs(xa - xb), axis=(1, 2)) / mean_r > TRAJ_TOL
     if Ub.size and not np.all(np.isnan(Ub)):
         with np.errstate(invalid="ignore"):
-            dU = np.nanmax(np.abs(Ua - Ub), axis=1, initial=0.0) / max(np.nanmax(np.abs(Ub)), TINY)
-        over |= (dU > PRESSURE_TOL) | (np.isnan(Ua) != np.isnan(Ub)).any(axis=1)
+            dU = np.nanmax(np.abs(Ua - Ub), axis=1, initial=0.0) / E_w
+        over |= (dU > TRAJ_TOL) | (np.isnan(Ua) != np.isnan(Ub)).any(axis=1)
         over |= np.abs(Wa - Wb) / Wb[0] > TRAJ_TOL
     first = np.flatnonzero(over)
     return (int(first[0]), float(t[first[0]])) if len(first) else (len(t), float("inf"))
@@ -435,7 +437,7 @@ def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
         t3 = time.time()
         rcounts = tr.info["counts"]
         ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
-        n_win, t_div = divergence(tp, tr, mean_r)
+        n_win, t_div = divergence(tp, tr, mean_r, scene.water.E_w)
         win = compare_window(ty, tr, n_win, mean_r) if n_win else {}
         same_rules = (rules_before(ycounts["history"], t_div, scene.numerics.dt)
                       == rules_before(rcounts["history"], t_div, scene.numerics.dt))
@@ -480,8 +482,8 @@ def reading_effect(case, scene, pk, tr, tp, ref_simulate, differ):
     t0 = time.time()
     ta = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=PAPER_READINGS)
     mean_r = float(np.mean(pk.r[pk.mobile]))
-    n_div, t_div = divergence(ta, tr, mean_r)
-    n_chaos, t_chaos = divergence(tp, tr, mean_r)
+    n_div, t_div = divergence(ta, tr, mean_r, scene.water.E_w)
+    n_chaos, t_chaos = divergence(tp, tr, mean_r, scene.water.E_w)
     start = min(n_chaos, len(tr.t) - 1)
     sa = statistics(ta, start, pk, scene)
     sr, sp = (statistics(tj, start, pk, scene) for tj in (tr, tp))

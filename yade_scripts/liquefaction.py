@@ -2,15 +2,18 @@
 
     yade -n -x yade_scripts/liquefaction.py --case N --out DIR [--duration S] [--dt S]
                                             [--transfer paper|conserving] [--scene FILE]
+                                            [--set TABLE.FIELD=VALUE ...] [--vtk]
+    yade -n -x yade_scripts/liquefaction.py --resume DIR [--duration S]
 
 N = 1..7 are the cases of SPEC §2.5 (yade_scripts/scenes/liquefaction_case<N>.toml): 1 saturated
 undrained, 2 dry, 3 drained sides (spring d, cosine); 4 saturated undrained, 5 dry (elastic
 spring a, cosine); 6 saturated undrained, 7 dry (spring d, El Centro). --transfer chooses how the
 water moves onto rebuilt pores ([water] transfer). Writes DIR/history.csv (t, U_block1..6,
 porosity, base_acc, base_vel, base_disp, side walls, water balance ...), DIR/summary.json, the
-snapshots, and the figures: DIR/pressure_blocks_fig37.png (block pressures with the base input and
-the block positions of Fig. 35; Fig. 37/39/42/44), DIR/snapshots.png (velocities, normal forces
-and pores; Fig. 36/38/43/45) and DIR/history_panels.png.
+snapshots, DIR/checkpoint.pkl (Ctrl-C stops with a checkpoint; --resume continues), with --vtk a
+ParaView series in DIR/vtk/, and the figures: DIR/pressure_blocks_fig37.png (block pressures with
+the base input and the block positions of Fig. 35; Fig. 37/39/42/44), DIR/snapshots.png
+(velocities, normal forces and pores; Fig. 36/38/43/45) and DIR/history_panels.png.
 """
 import argparse
 import os
@@ -20,54 +23,43 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser, number, output_dir, scene_and_packing  # noqa: E402
+from engines.preflight import ArgumentParser  # noqa: E402
+from engines.run_options import add_run_arguments, job_argv, run_script  # noqa: E402
 
 CASES = tuple(range(1, 8))
 
 
-def parse(argv):
+def parser():
     ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    which = ap.add_mutually_exclusive_group(required=True)
+    which = ap.add_mutually_exclusive_group()
     which.add_argument("--case", type=int, choices=CASES, help="case of SPEC §2.5 (1-7)")
     which.add_argument("--scene", help="a scene file instead of a case preset")
-    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
-    ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
-                    help="simulated time [s] (default: the scene's, 0.18)")
-    ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
     ap.add_argument("--transfer", choices=("paper", "conserving"),
                     help="water at re-meshing (default: the scene's [water] transfer)")
-    return ap.parse_args(argv)
-
-
-def overrides_of(args):
-    """The command line's changes to the scene, {table: {field: value}} (recorded in summary.json)."""
-    out = {}
-    num = {k: v for k, v in (("dt", args.dt), ("duration", args.duration)) if v is not None}
-    if num:
-        out["numerics"] = num
-    if args.transfer:
-        out["water"] = {"transfer": args.transfer}
-    return out or None
-
-
-def refuse_dry_transfer(args):
-    def check(sc):
-        if args.transfer and not sc.water.enabled:
-            raise ValueError(f"--transfer: {sc.scene.name} is dry (no water to transfer)")
-    return check
+    add_run_arguments(ap)
+    return ap
 
 
 def main(argv):
-    args = parse(argv)
-    sc, packing = scene_and_packing(lambda: scenes.load(args.scene, overrides_of(args)) if args.scene else
-                                    scenes.preset(f"liquefaction_case{args.case}", overrides_of(args)), args.out,
-                                    refuse_dry_transfer(args))
-    from engines.yade_run import done_line, run_scene
+    ap = parser()
+    args = ap.parse_args(job_argv(ap, argv))
+    if not (args.case or args.scene or args.resume):
+        ap.error("one of --case, --scene or --resume is required")
+
+    def load_scene(overrides):
+        if args.transfer:
+            overrides = {**(overrides or {}), "water": {**(overrides or {}).get("water", {}), "transfer": args.transfer}}
+        if args.scene:
+            return scenes.load(args.scene, overrides)
+        return scenes.preset(f"liquefaction_case{args.case}", overrides)
+
+    def check(sc):
+        if args.transfer and not sc.water.enabled:
+            raise ValueError(f"--transfer: {sc.scene.name} is dry (no water to transfer)")
+
     from postproc import liquefaction
-    summary = run_scene(sc, packing, args.out)
-    for path in liquefaction.run_figures(args.out):
-        print("figure:", path)
-    print(done_line(summary))
+    run_script(ap, args, load_scene, scene_given=bool(args.case or args.scene or args.transfer), check=check,
+               figures=liquefaction.run_figures)
 
 
 if __name__ == "__main__":
