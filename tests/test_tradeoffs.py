@@ -91,7 +91,7 @@ def test_study_points_and_jobs():
     over, prog = study.settings_of("liquefaction_case1", "E_w_scale", 10.0)
     assert over["water.E_w"] == 24000.0 and over["water.substep"] and prog == "yade"
     assert study.settings_of("liquefaction_case1", "precision", "longdouble")[1] == "yade-longdouble"
-    jobs, meta = study.study_jobs("out/x")
+    jobs, meta = study.study_jobs()
     assert len({j.name for j in jobs}) == len(jobs) == len(pts)
     argv = dict(zip(jobs[0].argv, jobs[0].argv[1:]))
     assert argv["--case"] == "liquefaction_case1" and argv["--starts"] == "5" and argv["--window"] == "0.04"

@@ -37,8 +37,9 @@ STARTS = 5
 REFERENCE_DT = 5e-7
 PAPER_DT = 1e-6
 
-# Per case: the window, the reference, the paper's settings, the base the other knobs are swept
-# around (a fast dt, rebuilds every 1 ms) and the knobs. Overrides are {"table.field": value}.
+# Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
+# the values of each knob; "preset" (default: the key) and "reference_dt" (default REFERENCE_DT)
+# where they differ. "defaults" are the named settings chosen from the study.
 CASES = {
     "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5,
                            "dt": [1e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4],
@@ -216,14 +217,16 @@ def run_setting(case, overrides, window, record, n_starts, out_dir):
 
 
 # -- study (Debian's Python) ----------------------------------------------------------------------
-def study_jobs(out, cases=None, starts=STARTS, yade_args=("-n", "-j", "1")):
+def study_jobs(cases=None, starts=STARTS, yade_args=("-n", "-j", "1")):
+    """(jobs for yade_scripts.sweep, {job name: (case, knob, value)}) of the study's points."""
     from yade_scripts.sweep import Job
     jobs, meta = [], {}
     for case, knob, value in points(cases):
         over, program = settings_of(case, knob, value)
         name = job_name(case, knob, value)
-        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run", "--case", CASES[case].get("preset", case),
-                "--window", repr(CASES[case]["window"]), "--starts", str(starts), "--out", "{out}"]
+        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run",
+                "--case", CASES[case].get("preset", case), "--window", repr(CASES[case]["window"]),
+                "--starts", str(starts), "--out", "{out}"]
         for k, v in over.items():
             argv += ["--set", f"{k}={json.dumps(v)}"]
         jobs.append(Job(name, argv, {"PYTHONPATH": ROOT}))
@@ -241,7 +244,7 @@ def study_main(argv):
     ap.add_argument("--cases", nargs="+", choices=sorted(CASES), help="a subset of the cases")
     ap.add_argument("--analyse-only", action="store_true", help="skip the runs, analyse what is there")
     a = ap.parse_args(argv)
-    jobs, meta = study_jobs(os.path.join(a.out, "runs"), a.cases)
+    jobs, meta = study_jobs(a.cases)
     if not a.analyse_only:
         from yade_scripts.sweep import run_sweep
         run_sweep(jobs, os.path.join(a.out, "runs"), workers=a.workers, scheduler=a.scheduler)
