@@ -9,7 +9,7 @@ EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench bench-seismic packings biaxial liquefaction mutants clean
+.PHONY: deps ext demo test bench bench-seismic packings biaxial liquefaction tradeoffs stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -87,6 +87,19 @@ liquefaction: deps
 	 | xargs -P $(LIQ_JOBS) -L 1 $(LIQ_RUN)
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
+
+# Speed against accuracy (issue 12; docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
+# and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts against a dt = 5e-7 s
+# reference, through the sweep runner (resumable: a re-run skips the finished settings; about
+# 25 CPU-minutes, one process at a time so that the costs are comparable; SCHEDULER=tcp://host:8786
+# runs it on a Dask cluster) -> $(OUT)/tradeoffs/{tradeoffs.json,table.md,tradeoffs_*.png}.
+tradeoffs: deps
+	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --out $(OUT)/tradeoffs $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+
+# The stability map (issue 12): ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
+# (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.
+stability: deps
+	nice -n 10 $(YADE) -n -j 1 -x yade_scripts/stability.py --out $(OUT)/stability
 
 clean:
 	rm -rf $(OUT) .pytest_cache

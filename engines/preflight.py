@@ -117,16 +117,11 @@ def check_tie_time_step(scene, packing):
 def start_darcy_limit(scene, packing):
     """The explicit Darcy limit [s] of the water at the start: the pores of the packing built
     as the engine builds them, W = A (U = 0). None for a dry scene."""
-    from engines import pore_geometry as pg
-    from engines.pore_water import PoreWater
-
-    settings = scene.water_settings()
-    if settings is None:
+    if not scene.water.enabled:
         return None
-    net = pg.build_pores(packing.xz, packing.r, eps_m=scene.contact.eps_m, l_m=scene.water.l_m,
-                         walls=packing.group)
-    m = pg.measure(net, packing.xz, packing.r)
-    return PoreWater(net, m.void_area, settings).darcy_limit(m.void_area, m.link_contact)
+    from engines.time_step import start_pores
+    _, m, water = start_pores(scene, packing)
+    return water.darcy_limit(m.void_area, m.link_contact)
 
 
 def check_darcy(scene, packing):
@@ -141,6 +136,24 @@ def check_darcy(scene, packing):
         raise InputError(f"[numerics] dt = {num.dt:.3g} s: the water step water_interval x dt = {h:.3g} s exceeds "
                          f"the explicit Darcy limit {limit:.3g} s at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s, "
                          f"E_w = {w.E_w:g} N/m); reduce dt or the permeabilities, or set [water] substep = true")
+
+
+def check_water_stiffness(scene, packing):
+    """dt <= 2 sqrt(m / k_w) of the stiffness the water adds to the particles at the start
+    (engines.time_step: k_w = E_w sum_p (2 r)^2 / A_p over the pores a disc bounds)."""
+    if not scene.water.enabled:
+        return
+    from engines import time_step
+    from engines.pore_dem import disc_masses
+
+    net, m, _ = time_step.start_pores(scene, packing)
+    limit = time_step.water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w,
+                                            disc_masses(scene, packing)[0], packing.mobile)
+    dt = scene.numerics.dt
+    if dt > limit:
+        raise InputError(f"[numerics] dt = {dt:.3g} s exceeds the water-stiffness limit {limit:.3g} s at the start "
+                         f"(2 sqrt(m / k_w), k_w = E_w sum (2 r)^2 / A over the pores a disc bounds, [water] E_w = "
+                         f"{scene.water.E_w:g} N/m); reduce dt or E_w, or set dt = \"auto\"")
 
 
 def check_duration(scene):
@@ -171,13 +184,17 @@ def check_engine_options(scene):
 def preflight(scene, packing, out_dir):
     """Every check of a run that can be made before its first step; raises InputError.
 
-    Returns notes (one line each) on what the run will silently skip, for the script to print."""
+    Returns notes (one line each) on what the run will silently skip, for the script to print.
+    A dt = "auto" is checked as it will be chosen (engines.time_step)."""
+    from engines.time_step import resolve_dt
+    scene = resolve_dt(scene, packing, log=None)
     check_output_dir(out_dir)
     check_duration(scene)
     check_engine_options(scene)
     check_record(scene)
     check_time_step(scene, packing)
     check_tie_time_step(scene, packing)
+    check_water_stiffness(scene, packing)
     check_darcy(scene, packing)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:

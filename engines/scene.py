@@ -25,6 +25,7 @@ class SceneError(ValueError):
 # bounds, or a tuple of allowed strings.
 REQUIRED = object()
 POS = (0.0, math.inf)
+POS_OR_AUTO = (0.0, math.inf, "auto")  # > 0, or the string "auto" (numerics.dt: engines.time_step)
 SCHEMA = {
     "scene": {
         "name": (str, REQUIRED, None, "run name"),
@@ -102,12 +103,14 @@ SCHEMA = {
         "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
     },
     "numerics": {
-        "dt": (float, 1e-6, POS, "time step [s]"),
+        "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.time_step)"),
         "duration": (float, 0.06, POS, "simulated time [s]"),
         "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2))"),
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
         "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
+        # issue 12: the automatic time step (engines.time_step; dt = "auto") and its safety factor
+        "dt_auto_factor": (float, 0.45, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.45 the study's fast setting, 0.05 its accurate one (docs/TRADEOFFS.md)"),
     },
     "output": {
         "history_interval": (int, 100, (1, math.inf), "steps between history rows"),
@@ -173,6 +176,12 @@ class _Table(dict):
 def _check(table, name, value, spec):
     typ, _, check, _ = spec
     where = f"[{table}] {name}"
+    if check is POS_OR_AUTO:
+        if value == "auto":
+            return value
+        if isinstance(value, str):
+            raise SceneError(f"{where}: expected a number > 0 or \"auto\", got {value!r}")
+        check = POS
     if typ is float and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if typ is float and not isinstance(value, float) or typ is int and (not isinstance(value, int) or isinstance(value, bool)) \
@@ -223,6 +232,8 @@ def _cross_checks(t, path):
     if c["law"] == "yade" and c["spring"] not in ("a", "b"):
         raise SceneError(f"[contact] spring = {c['spring']!r}: law = 'yade' has springs a and b only "
                          f"(no YADE law has the f_max plateau of c and d); use law = 'paper'")
+    if t["numerics"]["dt_auto_factor"] <= 0:
+        raise SceneError(f"[numerics] dt_auto_factor: must be in (0, 1], got {t['numerics']['dt_auto_factor']}")
     if p["d_min"] >= p["d_max"]:
         raise SceneError(f"[packing] d_min = {p['d_min']} must be < d_max = {p['d_max']}")
     if p["source"] == "file" and not p["file"]:
@@ -319,6 +330,8 @@ def schema_markdown():
                 rng = ""
             elif isinstance(check[0], str):
                 rng = ", ".join(check)
+            elif check is POS_OR_AUTO:
+                rng = "> 0 or 'auto'"
             else:
                 rng = "> 0" if check is POS else f"[{check[0]}, {check[1]}]"
             lines.append(f"| {table} | {name} | {typ.__name__} | {shown} | {rng} | {doc} |")

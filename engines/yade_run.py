@@ -326,7 +326,9 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True):
     """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs
     (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later).
     Returns the summary ("status": completed or interrupted); re-raises an error after writing
-    the history, summary and failure state."""
+    the history, summary and failure state. A dt = "auto" is chosen here (engines.time_step; printed)."""
+    from engines.time_step import resolve_dt
+    scene = resolve_dt(scene, packing)
     os.makedirs(out_dir, exist_ok=True)
     clear_outputs(out_dir)
     duration = scene.numerics.duration if duration is None else duration

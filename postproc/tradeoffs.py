@@ -1,0 +1,228 @@
+"""The speed/accuracy study's tables and figures (yade_scripts/tradeoffs.py; docs/TRADEOFFS.md).
+
+``analyse(out, jobs, meta)`` reads OUT/runs/<job>/result.json, computes each setting's errors
+against its case's reference (engines.tradeoffs: ensemble means over the starts, chaos floors),
+and writes OUT/tradeoffs.json, OUT/table.md and OUT/tradeoffs_<case>.png (error against cost,
+log axes, the Pareto front marked). Cost is CPU seconds per start (the machine is shared, so
+CPU time is steadier than wall time; both are kept); the speed-up is against the case's run at
+the paper's settings (dt = 1e-6 s, water every step, rebuilds every 1000 steps).
+"""
+import json
+import os
+
+import numpy as np
+
+from engines import tradeoffs as tr
+
+METRICS = ("pressure_rms", "porosity_change", "settlement")  # judged; pressure_rms_below_surface: a diagnostic
+LABELS = {"pressure_rms": "block pressure RMS", "porosity_change": "porosity change", "settlement": "settlement"}
+DIAGNOSTIC = "pressure_rms_below_surface"
+TARGET = 0.05
+PAPER_DT = 1e-6
+
+
+def load(path):
+    """A result.json as arrays over its ok starts: t, U (starts, times, blocks), porosity, height,
+    kinetic_energy (starts, times); None when no start ran to the end."""
+    try:
+        with open(path) as f:
+            res = json.load(f)
+    except (OSError, ValueError):
+        return None
+    ok = [s for s in res["starts"] if s["status"] == "ok"]
+    res["n_ok"] = len(ok)
+    rec = [s["cpu_record_s"] for s in ok if "cpu_record_s" in s]
+    res["cpu_record_s"] = float(np.mean(rec)) if rec and len(rec) == len(ok) else None
+    res["messages"] = sorted({s.get("message", "") for s in res["starts"] if s["status"] != "ok"})
+    if not ok or len({len(s["t"]) for s in ok}) != 1:
+        res["data"] = None
+        return res
+    res["data"] = {"t": np.array(ok[0]["t"]), **{k: np.array([s[k] for s in ok], float)
+                                                  for k in ("U", "porosity", "height", "kinetic_energy")}}
+    return res
+
+
+def record_cost(results, meta):
+    """Runs written before the recording was timed on its own (no cpu_record_s) have it in their
+    cpu_s: take out the median recording cost of the same case's other runs (the same window and
+    samples), and mark them ("record_cost_estimated")."""
+    for case in {c for c, _, _ in meta.values()}:
+        named = [n for n, (c, _, _) in meta.items() if c == case and results.get(n)]
+        known = [results[n]["cpu_record_s"] for n in named if results[n]["cpu_record_s"] is not None]
+        if not known:
+            continue
+        for n in named:
+            res = results[n]
+            if res["cpu_record_s"] is None and res.get("data") is not None:
+                res["cpu_s"] -= float(np.median(known))
+                res["record_cost_estimated"] = True
+
+
+def is_paper(knob, value):
+    return knob == "dt" and value == PAPER_DT
+
+
+def analyse(out, jobs, meta, log=print):
+    """Errors, speed-ups, the table and the figures of the study in ``out`` (module docstring).
+    ``meta``: job name -> (case, knob, value). Returns the tradeoffs.json dict."""
+    log = log or (lambda *a: None)
+    results = {j.name: load(os.path.join(out, "runs", j.name, "result.json")) for j in jobs}
+    record_cost(results, meta)
+    cases = sorted({c for c, _, _ in meta.values()}, key=[c for c, _, _ in meta.values()].index)
+    doc = {"reference": {}, "runs": [], "defaults": None, "alternatives": {},
+           "notes": "error: ensemble means over the starts against the reference's (engines.tradeoffs), as fractions; "
+                    "floor: the same metric between two sets of starts at the reference settings (chaos); "
+                    "speedup: CPU seconds per start at the paper's settings of the case over the run's"}
+    for case in cases:
+        names = [n for n, (c, _, _) in meta.items() if c == case]
+        ref = next((results[n] for n in names if meta[n][1] == "reference"), None)
+        paper = next((results[n] for n in names if is_paper(*meta[n][1:])), None)
+        if ref is None or ref.get("data") is None:
+            log(f"{case}: no reference yet")
+            continue
+        floor = tr.floors(ref["data"])
+        if paper is None and ref["dt"] == PAPER_DT:  # a case whose reference is the paper's settings
+            paper = ref
+        paper_cpu = paper["cpu_s"] if paper and paper.get("data") is not None else None
+        doc["reference"][case] = {"settings": ref["overrides"], "dt": ref["dt"], "window_s": ref["window"],
+                                  "starts": ref["n_ok"], "cpu_s": ref["cpu_s"], "wall_s": ref["wall_s"], "floor": floor,
+                                  "paper_cpu_s": paper_cpu}
+        for n in names:
+            _, knob, value = meta[n]
+            res = results[n]
+            if knob == "reference" or res is None:
+                continue
+            row = {"case": case, "knob": knob, "value": value, "settings": res["overrides"], "dt": res["dt"],
+                   "starts_ok": res["n_ok"], "starts": len(res["starts"]), "wall_s": res["wall_s"], "cpu_s": res["cpu_s"],
+                   "program": res.get("program", "yade"), "messages": res["messages"]}
+            if res["data"] is not None:
+                row["speedup"] = paper_cpu / res["cpu_s"] if paper_cpu else None
+                row["error"] = tr.errors(res["data"], ref["data"])
+                row["substeps_max"] = max(s.get("substeps_max", 0) for s in res["starts"])
+                row["kinetic_energy_max"] = float(np.max(res["data"]["kinetic_energy"]))
+            else:
+                row["speedup"], row["error"] = None, None
+            if knob == "defaults":
+                key = value.get("name", "defaults") if isinstance(value, dict) else "defaults"
+                doc["alternatives"][f"{case}:{key}"] = row
+            doc["runs"].append(row)
+        judge([r for r in doc["runs"] if r["case"] == case])
+    fast = doc["alternatives"].get("liquefaction_case1:fast")
+    if fast is not None:
+        doc["defaults"] = {"settings": fast["settings"], "speedup": fast["speedup"], "error": fast["error"],
+                           "floor": doc["reference"]["liquefaction_case1"]["floor"], "case": "liquefaction_case1",
+                           "window_s": doc["reference"]["liquefaction_case1"]["window_s"]}
+        full = doc["alternatives"].get("liquefaction_case1_full:fast")
+        if full is not None:  # the whole 0.18 s, against the paper's settings as the reference
+            doc["defaults"]["full_duration"] = {k: full[k] for k in ("speedup", "error", "cpu_s")}
+            doc["defaults"]["full_duration"]["floor"] = doc["reference"]["liquefaction_case1_full"]["floor"]
+    with open(os.path.join(out, "tradeoffs.json"), "w") as f:
+        json.dump(doc, f, indent=1, default=float)
+    with open(os.path.join(out, "table.md"), "w") as f:
+        f.write(table(doc))
+    for case in doc["reference"]:
+        log("figure:", figure(doc, case, os.path.join(out, f"tradeoffs_{case}.png")))
+    return doc
+
+
+def judge(rows):
+    """Mark each row: ``within_target`` (every metric <= 5 %) and ``within_paper`` (every metric <=
+    max(5 %, the error of the paper's settings, dt = 1e-6 s, on that metric): no worse than the
+    paper's own settings measured the same way, which is what the chaos floor allows to resolve)."""
+    paper = next((r for r in rows if is_paper(r["knob"], r["value"]) and r["error"]), None)
+    for r in rows:
+        err = r["error"]
+        r["within_target"] = bool(err) and all(err[m] <= TARGET for m in METRICS)
+        r["within_paper"] = bool(err) and paper is not None and \
+            all(err[m] <= max(TARGET, paper["error"][m]) for m in METRICS)
+
+
+def worst(err):
+    return max(err[m] for m in METRICS) if err else np.nan
+
+
+def _fmt(v, spec=".3f"):
+    return "–" if v is None or (isinstance(v, float) and not np.isfinite(v)) else format(v, spec)
+
+
+def _value(row):
+    v = row["value"]
+    if isinstance(v, dict):
+        return v.get("name", "")
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def table(doc):
+    """Markdown: one line per run (errors in %, the chaos floor on the case's first line)."""
+    lines = ["| case | knob | value | dt [s] | CPU s/start | speed-up | pressure RMS % | porosity change % | "
+             "settlement % | below surface % | ≤ 5 % | ≤ paper's | starts ok |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for case, ref in doc["reference"].items():
+        fl = ref["floor"]
+        lines.append(f"| {case} | reference (chaos floor) | dt {ref['dt']:g} | {ref['dt']:g} | {ref['cpu_s']:.1f} | "
+                     f"{_fmt(ref['paper_cpu_s'] / ref['cpu_s'] if ref['paper_cpu_s'] else None, '.2f')} | "
+                     + " | ".join(f"({100 * fl[m]:.1f})" for m in METRICS + (DIAGNOSTIC,)) + f" | | | {ref['starts']} |")
+        for row in doc["runs"]:
+            if row["case"] != case:
+                continue
+            err = row["error"]
+            cells = [f"{100 * err[m]:.1f}" for m in METRICS + (DIAGNOSTIC,)] if err else \
+                ["failed: " + "; ".join(row["messages"])[:60], "", "", ""]
+            cells += ["yes" if row.get(k) else "no" for k in ("within_target", "within_paper")]
+            lines.append(f"| {case} | {row['knob']} | {_value(row)} | {row['dt']:g} | {row['cpu_s']:.2f} | "
+                         f"{_fmt(row['speedup'], '.1f')} | " + " | ".join(cells) + f" | {row['starts_ok']}/{row['starts']} |")
+    return "\n".join(lines) + "\n"
+
+
+KNOB_STYLE = {"dt": ("tab:blue", "o"), "water_interval": ("tab:orange", "s"), "rebuild_period": ("tab:green", "^"),
+              "smoothing": ("tab:red", "D"), "transfer": ("tab:purple", "v"), "E_w_scale": ("tab:brown", "P"),
+              "precision": ("tab:pink", "X"), "law": ("tab:olive", "*"), "defaults": ("black", "*")}
+
+
+def figure(doc, case, path):
+    """Error against CPU seconds per start (log axes), one panel per metric and one for the worst,
+    the Pareto front of each panel, the chaos floor (grey band) and the 5 % target."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in doc["runs"] if r["case"] == case and r["error"]]
+    ref = doc["reference"][case]
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8.5), sharex=True)
+    panels = [("worst", "worst of the three metrics")] + [(m, LABELS[m]) for m in METRICS]
+    for ax, (key, title) in zip(axes.flat, panels):
+        cost = np.array([r["cpu_s"] for r in rows])
+        err = np.array([worst(r["error"]) if key == "worst" else r["error"][key] for r in rows])
+        fl = max(ref["floor"].values()) if key == "worst" else ref["floor"][key]
+        bottom = 0.3 * min(np.min(err[err > 0], initial=fl), fl)
+        err = np.maximum(err, bottom)  # a zero error (identical runs) drawn at the axis bottom
+        for knob, (color, marker) in KNOB_STYLE.items():
+            sel = [k for k, r in enumerate(rows) if r["knob"] == knob]
+            if sel:
+                ax.scatter(cost[sel], err[sel], c=color, marker=marker, s=70 if knob == "defaults" else 40,
+                           label=knob.replace("_", " "), zorder=3, edgecolors="k", linewidths=0.4)
+        for k, r in enumerate(rows):
+            ax.annotate(_value(r), (cost[k], err[k]), fontsize=6, xytext=(3, 3), textcoords="offset points")
+        front = tr.pareto_front(cost, err)
+        ax.step(cost[front], err[front], where="post", color="k", lw=1.0, ls="--", label="Pareto front", zorder=2)
+        ax.axhspan(bottom, fl, color="0.85", zorder=0, label="chaos floor")
+        ax.axhline(TARGET, color="tab:red", lw=0.8, label="5 % target")
+        if ref["paper_cpu_s"]:
+            ax.axvline(ref["paper_cpu_s"], color="0.4", lw=0.8, ls=":", label="paper's settings")
+            ax.axvline(ref["paper_cpu_s"] / 10, color="tab:green", lw=0.8, ls=":", label="10x faster")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(bottom, max(ax.get_ylim()[1], 1.5 * TARGET))  # the target always in view
+        ax.set_title(title, fontsize=10)
+        ax.set_ylabel("error (fraction of the reference)")
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in axes[1]:
+        ax.set_xlabel("CPU seconds per start (one run of the window)")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=7, fontsize=8)
+    fig.suptitle(f"{case}: error against cost, {ref['window_s']:g} s window, {ref['starts']} starts "
+                 f"(reference dt = {ref['dt']:g} s)", fontsize=11)
+    fig.tight_layout(rect=(0, 0.06, 1, 0.97))
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,138 @@
+"""The speed/accuracy study (issue 12 item 1): its error metrics on statistics, their chaos floors,
+the Pareto front, the perturbed starts and the study's bookkeeping, on synthetic runs (no YADE)."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+from engines import scene as scenes
+from engines import tradeoffs as tr
+from packing.deposition import scene_packing
+
+
+def _run(U, porosity, height, t=None):
+    U = np.asarray(U, float)
+    t = np.arange(U.shape[1]) * 1e-3 if t is None else t
+    return {"t": t, "U": U, "porosity": np.asarray(porosity, float), "height": np.asarray(height, float)}
+
+
+def test_pressure_error_is_the_rms_of_the_ensemble_mean_difference():
+    rng = np.random.default_rng(1)
+    U_ref = rng.normal(100.0, 30.0, (5, 40, 3))
+    assert tr.pressure_error(np.arange(40), U_ref, np.arange(40), U_ref) == 0.0
+    # every start 10 % higher: the error is 0.1 whatever the spread between starts
+    assert tr.pressure_error(np.arange(40), 1.1 * U_ref, np.arange(40), U_ref) == pytest.approx(0.1, rel=1e-12)
+    # a run offset by c in one block of three: RMS over blocks and times = c / sqrt(3) over the reference's RMS
+    off = U_ref.copy()
+    off[:, :, 1] += 7.0
+    expected = 7.0 / np.sqrt(3) / np.sqrt(np.mean(U_ref.mean(axis=0) ** 2))
+    assert tr.pressure_error(np.arange(40), off, np.arange(40), U_ref) == pytest.approx(expected, rel=1e-12)
+
+
+def test_pressure_error_interpolates_onto_the_reference_times_and_skips_empty_blocks():
+    t_ref = np.linspace(0, 1, 11)
+    U_ref = np.stack([np.column_stack([1 + t_ref, np.full(11, np.nan)])] * 2)  # block 2 holds no pore
+    t = np.linspace(0, 1, 5)
+    U = np.stack([np.column_stack([1 + t, np.full(5, np.nan)])] * 3)
+    assert tr.pressure_error(t, U, t_ref, U_ref) == pytest.approx(0.0, abs=1e-15)  # linear: exact
+
+
+def test_floors_follow_the_spread_between_starts():
+    # starts = mean +- sigma (alternating), n = 4: std (ddof 1) = sigma sqrt(4/3)
+    n, sigma = 4, 3.0
+    z = np.array([1, -1, 1, -1], float)
+    U = 50.0 + sigma * z[:, None, None] * np.ones((1, 20, 2))
+    floor = np.sqrt(2 / n) * sigma * np.sqrt(4 / 3) / 50.0
+    assert tr.pressure_floor(U) == pytest.approx(floor, rel=1e-12)
+    x = 2e-4 + 1e-5 * z
+    assert tr.change_floor(x) == pytest.approx(np.sqrt(2 / n) * 1e-5 * np.sqrt(4 / 3) / 2e-4, rel=1e-12)
+    assert tr.change_error(x * 1.2, x) == pytest.approx(0.2, rel=1e-12)
+
+
+def test_errors_use_porosity_change_and_settlement():
+    ref = _run(np.ones((2, 3, 1)), [[0.30, 0.31, 0.32], [0.30, 0.30, 0.34]], [[1.0, 0.9, 0.8], [1.0, 0.9, 0.6]])
+    run = _run(np.ones((2, 3, 1)), [[0.30, 0.31, 0.33], [0.30, 0.30, 0.36]], [[1.0, 0.9, 0.8], [1.0, 0.9, 0.8]])
+    e = tr.errors(run, ref)
+    assert e["pressure_rms"] == 0.0
+    assert e["porosity_change"] == pytest.approx((0.045 - 0.03) / 0.03)  # mean change 0.045 against 0.03
+    assert e["settlement"] == pytest.approx(abs(0.2 - 0.3) / 0.3)
+    assert set(tr.floors(ref)) == set(e)
+
+
+def test_pareto_front():
+    cost = [1, 2, 3, 4, 5, 0.5]
+    err = [0.5, 0.1, 0.2, 0.05, 0.3, np.nan]
+    assert tr.pareto_front(cost, err) == [0, 1, 3]
+    assert tr.pareto_front([1, 1], [0.2, 0.1]) == [1]  # the same cost: the lower error only
+
+
+def test_perturbed_starts_move_only_the_particles_by_about_the_size():
+    pk = scene_packing(scenes.preset("quicksand_case1"))
+    assert tr.perturbed(pk, 0) is pk
+    a, b = tr.perturbed(pk, 1), tr.perturbed(pk, 2)
+    d = a.xz - pk.xz
+    assert np.all(d[~pk.mobile] == 0) and 0.3e-9 < np.std(d[pk.mobile]) < 3e-9
+    assert not np.allclose(a.xz, b.xz, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(tr.perturbed(pk, 1).xz, a.xz)  # reproducible
+
+
+def test_study_points_and_jobs():
+    from yade_scripts import tradeoffs as study
+    pts = study.points()
+    assert pts[0] == ("liquefaction_case1", "reference", study.REFERENCE_DT)
+    assert ("liquefaction_case1", "dt", study.PAPER_DT) in pts
+    cases = [c for c, _, _ in pts]
+    assert cases.index("liquefaction_case4") > max(i for i, c in enumerate(cases) if c != "liquefaction_case4")
+    # the dt sweep keeps the rebuild period at 1 ms, the paper's 1000 steps of 1e-6 s
+    for dt in (5e-7, 1e-6, 2e-5, 1e-4):
+        over, _ = study.settings_of("liquefaction_case1", "dt", dt)
+        assert over["numerics.rebuild_interval"] * dt == pytest.approx(1e-3)
+    over, prog = study.settings_of("liquefaction_case1", "E_w_scale", 10.0)
+    assert over["water.E_w"] == 24000.0 and over["water.substep"] and prog == "yade"
+    assert study.settings_of("liquefaction_case1", "precision", "longdouble")[1] == "yade-longdouble"
+    jobs, meta = study.study_jobs()
+    assert len({j.name for j in jobs}) == len(jobs) == len(pts)
+    argv = dict(zip(jobs[0].argv, jobs[0].argv[1:]))
+    assert argv["--case"] == "liquefaction_case1" and argv["--starts"] == "5" and argv["--window"] == "0.04"
+
+
+def _fake_result(path, case, over, dt, cpu, scale, rng, n=5, ok=True):
+    t = np.arange(0, 0.0105, 5e-4)
+    starts = []
+    for s in range(n):
+        U = scale * (100 * np.sin(2 * np.pi * 100 * t)[:, None] * np.ones(2) + rng.normal(0, 0.2, (len(t), 2)))
+        starts.append({"seed": s, "status": "ok" if ok else "refused", "t": list(t), "U": U.tolist(),
+                       "porosity": list(0.3 + scale * 0.01 * t / t[-1]), "height": list(1e-2 - scale * 1e-4 * t / t[-1]),
+                       "kinetic_energy": list(0 * t), "cpu_s": cpu, "message": "" if ok else "refused: eq 52"})
+    os.makedirs(path, exist_ok=True)
+    with open(os.path.join(path, "result.json"), "w") as f:
+        json.dump({"case": case, "overrides": over, "dt": dt, "window": 0.01, "cpu_s": cpu, "wall_s": 2 * cpu,
+                   "starts": starts}, f)
+
+
+def test_analyse_writes_the_issue_format(tmp_path):
+    from postproc.tradeoffs import analyse
+    from yade_scripts.sweep import Job
+    rng = np.random.default_rng(0)
+    case = "liquefaction_case1"
+    spec = [("ref", "reference", 5e-7, 5e-7, 100.0, 1.0, True), ("paper", "dt", 1e-6, 1e-6, 50.0, 1.0, True),
+            ("fast", "dt", 2e-5, 2e-5, 2.5, 1.02, True), ("bad", "dt", 2e-4, 2e-4, 0.1, 1.0, False),
+            ("def", "defaults", {"name": "fast", "numerics.dt": "auto"}, 2e-5, 2.0, 1.03, True)]
+    jobs, meta = [], {}
+    for name, knob, value, dt, cpu, scale, ok in spec:
+        _fake_result(str(tmp_path / "runs" / name), case, {"numerics": {"dt": dt}}, dt, cpu, scale, rng, ok=ok)
+        jobs.append(Job(name, ("true",)))
+        meta[name] = (case, knob, value)
+    doc = analyse(str(tmp_path), jobs, meta, log=None)
+    on_disk = json.loads((tmp_path / "tradeoffs.json").read_text())
+    assert set(on_disk) >= {"reference", "runs", "defaults"}
+    runs = {r["value"] if not isinstance(r["value"], dict) else "def": r for r in doc["runs"]}
+    assert runs[1e-6]["speedup"] == pytest.approx(1.0) and runs[2e-5]["speedup"] == pytest.approx(20.0)
+    assert runs[2e-5]["error"]["pressure_rms"] == pytest.approx(0.02, rel=0.1)  # 2 % higher everywhere
+    assert runs[2e-4]["error"] is None and "eq 52" in runs[2e-4]["messages"][0]
+    d = on_disk["defaults"]
+    assert d["speedup"] == pytest.approx(25.0)
+    assert set(d["error"]) == {"pressure_rms", "porosity_change", "settlement", "pressure_rms_below_surface"}
+    assert (tmp_path / f"tradeoffs_{case}.png").stat().st_size > 10000
+    assert "| liquefaction_case1 | dt | 2e-05 |" in (tmp_path / "table.md").read_text()

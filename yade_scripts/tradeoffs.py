@@ -1,0 +1,264 @@
+"""Speed against accuracy (issue 12): each numerical knob swept, error against a fine reference.
+
+    make tradeoffs                                   # the study -> out/tradeoffs/ (resumable)
+    /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs [--workers 1] [--scheduler ADDR]
+    /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --analyse-only
+    yade -n -j 1 -x yade_scripts/tradeoffs.py run --case liquefaction_case1 --window 0.04 \\
+         --set numerics.dt=2e-5 --set numerics.rebuild_interval=50 --out out/one   # one setting
+
+``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
+(engines.tradeoffs.perturbed: start s moves the particles by 1e-9 m x N(0, 1), seed s; start 0 is
+the preset's packing) for ``--window`` seconds and writes OUT/result.json: per start the block
+pressure, window porosity, particles' mean height and kinetic energy every ``--record`` seconds,
+the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
+water balance and sub-steps. The cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the engines is recorded with
+its message.
+
+``study`` builds the jobs of KNOBS (one per case, knob and value), runs them with the sweep runner
+(yade_scripts/sweep.py: resumable, local processes or a Dask scheduler), then computes the
+errors (engines.tradeoffs) against each case's reference and writes out/tradeoffs/tradeoffs.json,
+table.md and the error-against-cost figures (docs/TRADEOFFS.md explains them).
+"""
+import argparse
+import json
+import os
+import sys
+import time
+
+_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
+sys.path.insert(0, ROOT)
+
+import numpy as np  # noqa: E402
+
+RECORD = 5e-4      # s between samples of the histories (a multiple of every dt below)
+REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
+STARTS = 5
+REFERENCE_DT = 5e-7
+PAPER_DT = 1e-6
+
+# Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
+# the values of each knob; "preset" (default: the key) and "reference_dt" (default REFERENCE_DT)
+# where they differ. "defaults" are the named settings chosen from the study.
+CASES = {
+    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5,
+                           "dt": [1e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4],
+                           "water_interval": [2, 5, 10], "rebuild_period": [2e-4, 5e-4, 2e-3, 5e-3],
+                           "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
+                           "precision": ["longdouble"],
+                           "defaults": [{"name": "fast", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.45,
+                                         "numerics.rebuild_interval": 20, "numerics.water_interval": 2},
+                                        {"name": "accurate", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.05,
+                                         "numerics.rebuild_interval": 200, "numerics.water_interval": 1}]},
+    "quicksand_case1": {"window": 0.03, "fast_dt": 1e-5,
+                        "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
+                        "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
+                        "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
+    # the fast setting over the whole 0.18 s against the paper's settings as the reference
+    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT,
+                                "fast_dt": 2e-5, "defaults": []},
+    "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
+}
+CASES["liquefaction_case1_full"]["defaults"] = CASES["liquefaction_case1"]["defaults"][:1]
+
+
+def dt_settings(dt):
+    """dt [s] with the pores rebuilt every REBUILD_PERIOD (so that the dt sweep does not also
+    change the rebuild period), water every step."""
+    return {"numerics.dt": dt, "numerics.rebuild_interval": max(1, int(round(REBUILD_PERIOD / dt))),
+            "numerics.water_interval": 1}
+
+
+def settings_of(case, knob, value):
+    """(overrides, yade program) of one point of the study."""
+    spec = CASES[case]
+    base = dt_settings(spec["fast_dt"])
+    if knob == "reference":
+        return dt_settings(spec.get("reference_dt", REFERENCE_DT)), "yade"
+    if knob == "dt":
+        return dt_settings(value), "yade"
+    if knob == "water_interval":
+        return {**base, "numerics.water_interval": value}, "yade"
+    if knob == "rebuild_period":
+        return {**base, "numerics.rebuild_interval": int(round(value / spec["fast_dt"]))}, "yade"
+    if knob in ("smoothing", "transfer"):
+        return {**base, f"water.{knob}": value}, "yade"
+    if knob == "E_w_scale":
+        from engines import scene as scenes
+        E_w = scenes.preset(case).water.E_w * value
+        return {**base, "water.E_w": E_w, "water.substep": True}, "yade"
+    if knob == "law":
+        return {**base, "contact.law": value}, "yade"
+    if knob == "precision":
+        return base, f"yade-{value}"
+    if knob == "defaults":  # a named setting chosen from the study (docs/TRADEOFFS.md)
+        return {k: v for k, v in value.items() if k != "name"}, "yade"
+    raise ValueError(f"unknown knob {knob!r}")
+
+
+PRIORITY = (("reference", "dt", "water_interval", "rebuild_period"),
+            ("smoothing", "transfer", "E_w_scale", "precision", "law", "defaults"))
+LAST = ("liquefaction_case1_full", "liquefaction_case4")  # run after every knob of the other cases
+
+
+def points(cases=None):
+    """[(case, knob, value)] of the study in the order it runs: the references, dt (with the paper's
+    settings), water_interval and rebuild_period of every case, then the other knobs, case by case
+    in the order of CASES (liquefaction case 4 last), so that a stopped study has the first knobs."""
+    out = []
+    order = [(knobs, [c for c in CASES if c not in LAST]) for knobs in PRIORITY]
+    order.append((sum(PRIORITY, ()), list(LAST)))
+    for knobs, names in order:
+        for case in names:
+            spec = CASES[case]
+            if cases and case not in cases:
+                continue
+            for knob in knobs:
+                if knob == "reference":
+                    out.append((case, knob, spec.get("reference_dt", REFERENCE_DT)))
+                else:
+                    out += [(case, knob, v) for v in spec.get(knob, [])]
+    return out
+
+
+def job_name(case, knob, value):
+    text = value if isinstance(value, str) else value["name"] if isinstance(value, dict) else repr(value)
+    safe = "".join(c if c.isalnum() or c in "._=,+-" else "_" for c in text)
+    return f"{case}.{knob}={safe}"[:120]
+
+
+# -- run (inside YADE) ----------------------------------------------------------------------------
+def parse_set(text):
+    from engines.run_options import scene_setting
+    return scene_setting(text)
+
+
+def run_main(argv):
+    from engines.preflight import ArgumentParser, number, output_dir
+    ap = ArgumentParser(prog="tradeoffs.py run")
+    ap.add_argument("--case", required=True, help="a preset of yade_scripts/scenes (e.g. liquefaction_case1)")
+    ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="TABLE.FIELD=VALUE")
+    ap.add_argument("--window", type=number(lo=0, lo_open=True, unit="s"), required=True)
+    ap.add_argument("--record", type=number(lo=0, lo_open=True, unit="s"), default=RECORD)
+    ap.add_argument("--starts", type=number(int, 1), default=STARTS)
+    ap.add_argument("--out", type=output_dir, required=True)
+    a = ap.parse_args(argv)
+    over = {}
+    for table, field, value in a.set:
+        over.setdefault(table, {})[field] = value
+    over.setdefault("numerics", {})["duration"] = a.window
+    result = run_setting(a.case, over, a.window, a.record, a.starts, a.out)
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "result.json"), "w") as f:
+        json.dump(result, f)
+    print(f"{a.case} {over}: cpu {result['cpu_s']:.1f} s, wall {result['wall_s']:.1f} s, "
+          f"{sum(1 for s in result['starts'] if s['status'] == 'ok')}/{a.starts} starts ok")
+
+
+def run_setting(case, overrides, window, record, n_starts, out_dir):
+    """Run one setting from n_starts perturbed starts; returns the result dict (module docstring)."""
+    from yade import O
+    from engines import scene as scenes
+    from engines.preflight import InputError, preflight
+    from engines.time_step import resolve_dt
+    from engines.tradeoffs import perturbed
+    from engines.yade_coupling import YadeCoupling
+    from packing.deposition import scene_packing
+
+    sc = scenes.preset(case, overrides)
+    packing = scene_packing(sc)
+    sc = resolve_dt(sc, packing)
+    dt = sc.numerics.dt
+    every = max(1, int(round(record / dt)))
+    n_steps = int(round(window / dt))
+    YadeCoupling(sc, packing).run(10)  # loads the compiled kernels (numba's cache) outside the timing
+    starts, cpu, wall = [], 0.0, 0.0
+    for s in range(n_starts):
+        pk = perturbed(packing, s)
+        rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
+        try:
+            preflight(sc, pk, out_dir)
+            c0, w0 = time.process_time(), time.time()
+            cp = YadeCoupling(sc, pk)
+            mob = pk.mobile
+            k, c_rec, w_rec = 0, 0.0, 0.0  # the recording's own time, left out of the cost
+            while True:
+                r0, q0 = time.process_time(), time.time()
+                xz = cp.positions()
+                rec["t"].append(O.iter * dt)
+                rec["U"].append([float(u) for u in cp.block_pressures(xz)])
+                rec["porosity"].append(float(cp.porosity(xz)))
+                rec["height"].append(float(np.mean(xz[mob, 1])))
+                rec["kinetic_energy"].append(cp.kinetic_energy())
+                c_rec, w_rec = c_rec + time.process_time() - r0, w_rec + time.time() - q0
+                if k >= n_steps or not np.all(np.isfinite(xz)):
+                    break
+                cp.run(min(every, n_steps - k))
+                k += min(every, n_steps - k)
+            cpu_s, wall_s = time.process_time() - c0 - c_rec, time.time() - w0 - w_rec
+            w, wm = cp.water, cp.water_model
+            rec.update(status="ok" if np.all(np.isfinite(xz)) else "nan", cpu_s=cpu_s, wall_s=wall_s, steps=int(O.iter),
+                       cpu_record_s=c_rec,
+                       water_balance_error=w.balance_error() if w else 0.0,
+                       substeps_max=wm.substeps_max if wm else 0, substeps_total=wm.substeps_total if wm else 0,
+                       n_rebuilds=wm.n_rebuilds if wm else 0,
+                       contact_list_builds=cp.core.contact.list_builds if cp.core is not None else None)
+            cpu += cpu_s
+            wall += wall_s
+        except InputError as e:  # refused up front
+            rec.update(status="refused", message=str(e), steps=0)
+        except ValueError as e:  # stopped by an engine (DarcyStabilityError ...)
+            rec.update(status="failed", message=str(e), steps=int(O.iter))
+        starts.append(rec)
+    ok = [r for r in starts if r["status"] == "ok"]
+    return {"case": case, "overrides": overrides, "dt": dt, "window": window, "record": record,
+            "n_steps": n_steps, "cpu_s": cpu / max(len(ok), 1), "wall_s": wall / max(len(ok), 1),
+            "starts": starts, "program": os.path.basename(sys.argv[0]) if sys.argv else "yade"}
+
+
+# -- study (Debian's Python) ----------------------------------------------------------------------
+def study_jobs(cases=None, starts=STARTS, yade_args=("-n", "-j", "1")):
+    """(jobs for yade_scripts.sweep, {job name: (case, knob, value)}) of the study's points."""
+    from yade_scripts.sweep import Job
+    jobs, meta = [], {}
+    for case, knob, value in points(cases):
+        over, program = settings_of(case, knob, value)
+        name = job_name(case, knob, value)
+        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run",
+                "--case", CASES[case].get("preset", case), "--window", repr(CASES[case]["window"]),
+                "--starts", str(starts), "--out", "{out}"]
+        for k, v in over.items():
+            argv += ["--set", f"{k}={json.dumps(v)}"]
+        jobs.append(Job(name, argv, {"PYTHONPATH": ROOT}))
+        meta[name] = (case, knob, value)
+    return jobs, meta
+
+
+def study_main(argv):
+    from engines.preflight import ArgumentParser, number
+    ap = ArgumentParser(prog="tradeoffs.py study")
+    ap.add_argument("--out", default=os.path.join("out", "tradeoffs"))
+    ap.add_argument("--workers", type=number(int, 1), default=int(os.environ.get("TRADE_JOBS", "1")),
+                    help="local processes at a time (default 1: the study is timed)")
+    ap.add_argument("--scheduler", help="Dask scheduler address (timings then come from the workers)")
+    ap.add_argument("--cases", nargs="+", choices=sorted(CASES), help="a subset of the cases")
+    ap.add_argument("--analyse-only", action="store_true", help="skip the runs, analyse what is there")
+    a = ap.parse_args(argv)
+    jobs, meta = study_jobs(a.cases)
+    if not a.analyse_only:
+        from yade_scripts.sweep import run_sweep
+        run_sweep(jobs, os.path.join(a.out, "runs"), workers=a.workers, scheduler=a.scheduler)
+    from postproc.tradeoffs import analyse
+    analyse(a.out, jobs, meta)
+
+
+def main(argv):
+    if argv and argv[0] == "run":
+        return run_main(argv[1:])
+    if argv and argv[0] == "study":
+        return study_main(argv[1:])
+    sys.exit("usage: tradeoffs.py run ... | study ... (see the docstring)")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
