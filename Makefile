@@ -79,7 +79,7 @@ biaxial: deps
 # study uses what is there.
 LIQ_CASES ?= 1 2 3 4 5 6 7
 LIQ_CONSERVING ?= 1 3
-LIQ_JOBS ?= 1
+LIQ_JOBS ?= 2
 LIQ_RUN := $(YADE) -n -x yade_scripts/liquefaction.py
 liquefaction: deps
 	@{ for n in $(LIQ_CASES); do echo "--case $$n --out $(OUT)/liquefaction/case$$n"; done; \
