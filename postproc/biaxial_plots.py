@@ -185,7 +185,7 @@ def plot_study_curves(per_phi_e, path):
                 phi, c_star = mohr_coulomb_fit(s3, s1)
                 smax = max(smax, max(s1))
                 x = np.array([0, 1.05 * max(s1)])
-                am.plot(x, c_star + x * np.tan(np.radians(phi)), "k-", lw=0.8,
+                am.plot(x, c_star + x * np.tan(np.radians(phi)), color="k", lw=0.8, ls=("-", "--", ":", "-.")[seed % 4],
                         label=f"seed {seed}: φ* = {phi:.1f}°, c* = {c_star:.1f} Pa")
         ax.set(xlabel="axial strain [%]", ylabel="deviator σ1 − σ3 [Pa]", title=f"φe = {pe:g}° (Fig. 9–11 A)")
         ax.legend(fontsize=7)
