@@ -89,9 +89,10 @@ def sensitivity_name(seed, **changes):
 
 
 def main_jobs(seeds, quick=False):
-    """The main grid: φe × the four σ3 on one packing seed per job, to 5 % strain."""
+    """The main grid: φe × the four σ3 on one packing seed per job, to 5 % strain; φe = 15° (the
+    paper's φ*, c*) first."""
     return [biaxial_job(f"main_phi{p:g}_seed{s}", quick=quick, phi_e=p, sigma3=SIGMA3, max_strain=5.0, seed=s)
-            for p in PHI_E for s in seeds]
+            for p in sorted(PHI_E, reverse=True) for s in seeds]
 
 
 def sensitivity_jobs(parts, seeds, quick=False):
