@@ -154,9 +154,11 @@ def predicted_cpu_s(job):
 
 
 def estimate(jobs, runs, log=print):
-    """Print the predicted CPU minutes of the jobs not yet done; returns their sum [s]."""
+    """Print (``log``; None = quiet) the predicted CPU minutes of the jobs not yet done; returns
+    their sum [s]."""
     from yade_scripts.sweep import is_done
 
+    log = log or (lambda *a: None)
     todo = [j for j in jobs if not is_done(j, runs)]
     cost = {j.name: predicted_cpu_s(j) for j in todo}
     for name, c in cost.items():
