@@ -240,6 +240,11 @@ def analyse_main(runs, seeds):
     return out
 
 
+def phi_one_circle(q_f, sigma3):
+    """φ [deg] of the line through the origin tangent to one Mohr circle (c* = 0)."""
+    return math.degrees(math.asin(q_f / (q_f + 2 * sigma3)))
+
+
 def analyse_sensitivity(runs, seeds):
     """Peak, E50 and φ (line through the origin, c* = 0) at σ3 = 200 Pa for each knob's value
     (the reference value's runs are those of the knob's specimen: 1000 or SMALL_DISCS discs)."""
@@ -266,7 +271,7 @@ def analyse_sensitivity(runs, seeds):
                 q_f = c.peak()[1]
                 cells["peak_deviator_pa"].append(q_f)
                 cells["e50_pa"].append(c.e50())
-                cells["phi0_deg"].append(math.degrees(math.asin(q_f / (q_f + 2 * SENS_SIGMA3))))  # c* = 0
+                cells["phi0_deg"].append(phi_one_circle(q_f, SENS_SIGMA3))
                 cells["curves"].append(c)
                 cells["wall_s"].append(summary["wall_s"])
             res[v] = cells
@@ -314,14 +319,21 @@ def write_table(study, path):
     paper_q = PAPER["peak_deviator_200_pa"]
     lines = ["Main grid (1000 discs, 100 %/min, 5 % strain; mean ± s.d. over packings):", "",
              "| φe | φ* paper | φ* model | c* paper | c* model [Pa] | peak q at σ3 = 200 Pa, paper | model [Pa] |"
-             " eq 4: A | m |", "|---|---|---|---|---|---|---|---|---|"]
+             " φ at σ3 = 200 Pa, c* = 0 | eq 4: A | m |", "|---|---|---|---|---|---|---|---|---|---|"]
     for p in PHI_E:
         k = f"{p}"
         eq4 = m["eq4"].get(k)
+        q200 = m["peak_deviator_pa"].get(k, {}).get("200.0")
         lines.append(f"| {p:g}° | {PAPER['phi_star_deg'].get(p, '–')} | {_ms(m['phi_star_deg'].get(k), unit='°')} | "
                      f"{PAPER['c_star_pa'].get(p, '–')} | {_ms(m['c_star_pa'].get(k))} | ≈ {paper_q[p]:g} | "
-                     f"{_ms(m['peak_deviator_pa'].get(k, {}).get('200.0'), '{:.0f}')} | "
+                     f"{_ms(q200, '{:.0f}')} | {_ms(q200 and _mean_sd([phi_one_circle(q, 200.0) for q in q200['values']]), unit='°')} | "
                      f"{_num(eq4 and eq4['A'], '{:.3g}')} | {_num(eq4 and eq4['m'], '{:.3f}')} |")
+    ref = sens.get("n_discs", {}).get("1000")
+    if ref and ref["peak_deviator_pa"]["n"]:
+        lines += ["", f"φe = {SENS_PHI:g}° at σ3 = {SENS_SIGMA3:g} Pa from the sensitivity reference runs (1000 discs packed "
+                  f"straight to {SENS_SIGMA3:g} Pa, {SENS_STRAIN:g} % strain): peak q = "
+                  f"{_ms(ref['peak_deviator_pa'], '{:.0f}')} Pa (paper ≈ {paper_q[SENS_PHI]:g}), φ (c* = 0) = "
+                  f"{_ms(ref['phi0'], unit='°')}, E50 = {_ms(ref['e50_pa'], '{:.3g}')} Pa."]
     lines += ["", "Peak deviator and E50 against σ3 (Fig. 9–11, 15):", "",
               "| φe | σ3 [Pa] | peak q [Pa] | strain at peak [%] | E50 [Pa] |", "|---|---|---|---|---|"]
     for p in PHI_E:
@@ -349,7 +361,12 @@ def write_table(study, path):
                   f"{v['e50_pa']['mean']:.4g} Pa ({', '.join(f'{x:.4g}' for x in v['e50_pa']['values'])}) | "
                   f"{100 * v['e50_error']:+.1f} % |"]
     elif cal:
-        lines += ["", f"Calibration round trip: not verified ({cal.get('error') or cal.get('failed')})"]
+        why = cal.get("error") or "no result from " + ", ".join(f["job"] for f in cal.get("failed", []))
+        inv = cal.get("inverted")
+        lines += ["", "Calibration round trip: not verified: " + why + (
+            f" (eq 5–6 gave φe = {inv['phi_e_deg']:.2f}°, kn = {inv['kn_pa_per_m']:.4g} Pa/m for φ* = "
+            f"{cal['target']['phi_star_deg']:.2f}°, E50 = {cal['target']['e50_pa']:.4g} Pa at σ3 = "
+            f"{cal['target']['sigma3_pa']:g} Pa)" if inv else "")]
     if study.get("stability"):
         st = study["stability"]
         lines += ["", f"Time steps ({st['n_discs']} discs packed at 0.5e-4 s, left at rest {st['rest_time_s']:g} s):", "",
