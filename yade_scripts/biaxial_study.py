@@ -118,7 +118,7 @@ def sensitivity_jobs(parts, seeds, quick=False):
     if "rate" in parts:
         jobs += [sens(s, strain_rate=r) for r in RATES for s in seeds]
     if "dt" in parts:
-        jobs += [sens(s, dt=dt, packing_dt=5e-5, **small) for dt in DTS for s in seeds]
+        jobs += [sens(s, dt=dt, packing_dt=5e-5, **small) for dt in sorted(DTS, reverse=True) for s in seeds]
     if "sideload" in parts:
         jobs += [biaxial_job(f"sideload_diameter_seed{s}", quick=quick, phi_e=15.0, sigma3=(100.0, 400.0),
                              max_strain=5.0, side_load="diameter", seed=s) for s in seeds]
