@@ -407,11 +407,11 @@ def figures(out, main, sens):
     if pairs:
         plot_sigma3_kn_collapse(pairs, os.path.join(out, "fig18_sigma3_over_kn.png"))
     for key, fname, title, label in [
-            ("strain_rate_pct_min", "fig05_strain_rate.png", "axial strain rate (Fig. 5)", "strain rate [%/min]"),
-            ("dt_s", "fig06_dt.png", "time step (Fig. 6)", "Δt [s]"),
+            ("strain_rate_pct_min", "fig05_strain_rate.png", "axial strain rate, 1000 discs (Fig. 5)", "strain rate [%/min]"),
+            ("dt_s", "fig06_dt.png", f"time step, {SMALL_DISCS} discs (Fig. 6)", "Δt [s]"),
             ("n_discs", "fig08_discs.png", "number of discs (Fig. 8)", "discs"),
-            ("kn_pa_per_m", "fig13_kn.png", "kn (Fig. 13)", "kn [Pa/m]"),
-            ("ks_ratio", "fig14_ks.png", "ks/kn (Fig. 14)", "ks/kn")]:
+            ("kn_pa_per_m", "fig13_kn.png", f"kn, {SMALL_DISCS} discs (Fig. 13)", "kn [Pa/m]"),
+            ("ks_ratio", "fig14_ks.png", f"ks/kn, {SMALL_DISCS} discs (Fig. 14)", "ks/kn")]:
         groups = {float(v): c["curves"] for v, c in sens[key].items() if c["curves"]}
         failed = {float(v): len(c["failed"]) for v, c in sens[key].items() if c["failed"]}
         if groups:
