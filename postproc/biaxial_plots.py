@@ -1,5 +1,6 @@
 """Figures of seed 003's biaxial tests (Murakami et al. Fig. 4–21), from what the runs write."""
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -92,6 +93,9 @@ def plot_e50_sigma3(points, path):
         u = np.unique(s3)
         ax.plot(u, [np.exp(np.mean(np.log(e[s3 == v]))) for v in u], "-", color=col, label=f"φe = {pe:g}° (geometric mean)")
     ax.set(xscale="log", yscale="log", xlabel="σ3 [Pa]", ylabel="E50 [Pa]", title="E50 against σ3 (Fig. 15)")
+    s3_all = sorted({p["sigma3_pa"] for p in points})
+    ax.set_xticks(s3_all, [f"{v:g}" for v in s3_all])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     _save(fig, path)
