@@ -108,7 +108,7 @@ def plot_eq4(points, fits, path, extra=()):
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     for k, p in enumerate(extra):
         ax.plot(p["sigma3_pa"] / p["kn"], p["e50_pa"] / p["sigma3_pa"], "D", mfc="none", ms=5,
-                color=PHI_COLOURS.get(p["phi_e_deg"]), label=f"φe = {p['phi_e_deg']:g}°, kn ≠ 1e8 (not fitted)" if k == 0 else None)
+                color=PHI_COLOURS.get(p["phi_e_deg"]), label=f"φe = {p['phi_e_deg']:g}°, kn ≠ 1e8, other specimen (not fitted)" if k == 0 else None)
     for pe, (A, m) in sorted(fits.items()):
         sel = [p for p in points if p["phi_e_deg"] == pe]
         x = np.array([p["sigma3_pa"] / p["kn"] for p in sel])

@@ -402,8 +402,8 @@ def figures(out, main, sens):
         main_curves = [c[s3] for c in main["per_phi_e"].get(SENS_PHI, {}).get("curves", {}).values() if s3 in c]
         kn_curves = sens["kn_pa_per_m"].get(kn, {}).get("curves", [])
         if main_curves and kn_curves:
-            pairs[s3 / KN] = {f"kn = {KN:.0e}, σ3 = {s3:g} Pa": main_curves,
-                              f"kn = {kn:.0e}, σ3 = {SENS_SIGMA3:g} Pa": kn_curves}
+            pairs[s3 / KN] = {f"kn = {KN:.0e}, σ3 = {s3:g} Pa, 1000 discs": main_curves,
+                              f"kn = {kn:.0e}, σ3 = {SENS_SIGMA3:g} Pa, {SMALL_DISCS} discs": kn_curves}
     if pairs:
         plot_sigma3_kn_collapse(pairs, os.path.join(out, "fig18_sigma3_over_kn.png"))
     for key, fname, title, label in [

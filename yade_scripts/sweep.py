@@ -129,7 +129,7 @@ def run_job(job, root):
     return rec
 
 
-def _is_done(job, root):
+def is_done(job, root):
     rec = read_record(root, job.name)
     out = os.path.abspath(os.path.join(root, job.name))
     return rec is not None and rec.get("status") == "ok" and rec.get("command") == job.command(out) \
@@ -151,7 +151,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     os.makedirs(root, exist_ok=True)
     log = log or (lambda *a: None)
     t0 = time.time()
-    kept = {j.name: read_record(root, j.name) for j in jobs if resume and _is_done(j, root)}
+    kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
     todo = [j for j in jobs if j.name not in kept]
     log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
         f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
