@@ -65,9 +65,10 @@ packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
 
-# Seed 003 (hours on 2 cores, niced, resumable): biaxial tests of the paper's specimen, φ*(φe),
-# E50, eq 4-6 and their sensitivity, through the sweep runner. SCHEDULER=tcp://host:8786 runs the
-# jobs on a Dask cluster instead of the local cores.
+# Seed 003 (about 85 CPU minutes, niced, resumable: finished jobs are kept): biaxial tests of the
+# paper's specimen, φ*(φe), E50, eq 4-6 and their sensitivity, through the sweep runner
+# (docs/BIAXIAL.md). `biaxial_study.py --estimate` prints what is left to run and its predicted
+# cost. SCHEDULER=tcp://host:8786 runs the jobs on a Dask cluster instead of the local cores.
 biaxial: deps
 	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 

@@ -119,8 +119,8 @@ def stable_dt(r, c):
     """Time step [s] for seed 003's packings: the paper's 0.5e-4 s for its constants (Table 1–2),
     scaled as 1/ω for others, never above it. Measured on a 1000-disc packing at rest
     (yade_scripts/biaxial_stability.py): kn = 1e8, ks/kn = 0.25 rings at 7e-5 s, not at 5e-5 s;
-    ks/kn = 0.5 at 5e-5 s, not at 4e-5 s; kn = 2e8 at 5e-5 s, not at 3.5e-5 s: the highest mode
-    goes as √(kn f_w (1 + 4 ks/kn) / (ρ r_min))."""
+    kn = 2e8 at 5e-5 s, not at 3.5e-5 s: the highest mode goes as √(kn f_w (1 + 4 ks/kn) / (ρ r_min)).
+    Known defect: at ks/kn = 0.5 the 4.08e-5 s it gives still rings (docs/BIAXIAL.md)."""
     stiff = c.kn * c.width_factor * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
     paper = 1e8 * (1 + 4 * 0.25) / (2500.0 * 1.4e-3)
     return PAPER_DT * min(1.0, math.sqrt(paper / stiff))

@@ -1,5 +1,6 @@
 """Figures of seed 003's biaxial tests (Murakami et al. Fig. 4–21), from what the runs write."""
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -92,6 +93,9 @@ def plot_e50_sigma3(points, path):
         u = np.unique(s3)
         ax.plot(u, [np.exp(np.mean(np.log(e[s3 == v]))) for v in u], "-", color=col, label=f"φe = {pe:g}° (geometric mean)")
     ax.set(xscale="log", yscale="log", xlabel="σ3 [Pa]", ylabel="E50 [Pa]", title="E50 against σ3 (Fig. 15)")
+    s3_all = sorted({p["sigma3_pa"] for p in points})
+    ax.set_xticks(s3_all, [f"{v:g}" for v in s3_all])
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")
     _save(fig, path)
@@ -104,7 +108,7 @@ def plot_eq4(points, fits, path, extra=()):
     fig, ax = plt.subplots(figsize=(5.5, 4.2))
     for k, p in enumerate(extra):
         ax.plot(p["sigma3_pa"] / p["kn"], p["e50_pa"] / p["sigma3_pa"], "D", mfc="none", ms=5,
-                color=PHI_COLOURS.get(p["phi_e_deg"]), label=f"φe = {p['phi_e_deg']:g}°, kn ≠ 1e8 (not fitted)" if k == 0 else None)
+                color=PHI_COLOURS.get(p["phi_e_deg"]), label=f"φe = {p['phi_e_deg']:g}°, kn ≠ 1e8, other specimen (not fitted)" if k == 0 else None)
     for pe, (A, m) in sorted(fits.items()):
         sel = [p for p in points if p["phi_e_deg"] == pe]
         x = np.array([p["sigma3_pa"] / p["kn"] for p in sel])
@@ -185,7 +189,7 @@ def plot_study_curves(per_phi_e, path):
                 phi, c_star = mohr_coulomb_fit(s3, s1)
                 smax = max(smax, max(s1))
                 x = np.array([0, 1.05 * max(s1)])
-                am.plot(x, c_star + x * np.tan(np.radians(phi)), "k-", lw=0.8,
+                am.plot(x, c_star + x * np.tan(np.radians(phi)), color="k", lw=0.8, ls=("-", "--", ":", "-.")[seed % 4],
                         label=f"seed {seed}: φ* = {phi:.1f}°, c* = {c_star:.1f} Pa")
         ax.set(xlabel="axial strain [%]", ylabel="deviator σ1 − σ3 [Pa]", title=f"φe = {pe:g}° (Fig. 9–11 A)")
         ax.legend(fontsize=7)

@@ -158,3 +158,25 @@ def test_tiling_repeats_the_block_with_seams_as_in_the_cell(tmp_path):
     back = Packing.load(str(tmp_path / "ground.csv"))
     np.testing.assert_allclose(back.xz, pk.xz, rtol=1e-12)
     np.testing.assert_allclose(back.r, pk.r, rtol=1e-12)
+
+
+def test_study_cost_estimate_follows_steps_and_discs(tmp_path):
+    """--estimate: CPU ∝ discs; the compression's steps ∝ strain / rate / Δt; done jobs not counted."""
+    import json
+
+    from yade_scripts import biaxial_study as st
+
+    ref = st.predicted_cpu_s(st.sensitivity(1))
+    assert st.predicted_cpu_s(st.sensitivity(1, n_discs=500)) == pytest.approx(ref / 2)
+    ms = st.MS_PER_STEP_1000 / 1000
+    slow = st.predicted_cpu_s(st.sensitivity(1, strain_rate=25.0))
+    assert (slow - ref) / ms == pytest.approx(0.04 / (25 / 6000) / 5e-5 - 0.04 / (100 / 6000) / 5e-5)
+    fine = st.predicted_cpu_s(st.sensitivity(1, dt=2.5e-5, packing_dt=5e-5))
+    pack = st.PACK_STEPS[0] * ms
+    assert fine - pack == pytest.approx(2 * (ref - pack))  # all but the packing at half the step
+    assert st.predicted_cpu_s(st.main_jobs([1])[0]) > 3 * ref  # four σ3 to 5 % against one to 4 %
+    jobs = [st.sensitivity(1), st.sensitivity(2)]
+    done = tmp_path / jobs[0].name
+    done.mkdir()
+    (done / "job.json").write_text(json.dumps({"status": "ok", "command": jobs[0].command(str(done)), "env": {}}))
+    assert st.estimate(jobs, str(tmp_path), log=None) == pytest.approx(ref)

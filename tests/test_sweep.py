@@ -99,3 +99,16 @@ def test_a_runner_failure_is_reported_not_lost(tmp_path, monkeypatch):
     monkeypatch.setattr(sweep, "run_job", broken)
     rec = run_sweep([Job("a", ("true",))], str(tmp_path), log=None)[0]
     assert rec["status"] == "failed" and "disk full" in rec["stderr_tail"]
+
+
+def test_cpu_seconds_and_timeout_are_recorded(tmp_path):
+    # a job busy for 0.5 s of CPU (in a child it waits for), one asleep for 0.5 s, one stopped by its timeout
+    busy = "import subprocess, sys; subprocess.run([sys.executable, '-c', " \
+           "'import time\\nt = time.process_time()\\nwhile time.process_time() - t < 0.5: pass'])"
+    jobs = [Job("busy", (sys.executable, "-c", busy)), Job("asleep", (sys.executable, "-c", "import time; time.sleep(0.5)")),
+            Job("late", (sys.executable, "-c", "import time; time.sleep(30)"), timeout=0.5)]
+    busy_rec, asleep_rec, late_rec = run_sweep(jobs, str(tmp_path), workers=1, log=None)
+    assert busy_rec["status"] == "ok" and 0.45 < busy_rec["cpu_s"] < busy_rec["wall_s"] + 0.05
+    assert asleep_rec["status"] == "ok" and asleep_rec["wall_s"] >= 0.5 and asleep_rec["cpu_s"] < 0.3
+    assert late_rec["status"] == "failed" and late_rec["returncode"] == -9 and late_rec["wall_s"] < 10
+    assert "timeout after 0.5 s" in late_rec["stderr_tail"]

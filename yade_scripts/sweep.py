@@ -9,7 +9,7 @@ local cores or on a Dask distributed cluster, resumable.
 A job is a name and a command line; ``{out}`` in an argument becomes the job's directory
 ``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR). Each job writes
 there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
-"failed"), return code, wall seconds, command, host, and the tail of stderr. ``run_sweep``
+"failed"), return code, wall and CPU seconds, command, host, and the tail of stderr. ``run_sweep``
 returns the records of all jobs in the order given, prints one line per finished job and a
 summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job whose job.json says
 "ok" for the same command is not run again; failed, interrupted or changed jobs are.
@@ -32,6 +32,7 @@ import re
 import socket
 import subprocess
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -78,6 +79,28 @@ def read_record(root, name):
         return None
 
 
+def _run_timed(cmd, stdout, stderr, env, timeout):
+    """Run ``cmd`` to its end: (return code, CPU seconds it used (user + system, with the children
+    it waited for), whether it was killed at ``timeout`` seconds)."""
+    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env)
+    killed = threading.Event()
+
+    def kill():
+        killed.set()
+        proc.kill()
+
+    timer = threading.Timer(timeout, kill) if timeout else None
+    if timer:
+        timer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+    finally:
+        if timer:
+            timer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, usage.ru_utime + usage.ru_stime, killed.is_set()
+
+
 def run_job(job, root):
     """Run one job in its directory (blocking); write and return its record. Runs wherever it is
     called: in a local thread or on a Dask worker."""
@@ -90,23 +113,23 @@ def run_job(job, root):
     env = {**os.environ, **job.env, "SWEEP_JOB_DIR": out}
     t0 = time.time()
     err_path = os.path.join(out, "stderr.log")
+    cpu_s, note = 0.0, ""
     try:
         with open(os.path.join(out, "stdout.log"), "w") as so, open(err_path, "w") as se:
-            rc = subprocess.run(cmd, stdout=so, stderr=se, env=env, timeout=job.timeout).returncode
-        note = ""
-    except subprocess.TimeoutExpired:
-        rc, note = -9, f"timeout after {job.timeout} s"
+            rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout)
+        if timed_out:
+            rc, note = -9, f"timeout after {job.timeout} s"
     except OSError as e:
         rc, note = 127, f"could not start: {e}"
     with open(err_path, errors="replace") as f:
         tail = f.read()[-STDERR_TAIL:]
-    rec.update(status="ok" if rc == 0 else "failed", returncode=rc, wall_s=time.time() - t0, finished=time.time(),
-               stderr_tail=(note + "\n" + tail).strip())
+    rec.update(status="ok" if rc == 0 else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
+               finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
     _write_json(os.path.join(out, "job.json"), rec)
     return rec
 
 
-def _is_done(job, root):
+def is_done(job, root):
     rec = read_record(root, job.name)
     out = os.path.abspath(os.path.join(root, job.name))
     return rec is not None and rec.get("status") == "ok" and rec.get("command") == job.command(out) \
@@ -128,7 +151,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     os.makedirs(root, exist_ok=True)
     log = log or (lambda *a: None)
     t0 = time.time()
-    kept = {j.name: read_record(root, j.name) for j in jobs if resume and _is_done(j, root)}
+    kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
     todo = [j for j in jobs if j.name not in kept]
     log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
         f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
