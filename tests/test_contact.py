@@ -146,10 +146,11 @@ def test_touching_pairs_counts_and_forces_for_plots():
     law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0), r, mobile=np.ones(4, bool))
     law.forces(xz, np.zeros((4, 2)), np.zeros(4), 1e-6)
     np.testing.assert_array_equal(law.touch_count(), [1, 2, 1, 0])
-    pairs, fn = law.contact_pairs()
+    pairs, fn, es = law.contact_pairs()
     order = np.argsort(pairs[:, 0])
     np.testing.assert_array_equal(pairs[order], [[0, 1], [1, 2]])
     np.testing.assert_allclose(fn[order], [1.0, 2.0], rtol=1e-9)
+    np.testing.assert_array_equal(es, [0.0, 0.0])       # head-on: no tangential spring
 
 
 def test_forces_do_not_depend_on_the_neighbour_list_bookkeeping():

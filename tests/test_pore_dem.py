@@ -7,7 +7,7 @@ import pytest
 from engines import pore_geometry as pg
 from engines import scene as sc
 from engines import pore_dem
-from engines.pore_dem import PoreDEM, disc_masses, input_acceleration, moving_walls
+from engines.pore_dem import PoreDEM, disc_masses, moving_walls
 from packing.layouts import hex_lattice
 from packing.packing import Packing
 
@@ -42,38 +42,25 @@ def test_masses_per_unit_thickness():
     np.testing.assert_allclose(inertia, m * np.array([0.4e-3, 0.5e-3]) ** 2 / 2, rtol=1e-15)
 
 
-def test_input_acceleration_cosine_and_record(tmp_path):
-    a = input_acceleration(scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0}))
-    assert a(0.0) == 15.0 and a(0.005) == pytest.approx(0.0, abs=1e-12) and a(0.01) == pytest.approx(-15.0)
-    rec = tmp_path / "rec.txt"
-    rec.write_text("# t [s], a [g]\n0.0 0.0\n0.02 0.5\n0.04 -0.25\n")
-    a = input_acceleration(scene(loading={"type": "record", "record": str(rec), "time_scale": 0.5, "amplitude_scale": 2.0}))
-    g0 = 9.80665
-    assert a(0.005) == pytest.approx(0.5 * 2.0 * 0.5 * g0, rel=1e-12)   # halfway to the 2nd sample at t = 0.01
-    assert a(0.01) == pytest.approx(2.0 * 0.5 * g0, rel=1e-12)
-    assert a(0.02) == pytest.approx(-2.0 * 0.25 * g0, rel=1e-12)
-    assert a(0.03) == 0.0                                               # after the record
-    assert input_acceleration(scene()) is None
-    one = tmp_path / "one.txt"
-    one.write_text("0.0 0.2\n")                                        # a record of one sample
-    a = input_acceleration(scene(loading={"type": "record", "record": str(one)}))
-    assert a(0.0) == pytest.approx(0.2 * g0) and a(1.0) == 0.0
-    with pytest.raises(ValueError, match=r"\[loading\] record"):
-        input_acceleration(scene(loading={"type": "record", "record": str(tmp_path / "missing.txt")}))
-
-
-def test_wall_velocity_integrates_the_input():
+def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
+    """The driven walls, moved by x += wall_velocity dt each step, follow the exact displacement of
+    a = A cos(w t) from rest, u = A/w^2 (1 - cos w t), to the second-order error of the
+    constant-average-acceleration method (a first-order integration would be off by ~1/n)."""
     s = scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0, "moves": "box"},
               numerics={"dt": 1e-6})
     pk = wet_box()
     core = PoreDEM(s, pk)
     np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
-    for _ in range(30):
+    u, w = 0.0, 2 * np.pi * 50.0
+    for k in range(1, 31):
         core.step(pk.xz)
-    expected = sum(15.0 * np.cos(2 * np.pi * 50.0 * k * 1e-6) * 1e-6 for k in range(30))
-    assert core.wall_velocity == pytest.approx(expected, rel=1e-13)
+        u += core.wall_velocity * 1e-6
+        assert u == pytest.approx(15.0 / w**2 * (1 - np.cos(w * k * 1e-6)), rel=1e-6)
     np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
     assert not moving_walls(scene(), pk).any()
+    still = PoreDEM(scene(), pk)
+    still.step(pk.xz)
+    assert still.base is None and still.wall_velocity == 0.0
 
 
 def test_bad_numerics_are_refused():
@@ -174,13 +161,21 @@ def test_block_pressures_are_means_of_the_pores_in_each_block():
         assert sel.any() and g == pytest.approx(U[sel].mean(), rel=1e-14)
 
 
-def test_porosity_of_a_hexagonal_lattice_is_exact():
-    """Void / polygon area of the pores of a touching hexagonal lattice: 1 - pi / (2 sqrt 3)."""
-    xz = hex_lattice(6, 5, 2 * R)
-    pk = Packing(xz, np.full(len(xz), R), np.zeros(len(xz), int), np.ones(len(xz)))
-    assert pore_dem.porosity(scene(), pk, xz) == pytest.approx(1 - np.pi / (2 * np.sqrt(3)), rel=1e-12)
-    far = Packing(np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, R), [0, 0], [1.0, 1.0])
-    assert np.isnan(pore_dem.porosity(scene(), far, far.xz))   # no pore: no porosity
+def test_window_porosity_moves_with_the_base():
+    """Void fraction of the window of a box packing around its particles only (walls excluded):
+    one particle of radius r wholly inside gives 1 - pi r^2 / |window|; the window shifted with
+    the base until the particle's centre is on its edge sees half the disc."""
+    xz = np.array([[0.0, 0.0], [4 * R, 0.0], [2 * R, -2 * R], [2 * R, 0.0]])
+    pk = Packing(xz, np.full(4, R), [pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM, 0], np.ones(4))
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 1.0]}), pk)
+    assert (window.x0, window.x1) == pytest.approx((R, 3 * R), rel=1e-12)
+    area = (window.x1 - window.x0) * (window.z1 - window.z0)
+    big = type(window)(-5 * R, 5 * R, -R, R)
+    assert pore_dem.window_porosity(pk, big, xz) == pytest.approx(1 - np.pi * R**2 / (20 * R**2), rel=1e-12)
+    assert pore_dem.window_porosity(pk, big, xz, base_disp=-3 * R) == pytest.approx(1 - np.pi * R**2 / 2 / (20 * R**2), rel=1e-12)
+    assert 0 < area and np.isnan(pore_dem.window_porosity(pk, None, xz))
+    no_sides = Packing(xz[2:], np.full(2, R), [pg.WALL_BOTTOM, 0], np.ones(2))
+    assert pore_dem.porosity_window(scene(), no_sides) is None
 
 
 def test_kinetic_energy_with_spin_of_the_mobile_discs():
@@ -201,8 +196,9 @@ def test_a_disc_pressed_into_a_wall_feels_the_spring():
     core = PoreDEM(s, pk)
     F, _ = core.step(pk.xz)
     assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
-    pairs, fn = core.contact.contact_pairs()
+    pairs, fn, es = core.contact.contact_pairs()
     assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
+    assert es == pytest.approx([0.0], abs=1e-15)                 # no tangential motion: no shear spring
     moved = pk.xz.copy()
     moved[1, 1] += 3e-9
     core.step(moved)
@@ -236,7 +232,7 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
 def test_steps_match_the_reference_without_yade(variant):
     """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
     x += v dt, walls at the input velocity, adjusted velocities set before) follows the independent
-    reference (with PoreDEM's wall kinematics, READINGS D1) disc by disc: contact law, spin,
+    reference disc by disc: contact law, spin,
     separation adjustment, pore rebuilds, water steps every water_interval, smoothing, drained
     sides, inflow and input."""
     from engines import reference as ref
@@ -253,7 +249,7 @@ def test_steps_match_the_reference_without_yade(variant):
     pk = wet_box(seed=5, jitter=0.05)
     core = PoreDEM(s, pk)
     moving = moving_walls(s, pk)
-    model = ref.ReferenceModel(s.as_dict(), pk, readings={"wall_step": "symplectic_euler"})  # PoreDEM.wall_velocity
+    model = ref.ReferenceModel(s.as_dict(), pk)   # the paper's readings, walls included (READINGS D1)
     m, _ = disc_masses(s, pk)
     mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
     up = s.material.rho_w * np.pi * pk.r**2 * g
