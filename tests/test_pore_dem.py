@@ -279,3 +279,81 @@ def test_rebuild_every_step_when_asked():
     for k in range(4):
         core.step(moving_positions(pk, k))
     assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_side_wall_ties_add_their_forces_to_the_step(compiled):
+    """[loading] side_walls = "springs" (Fig. 27): a middle disc of the left column moved by dx in
+    one step feels -2 k's dx - 2 eta's dx/dt more than with fixed walls (its two ties, the tie
+    velocity du/dt of the step), its two neighbours +k's dx + eta's dx/dt each; nothing in z."""
+    ks, eta, dx, dt = 1e3, 0.5, 1e-8, 1e-7
+    tables = dict(contact={"ks_wall": ks, "eta_s_wall": eta}, numerics={"dt": dt})
+    pk = wet_box()
+    ties = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0, "side_walls": "springs"}, **tables), pk, compiled)
+    fixed = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0}, **tables), pk, compiled)
+    left = np.flatnonzero(pk.group == pg.WALL_LEFT)
+    left = left[np.argsort(pk.xz[left, 1])]
+    d, below, above = left[2], left[1], left[3]
+    for k in range(2):
+        xz = pk.xz.copy()
+        xz[d, 0] += k * dx
+        diff = ties.step(xz)[0] - fixed.step(xz)[0]
+        tie = k * (ks * dx + eta * dx / dt)
+        expected = np.zeros_like(diff)
+        expected[[d, below, above], 0] = [-2 * tie, tie, tie]
+        np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
+
+
+def test_side_wall_ties_refuse_a_step_above_their_limit():
+    """dt must stay below sqrt(m_min / k's) of the moving wall discs (engines.seismic_box)."""
+    pk = wet_box()
+    m_wall = disc_masses(scene(), pk)[0][pk.group == pg.WALL_LEFT].min()
+    dt = 1e-7
+    for ks, ok in ((0.98 * m_wall / dt**2, True), (1.02 * m_wall / dt**2, False)):
+        s = scene(loading={"type": "cosine", "side_walls": "springs"}, contact={"ks_wall": ks}, numerics={"dt": dt})
+        if ok:
+            PoreDEM(s, pk)
+        else:
+            with pytest.raises(ValueError, match="side-wall ties"):
+                PoreDEM(s, pk)
+
+
+@pytest.mark.parametrize("wet", [True, False])
+def test_one_compiled_call_per_step_equals_the_general_step(wet):
+    """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
+    does between YADE's position read and force write) gives the forces, velocity fixes, water and
+    rebuilds of PoreDEM.step, step by step (falling back to ``step`` where it says so)."""
+    from engines import kernels
+    s = wet_scene(q_w=1e-4) if wet else scene(numerics={"dt": 1e-6})
+    s = sc.validate({**s.as_dict(), "contact": {**s.as_dict()["contact"], "separation_adjustment": True}})
+    pk = wet_box(jitter=0.05)
+    general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
+    rows, held = np.arange(len(pk.r)), np.zeros((len(pk.r), 2))
+    n_fused = 0
+    for k in range(10):
+        xz = moving_positions(pk, k)
+        F, fixes = general.step(xz.copy())
+        args = fused.kernel_step_args()
+        if args is None:
+            F2, fixes2 = fused.step(xz.copy())
+        else:
+            n_fused += 1
+            due, law_args, water_args = args
+            F2 = np.zeros_like(xz)
+            while True:
+                n_lost, n_sub = kernels.dem_step(xz, F2, rows, held, due, *law_args, *water_args)
+                if n_lost != kernels.LIST_STALE:
+                    break
+                fused.law.contact._update_list(xz)
+                due, law_args, water_args = args = fused.kernel_step_args()
+            fixes2 = fused.finish_kernel_step(xz, n_lost, n_sub, args)
+        np.testing.assert_allclose(F2, F, rtol=1e-12, atol=1e-12 * np.abs(F).max())
+        assert fixes2.keys() == fixes.keys()
+        assert fused.k == general.k == k + 1
+        if wet:
+            assert fused.water.total_water() == pytest.approx(general.water.total_water(), rel=1e-13)
+            assert fused.water_model.n_rebuilds == general.water_model.n_rebuilds
+    assert n_fused >= 5
+    if wet:
+        assert general.water.balance.inflow > 0
+        assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
