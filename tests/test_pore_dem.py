@@ -138,7 +138,8 @@ def test_dry_scene_has_no_water_and_nan_pressures():
     assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
     assert pore_dem.water_model(s, pk) is None
     bounds = pk.block_bounds(s.output.block_z)
-    assert np.all(np.isnan(pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)))
+    dry_blocks = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert dry_blocks.shape == (len(bounds),) and np.all(np.isnan(dry_blocks))
     F, fixes = core.step(pk.xz)
     assert np.all(np.isfinite(F)) and fixes == {}
 
@@ -174,8 +175,9 @@ def test_window_porosity_moves_with_the_base():
     assert pore_dem.window_porosity(pk, big, xz) == pytest.approx(1 - np.pi * R**2 / (20 * R**2), rel=1e-12)
     assert pore_dem.window_porosity(pk, big, xz, base_disp=-3 * R) == pytest.approx(1 - np.pi * R**2 / 2 / (20 * R**2), rel=1e-12)
     assert 0 < area and np.isnan(pore_dem.window_porosity(pk, None, xz))
-    no_sides = Packing(xz[2:], np.full(2, R), [pg.WALL_BOTTOM, 0], np.ones(2))
-    assert pore_dem.porosity_window(scene(), no_sides) is None
+    for keep in ([2, 3], [0, 2, 3], [1, 2, 3]):        # no side column, only the left, only the right
+        part = Packing(xz[keep], np.full(len(keep), R), np.array(pk.group)[keep], np.ones(len(keep)))
+        assert pore_dem.porosity_window(scene(), part) is None
 
 
 def test_kinetic_energy_with_spin_of_the_mobile_discs():
@@ -302,6 +304,8 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
         expected = np.zeros_like(diff)
         expected[[d, below, above], 0] = [-2 * tie, tie, tie]
         np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
+    assert ties.kernel_step_args() is None                      # the ties need the general step
+    assert (fixed.kernel_step_args() is None) == (not compiled)
 
 
 def test_side_wall_ties_refuse_a_step_above_their_limit():
@@ -318,42 +322,61 @@ def test_side_wall_ties_refuse_a_step_above_their_limit():
                 PoreDEM(s, pk)
 
 
+def fused_step(core, xz, vel=None):
+    """One step of ``core`` as PaperLawEngine.drive does it: kernels.dem_step between
+    kernel_step_args and finish_kernel_step (the pair list rebuilt when the kernel finds it
+    stale), or the general ``step`` where kernel_step_args says None. Returns (F, fixes, fused)."""
+    from engines import kernels
+    args = core.kernel_step_args()
+    if args is None:
+        return (*core.step(xz, vel), False)
+    F = np.zeros_like(xz)
+    rows, held = np.arange(len(xz)), np.zeros_like(xz)
+    while True:
+        due, law_args, water_args = args
+        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args)
+        if n_lost != kernels.LIST_STALE:
+            return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
+        core.law.contact._update_list(xz)
+        args = core.kernel_step_args()
+
+
 @pytest.mark.parametrize("wet", [True, False])
 def test_one_compiled_call_per_step_equals_the_general_step(wet):
     """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
-    does between YADE's position read and force write) gives the forces, velocity fixes, water and
-    rebuilds of PoreDEM.step, step by step (falling back to ``step`` where it says so)."""
-    from engines import kernels
+    does between YADE's position read and force write) gives the forces, water and rebuilds of
+    PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``."""
     s = wet_scene(q_w=1e-4) if wet else scene(numerics={"dt": 1e-6})
-    s = sc.validate({**s.as_dict(), "contact": {**s.as_dict()["contact"], "separation_adjustment": True}})
     pk = wet_box(jitter=0.05)
     general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
-    rows, held = np.arange(len(pk.r)), np.zeros((len(pk.r), 2))
     n_fused = 0
     for k in range(10):
         xz = moving_positions(pk, k)
         F, fixes = general.step(xz.copy())
-        args = fused.kernel_step_args()
-        if args is None:
-            F2, fixes2 = fused.step(xz.copy())
-        else:
-            n_fused += 1
-            due, law_args, water_args = args
-            F2 = np.zeros_like(xz)
-            while True:
-                n_lost, n_sub = kernels.dem_step(xz, F2, rows, held, due, *law_args, *water_args)
-                if n_lost != kernels.LIST_STALE:
-                    break
-                fused.law.contact._update_list(xz)
-                due, law_args, water_args = args = fused.kernel_step_args()
-            fixes2 = fused.finish_kernel_step(xz, n_lost, n_sub, args)
+        F2, fixes2, one_call = fused_step(fused, xz.copy())
+        n_fused += one_call
+        assert one_call == (k > 0 and not (wet and k % 4 == 0))
         np.testing.assert_allclose(F2, F, rtol=1e-12, atol=1e-12 * np.abs(F).max())
-        assert fixes2.keys() == fixes.keys()
         assert fused.k == general.k == k + 1
         if wet:
             assert fused.water.total_water() == pytest.approx(general.water.total_water(), rel=1e-13)
             assert fused.water_model.n_rebuilds == general.water_model.n_rebuilds
-    assert n_fused >= 5
     if wet:
         assert general.water.balance.inflow > 0
         assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
+    every = PoreDEM(wet_scene(rebuild_interval=1), pk)
+    every.step(pk.xz)
+    assert every.kernel_step_args() is None                      # k = 1: a rebuild is due
+
+
+def test_one_compiled_call_adjusts_the_caller_velocities():
+    """The separation adjustment of eq 18-23 in the one-call step: the disc leaving the wall gets
+    -Vn''/Vn = e from the caller's velocities, as in the general step."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        fused_step(core, np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    assert one_call and set(fixes) == {1}
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
