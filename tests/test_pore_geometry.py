@@ -339,3 +339,25 @@ def test_the_outer_boundary_of_a_pore_with_an_island_comes_first():
     assert net.n_pores == 1
     cycles = pg.pore_polygon(net, 0)
     assert [len(c) for c in cycles] == [8, 2] and set(cycles[1]) == {8, 9}
+
+
+def test_locate_points_in_triangles_edges_count_as_inside():
+    """Point location (used for the rattlers off the regular triangulation): the first triangle
+    holding each point, a point on an edge inside, a point outside every triangle -1; millimetre
+    coordinates, two triangles of a square split along its diagonal."""
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0], [2.0, 2.0]]) * 1e-3
+    tri = np.array([[0, 1, 2], [1, 3, 2]])                     # both counter-clockwise
+    points = np.array([[0.5, 0.5], [1.5, 1.5], [3.0, 3.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [2.0, 1.0],
+                       [-1.0, 1.0], [1.5, -0.1]]) * 1e-3
+    # inside 0, inside 1, outside, on 0's edges ab and ca, on the shared diagonal (first: 0), on 1's
+    # edge ab, outside beside edge ca of 0 (two of its three sides positive), below edge ab
+    np.testing.assert_array_equal(pg._locate(xz, tri, points), [0, 1, -1, 0, 0, 0, 1, -1, -1])
+
+
+@pytest.mark.parametrize("candidates", ["regular", "delaunay"])
+def test_three_touching_discs_make_one_pore(candidates):
+    """The smallest packing with a pore: three equal touching discs, void sqrt(3) r^2 - pi r^2 / 2."""
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)]])
+    net = pg.build_pores(xz, np.ones(3), candidates=candidates)
+    assert net.n_pores == 1 and len(net.links) == 3
+    np.testing.assert_allclose(pg.measure(net, xz, np.ones(3)).void_area, [np.sqrt(3) - np.pi / 2], rtol=1e-12)

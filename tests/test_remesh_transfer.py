@@ -170,3 +170,17 @@ def test_undrained_pore_keeps_its_water():
         w.advance(1e-5, A, np.zeros(0, bool))
     np.testing.assert_allclose(w.W, A * 1.3, rtol=1e-15)
     assert pressure(w.W, A, E_W)[0] == pytest.approx(E_W * 0.3 / 1.3)
+
+
+def test_clip_areas_of_a_batch_with_different_vertex_counts():
+    """One call over pairs whose overlaps have 6, 3, 3, 0 and 4 vertices (padded rows of
+    different lengths): each area is the analytic one; an empty batch gives no areas."""
+    star = np.array([[0.0, 1.0], [-np.sqrt(3) / 2, -0.5], [np.sqrt(3) / 2, -0.5]])
+    unit = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    subj = np.array([star, unit, unit, unit, unit])
+    clip = np.array([-star, 0.5 * unit + 0.1, unit + [0.5, 0.0], unit + 5.0, np.array([[0.5, -1.0], [0.5, 2.0], [-1.0, 0.5]])])
+    # hexagon 2/3 of the triangle; a half-size copy inside; the corner triangle (0.5, 0)-(1, 0)-(0.5, 0.5);
+    # nothing; the unit triangle cut by x <= 0.5: a trapezoid of area 0.5 - 0.125
+    expected = [2 / 3 * 3 * np.sqrt(3) / 4, 0.125, 0.125, 0.0, 0.375]
+    np.testing.assert_allclose(pg._clip_areas(subj, clip), expected, rtol=1e-13, atol=1e-15)
+    assert pg._clip_areas(np.zeros((0, 3, 2)), np.zeros((0, 3, 2))).shape == (0,)
