@@ -370,3 +370,36 @@ def test_two_rebuilds_add_up_in_the_budget():
     w.remesh(one, A1, A2)
     assert w.balance.remesh_change == pytest.approx(w.W.sum() - 1.2 * A1.sum(), rel=1e-12)
     assert w.balance_error() < 1e-14
+
+
+def _surface_pore_at_a_side_wall():
+    """One triangular pore of a left-wall disc and two particles: on the free surface (its
+    particle-particle and wall-particle edges face the outside) and touching a side wall."""
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [1.5, 2.6]])
+    net = pg.build_pores(xz, np.ones(3), l_m=2.0, walls=np.array([pg.WALL_LEFT, 0, 0]))
+    assert net.n_pores == 1 and net.pore_surface[0] and net.pore_touches["left"][0]
+    return net
+
+
+def test_stability_limit_of_a_pore_drained_to_both_surface_and_side():
+    """Both boundary conductances add: lambda = (k1 + k3) W / E_w / c with c = W^2 / (E_w A), so
+    the limit is 2 W / ((k1 + k3) A); undrained it is 2 W / (k1 A)."""
+    net = _surface_pore_at_a_side_wall()
+    A, W = np.array([0.25]), np.array([0.5])
+    drained = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0, k3=3.0, sides="drained"), W=W)
+    assert drained.darcy_limit(A, np.zeros(3, bool)) == pytest.approx(2 * 0.5 / (7.0 * 0.25), rel=1e-14)
+    shut = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0, k3=3.0), W=W)
+    assert shut.darcy_limit(A, np.zeros(3, bool)) == pytest.approx(2 * 0.5 / (4.0 * 0.25), rel=1e-14)
+
+
+def test_a_step_that_would_empty_a_pore_exactly_is_refused():
+    """W = 0 has no pressure (eq 32 divides by W): a surface pore with W = 0.5, A = 0.25, E_w = 1,
+    k1 = 4 loses q = k1 (W - A) = 1 m^2/s, and a step of h = 0.5 s (half its stability limit)
+    would leave exactly W = 0: refused, the water unchanged."""
+    net = _surface_pore_at_a_side_wall()
+    A = np.array([0.25])
+    w = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=[0.5])
+    assert w.darcy_limit(A, np.zeros(3, bool)) == 1.0
+    with pytest.raises(DarcyStabilityError, match="fell to 0.000e"):
+        w.advance(0.5, A, np.zeros(3, bool))
+    np.testing.assert_array_equal(w.W, [0.5])
