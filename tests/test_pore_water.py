@@ -403,3 +403,14 @@ def test_a_step_that_would_empty_a_pore_exactly_is_refused():
     with pytest.raises(DarcyStabilityError, match="fell to 0.000e"):
         w.advance(0.5, A, np.zeros(3, bool))
     np.testing.assert_array_equal(w.W, [0.5])
+
+
+def test_the_refused_step_names_the_pore_that_would_empty():
+    """Of two pores against a drained side wall, the second (W = 3 A) would overshoot below zero at
+    the stability limit while the first (U = 0) stays full: the error names pore 1."""
+    xz, r, net = _two_pores()
+    A = pg.measure(net, xz, r).void_area
+    w = PoreWater(net, A, WaterSettings(E_w=1000.0, k1=1e-3, k2=1e-3, k3=50.0, sides="drained"), W=A * [1.0, 3.0])
+    h = w.darcy_limit(A, np.zeros(len(net.links), bool))
+    with pytest.raises(DarcyStabilityError, match="water area of pore 1 fell to -"):
+        w.advance(h, A, np.zeros(len(net.links), bool))
