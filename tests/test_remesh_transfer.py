@@ -184,3 +184,68 @@ def test_clip_areas_of_a_batch_with_different_vertex_counts():
     expected = [2 / 3 * 3 * np.sqrt(3) / 4, 0.125, 0.125, 0.0, 0.375]
     np.testing.assert_allclose(pg._clip_areas(subj, clip), expected, rtol=1e-13, atol=1e-15)
     assert pg._clip_areas(np.zeros((0, 3, 2)), np.zeros((0, 3, 2))).shape == (0,)
+
+
+def _tri_area(a, b, c):
+    return 0.5 * abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def test_conserving_transfer_across_a_flipped_diagonal():
+    """Four discs, two pores split by one diagonal before and by the other after: each old pore
+    overlaps both new ones in a triangle cut by the crossing point M of the diagonals
+    (pore_overlaps against these areas). Such overlaps have rank one (|ABM| |CDM| = |BCM| |DAM|),
+    so the void shares are V = a b^T / sum(a) and X = W - A of each old pore is split in the
+    proportions b of the new voids."""
+    from engines.pore_water import conserving_water
+    r = np.ones(4)
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
+    new = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [-0.4, 2.2]]), r, l_m=2.0, candidates="delaunay")
+    assert [1, 3] in old.links.tolist() and [0, 2] in new.links.tolist()
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])      # both triangulations valid here
+    A, B, C, D = xz
+    t = np.linalg.solve(np.column_stack([C - A, B - D]), B - A)[0]        # A + t (C - A) = M on BD
+    M = A + t * (C - A)
+    piece = {frozenset(k): _tri_area(*(xz[list(k)]), M) for k in ((0, 1), (1, 2), (2, 3), (3, 0))}
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    assert len(o) == 4
+    for pp, qq, oo in zip(p, q, o):   # the two triangles share two corners (a side); M is the third
+        common = frozenset(old.vertices_of(pp).tolist()) & frozenset(new.vertices_of(qq).tolist())
+        assert oo == pytest.approx(piece[common], rel=1e-12)
+    a, b = np.array([1.0, 3.0]), np.array([2.5, 1.5])                    # void areas (same total)
+    W_old = a + np.array([0.5, 0.3])
+    W_new, matched = conserving_water(old, W_old, a, new, b, xz)
+    assert matched.all()
+    np.testing.assert_allclose(W_new, b + (W_old - a).sum() * b / b.sum(), rtol=1e-12)
+
+
+class _Pores:
+    """A stand-in network for conserving_water: only its pore count and a_min are read."""
+
+    def __init__(self, n_pores):
+        self.n_pores, self.a_min = n_pores, 0.0
+
+
+def test_conserving_shares_solve_the_matrix_scaling(monkeypatch):
+    """The void shares V = diag(alpha) O diag(beta) of a 2x2 group of overlaps O (given here, not
+    of rank one) with rows summing to the old voids a and columns to the new voids b rescaled to
+    the same total: V = [[x, a0 - x], [b0 - x, a1 - b0 + x]] with the cross ratio
+    V00 V11 / (V01 V10) = O00 O11 / (O01 O10), a quadratic in x. Each old pore's excess water goes
+    in the shares V_pq / a_p. An old pore (the last) and a new pore overlapping nothing: the new
+    one is unmatched, the old one's excess is not passed on; a 1x1 group takes all its water."""
+    from engines import pore_water as pw
+    O = np.array([[1.0, 2.0], [3.0, 1.5]])
+    # old pores 0, 1 (the 2x2 group), 2 (alone with new pore 2), 3 (overlapping nothing)
+    p, q = np.array([0, 0, 1, 1, 2]), np.array([0, 1, 0, 1, 2])
+    monkeypatch.setattr(pw.pg, "pore_overlaps", lambda old, new, xz: (p, q, np.r_[O.ravel(), 0.7]))
+    a = np.array([1.0, 3.0, 2.0, 0.5])
+    b = np.array([2.5, 2.5, 1.0, 0.4])                  # the group's new voids total 5, its old ones 4
+    X = np.array([0.5, 0.3, 0.2, 0.1])
+    W_new, matched = pw.conserving_water(_Pores(4), a + X, a, _Pores(4), b, np.zeros((0, 2)))
+    np.testing.assert_array_equal(matched, [True, True, True, False])
+    bs = b[:2] * a[:2].sum() / b[:2].sum()
+    rho = O[0, 0] * O[1, 1] / (O[0, 1] * O[1, 0])
+    roots = np.roots([1 - rho, a[1] - bs[0] + rho * (a[0] + bs[0]), -rho * a[0] * bs[0]])
+    x = [v.real for v in roots if max(0.0, bs[0] - a[1]) < v.real < min(a[0], bs[0])][0]
+    V = np.array([[x, a[0] - x], [bs[0] - x, a[1] - bs[0] + x]])
+    np.testing.assert_allclose(W_new[:2], b[:2] + X[:2] @ (V / a[:2, None]), rtol=1e-11)
+    assert W_new[2] == pytest.approx(b[2] + X[2], rel=1e-14) and np.isnan(W_new[3])
