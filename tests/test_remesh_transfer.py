@@ -249,3 +249,13 @@ def test_conserving_shares_solve_the_matrix_scaling(monkeypatch):
     V = np.array([[x, a[0] - x], [bs[0] - x, a[1] - bs[0] + x]])
     np.testing.assert_allclose(W_new[:2], b[:2] + X[:2] @ (V / a[:2, None]), rtol=1e-11)
     assert W_new[2] == pytest.approx(b[2] + X[2], rel=1e-14) and np.isnan(W_new[3])
+
+
+def test_conserving_transfer_refuses_a_new_pore_left_without_water(monkeypatch):
+    """Suction (W < A) handed on whole: old pore 1 (A = 1, W = 0.75) onto new pore 1 (A = 0.25)
+    leaves it exactly W = 0.25 - 0.25 = 0, no water: refused, naming new pore 1 (pore 0 is fine)."""
+    from engines import pore_water as pw
+    monkeypatch.setattr(pw.pg, "pore_overlaps", lambda old, new, xz: (np.array([0, 1]), np.array([0, 1]), np.ones(2)))
+    a, b = np.array([1.0, 1.0]), np.array([1.0, 0.25])
+    with pytest.raises(ValueError, match=r"new pore 1 would hold no water \(W = 0.000e\+00"):
+        pw.conserving_water(_Pores(2), np.array([1.0, 0.75]), a, _Pores(2), b, np.zeros((0, 2)))
