@@ -259,3 +259,33 @@ def test_conserving_transfer_refuses_a_new_pore_left_without_water(monkeypatch):
     a, b = np.array([1.0, 1.0]), np.array([1.0, 0.25])
     with pytest.raises(ValueError, match=r"new pore 1 would hold no water \(W = 0.000e\+00"):
         pw.conserving_water(_Pores(2), np.array([1.0, 0.75]), a, _Pores(2), b, np.zeros((0, 2)))
+
+
+def test_pore_overlaps_of_an_old_triangle_turned_over():
+    """An old pore (triangle ABC) whose corner C has moved across AB, so that it is turned over at
+    the current positions, with a disc D now inside it: the new network splits ABC' into ABD, BC'D
+    and C'AD (area 2 each), and the old pore overlaps each of them wholly."""
+    r = np.ones(4)
+    old = pg.build_pores(np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 3.0], [20.0, 20.0]]), r, l_m=3.0)
+    xz = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, -3.0], [2.0, -1.0]])
+    new = pg.build_pores(xz, r, l_m=3.0)
+    assert old.n_pores == 1 and new.n_pores == 3 and pg._signed_area(xz[old.tri])[0] < 0
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    np.testing.assert_array_equal(p, [0, 0, 0])
+    np.testing.assert_array_equal(q, [0, 1, 2])
+    np.testing.assert_allclose(o, [_tri_area(*xz[new.vertices_of(k)]) for k in range(3)], rtol=1e-12)
+    np.testing.assert_allclose(o, 2.0, rtol=1e-12)
+
+
+def test_pore_overlaps_onto_a_single_new_pore():
+    """Two old pores (a quadrilateral split by its diagonal) onto one new pore (the diagonal no
+    longer a link): pairs (0, 0) and (1, 0) with the areas of the two triangles."""
+    r = np.ones(4)
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
+    new = pg.build_pores(xz, r, l_m=1.5, candidates="delaunay")
+    assert old.n_pores == 2 and new.n_pores == 1
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    np.testing.assert_array_equal(p, [0, 1])
+    np.testing.assert_array_equal(q, [0, 0])
+    np.testing.assert_allclose(o, [_tri_area(*xz[old.vertices_of(k)]) for k in range(2)], rtol=1e-12)
