@@ -250,3 +250,39 @@ def test_contact_law_and_separation_adjustment_match_the_reference(spring):
         model.step()
     assert touched > 100
     assert adjusted > 0 or spring in "cd"    # the capped springs absorb so much that no disc flies free
+
+
+def test_a_pair_that_touched_without_approach_separates_freely():
+    """Eq 19 scales the separation by the approach velocity of the collision: a contact made at
+    rest (Vn_ij = 0, e.g. a grain settling onto another) gives no bound, so two discs pushed apart
+    (by the water, say) keep their velocities."""
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=0.0)
+    vel = np.array([[-0.2, 0.1], [0.3, 0.0]])
+    fix = separation_adjustment([ev], np.array([0, 0]), vel, np.array([1.0, 2.0]), np.array([True, True]), 0.01)
+    np.testing.assert_array_equal(fix[0], vel[0])
+    np.testing.assert_array_equal(fix[1], vel[1])
+
+
+def test_isolated_pair_after_a_disc_that_left_two_walls():
+    """Eq 24 for an isolated pair (3, 4) in the same step as a disc 0 that left two walls (pattern
+    b, eq 22-23 with the smaller Rk): the pair keeps its normal momentum and separates at e Vn."""
+    e = 0.01
+    evs = [SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=1.0),
+           SeparationEvent(0, 2, np.array([0.0, 1.0]), vn_collision=1.0),
+           SeparationEvent(3, 4, np.array([1.0, 0.0]), vn_collision=2.0)]
+    vel = np.array([[-0.5, -0.2], [0.0, 0.0], [0.0, 0.0], [-0.4, 0.0], [0.6, 0.0]])
+    m = np.array([1.0, np.inf, np.inf, 2.0, 3.0])
+    fix = separation_adjustment(evs, np.array([0, 4, 4, 0, 0]), vel, m, np.array([True, False, False, True, True]), e)
+    assert m[3] * fix[3][0] + m[4] * fix[4][0] == pytest.approx(m[3] * vel[3, 0] + m[4] * vel[4, 0], abs=1e-14)
+    assert fix[3][0] - fix[4][0] == pytest.approx(-e * 2.0, rel=1e-12)
+    # disc 0: Rk = e Vn / |Vn'| for each wall, 0.02 along x and 0.05 along z; the smaller one, along its normal
+    np.testing.assert_allclose(fix[0], [-0.5 * 0.02, -0.2], rtol=1e-12)
+
+
+def test_a_disc_at_rest_left_by_a_receding_wall_is_not_scaled():
+    """Eq 22 scales the leaving disc's own normal velocity; a disc at rest that a wall moves away
+    from (Vn_i = 0) has none to scale and keeps its velocity."""
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=1.0)
+    vel = np.array([[0.0, 0.4], [2.0, 0.0]])
+    fix = separation_adjustment([ev], np.array([0, 3]), vel, np.array([1.0, np.inf]), np.array([True, False]), 0.01)
+    np.testing.assert_array_equal(fix[0], [0.0, 0.4])
