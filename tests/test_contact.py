@@ -286,3 +286,45 @@ def test_a_disc_at_rest_left_by_a_receding_wall_is_not_scaled():
     vel = np.array([[0.0, 0.4], [2.0, 0.0]])
     fix = separation_adjustment([ev], np.array([0, 3]), vel, np.array([1.0, np.inf]), np.array([True, False]), 0.01)
     np.testing.assert_array_equal(fix[0], [0.0, 0.4])
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_discs_exactly_touching_are_in_contact(compiled):
+    """Eq 1: contact when r_i + r_j >= R_ij, so discs exactly touching (overlap 0, exact in binary)
+    and approaching at 0.1 m/s feel the dashpot eta_n du_n / dt (the spring is still 0) and count
+    as touching."""
+    r = np.array([0.5, 0.5])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=2.0, ks=0.0, eta_s=0.0), r,
+                     mobile=np.array([True, True]), compiled=compiled)
+    dt = 1e-6
+    xz = np.array([[0.0, 0.0], [1.0, 0.0]])
+    F, _, _ = law.forces(xz, np.array([[1e-7, 0.0], [0.0, 0.0]]), np.zeros(2), dt)
+    np.testing.assert_array_equal(law.touch_count(), [1, 1])
+    np.testing.assert_allclose(F, [[-2.0 * 0.1, 0.0], [2.0 * 0.1, 0.0]], rtol=1e-9)
+
+
+def test_pattern_b_takes_the_smallest_factor_over_all_qualifying_walls():
+    """Eq 22-23, pattern b: of the walls a disc left, those it leaves faster than e Vn give a factor
+    Rk = -e Vn / Vn'; the smallest wins, whatever the order of the events, and a wall it leaves
+    slowly (first here) is skipped, not the end of the search."""
+    e = 0.01
+    evs = [SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=100.0),   # slow: 0.5 < e 100
+           SeparationEvent(0, 2, np.array([0.0, 1.0]), vn_collision=1.0),     # Rk = 0.01 / 0.2 = 0.05
+           SeparationEvent(0, 3, np.array([1.0, 0.0]), vn_collision=1.0)]     # Rk = 0.01 / 0.5 = 0.02
+    vel = np.array([[-0.5, -0.2], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    m, mobile = np.array([1.0, np.inf, np.inf, np.inf]), np.array([True, False, False, False])
+    fix = separation_adjustment(evs, np.array([0, 3, 3, 3]), vel, m, mobile, e)
+    np.testing.assert_allclose(fix[0], [-0.5 * 0.02, -0.2], rtol=1e-12)
+
+
+def test_separation_pattern_c_with_the_wall_first_in_the_pair():
+    """Fig. 3(c) with the wall k listed first in its pair (a lower index): j (index 1) is adjusted
+    against k first, then i (index 2) against the new j."""
+    e = 0.01
+    ev_kj = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=2.0)   # wall k at left of j
+    ev_ji = SeparationEvent(1, 2, np.array([1.0, 0.0]), vn_collision=1.0)   # j at left of i
+    vel = np.array([[0.0, 0.0], [0.3, 0.0], [0.5, 0.0]])
+    fix = separation_adjustment([ev_kj, ev_ji], np.array([3, 0, 0]), vel, np.array([np.inf, 1.0, 1.0]),
+                                np.array([False, True, True]), e)
+    assert fix[1][0] == pytest.approx(e * 2.0, rel=1e-12)             # j leaves k at e Vn_kj
+    assert fix[2][0] - fix[1][0] == pytest.approx(e * 1.0, rel=1e-12)  # i leaves the adjusted j at e Vn_ji
