@@ -318,13 +318,15 @@ def test_pattern_b_takes_the_smallest_factor_over_all_qualifying_walls():
 
 
 def test_separation_pattern_c_with_the_wall_first_in_the_pair():
-    """Fig. 3(c) with the wall k listed first in its pair (a lower index): j (index 1) is adjusted
-    against k first, then i (index 2) against the new j."""
+    """Fig. 3(c) with the wall k listed first in its pair (a lower index): j (index 1) leaves k
+    (to its left) and i (index 2, above it). j is adjusted against k alone first (its separation
+    from i would give the smaller factor, but i is free), then i against the new j."""
     e = 0.01
     ev_kj = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=2.0)   # wall k at left of j
-    ev_ji = SeparationEvent(1, 2, np.array([1.0, 0.0]), vn_collision=1.0)   # j at left of i
-    vel = np.array([[0.0, 0.0], [0.3, 0.0], [0.5, 0.0]])
+    ev_ji = SeparationEvent(1, 2, np.array([0.0, 1.0]), vn_collision=1.0)   # i above j
+    vel = np.array([[0.0, 0.0], [0.3, -0.4], [0.0, 0.1]])
     fix = separation_adjustment([ev_kj, ev_ji], np.array([3, 0, 0]), vel, np.array([np.inf, 1.0, 1.0]),
                                 np.array([False, True, True]), e)
-    assert fix[1][0] == pytest.approx(e * 2.0, rel=1e-12)             # j leaves k at e Vn_kj
-    assert fix[2][0] - fix[1][0] == pytest.approx(e * 1.0, rel=1e-12)  # i leaves the adjusted j at e Vn_ji
+    np.testing.assert_allclose(fix[1], [e * 2.0, -0.4], rtol=1e-12)         # j leaves k at e Vn_kj
+    assert fix[2][0] == 0.0
+    assert fix[2][1] - fix[1][1] == pytest.approx(e * 1.0, rel=1e-12)      # i leaves the adjusted j at e Vn_ji
