@@ -289,3 +289,17 @@ def test_pore_overlaps_onto_a_single_new_pore():
     np.testing.assert_array_equal(p, [0, 1])
     np.testing.assert_array_equal(q, [0, 0])
     np.testing.assert_allclose(o, [_tri_area(*xz[old.vertices_of(k)]) for k in range(2)], rtol=1e-12)
+
+
+def test_pores_that_only_share_an_edge_do_not_overlap():
+    """The old pore ABD and the new pore BCD (the radii decide which sides are links) meet along
+    BD only: no overlapping pair, so the new pore is unmatched in the conserving transfer."""
+    from engines.pore_water import conserving_water
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [2.4, 2.4], [0.0, 2.0]])
+    old = pg.build_pores(xz, np.array([0.6, 1.42, 0.5, 1.42]), candidates="delaunay")
+    new = pg.build_pores(xz, np.array([0.2, 1.42, 1.1, 1.42]), candidates="delaunay")
+    assert sorted(old.vertices_of(0).tolist()) == [0, 1, 3] and sorted(new.vertices_of(0).tolist()) == [1, 2, 3]
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    assert len(p) == len(q) == len(o) == 0
+    W_new, matched = conserving_water(old, np.array([0.2]), np.array([0.1]), new, np.array([0.3]), xz)
+    assert not matched.any() and np.isnan(W_new).all()
