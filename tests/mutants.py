@@ -124,8 +124,8 @@ def summarise(status, modules, equivalent, judged=MODULES):
         else:
             row["survived"] += 1
     for row in per.values():
-        judged = row["total"] - row["equivalent"]
-        row["score"] = row["killed"] / judged if judged else None
+        n = row["total"] - row["equivalent"]
+        row["score"] = row["killed"] / n if n else None
     rows = [r for m, r in per.items() if m in judged]
     total = sum(r["total"] for r in rows)
     killed = sum(r["killed"] for r in rows)
