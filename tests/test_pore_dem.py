@@ -57,7 +57,7 @@ def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
         u += core.wall_velocity * 1e-6
         assert u == pytest.approx(15.0 / w**2 * (1 - np.cos(w * k * 1e-6)), rel=1e-6)
     np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
-    assert not moving_walls(scene(), pk).any()
+    assert moving_walls(scene(), pk).shape == (len(pk.r),) and not moving_walls(scene(), pk).any()
     still = PoreDEM(scene(), pk)
     still.step(pk.xz)
     assert still.base is None and still.wall_velocity == 0.0
@@ -341,12 +341,18 @@ def fused_step(core, xz, vel=None):
         args = core.kernel_step_args()
 
 
-@pytest.mark.parametrize("wet", [True, False])
+@pytest.mark.parametrize("wet", [None, "plain", "smoothing_substeps"])
 def test_one_compiled_call_per_step_equals_the_general_step(wet):
     """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
     does between YADE's position read and force write) gives the forces, water and rebuilds of
-    PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``."""
-    s = wet_scene(q_w=1e-4) if wet else scene(numerics={"dt": 1e-6})
+    PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``. Also
+    with smoothing (eq 45-46) and water steps above the Darcy limit taken in sub-steps."""
+    if wet is None:
+        s = scene(numerics={"dt": 1e-6})
+    elif wet == "plain":
+        s = wet_scene(q_w=1e-4)
+    else:
+        s = wet_scene(q_w=1e-4, k1=2e6, smoothing=True, substep=True)
     pk = wet_box(jitter=0.05)
     general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
     n_fused = 0
@@ -364,6 +370,7 @@ def test_one_compiled_call_per_step_equals_the_general_step(wet):
     if wet:
         assert general.water.balance.inflow > 0
         assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
+        assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
     every = PoreDEM(wet_scene(rebuild_interval=1), pk)
     every.step(pk.xz)
     assert every.kernel_step_args() is None                      # k = 1: a rebuild is due
@@ -380,3 +387,20 @@ def test_one_compiled_call_adjusts_the_caller_velocities():
     _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
     assert one_call and set(fixes) == {1}
     np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+def test_an_isolated_pair_separating_keeps_its_momentum():
+    """Eq 24 through the step: two free discs of different masses (m = rho pi r^2) that collided
+    and fly apart too fast are slowed to -Vn''/Vn = e, their total momentum unchanged."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    r = np.array([R, 0.7 * R])
+    pk = Packing(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), r, [0, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    m, _ = disc_masses(s, pk)
+    for gap in (5e-9, -5e-9):                              # approach at 0.1 m/s: contact
+        core.step(np.array([[0.0, 0.0], [r.sum() + gap, 0.0]]))
+    vel = np.array([[-0.3, 0.0], [0.5, 0.0]])
+    _, fixes = core.step(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), vel=vel)
+    assert set(fixes) == {0, 1}
+    assert m[0] * fixes[0][0] + m[1] * fixes[1][0] == pytest.approx(m @ vel[:, 0], rel=1e-9)
+    assert fixes[1][0] - fixes[0][0] == pytest.approx(s.contact.restitution * 0.1, rel=1e-6)
