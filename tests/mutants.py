@@ -68,7 +68,8 @@ def prepare(work, modules, tests, again=False):
     lines = ["[mutmut]", "source_paths=", *(f"    {m}" for m in modules), "also_copy=",
              *(f"    {d}" for d in COPY if d != "tests"), "pytest_add_cli_args_test_selection=",
              *(f"    {t}" for t in tests), "pytest_add_cli_args=", "    -q", "    -p", "    no:cacheprovider",
-             "    -p", "    no:warnings"]
+             "    -p", "    no:warnings",
+             "timeout_multiplier=3"]   # a mutant over 6x the CPU time of its tests hangs (mutmut's default: 30x)
     with open(os.path.join(work, "setup.cfg"), "w") as f:
         f.write("\n".join(lines) + "\n")
 
