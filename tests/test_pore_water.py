@@ -414,3 +414,12 @@ def test_the_refused_step_names_the_pore_that_would_empty():
     h = w.darcy_limit(A, np.zeros(len(net.links), bool))
     with pytest.raises(DarcyStabilityError, match="water area of pore 1 fell to -"):
         w.advance(h, A, np.zeros(len(net.links), bool))
+
+
+def test_balance_error_is_relative_for_pores_of_square_millimetres():
+    """The balance error is relative to the initial water also when that is far below 1 m^2 (every
+    real packing): 3e-9 m^2 appearing in 1e-6 m^2 of water is an error of 3e-3."""
+    net = _surface_pore_at_a_side_wall()
+    w = PoreWater(net, np.array([1e-6]), WaterSettings(E_w=1.0, k1=4.0, k2=1.0))
+    w.W = w.W + 3e-9
+    assert w.balance_error() == pytest.approx(3e-3, rel=1e-9)
