@@ -405,3 +405,46 @@ def test_edge_insertion_that_cannot_converge_stops_naming_the_link():
     # edge 1-3 lies between triangles (0, 1, 3) and (1, 2, 3): their quadrilateral is not convex at 3
     with pytest.raises(RuntimeError, match="link 0-2 did not converge"):
         ft.insert(0, 2, [(1, 3)])
+
+
+def _proper_crossings(xz, tri, k, l):
+    """The triangulation edges that the segment k-l crosses at an interior point of both (written
+    out from orientations, independently of _FlipTriangulation's walk)."""
+    o = pg._orient
+    p = [tuple(v) for v in xz.tolist()]
+    out = set()
+    for a, b in _edges_of(tri):
+        if {a, b} & {k, l}:
+            continue
+        if o(p[k], p[l], p[a]) * o(p[k], p[l], p[b]) < 0 and o(p[a], p[b], p[k]) * o(p[a], p[b], p[l]) < 0:
+            out.add((a, b))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_crossed_edges_are_those_the_segment_crosses_in_order(seed):
+    """The walk from k to l returns exactly the edges the segment crosses, in order along it."""
+    from scipy.spatial import Delaunay
+    xz = np.random.default_rng(10 + seed).random((40, 2))
+    tri = pg._ccw(xz, Delaunay(xz).simplices)
+    k, l = int(np.argmin(xz[:, 0])), int(np.argmax(xz[:, 0]))
+    edges = pg._FlipTriangulation(xz, tri).crossed_edges(k, l)
+    assert {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l) and len(edges) >= 3
+    d = xz[l] - xz[k]
+    t = [np.linalg.solve(np.column_stack([d, xz[a] - xz[b]]), xz[a] - xz[k])[0] for a, b in edges]
+    assert np.all(np.diff(t) > 0) and 0 < t[0] and t[-1] < 1
+
+
+def test_crossed_edges_through_a_vertex_and_past_one_behind():
+    """Integer coordinates, B exactly on the line through k and l: the segment k -> F runs through
+    B (None: no edge can be inserted), while k -> l, with B behind k, crosses its edges as usual."""
+    from scipy.spatial import Delaunay
+    xz = np.array([[0.0, 0.0], [-1.0, -2.0], [2.0, 4.0], [1.5, 1.8], [0.5, 2.2], [-2.0, 0.0], [1.0, -2.0],
+                   [-2.0, -4.0], [-3.0, -3.0]])
+    k, B, l, F = 0, 1, 2, 7
+    tri = pg._ccw(xz, Delaunay(xz).simplices)
+    assert (k, B) in _edges_of(tri) and (k, l) not in _edges_of(tri)
+    ft = pg._FlipTriangulation(xz, tri)
+    assert ft.crossed_edges(k, F) is None
+    edges = ft.crossed_edges(k, l)
+    assert edges is not None and {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l)
