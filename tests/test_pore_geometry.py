@@ -439,9 +439,9 @@ def test_crossed_edges_through_a_vertex_and_past_one_behind():
     """Integer coordinates, B exactly on the line through k and l: the segment k -> F runs through
     B (None: no edge can be inserted), while k -> l, with B behind k, crosses its edges as usual."""
     from scipy.spatial import Delaunay
-    xz = np.array([[0.0, 0.0], [-1.0, -2.0], [2.0, 4.0], [1.5, 1.8], [0.5, 2.2], [-2.0, 0.0], [1.0, -2.0],
-                   [-2.0, -4.0], [-3.0, -3.0]])
-    k, B, l, F = 0, 1, 2, 7
+    xz = np.array([[0.0, 0.0], [2.0, 4.0], [1.5, 1.8], [0.5, 2.2], [-2.0, 0.0], [1.0, -2.0],
+                   [-2.0, -4.0], [-3.0, -3.0], [-1.0, -2.0]])
+    k, l, F, B = 0, 1, 6, 8          # B last: k's other neighbours are looked at first
     tri = pg._ccw(xz, Delaunay(xz).simplices)
     assert (k, B) in _edges_of(tri) and (k, l) not in _edges_of(tri)
     ft = pg._FlipTriangulation(xz, tri)
