@@ -393,6 +393,12 @@ def test_edge_insertion_by_flips_keeps_a_triangulation(seed):
     assert max(count.values()) == 2
     crossed = {tuple(sorted(e)) for e in edges}
     assert _edges_of(tri) - crossed <= _edges_of(new)
+    # the flipped triangulation answers further walks from k and l (their neighbour sets kept up to date)
+    for v in (k, l):
+        for m in range(len(xz)):
+            if m != v and tuple(sorted((v, m))) not in _edges_of(new):
+                got = ft.crossed_edges(v, m)
+                assert got is not None and {tuple(sorted(e)) for e in got} == _proper_crossings(xz, new, v, m)
 
 
 def test_edge_insertion_that_cannot_converge_stops_naming_the_link():
