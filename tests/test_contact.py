@@ -330,3 +330,16 @@ def test_separation_pattern_c_with_the_wall_first_in_the_pair():
     np.testing.assert_allclose(fix[1], [e * 2.0, -0.4], rtol=1e-12)         # j leaves k at e Vn_kj
     assert fix[2][0] == 0.0
     assert fix[2][1] - fix[1][1] == pytest.approx(e * 1.0, rel=1e-12)      # i leaves the adjusted j at e Vn_ji
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_eps_m_wider_than_the_skin_is_in_the_pair_list(compiled):
+    """Eq 26 with eps_m larger than the neighbour list's skin (0.25 r): two discs 0.35 mm apart with
+    eps_m = 0.4 mm touch from the first step, with the spring kn (r_i + r_j + eps_m - R)."""
+    r = np.array([1e-3, 1e-3])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0, eps_m=0.4e-3), r,
+                     mobile=np.array([True, True]), compiled=compiled)
+    xz = np.array([[0.0, 0.0], [2.35e-3, 0.0]])
+    F, _, _ = law.forces(xz, np.zeros((2, 2)), np.zeros(2), 1e-6)
+    np.testing.assert_array_equal(law.touch_count(), [1, 1])
+    np.testing.assert_allclose(F[1], [1e6 * 0.05e-3, 0.0], rtol=1e-9, atol=1e-12)
