@@ -343,3 +343,13 @@ def test_eps_m_wider_than_the_skin_is_in_the_pair_list(compiled):
     F, _, _ = law.forces(xz, np.zeros((2, 2)), np.zeros(2), 1e-6)
     np.testing.assert_array_equal(law.touch_count(), [1, 1])
     np.testing.assert_allclose(F[1], [1e6 * 0.05e-3, 0.0], rtol=1e-9, atol=1e-12)
+
+
+def test_settings_accept_any_positive_stiffness_and_need_f_max_for_the_plateau_springs():
+    """kn > 0 is the only bound on the stiffness (0.5 N/m is soft, not wrong); springs c and d (eq 27)
+    cap the force at f_max, which must then be > 0; a and b never read it."""
+    assert ContactSettings(kn=0.5).kn == 0.5
+    for spring in ("c", "d"):
+        with pytest.raises(ValueError, match="f_max"):
+            ContactSettings(spring=spring, f_max=0.0)
+    assert ContactSettings(spring="a", f_max=0.0).f_max == 0.0
