@@ -423,3 +423,19 @@ def test_balance_error_is_relative_for_pores_of_square_millimetres():
     w = PoreWater(net, np.array([1e-6]), WaterSettings(E_w=1.0, k1=4.0, k2=1.0))
     w.W = w.W + 3e-9
     assert w.balance_error() == pytest.approx(3e-3, rel=1e-9)
+
+
+def test_rule_codes_per_pore_are_small_integers():
+    """pressures_by_rule gives each new pore the code 1-4 of the rule (a)-(d) that set it, as
+    integers (postproc.vtk and the snapshots take integer codes); here rule (c) for one pore whose
+    old pressure is unusable, (a) for the rest."""
+    from engines.pore_water import pressures_by_rule
+    xz, r, net = _random_network(n=100)
+    valid = np.ones(net.n_pores, bool)
+    p = int(np.flatnonzero(~net.pore_surface)[0])
+    valid[p] = False
+    _, rule = pressures_by_rule(net, np.linspace(1.0, 2.0, net.n_pores), valid, net)
+    assert rule.dtype.kind == "i"
+    expected = np.ones(net.n_pores, int)
+    expected[p] = 3
+    np.testing.assert_array_equal(rule, expected)
