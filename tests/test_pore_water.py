@@ -439,3 +439,30 @@ def test_rule_codes_per_pore_are_small_integers():
     expected = np.ones(net.n_pores, int)
     expected[p] = 3
     np.testing.assert_array_equal(rule, expected)
+
+
+def test_rule_c_averages_neighbours_on_both_sides_of_the_index_order():
+    """Rule (c) takes the mean over all assigned neighbours, those listed before it and after it."""
+    from engines.pore_water import pressures_by_rule
+    xz, r, net = _random_network(n=100)
+    i, j = net.throat_conns.T
+    nbs = {p: np.unique(np.concatenate([j[i == p], i[j == p]])) for p in range(net.n_pores)}
+    p = next(p for p in range(net.n_pores) if nbs[p].min() < p < nbs[p].max())
+    U_old = np.linspace(1.0, 2.0, net.n_pores) ** 2
+    valid = np.ones(net.n_pores, bool)
+    valid[p] = False
+    U, rule = pressures_by_rule(net, U_old, valid, net)
+    assert rule[p] == 3 and U[p] == pytest.approx(U_old[nbs[p]].mean(), rel=1e-14)
+
+
+def test_pores_without_throats_fall_to_rule_d():
+    """Two separate triangles (two pores, no throat between them) without usable old pressures:
+    rule (c) has no neighbour to average, so both get U = 0 by rule (d)."""
+    from engines.pore_water import pressures_by_rule
+    tri = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)]])
+    xz = np.vstack([tri, tri + 10.0])
+    net = pg.build_pores(xz, np.ones(6))
+    assert net.n_pores == 2 and len(net.throat_conns) == 0
+    U, rule = pressures_by_rule(net, np.array([5.0, 7.0]), np.zeros(2, bool), net)
+    np.testing.assert_array_equal(U, [0.0, 0.0])
+    np.testing.assert_array_equal(rule, [4, 4])
