@@ -147,6 +147,8 @@ def main(argv=None):
     ap.add_argument("--only", nargs="+", metavar="MODULE",
                     help="with --again: test only the unchecked and surviving mutants of these source files "
                          "(a run too long for one sitting, module by module)")
+    ap.add_argument("--survivors-only", action="store_true",
+                    help="with --again --only: re-test the surviving mutants only, not the unchecked ones")
     args = ap.parse_args(argv)
     if args.only and not (args.again and set(args.only) <= set(args.modules)):
         ap.error(f"--only needs --again and modules among {args.modules}, got {args.only}")
@@ -165,7 +167,7 @@ def main(argv=None):
                 run_mutmut(work, mutmut, args.max_children, [], log)   # new, changed and unchecked mutants
             if again:
                 equivalent = read_equivalent()
-                redo = KILLED if args.only else KILLED | {"not checked"}
+                redo = KILLED if args.only and not args.survivors_only else KILLED | {"not checked"}
                 left = sorted(n for n, st in results(work, mutmut).items() if st not in redo and n not in equivalent
                               and (not args.only or module_of(n, args.modules) in args.only))
                 for k in range(0, len(left), 400):
