@@ -150,8 +150,9 @@ def main(argv=None):
     ap.add_argument("--survivors-only", action="store_true",
                     help="with --again --only: re-test the surviving mutants only, not the unchecked ones")
     args = ap.parse_args(argv)
-    if args.only and not (args.again and set(args.only) <= set(args.modules)):
-        ap.error(f"--only needs --again and modules among {args.modules}, got {args.only}")
+    if args.only and not ((args.again or args.report_only) and set(args.only) <= set(args.modules)):
+        ap.error(f"--only needs --again (or --report-only: diffs of those files only) and modules among "
+                 f"{args.modules}, got {args.only}")
     if args.max_children < 1:
         ap.error(f"--max-children must be >= 1, got {args.max_children}")
     mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
