@@ -148,7 +148,8 @@ def test_remesh_rules_c_and_d():
 
 
 @pytest.mark.parametrize("kw,field", [(dict(E_w=0.0), "E_w"), (dict(k1=-1.0), "k1"), (dict(k2=np.nan), "k2"),
-                                      (dict(q_w=-1.0), "q_w"), (dict(sides="leaky"), "sides")])
+                                      (dict(q_w=-1.0), "q_w"), (dict(sides="leaky"), "sides"),
+                                      (dict(transfer="swap"), "transfer")])
 def test_bad_settings_name_the_field(kw, field):
     args = dict(E_w=240.0, k1=200.0, k2=2.0)
     args.update(kw)
@@ -466,3 +467,16 @@ def test_pores_without_throats_fall_to_rule_d():
     U, rule = pressures_by_rule(net, np.array([5.0, 7.0]), np.zeros(2, bool), net)
     np.testing.assert_array_equal(U, [0.0, 0.0])
     np.testing.assert_array_equal(rule, [4, 4])
+
+
+def test_initial_water_is_checked_and_the_state_starts_clean():
+    """W must match the pores and be positive (W = 0 has no pressure, eq 32); a new state has rule
+    code 0 (built with the network) for every pore and no re-meshing counts yet."""
+    net = _surface_pore_at_a_side_wall()
+    A = np.array([0.25])
+    for W in ([0.5, 0.5], [0.0], [-0.1]):
+        with pytest.raises(ValueError, match="positive water areas"):
+            PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=W)
+    w = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=[1])      # integers are areas too
+    assert w.W.dtype == float and w.remesh_counts == {}
+    assert w.rule.dtype.kind == "i" and w.rule.shape == (1,) and w.rule[0] == 0
