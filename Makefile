@@ -37,8 +37,9 @@ test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q tests
 
-# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,750 mutants, about an hour on 2 busy cores):
-# out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
+# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,770 mutants, one to several hours
+# on a shared machine): out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
+# Continue an interrupted run with `$(MUTANT_VENV)/bin/python tests/mutants.py --again [--only engines/X.py ...]`.
 MUTANT_VENV := $(OUT)/venv-mutants
 $(MUTANT_VENV)/bin/mutmut:
 	$(PY) -m venv --system-site-packages $(MUTANT_VENV)

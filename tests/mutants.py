@@ -15,7 +15,8 @@ and OUT/survivors.txt (each surviving mutant's diff, for review). A timed-out or
 counts as killed; a mutant no test reaches counts as survived; mutants an interrupted run did not
 reach are left out of the totals (``not_checked``). ``--again`` keeps OUT/work and its results,
 copies the current sources and tests in, and runs only what needs it: mutants of changed functions,
-unchecked ones and the survivors (with the new tests). Mutants judged equivalent (they
+unchecked ones and the survivors (with the new tests); ``--again --only MODULE...`` tests just the
+unchecked and surviving mutants of those files (a long run, module by module). Mutants judged equivalent (they
 cannot change any result) are listed in tests/equivalent_mutants.txt, one per line as
 ``mutant-name  reason``; a listed mutant that was killed is reported as stale.
 mutmut must run from a virtual environment over Debian's Python with --system-site-packages, so
@@ -67,7 +68,8 @@ def prepare(work, modules, tests, again=False):
     lines = ["[mutmut]", "source_paths=", *(f"    {m}" for m in modules), "also_copy=",
              *(f"    {d}" for d in COPY if d != "tests"), "pytest_add_cli_args_test_selection=",
              *(f"    {t}" for t in tests), "pytest_add_cli_args=", "    -q", "    -p", "    no:cacheprovider",
-             "    -p", "    no:warnings"]
+             "    -p", "    no:warnings",
+             "timeout_multiplier=3"]   # a mutant over 6x the CPU time of its tests hangs (mutmut's default: 30x)
     with open(os.path.join(work, "setup.cfg"), "w") as f:
         f.write("\n".join(lines) + "\n")
 
@@ -124,8 +126,8 @@ def summarise(status, modules, equivalent, judged=MODULES):
         else:
             row["survived"] += 1
     for row in per.values():
-        judged = row["total"] - row["equivalent"]
-        row["score"] = row["killed"] / judged if judged else None
+        n = row["total"] - row["equivalent"]
+        row["score"] = row["killed"] / n if n else None
     rows = [r for m, r in per.items() if m in judged]
     total = sum(r["total"] for r in rows)
     killed = sum(r["killed"] for r in rows)
@@ -142,7 +144,15 @@ def main(argv=None):
     ap.add_argument("--report-only", action="store_true", help="summarise the last run in OUT/work again")
     ap.add_argument("--again", action="store_true",
                     help="keep the last run's results: re-test changed, unchecked and surviving mutants")
+    ap.add_argument("--only", nargs="+", metavar="MODULE",
+                    help="with --again: test only the unchecked and surviving mutants of these source files "
+                         "(a run too long for one sitting, module by module)")
+    ap.add_argument("--survivors-only", action="store_true",
+                    help="with --again --only: re-test the surviving mutants only, not the unchecked ones")
     args = ap.parse_args(argv)
+    if args.only and not ((args.again or args.report_only) and set(args.only) <= set(args.modules)):
+        ap.error(f"--only needs --again (or --report-only: diffs of those files only) and modules among "
+                 f"{args.modules}, got {args.only}")
     if args.max_children < 1:
         ap.error(f"--max-children must be >= 1, got {args.max_children}")
     mutmut = os.path.join(os.path.dirname(sys.executable), "mutmut")
@@ -154,13 +164,15 @@ def main(argv=None):
         again = args.again and os.path.exists(os.path.join(work, "mutants"))
         prepare(work, args.modules, TESTS, again)
         with open(os.path.join(args.out, "run.log"), "a" if again else "w") as log:
-            run_mutmut(work, mutmut, args.max_children, [], log)   # new, changed and unchecked mutants
+            if not (again and args.only):
+                run_mutmut(work, mutmut, args.max_children, [], log)   # new, changed and unchecked mutants
             if again:
                 equivalent = read_equivalent()
-                left = sorted(n for n, st in results(work, mutmut).items()
-                              if st not in KILLED | {"not checked"} and n not in equivalent)
-                for k in range(0, len(left), 200):
-                    run_mutmut(work, mutmut, args.max_children, left[k:k + 200], log)
+                redo = KILLED if args.only and not args.survivors_only else KILLED | {"not checked"}
+                left = sorted(n for n, st in results(work, mutmut).items() if st not in redo and n not in equivalent
+                              and (not args.only or module_of(n, args.modules) in args.only))
+                for k in range(0, len(left), 400):
+                    run_mutmut(work, mutmut, args.max_children, left[k:k + 400], log)
     status = results(work, mutmut)
     summary = summarise(status, args.modules, read_equivalent())
     summary["seconds"] = time.time() - t0
@@ -171,6 +183,9 @@ def main(argv=None):
     survivors = sorted(n for n, s in status.items() if s not in KILLED | {"not checked"} and n not in read_equivalent())
     with open(os.path.join(args.out, "survivors.txt"), "w") as f:
         for name in survivors:
+            if args.only and module_of(name, args.modules) not in args.only:
+                f.write(f"## {name}: {status[name]}\n")    # (a diff costs a mutmut call: only for --only)
+                continue
             diff = subprocess.run([mutmut, "show", name], cwd=work, capture_output=True, text=True).stdout
             f.write(f"## {name}: {status[name]}\n{diff}\n")
     for m, row in summary["modules"].items():

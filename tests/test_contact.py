@@ -146,11 +146,11 @@ def test_touching_pairs_counts_and_forces_for_plots():
     law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0), r, mobile=np.ones(4, bool))
     law.forces(xz, np.zeros((4, 2)), np.zeros(4), 1e-6)
     np.testing.assert_array_equal(law.touch_count(), [1, 2, 1, 0])
-    pairs, fn, e_s = law.contact_pairs()
+    pairs, fn, es = law.contact_pairs()
     order = np.argsort(pairs[:, 0])
     np.testing.assert_array_equal(pairs[order], [[0, 1], [1, 2]])
     np.testing.assert_allclose(fn[order], [1.0, 2.0], rtol=1e-9)
-    np.testing.assert_array_equal(e_s, [0.0, 0.0])   # head-on: no tangential displacement
+    np.testing.assert_array_equal(es, [0.0, 0.0])       # head-on: no tangential spring
 
 
 def test_forces_do_not_depend_on_the_neighbour_list_bookkeeping():
@@ -250,3 +250,106 @@ def test_contact_law_and_separation_adjustment_match_the_reference(spring):
         model.step()
     assert touched > 100
     assert adjusted > 0 or spring in "cd"    # the capped springs absorb so much that no disc flies free
+
+
+def test_a_pair_that_touched_without_approach_separates_freely():
+    """Eq 19 scales the separation by the approach velocity of the collision: a contact made at
+    rest (Vn_ij = 0, e.g. a grain settling onto another) gives no bound, so two discs pushed apart
+    (by the water, say) keep their velocities."""
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=0.0)
+    vel = np.array([[-0.2, 0.1], [0.3, 0.0]])
+    fix = separation_adjustment([ev], np.array([0, 0]), vel, np.array([1.0, 2.0]), np.array([True, True]), 0.01)
+    np.testing.assert_array_equal(fix[0], vel[0])
+    np.testing.assert_array_equal(fix[1], vel[1])
+
+
+def test_isolated_pair_after_a_disc_that_left_two_walls():
+    """Eq 24 for an isolated pair (3, 4) in the same step as a disc 0 that left two walls (pattern
+    b, eq 22-23 with the smaller Rk): the pair keeps its normal momentum and separates at e Vn."""
+    e = 0.01
+    evs = [SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=1.0),
+           SeparationEvent(0, 2, np.array([0.0, 1.0]), vn_collision=1.0),
+           SeparationEvent(3, 4, np.array([1.0, 0.0]), vn_collision=2.0)]
+    vel = np.array([[-0.5, -0.2], [0.0, 0.0], [0.0, 0.0], [-0.4, 0.0], [0.6, 0.0]])
+    m = np.array([1.0, np.inf, np.inf, 2.0, 3.0])
+    fix = separation_adjustment(evs, np.array([0, 4, 4, 0, 0]), vel, m, np.array([True, False, False, True, True]), e)
+    assert m[3] * fix[3][0] + m[4] * fix[4][0] == pytest.approx(m[3] * vel[3, 0] + m[4] * vel[4, 0], abs=1e-14)
+    assert fix[3][0] - fix[4][0] == pytest.approx(-e * 2.0, rel=1e-12)
+    # disc 0: Rk = e Vn / |Vn'| for each wall, 0.02 along x and 0.05 along z; the smaller one, along its normal
+    np.testing.assert_allclose(fix[0], [-0.5 * 0.02, -0.2], rtol=1e-12)
+
+
+def test_a_disc_at_rest_left_by_a_receding_wall_is_not_scaled():
+    """Eq 22 scales the leaving disc's own normal velocity; a disc at rest that a wall moves away
+    from (Vn_i = 0) has none to scale and keeps its velocity."""
+    ev = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=1.0)
+    vel = np.array([[0.0, 0.4], [2.0, 0.0]])
+    fix = separation_adjustment([ev], np.array([0, 3]), vel, np.array([1.0, np.inf]), np.array([True, False]), 0.01)
+    np.testing.assert_array_equal(fix[0], [0.0, 0.4])
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_discs_exactly_touching_are_in_contact(compiled):
+    """Eq 1: contact when r_i + r_j >= R_ij, so discs exactly touching (overlap 0, exact in binary)
+    and approaching at 0.1 m/s feel the dashpot eta_n du_n / dt (the spring is still 0) and count
+    as touching."""
+    r = np.array([0.5, 0.5])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=2.0, ks=0.0, eta_s=0.0), r,
+                     mobile=np.array([True, True]), compiled=compiled)
+    dt = 1e-6
+    xz = np.array([[0.0, 0.0], [1.0, 0.0]])
+    F, _, _ = law.forces(xz, np.array([[1e-7, 0.0], [0.0, 0.0]]), np.zeros(2), dt)
+    np.testing.assert_array_equal(law.touch_count(), [1, 1])
+    np.testing.assert_allclose(F, [[-2.0 * 0.1, 0.0], [2.0 * 0.1, 0.0]], rtol=1e-9)
+
+
+def test_pattern_b_takes_the_smallest_factor_over_all_qualifying_walls():
+    """Eq 22-23, pattern b: of the walls a disc left, those it leaves faster than e Vn give a factor
+    Rk = -e Vn / Vn'; the smallest wins, whatever the order of the events, and a wall it leaves
+    slowly (first here) is skipped, not the end of the search."""
+    e = 0.01
+    evs = [SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=100.0),   # slow: 0.5 < e 100
+           SeparationEvent(0, 2, np.array([0.0, 1.0]), vn_collision=1.0),     # Rk = 0.01 / 0.2 = 0.05
+           SeparationEvent(0, 3, np.array([1.0, 0.0]), vn_collision=1.0)]     # Rk = 0.01 / 0.5 = 0.02
+    vel = np.array([[-0.5, -0.2], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]])
+    m, mobile = np.array([1.0, np.inf, np.inf, np.inf]), np.array([True, False, False, False])
+    fix = separation_adjustment(evs, np.array([0, 3, 3, 3]), vel, m, mobile, e)
+    np.testing.assert_allclose(fix[0], [-0.5 * 0.02, -0.2], rtol=1e-12)
+
+
+def test_separation_pattern_c_with_the_wall_first_in_the_pair():
+    """Fig. 3(c) with the wall k listed first in its pair (a lower index): j (index 1) leaves k
+    (to its left) and i (index 2, above it). j is adjusted against k alone first (its separation
+    from i would give the smaller factor, but i is free), then i against the new j."""
+    e = 0.01
+    ev_kj = SeparationEvent(0, 1, np.array([1.0, 0.0]), vn_collision=2.0)   # wall k at left of j
+    ev_ji = SeparationEvent(1, 2, np.array([0.0, 1.0]), vn_collision=1.0)   # i above j
+    vel = np.array([[0.0, 0.0], [0.3, -0.4], [0.0, 0.1]])
+    fix = separation_adjustment([ev_kj, ev_ji], np.array([3, 0, 0]), vel, np.array([np.inf, 1.0, 1.0]),
+                                np.array([False, True, True]), e)
+    np.testing.assert_allclose(fix[1], [e * 2.0, -0.4], rtol=1e-12)         # j leaves k at e Vn_kj
+    assert fix[2][0] == 0.0
+    assert fix[2][1] - fix[1][1] == pytest.approx(e * 1.0, rel=1e-12)      # i leaves the adjusted j at e Vn_ji
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_eps_m_wider_than_the_skin_is_in_the_pair_list(compiled):
+    """Eq 26 with eps_m larger than the neighbour list's skin (0.25 r): two discs 0.35 mm apart with
+    eps_m = 0.4 mm touch from the first step, with the spring kn (r_i + r_j + eps_m - R)."""
+    r = np.array([1e-3, 1e-3])
+    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0, eps_m=0.4e-3), r,
+                     mobile=np.array([True, True]), compiled=compiled)
+    xz = np.array([[0.0, 0.0], [2.35e-3, 0.0]])
+    F, _, _ = law.forces(xz, np.zeros((2, 2)), np.zeros(2), 1e-6)
+    np.testing.assert_array_equal(law.touch_count(), [1, 1])
+    np.testing.assert_allclose(F[1], [1e6 * 0.05e-3, 0.0], rtol=1e-9, atol=1e-12)
+
+
+def test_settings_accept_any_positive_stiffness_and_need_f_max_for_the_plateau_springs():
+    """kn > 0 is the only bound on the stiffness (0.5 N/m is soft, not wrong); springs c and d (eq 27)
+    cap the force at f_max, which must then be > 0; a and b never read it."""
+    assert ContactSettings(kn=0.5).kn == 0.5
+    for spring in ("c", "d"):
+        with pytest.raises(ValueError, match="f_max"):
+            ContactSettings(spring=spring, f_max=0.0)
+    assert ContactSettings(spring="a", f_max=0.0).f_max == 0.0

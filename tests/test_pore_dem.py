@@ -42,19 +42,25 @@ def test_masses_per_unit_thickness():
     np.testing.assert_allclose(inertia, m * np.array([0.4e-3, 0.5e-3]) ** 2 / 2, rtol=1e-15)
 
 
-def test_wall_velocity_integrates_the_input():
+def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
+    """The driven walls, moved by x += wall_velocity dt each step, follow the exact displacement of
+    a = A cos(w t) from rest, u = A/w^2 (1 - cos w t), to the second-order error of the
+    constant-average-acceleration method (a first-order integration would be off by ~1/n)."""
     s = scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0, "moves": "box"},
               numerics={"dt": 1e-6})
     pk = wet_box()
     core = PoreDEM(s, pk)
     np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
-    for _ in range(30):
+    u, w = 0.0, 2 * np.pi * 50.0
+    for k in range(1, 31):
         core.step(pk.xz)
-    w, dt = 2 * np.pi * 50.0, 1e-6
-    u = lambda t: 15.0 / w**2 * (1.0 - np.cos(w * t))  # the exact displacement of a(t) = 15 cos(w t) from rest
-    assert core.wall_velocity == pytest.approx((u(30 * dt) - u(29 * dt)) / dt, rel=1e-6)  # 2nd order (READINGS D1)
+        u += core.wall_velocity * 1e-6
+        assert u == pytest.approx(15.0 / w**2 * (1 - np.cos(w * k * 1e-6)), rel=1e-6)
     np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
-    assert not moving_walls(scene(), pk).any()
+    assert moving_walls(scene(), pk).shape == (len(pk.r),) and not moving_walls(scene(), pk).any()
+    still = PoreDEM(scene(), pk)
+    still.step(pk.xz)
+    assert still.base is None and still.wall_velocity == 0.0
 
 
 def test_bad_numerics_are_refused():
@@ -132,7 +138,8 @@ def test_dry_scene_has_no_water_and_nan_pressures():
     assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
     assert pore_dem.water_model(s, pk) is None
     bounds = pk.block_bounds(s.output.block_z)
-    assert np.all(np.isnan(pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)))
+    dry_blocks = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert dry_blocks.shape == (len(bounds),) and np.all(np.isnan(dry_blocks))
     F, fixes = core.step(pk.xz)
     assert np.all(np.isfinite(F)) and fixes == {}
 
@@ -155,6 +162,24 @@ def test_block_pressures_are_means_of_the_pores_in_each_block():
         assert sel.any() and g == pytest.approx(U[sel].mean(), rel=1e-14)
 
 
+def test_window_porosity_moves_with_the_base():
+    """Void fraction of the window of a box packing around its particles only (walls excluded):
+    one particle of radius r wholly inside gives 1 - pi r^2 / |window|; the window shifted with
+    the base until the particle's centre is on its edge sees half the disc."""
+    xz = np.array([[0.0, 0.0], [4 * R, 0.0], [2 * R, -2 * R], [2 * R, 0.0]])
+    pk = Packing(xz, np.full(4, R), [pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM, 0], np.ones(4))
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 1.0]}), pk)
+    assert (window.x0, window.x1) == pytest.approx((R, 3 * R), rel=1e-12)
+    area = (window.x1 - window.x0) * (window.z1 - window.z0)
+    big = type(window)(-5 * R, 5 * R, -R, R)
+    assert pore_dem.window_porosity(pk, big, xz) == pytest.approx(1 - np.pi * R**2 / (20 * R**2), rel=1e-12)
+    assert pore_dem.window_porosity(pk, big, xz, base_disp=-3 * R) == pytest.approx(1 - np.pi * R**2 / 2 / (20 * R**2), rel=1e-12)
+    assert 0 < area and np.isnan(pore_dem.window_porosity(pk, None, xz))
+    for keep in ([2, 3], [0, 2, 3], [1, 2, 3]):        # no side column, only the left, only the right
+        part = Packing(xz[keep], np.full(len(keep), R), np.array(pk.group)[keep], np.ones(len(keep)))
+        assert pore_dem.porosity_window(scene(), part) is None
+
+
 def test_kinetic_energy_with_spin_of_the_mobile_discs():
     """1/2 m v^2 + 1/2 I omega^2 summed over the particles only (walls excluded)."""
     mass, inertia = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
@@ -173,8 +198,9 @@ def test_a_disc_pressed_into_a_wall_feels_the_spring():
     core = PoreDEM(s, pk)
     F, _ = core.step(pk.xz)
     assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
-    pairs, fn, _ = core.contact.contact_pairs()
+    pairs, fn, es = core.contact.contact_pairs()
     assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
+    assert es == pytest.approx([0.0], abs=1e-15)                 # no tangential motion: no shear spring
     moved = pk.xz.copy()
     moved[1, 1] += 3e-9
     core.step(moved)
@@ -208,7 +234,7 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
 def test_steps_match_the_reference_without_yade(variant):
     """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
     x += v dt, walls at the input velocity, adjusted velocities set before) follows the independent
-    reference (with PoreDEM's wall kinematics, READINGS D1) disc by disc: contact law, spin,
+    reference disc by disc: contact law, spin,
     separation adjustment, pore rebuilds, water steps every water_interval, smoothing, drained
     sides, inflow and input."""
     from engines import reference as ref
@@ -225,7 +251,7 @@ def test_steps_match_the_reference_without_yade(variant):
     pk = wet_box(seed=5, jitter=0.05)
     core = PoreDEM(s, pk)
     moving = moving_walls(s, pk)
-    model = ref.ReferenceModel(s.as_dict(), pk, readings={"wall_step": "average_acceleration"})  # PoreDEM.wall_velocity (D1)
+    model = ref.ReferenceModel(s.as_dict(), pk)   # the paper's readings, walls included (READINGS D1)
     m, _ = disc_masses(s, pk)
     mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
     up = s.material.rho_w * np.pi * pk.r**2 * g
@@ -255,3 +281,126 @@ def test_rebuild_every_step_when_asked():
     for k in range(4):
         core.step(moving_positions(pk, k))
     assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_side_wall_ties_add_their_forces_to_the_step(compiled):
+    """[loading] side_walls = "springs" (Fig. 27): a middle disc of the left column moved by dx in
+    one step feels -2 k's dx - 2 eta's dx/dt more than with fixed walls (its two ties, the tie
+    velocity du/dt of the step), its two neighbours +k's dx + eta's dx/dt each; nothing in z."""
+    ks, eta, dx, dt = 1e3, 0.5, 1e-8, 1e-7
+    tables = dict(contact={"ks_wall": ks, "eta_s_wall": eta}, numerics={"dt": dt})
+    pk = wet_box()
+    ties = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0, "side_walls": "springs"}, **tables), pk, compiled)
+    fixed = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0}, **tables), pk, compiled)
+    left = np.flatnonzero(pk.group == pg.WALL_LEFT)
+    left = left[np.argsort(pk.xz[left, 1])]
+    d, below, above = left[2], left[1], left[3]
+    for k in range(2):
+        xz = pk.xz.copy()
+        xz[d, 0] += k * dx
+        diff = ties.step(xz)[0] - fixed.step(xz)[0]
+        tie = k * (ks * dx + eta * dx / dt)
+        expected = np.zeros_like(diff)
+        expected[[d, below, above], 0] = [-2 * tie, tie, tie]
+        np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
+    assert ties.kernel_step_args() is None                      # the ties need the general step
+    assert (fixed.kernel_step_args() is None) == (not compiled)
+
+
+def test_side_wall_ties_refuse_a_step_above_their_limit():
+    """dt must stay below sqrt(m_min / k's) of the moving wall discs (engines.seismic_box)."""
+    pk = wet_box()
+    m_wall = disc_masses(scene(), pk)[0][pk.group == pg.WALL_LEFT].min()
+    dt = 1e-7
+    for ks, ok in ((0.98 * m_wall / dt**2, True), (1.02 * m_wall / dt**2, False)):
+        s = scene(loading={"type": "cosine", "side_walls": "springs"}, contact={"ks_wall": ks}, numerics={"dt": dt})
+        if ok:
+            PoreDEM(s, pk)
+        else:
+            with pytest.raises(ValueError, match="side-wall ties"):
+                PoreDEM(s, pk)
+
+
+def fused_step(core, xz, vel=None):
+    """One step of ``core`` as PaperLawEngine.drive does it: kernels.dem_step between
+    kernel_step_args and finish_kernel_step (the pair list rebuilt when the kernel finds it
+    stale), or the general ``step`` where kernel_step_args says None. Returns (F, fixes, fused)."""
+    from engines import kernels
+    args = core.kernel_step_args()
+    if args is None:
+        return (*core.step(xz, vel), False)
+    F = np.zeros_like(xz)
+    rows, held = np.arange(len(xz)), np.zeros_like(xz)
+    while True:
+        due, law_args, water_args = args
+        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args)
+        if n_lost != kernels.LIST_STALE:
+            return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
+        core.law.contact._update_list(xz)
+        args = core.kernel_step_args()
+
+
+@pytest.mark.parametrize("wet", [None, "plain", "smoothing_substeps"])
+def test_one_compiled_call_per_step_equals_the_general_step(wet):
+    """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
+    does between YADE's position read and force write) gives the forces, water and rebuilds of
+    PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``. Also
+    with smoothing (eq 45-46) and water steps above the Darcy limit taken in sub-steps."""
+    if wet is None:
+        s = scene(numerics={"dt": 1e-6})
+    elif wet == "plain":
+        s = wet_scene(q_w=1e-4)
+    else:
+        s = wet_scene(q_w=1e-4, k1=2e6, smoothing=True, substep=True)
+    pk = wet_box(jitter=0.05)
+    general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
+    n_fused = 0
+    for k in range(10):
+        xz = moving_positions(pk, k)
+        F, fixes = general.step(xz.copy())
+        F2, fixes2, one_call = fused_step(fused, xz.copy())
+        n_fused += one_call
+        assert one_call == (k > 0 and not (wet and k % 4 == 0))
+        np.testing.assert_allclose(F2, F, rtol=1e-12, atol=1e-12 * np.abs(F).max())
+        assert fused.k == general.k == k + 1
+        if wet:
+            assert fused.water.total_water() == pytest.approx(general.water.total_water(), rel=1e-13)
+            assert fused.water_model.n_rebuilds == general.water_model.n_rebuilds
+    if wet:
+        assert general.water.balance.inflow > 0
+        assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
+        assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
+    every = PoreDEM(wet_scene(rebuild_interval=1), pk)
+    every.step(pk.xz)
+    assert every.kernel_step_args() is None                      # k = 1: a rebuild is due
+
+
+def test_one_compiled_call_adjusts_the_caller_velocities():
+    """The separation adjustment of eq 18-23 in the one-call step: the disc leaving the wall gets
+    -Vn''/Vn = e from the caller's velocities, as in the general step."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        fused_step(core, np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    assert one_call and set(fixes) == {1}
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+def test_an_isolated_pair_separating_keeps_its_momentum():
+    """Eq 24 through the step: two free discs of different masses (m = rho pi r^2) that collided
+    and fly apart too fast are slowed to -Vn''/Vn = e, their total momentum unchanged."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    r = np.array([R, 0.7 * R])
+    pk = Packing(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), r, [0, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    m, _ = disc_masses(s, pk)
+    for gap in (5e-9, -5e-9):                              # approach at 0.1 m/s: contact
+        core.step(np.array([[0.0, 0.0], [r.sum() + gap, 0.0]]))
+    vel = np.array([[-0.3, 0.0], [0.5, 0.0]])
+    _, fixes = core.step(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), vel=vel)
+    assert set(fixes) == {0, 1}
+    assert m[0] * fixes[0][0] + m[1] * fixes[1][0] == pytest.approx(m @ vel[:, 0], rel=1e-9)
+    assert fixes[1][0] - fixes[0][0] == pytest.approx(s.contact.restitution * 0.1, rel=1e-6)

@@ -148,7 +148,8 @@ def test_remesh_rules_c_and_d():
 
 
 @pytest.mark.parametrize("kw,field", [(dict(E_w=0.0), "E_w"), (dict(k1=-1.0), "k1"), (dict(k2=np.nan), "k2"),
-                                      (dict(q_w=-1.0), "q_w"), (dict(sides="leaky"), "sides")])
+                                      (dict(q_w=-1.0), "q_w"), (dict(sides="leaky"), "sides"),
+                                      (dict(transfer="swap"), "transfer")])
 def test_bad_settings_name_the_field(kw, field):
     args = dict(E_w=240.0, k1=200.0, k2=2.0)
     args.update(kw)
@@ -370,3 +371,112 @@ def test_two_rebuilds_add_up_in_the_budget():
     w.remesh(one, A1, A2)
     assert w.balance.remesh_change == pytest.approx(w.W.sum() - 1.2 * A1.sum(), rel=1e-12)
     assert w.balance_error() < 1e-14
+
+
+def _surface_pore_at_a_side_wall():
+    """One triangular pore of a left-wall disc and two particles: on the free surface (its
+    particle-particle and wall-particle edges face the outside) and touching a side wall."""
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [1.5, 2.6]])
+    net = pg.build_pores(xz, np.ones(3), l_m=2.0, walls=np.array([pg.WALL_LEFT, 0, 0]))
+    assert net.n_pores == 1 and net.pore_surface[0] and net.pore_touches["left"][0]
+    return net
+
+
+def test_stability_limit_of_a_pore_drained_to_both_surface_and_side():
+    """Both boundary conductances add: lambda = (k1 + k3) W / E_w / c with c = W^2 / (E_w A), so
+    the limit is 2 W / ((k1 + k3) A); undrained it is 2 W / (k1 A)."""
+    net = _surface_pore_at_a_side_wall()
+    A, W = np.array([0.25]), np.array([0.5])
+    drained = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0, k3=3.0, sides="drained"), W=W)
+    assert drained.darcy_limit(A, np.zeros(3, bool)) == pytest.approx(2 * 0.5 / (7.0 * 0.25), rel=1e-14)
+    shut = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0, k3=3.0), W=W)
+    assert shut.darcy_limit(A, np.zeros(3, bool)) == pytest.approx(2 * 0.5 / (4.0 * 0.25), rel=1e-14)
+
+
+def test_a_step_that_would_empty_a_pore_exactly_is_refused():
+    """W = 0 has no pressure (eq 32 divides by W): a surface pore with W = 0.5, A = 0.25, E_w = 1,
+    k1 = 4 loses q = k1 (W - A) = 1 m^2/s, and a step of h = 0.5 s (half its stability limit)
+    would leave exactly W = 0: refused, the water unchanged."""
+    net = _surface_pore_at_a_side_wall()
+    A = np.array([0.25])
+    w = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=[0.5])
+    assert w.darcy_limit(A, np.zeros(3, bool)) == 1.0
+    with pytest.raises(DarcyStabilityError, match="fell to 0.000e"):
+        w.advance(0.5, A, np.zeros(3, bool))
+    np.testing.assert_array_equal(w.W, [0.5])
+
+
+def test_the_refused_step_names_the_pore_that_would_empty():
+    """Of two pores against a drained side wall, the second (W = 3 A) would overshoot below zero at
+    the stability limit while the first (U = 0) stays full: the error names pore 1."""
+    xz, r, net = _two_pores()
+    A = pg.measure(net, xz, r).void_area
+    w = PoreWater(net, A, WaterSettings(E_w=1000.0, k1=1e-3, k2=1e-3, k3=50.0, sides="drained"), W=A * [1.0, 3.0])
+    h = w.darcy_limit(A, np.zeros(len(net.links), bool))
+    with pytest.raises(DarcyStabilityError, match="water area of pore 1 fell to -"):
+        w.advance(h, A, np.zeros(len(net.links), bool))
+
+
+def test_balance_error_is_relative_for_pores_of_square_millimetres():
+    """The balance error is relative to the initial water also when that is far below 1 m^2 (every
+    real packing): 3e-9 m^2 appearing in 1e-6 m^2 of water is an error of 3e-3."""
+    net = _surface_pore_at_a_side_wall()
+    w = PoreWater(net, np.array([1e-6]), WaterSettings(E_w=1.0, k1=4.0, k2=1.0))
+    w.W = w.W + 3e-9
+    assert w.balance_error() == pytest.approx(3e-3, rel=1e-9)
+
+
+def test_rule_codes_per_pore_are_small_integers():
+    """pressures_by_rule gives each new pore the code 1-4 of the rule (a)-(d) that set it, as
+    integers (postproc.vtk and the snapshots take integer codes); here rule (c) for one pore whose
+    old pressure is unusable, (a) for the rest."""
+    from engines.pore_water import pressures_by_rule
+    xz, r, net = _random_network(n=100)
+    valid = np.ones(net.n_pores, bool)
+    p = int(np.flatnonzero(~net.pore_surface)[0])
+    valid[p] = False
+    _, rule = pressures_by_rule(net, np.linspace(1.0, 2.0, net.n_pores), valid, net)
+    assert rule.dtype.kind == "i"
+    expected = np.ones(net.n_pores, int)
+    expected[p] = 3
+    np.testing.assert_array_equal(rule, expected)
+
+
+def test_rule_c_averages_neighbours_on_both_sides_of_the_index_order():
+    """Rule (c) takes the mean over all assigned neighbours, those listed before it and after it."""
+    from engines.pore_water import pressures_by_rule
+    xz, r, net = _random_network(n=100)
+    i, j = net.throat_conns.T
+    nbs = {p: np.unique(np.concatenate([j[i == p], i[j == p]])) for p in range(net.n_pores)}
+    p = next(p for p in range(net.n_pores) if nbs[p].min() < p < nbs[p].max())
+    U_old = np.linspace(1.0, 2.0, net.n_pores) ** 2
+    valid = np.ones(net.n_pores, bool)
+    valid[p] = False
+    U, rule = pressures_by_rule(net, U_old, valid, net)
+    assert rule[p] == 3 and U[p] == pytest.approx(U_old[nbs[p]].mean(), rel=1e-14)
+
+
+def test_pores_without_throats_fall_to_rule_d():
+    """Two separate triangles (two pores, no throat between them) without usable old pressures:
+    rule (c) has no neighbour to average, so both get U = 0 by rule (d)."""
+    from engines.pore_water import pressures_by_rule
+    tri = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)]])
+    xz = np.vstack([tri, tri + 10.0])
+    net = pg.build_pores(xz, np.ones(6))
+    assert net.n_pores == 2 and len(net.throat_conns) == 0
+    U, rule = pressures_by_rule(net, np.array([5.0, 7.0]), np.zeros(2, bool), net)
+    np.testing.assert_array_equal(U, [0.0, 0.0])
+    np.testing.assert_array_equal(rule, [4, 4])
+
+
+def test_initial_water_is_checked_and_the_state_starts_clean():
+    """W must match the pores and be positive (W = 0 has no pressure, eq 32); a new state has rule
+    code 0 (built with the network) for every pore and no re-meshing counts yet."""
+    net = _surface_pore_at_a_side_wall()
+    A = np.array([0.25])
+    for W in ([0.5, 0.5], [0.0], [-0.1]):
+        with pytest.raises(ValueError, match="positive water areas"):
+            PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=W)
+    w = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=[1])      # integers are areas too
+    assert w.W.dtype == float and w.remesh_counts == {}
+    assert w.rule.dtype.kind == "i" and w.rule.shape == (1,) and w.rule[0] == 0

@@ -188,3 +188,136 @@ def test_undrained_pore_keeps_its_water():
         w.advance(1e-5, A, np.zeros(0, bool))
     np.testing.assert_allclose(w.W, A * 1.3, rtol=1e-15)
     assert pressure(w.W, A, E_W)[0] == pytest.approx(E_W * 0.3 / 1.3)
+
+
+def test_clip_areas_of_a_batch_with_different_vertex_counts():
+    """One call over pairs whose overlaps have 6, 3, 3, 0 and 4 vertices (padded rows of
+    different lengths): each area is the analytic one; an empty batch gives no areas."""
+    star = np.array([[0.0, 1.0], [-np.sqrt(3) / 2, -0.5], [np.sqrt(3) / 2, -0.5]])
+    unit = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    subj = np.array([star, unit, unit, unit, unit])
+    clip = np.array([-star, 0.5 * unit + 0.1, unit + [0.5, 0.0], unit + 5.0, np.array([[0.5, -1.0], [0.5, 2.0], [-1.0, 0.5]])])
+    # hexagon 2/3 of the triangle; a half-size copy inside; the corner triangle (0.5, 0)-(1, 0)-(0.5, 0.5);
+    # nothing; the unit triangle cut by x <= 0.5: a trapezoid of area 0.5 - 0.125
+    expected = [2 / 3 * 3 * np.sqrt(3) / 4, 0.125, 0.125, 0.0, 0.375]
+    np.testing.assert_allclose(pg._clip_areas(subj, clip), expected, rtol=1e-13, atol=1e-15)
+    assert pg._clip_areas(np.zeros((0, 3, 2)), np.zeros((0, 3, 2))).shape == (0,)
+
+
+def _tri_area(a, b, c):
+    return 0.5 * abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def test_conserving_transfer_across_a_flipped_diagonal():
+    """Four discs, two pores split by one diagonal before and by the other after: each old pore
+    overlaps both new ones in a triangle cut by the crossing point M of the diagonals
+    (pore_overlaps against these areas). Such overlaps have rank one (|ABM| |CDM| = |BCM| |DAM|),
+    so the void shares are V = a b^T / sum(a) and X = W - A of each old pore is split in the
+    proportions b of the new voids."""
+    from engines.pore_water import conserving_water
+    r = np.ones(4)
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
+    new = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [-0.4, 2.2]]), r, l_m=2.0, candidates="delaunay")
+    assert [1, 3] in old.links.tolist() and [0, 2] in new.links.tolist()
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])      # both triangulations valid here
+    A, B, C, D = xz
+    t = np.linalg.solve(np.column_stack([C - A, B - D]), B - A)[0]        # A + t (C - A) = M on BD
+    M = A + t * (C - A)
+    piece = {frozenset(k): _tri_area(*(xz[list(k)]), M) for k in ((0, 1), (1, 2), (2, 3), (3, 0))}
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    assert len(o) == 4
+    for pp, qq, oo in zip(p, q, o):   # the two triangles share two corners (a side); M is the third
+        common = frozenset(old.vertices_of(pp).tolist()) & frozenset(new.vertices_of(qq).tolist())
+        assert oo == pytest.approx(piece[common], rel=1e-12)
+    a, b = np.array([1.0, 3.0]), np.array([2.5, 1.5])                    # void areas (same total)
+    W_old = a + np.array([0.5, 0.3])
+    W_new, matched = conserving_water(old, W_old, a, new, b, xz)
+    assert matched.all()
+    np.testing.assert_allclose(W_new, b + (W_old - a).sum() * b / b.sum(), rtol=1e-12)
+
+
+class _Pores:
+    """A stand-in network for conserving_water: only its pore count and a_min are read."""
+
+    def __init__(self, n_pores):
+        self.n_pores, self.a_min = n_pores, 0.0
+
+
+def test_conserving_shares_solve_the_matrix_scaling(monkeypatch):
+    """The void shares V = diag(alpha) O diag(beta) of a 2x2 group of overlaps O (given here, not
+    of rank one) with rows summing to the old voids a and columns to the new voids b rescaled to
+    the same total: V = [[x, a0 - x], [b0 - x, a1 - b0 + x]] with the cross ratio
+    V00 V11 / (V01 V10) = O00 O11 / (O01 O10), a quadratic in x. Each old pore's excess water goes
+    in the shares V_pq / a_p. An old pore (the last) and a new pore overlapping nothing: the new
+    one is unmatched, the old one's excess is not passed on; a 1x1 group takes all its water."""
+    from engines import pore_water as pw
+    O = np.array([[1.0, 2.0], [3.0, 1.5]])
+    # old pores 0, 1 (the 2x2 group), 2 (alone with new pore 2), 3 (overlapping nothing)
+    p, q = np.array([0, 0, 1, 1, 2]), np.array([0, 1, 0, 1, 2])
+    monkeypatch.setattr(pw.pg, "pore_overlaps", lambda old, new, xz: (p, q, np.r_[O.ravel(), 0.7]))
+    a = np.array([1.0, 3.0, 2.0, 0.5])
+    b = np.array([2.5, 2.5, 1.0, 0.4])                  # the group's new voids total 5, its old ones 4
+    X = np.array([0.5, 0.3, 0.2, 0.1])
+    W_new, matched = pw.conserving_water(_Pores(4), a + X, a, _Pores(4), b, np.zeros((0, 2)))
+    np.testing.assert_array_equal(matched, [True, True, True, False])
+    bs = b[:2] * a[:2].sum() / b[:2].sum()
+    rho = O[0, 0] * O[1, 1] / (O[0, 1] * O[1, 0])
+    roots = np.roots([1 - rho, a[1] - bs[0] + rho * (a[0] + bs[0]), -rho * a[0] * bs[0]])
+    x = [v.real for v in roots if max(0.0, bs[0] - a[1]) < v.real < min(a[0], bs[0])][0]
+    V = np.array([[x, a[0] - x], [bs[0] - x, a[1] - bs[0] + x]])
+    np.testing.assert_allclose(W_new[:2], b[:2] + X[:2] @ (V / a[:2, None]), rtol=1e-11)
+    assert W_new[2] == pytest.approx(b[2] + X[2], rel=1e-14) and np.isnan(W_new[3])
+
+
+def test_conserving_transfer_refuses_a_new_pore_left_without_water(monkeypatch):
+    """Suction (W < A) handed on whole: old pore 1 (A = 1, W = 0.75) onto new pore 1 (A = 0.25)
+    leaves it exactly W = 0.25 - 0.25 = 0, no water: refused, naming new pore 1 (pore 0 is fine)."""
+    from engines import pore_water as pw
+    monkeypatch.setattr(pw.pg, "pore_overlaps", lambda old, new, xz: (np.array([0, 1]), np.array([0, 1]), np.ones(2)))
+    a, b = np.array([1.0, 1.0]), np.array([1.0, 0.25])
+    with pytest.raises(ValueError, match=r"new pore 1 would hold no water \(W = 0.000e\+00"):
+        pw.conserving_water(_Pores(2), np.array([1.0, 0.75]), a, _Pores(2), b, np.zeros((0, 2)))
+
+
+def test_pore_overlaps_of_an_old_triangle_turned_over():
+    """An old pore (triangle ABC) whose corner C has moved across AB, so that it is turned over at
+    the current positions, with a disc D now inside it: the new network splits ABC' into ABD, BC'D
+    and C'AD (area 2 each), and the old pore overlaps each of them wholly."""
+    r = np.ones(4)
+    old = pg.build_pores(np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 3.0], [20.0, 20.0]]), r, l_m=3.0)
+    xz = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, -3.0], [2.0, -1.0]])
+    new = pg.build_pores(xz, r, l_m=3.0)
+    assert old.n_pores == 1 and new.n_pores == 3 and pg._signed_area(xz[old.tri])[0] < 0
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    np.testing.assert_array_equal(p, [0, 0, 0])
+    np.testing.assert_array_equal(q, [0, 1, 2])
+    np.testing.assert_allclose(o, [_tri_area(*xz[new.vertices_of(k)]) for k in range(3)], rtol=1e-12)
+    np.testing.assert_allclose(o, 2.0, rtol=1e-12)
+
+
+def test_pore_overlaps_onto_a_single_new_pore():
+    """Two old pores (a quadrilateral split by its diagonal) onto one new pore (the diagonal no
+    longer a link): pairs (0, 0) and (1, 0) with the areas of the two triangles."""
+    r = np.ones(4)
+    xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
+    new = pg.build_pores(xz, r, l_m=1.5, candidates="delaunay")
+    assert old.n_pores == 2 and new.n_pores == 1
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    np.testing.assert_array_equal(p, [0, 1])
+    np.testing.assert_array_equal(q, [0, 0])
+    np.testing.assert_allclose(o, [_tri_area(*xz[old.vertices_of(k)]) for k in range(2)], rtol=1e-12)
+
+
+def test_pores_that_only_share_an_edge_do_not_overlap():
+    """The old pore ABD and the new pore BCD (the radii decide which sides are links) meet along
+    BD only: no overlapping pair, so the new pore is unmatched in the conserving transfer."""
+    from engines.pore_water import conserving_water
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [2.4, 2.4], [0.0, 2.0]])
+    old = pg.build_pores(xz, np.array([0.6, 1.42, 0.5, 1.42]), candidates="delaunay")
+    new = pg.build_pores(xz, np.array([0.2, 1.42, 1.1, 1.42]), candidates="delaunay")
+    assert sorted(old.vertices_of(0).tolist()) == [0, 1, 3] and sorted(new.vertices_of(0).tolist()) == [1, 2, 3]
+    p, q, o = pg.pore_overlaps(old, new, xz)
+    assert len(p) == len(q) == len(o) == 0
+    W_new, matched = conserving_water(old, np.array([0.2]), np.array([0.1]), new, np.array([0.3]), xz)
+    assert not matched.any() and np.isnan(W_new).all()
