@@ -999,7 +999,7 @@ class ReferenceModel:
             F[:, 0] += tie_forces(self.x, du / dt, *self.ties, self.tie_rest, self.dtype(s.ks_wall),
                                   self.dtype(s.eta_s_wall))
         m, free = self.mobile, self.free
-        self.v[free] += (F / self.mass[:, None] * dt)[free]                 # eq 14, 16
+        self.v[free] += F[free] / np.broadcast_to(self.mass[:, None], F.shape)[free] * dt   # eq 14, 16
         self.omega[m] += M[m] / self.inertia[m] * dt
         step_x, step_psi = self.v * dt, self.omega[m] * dt                  # eq 17
         if s.eq44:

@@ -15,7 +15,7 @@ Contact cases (short, deterministic; every tolerance is stated with its reason i
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
   head_on_adjusted         the same with the separation adjustment: -Vn''/Vn = e (pattern d, eq 24)
   pressed_release_a..d     a disc pressed into a fixed wall disc and released, per spring of Fig. 5
-Feature cases (2,100-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
+Feature cases (1,050-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
   settling_rules           loose discs falling into a wet box under 1000 m/s^2: re-meshing rules a-d
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
   shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
