@@ -27,6 +27,9 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/pore_d
      with the area actually used (eq 45) and held until the next water step.
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17; eq 44 optional).
+     Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
+     are integrated the same way in x only, under the contact forces of the particles, the pore
+     pressures and the ties of their column (``column_ties``, ``tie_forces``; velocities du/dt of a).
   f. moving walls follow the input acceleration (§6.1: velocity and displacement by the
      constant-(average-)acceleration method, ``WallMotion``): x_w += v_w dt + a_bar dt^2/2,
      v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2.
@@ -88,6 +91,9 @@ class Settings:
     water_interval: int
     eq44: bool
     block_z: list
+    side_walls: bool        # side-wall columns on springs (Fig. 27), else fixed
+    ks_wall: float          # k'_s of the ties [N/m]
+    eta_s_wall: float       # eta'_s of the ties [N s/m]
 
 
 def read_settings(tables):
@@ -100,14 +106,17 @@ def read_settings(tables):
         k3=w["k3"], q_w=w["q_w"], drained=w["sides"] == "drained", l_m=w["l_m"], smoothing=w["smoothing"],
         substep=w["substep"], loading=dict(tables["loading"]), dt=n["dt"], dt_safety=n["dt_safety"],
         rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"], eq44=n["damping_eq44"],
-        block_z=[list(b) for b in tables["output"]["block_z"]])
+        block_z=[list(b) for b in tables["output"]["block_z"]],
+        side_walls=tables["loading"]["side_walls"] == "springs", ks_wall=c["ks_wall"], eta_s_wall=c["eta_s_wall"])
 
 
 # ------------------------------------------------------------------------------------------------
 # Contact law (eq 1-13, 25-27): one record per ordered pair (i, j), seen from element i
 # ------------------------------------------------------------------------------------------------
 class PairRecords:
-    """The quantities of eq 1-13 for every ordered pair (i, j), i a particle and j any other disc.
+    """The quantities of eq 1-13 for every ordered pair (i, j), i a particle and j any other disc,
+    or i a side-wall disc on springs (``sliding``) and j a particle (the walls push each other only
+    through the ties of Fig. 27; fixed and driven walls take no force).
 
     Record p is pair (I[p], J[p]); its force acts on element I[p] only, so the force on i is the sum
     over the records of i (the Sigma of eq 13) and Newton's third law holds only because record
@@ -116,9 +125,12 @@ class PairRecords:
     Vn_ij [m/s], the approach velocity at collision (eq 20-21).
     """
 
-    def __init__(self, s, r, mobile, dtype):
+    def __init__(self, s, r, mobile, dtype, sliding=None):
         n = len(r)
-        self.I, self.J = np.nonzero(np.asarray(mobile)[:, None] & ~np.eye(n, dtype=bool))
+        mobile = np.asarray(mobile, bool)
+        sliding = np.zeros(n, bool) if sliding is None else np.asarray(sliding, bool)
+        self.mobile = mobile
+        self.I, self.J = np.nonzero((mobile[:, None] & ~np.eye(n, dtype=bool)) | (sliding[:, None] & mobile[None, :]))
         self.s, self.dtype, self.n = s, dtype, n
         self.r_i, self.r_j = np.asarray(r, dtype)[self.I], np.asarray(r, dtype)[self.J]
         self.kn, self.eta_n, self.ks, self.eta_s, self.mu, self.f_max, self.eps_m = (
@@ -130,7 +142,7 @@ class PairRecords:
 
     def forces(self, x, du, dpsi, dt):
         """Forces (N, 2) [N], moments Fm (N,) [N m, counter-clockwise] on the elements (eq 13), and
-        the records that were in contact at t - dt and are not at t: {i: [(j, n_ij, Vn_ij)]},
+        the records of particles i that were in contact at t - dt and are not at t: {i: [(j, n_ij, Vn_ij)]},
         n_ij = (cos alpha_ij, sin alpha_ij) the unit normal from i to j."""
         I, J, z = self.I, self.J, self.dtype(0)
         R_ij = np.sqrt((x[I, 0] - x[J, 0]) ** 2 + (x[I, 1] - x[J, 1]) ** 2)   # eq 1b
@@ -171,7 +183,7 @@ class PairRecords:
             F[owner, 1] = np.add.reduceat(-f_n * sin_a - f_s * cos_a, self.first)   # eq 13b
             Fm[owner] = -self.r_i[self.first] * np.add.reduceat(f_s, self.first)   # eq 13c
         left = {}
-        for p in np.flatnonzero(self.in_contact & ~touching):
+        for p in np.flatnonzero(self.in_contact & ~touching & self.mobile[I]):
             left.setdefault(int(I[p]), []).append((int(J[p]), np.array([cos_a[p], sin_a[p]]), self.Vn_ij[p]))
 
         V = du / dt                                                           # eq 17
@@ -185,7 +197,8 @@ class PairRecords:
         return F, Fm, left
 
     def contacts_of(self):
-        """Number of elements each element touches now (walls: 0, they carry no records)."""
+        """Number of elements each element touches now (fixed and driven walls: 0, they carry no
+        records; a side-wall disc on springs: the particles it touches)."""
         return np.bincount(self.I[self.in_contact], minlength=self.n)
 
 
@@ -832,6 +845,43 @@ def wall_displacements(loading, dt, n_steps, wall_step):
 
 
 # ------------------------------------------------------------------------------------------------
+# Side walls on springs (§6.1, Fig. 27)
+# ------------------------------------------------------------------------------------------------
+def column_ties(x, group):
+    """The ties of Fig. 27 as (lower, upper) (M,) disc indices: in each side-wall column (LEFT,
+    RIGHT) every disc to the one above it, and the lowest to the corner disc of the bottom wall
+    (the bottom-wall disc nearest to it). Raises ValueError for a column without a bottom wall."""
+    x, group = np.asarray(x, float), np.asarray(group)
+    bottom = np.flatnonzero(group == BOTTOM)
+    lower, upper = [], []
+    for side in (LEFT, RIGHT):
+        column = np.flatnonzero(group == side)
+        if not len(column):
+            continue
+        if not len(bottom):
+            raise ValueError("side walls on springs need a bottom wall to tie the columns to")
+        column = column[np.argsort(x[column, 1], kind="stable")]           # bottom to top
+        d2 = (x[bottom, 0] - x[column[0], 0]) ** 2 + (x[bottom, 1] - x[column[0], 1]) ** 2
+        chain = [int(bottom[np.argmin(d2)])] + column.tolist()
+        lower += chain[:-1]
+        upper += chain[1:]
+    return np.array(lower, int), np.array(upper, int)
+
+
+def tie_forces(x, V, lower, upper, rest, ks, eta):
+    """x-forces (N,) [N] of the ties (lower, upper) on every disc: a tie is a tangential spring k'_s
+    and dashpot eta'_s, and tangential to a vertical tie is x, so on the upper disc
+        f_u = -k'_s [(x_u - x_l) - rest] - eta'_s (V_u - V_l),   on the lower disc -f_u,
+    x (N, 2) positions [m], V (N, 2) velocities [m/s], rest (M,) x_u - x_l when the ties were made [m]."""
+    F = np.zeros(len(x), x.dtype)
+    for l, u, x0 in zip(lower, upper, rest):
+        f = -ks * ((x[u, 0] - x[l, 0]) - x0) - eta * (V[u, 0] - V[l, 0])
+        F[u] += f
+        F[l] -= f
+    return F
+
+
+# ------------------------------------------------------------------------------------------------
 # The model
 # ------------------------------------------------------------------------------------------------
 def block_bounds(xz, r, group, block_z):
@@ -851,7 +901,8 @@ class ReferenceModel:
     ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
     any object with xz (N, 2), r (N,), group (N,) and density_factor (N,); ``readings``: overrides of
     PAPER_READINGS (e.g. {"wall_step": "symplectic_euler"}). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
-    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]. ``contact`` (PairRecords),
+    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]; ``sliding`` (N,) the side-wall
+    discs on springs, ``ties`` (lower, upper) and ``tie_rest`` (column_ties). ``contact`` (PairRecords),
     ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
     """
 
@@ -882,7 +933,17 @@ class ReferenceModel:
         self.weight[:, 1] = -self.mass * dt_(s.g)
         if s.wet:
             self.weight[:, 1] += dt_(s.rho_w) * pi * self.r**2 * dt_(s.g)                    # eq 34b buoyancy
-        self.contact = PairRecords(s, self.r, self.mobile, dt_)
+        self.sliding = np.isin(self.group, (LEFT, RIGHT)) & s.side_walls
+        self.ties = column_ties(packing.xz, self.group) if s.side_walls else (np.zeros(0, int),) * 2
+        self.tie_rest = self.x[self.ties[1], 0] - self.x[self.ties[0], 0]
+        if self.sliding.any() and s.ks_wall > 0:   # <= 2 ties a disc: w^2 <= 4 k'_s / m, stable for w dt < 2
+            limit = np.sqrt(float(self.mass[self.sliding].min()) / s.ks_wall)
+            if s.dt > limit:
+                raise ValueError(f"[numerics] dt = {s.dt:.3e} s exceeds sqrt(m_min/k's) = {limit:.3e} s of the "
+                                 f"side-wall ties ([contact] ks_wall)")
+        # the degrees of freedom integrated in e: x and z of the particles, x of the sliding walls
+        self.free = np.column_stack([self.mobile | self.sliding, self.mobile])
+        self.contact = PairRecords(s, self.r, self.mobile, dt_, self.sliding)
         accel = input_acceleration(s.loading)
         self.walls = None if accel is None else WallMotion(accel, s.dt, self.readings["wall_step"], dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
@@ -934,14 +995,17 @@ class ReferenceModel:
                 U = pore_pressure(self.water.W, A, self.water.E_w)
                 self.F_pressure = pressure_forces(self.pores, self.x, self.r, U, geo.corner_angle)
         F = F + self.F_pressure + self.weight                               # e
-        m = self.mobile
-        self.v[m] += F[m] / self.mass[m, None] * dt                         # eq 14, 16
+        if self.sliding.any():                                              # Fig. 27
+            F[:, 0] += tie_forces(self.x, du / dt, *self.ties, self.tie_rest, self.dtype(s.ks_wall),
+                                  self.dtype(s.eta_s_wall))
+        m, free = self.mobile, self.free
+        self.v[free] += F[free] / np.broadcast_to(self.mass[:, None], F.shape)[free] * dt   # eq 14, 16
         self.omega[m] += M[m] / self.inertia[m] * dt
-        step_x, step_psi = self.v[m] * dt, self.omega[m] * dt               # eq 17
+        step_x, step_psi = self.v * dt, self.omega[m] * dt                  # eq 17
         if s.eq44:
-            step_x, step_psi = (du[m] + step_x) / 2, (dpsi[m] + step_psi) / 2   # eq 44
+            step_x, step_psi = (du + step_x) / 2, (dpsi[m] + step_psi) / 2  # eq 44
         self.x_prev, self.psi_prev = self.x.copy(), self.psi.copy()
-        self.x[m] += step_x
+        self.x[free] += step_x[free]
         self.psi[m] += step_psi
         if self.walls is not None:                                          # f
             self.x[self.moving, 0] += self.walls.step(k)

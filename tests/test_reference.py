@@ -533,3 +533,48 @@ def test_pores_agree_with_the_fast_path_on_packings_with_hidden_pairs():
         assert set(pores.vertex_sets) == {frozenset(net.vertices_of(p).tolist()) for p in range(net.n_pores)}
         inserted += net.n_inserted
     assert inserted >= 5, inserted
+
+
+def tied_column():
+    """A bottom row of three wall discs and a left column of three wall discs above its first disc,
+    side walls on springs (Fig. 27), one particle far from them, no gravity."""
+    xz = [[0.0, 0.0], [2 * R, 0.0], [4 * R, 0.0], [0.0, 2 * R], [0.0, 4 * R], [0.0, 6 * R], [20 * R, 20 * R]]
+    scene = make_scene(loading={"side_walls": "springs"}, contact={"ks_wall": 1.5e5, "eta_s_wall": 0.6})
+    return scene, packing(xz, [ref.BOTTOM] * 3 + [ref.LEFT] * 3 + [ref.PARTICLE])
+
+
+def test_column_ties_chain_the_corner_and_the_column_bottom_to_top():
+    scene, pk = tied_column()
+    lower, upper = ref.column_ties(pk.xz[::-1], pk.group[::-1])   # order of the discs must not matter
+    assert (lower.tolist(), upper.tolist()) == ([6, 3, 2], [3, 2, 1])
+
+
+@pytest.mark.parametrize("kind", ["spring", "dashpot"])
+def test_tie_force_on_a_displaced_column_disc(kind):
+    """The middle disc of a column moved by dx (or moving at v) from rest: its two ties pull it back by
+    -2 k's dx (or -2 eta's v), each neighbour gets +k's dx (+eta's v), and it moves in x only."""
+    scene, pk = tied_column()
+    m = ref.ReferenceModel(scene, pk)
+    ks, eta, dt = scene.contact.ks_wall, scene.contact.eta_s_wall, m.dt
+    dx, v0 = 1e-6, 0.01
+    if kind == "spring":
+        m.x[4, 0] += dx
+        m.x_prev[4, 0] += dx                  # at rest: du = 0
+        expected, c = -2 * ks * dx, ks * dx
+    else:
+        m.x_prev[4, 0] -= v0 * dt             # du / dt = v0 at the rest positions
+        expected, c = -2 * eta * v0, eta * v0
+    m.step()
+    F = m.v[:, 0] * m.mass / dt               # v = F / m dt from rest
+    np.testing.assert_allclose(F[3:6], [c, expected, c], rtol=1e-9)
+    assert np.all(m.v[:3] == 0) and np.all(m.v[:, 1] == 0) and np.all(m.x[:, 1] == pk.xz[:, 1])
+
+
+def test_a_column_shifted_rigidly_with_its_corner_feels_no_tie():
+    scene, pk = tied_column()
+    m = ref.ReferenceModel(scene, pk)
+    m.x[[0, 3, 4, 5], 0] += 3e-5
+    m.x_prev[:] = m.x
+    m.step()
+    one_tie = scene.contact.ks_wall * 3e-5 / m.mass.min() * m.dt   # the speed one stretched tie would give
+    assert 0 < one_tie and np.abs(m.v).max() < 1e-9 * one_tie

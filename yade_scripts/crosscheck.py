@@ -15,12 +15,14 @@ Contact cases (short, deterministic; every tolerance is stated with its reason i
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
   head_on_adjusted         the same with the separation adjustment: -Vn''/Vn = e (pattern d, eq 24)
   pressed_release_a..d     a disc pressed into a fixed wall disc and released, per spring of Fig. 5
-Feature cases (2,100-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
+Feature cases (1,050-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
   settling_rules           loose discs falling into a wet box under 1000 m/s^2: re-meshing rules a-d
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
   shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
                            eps_m > 0, water_interval 2, smoothing
   elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
+  seismic_box              the liquefaction_case1 box: base shaken by the cosine, side-wall columns
+                           moving in x on the ties of Fig. 27 (k's, eta's), spring d, eps_m > 0
 and the precision study: the reference runs the quick-sand preset in float32, float64 and longdouble.
 """
 import argparse
@@ -240,16 +242,21 @@ class FeatureCase:
     min_rebuilds: int = 20
 
 
-def quicksand_build(**overrides):
-    """The quicksand_case1 preset (with ``overrides``) and its packing (packing.deposition.scene_packing)."""
+def preset_build(name, **overrides):
+    """The preset ``name`` (with ``overrides``) and its packing (packing.deposition.scene_packing)."""
     def build():
         try:
             from packing.deposition import scene_packing
         except ImportError as e:
             raise RuntimeError(f"missing prerequisite packing.deposition.scene_packing: {e}") from None
-        scene = sc.preset("quicksand_case1", overrides or None)
+        scene = sc.preset(name, overrides or None)
         return scene, scene_packing(scene)
     return build
+
+
+def quicksand_build(**overrides):
+    """The quicksand_case1 preset (with ``overrides``) and its packing."""
+    return preset_build("quicksand_case1", **overrides)
 
 
 def settling_box(seed=3, nx=8, nz=8, spacing=2.2 * R):
@@ -296,6 +303,7 @@ def feature_cases():
             loading={"type": "record", "record": ELCENTRO, "moves": "box", "time_scale": 0.001,
                      "amplitude_scale": 5.0},
             numerics={"rebuild_interval": 100}), 2100, 50),
+        FeatureCase("seismic_box", preset_build("liquefaction_case1", numerics={"rebuild_interval": 50}), 1050, 50),
     ]
 
 
@@ -312,6 +320,10 @@ def features_of(scene):
     elif ld.type == "record":
         out["input"] = (f"record {os.path.basename(ld.record)} x time {ld.time_scale} x amplitude "
                         f"{ld.amplitude_scale}, moves {ld.moves}")
+    if ld.type != "none":
+        out["side_walls"] = ld.side_walls
+        if ld.side_walls == "springs":
+            out.update(ks_wall=c.ks_wall, eta_s_wall=c.eta_s_wall)
     return out
 
 
@@ -611,10 +623,18 @@ def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "crosscheck"))
     ap.add_argument("--skip-precision", action="store_true", help="leave out the float32/longdouble study")
+    ap.add_argument("--only", nargs="+", metavar="CASE", help="run only these cases (names as in the docstring)")
     args = ap.parse_args(argv)
     from engines.yade_coupling import simulate  # needs YADE: run under `yade -n -x`
     t0 = time.time()
-    result = run_cases(simulate, log=lambda line: print(line, flush=True), measure_readings=True)
+    cases, features = contact_cases(), feature_cases()
+    if args.only:
+        unknown = set(args.only) - {c.name for c in cases + features}
+        if unknown:
+            ap.error(f"unknown cases {sorted(unknown)}")
+        cases, features = ([c for c in group if c.name in args.only] for group in (cases, features))
+    result = run_cases(simulate, cases=cases, features=features, log=lambda line: print(line, flush=True),
+                       measure_readings=True)
     if not args.skip_precision:
         try:
             result["precision"] = precision_study()
