@@ -304,7 +304,7 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
         expected = np.zeros_like(diff)
         expected[[d, below, above], 0] = [-2 * tie, tie, tie]
         np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
-    assert ties.kernel_step_args() is None                      # the ties need the general step
+    assert (ties.kernel_step_args() is None) == (not compiled)  # the ties run in the one-call step too
     assert (fixed.kernel_step_args() is None) == (not compiled)
 
 
@@ -333,8 +333,8 @@ def fused_step(core, xz, vel=None):
     F = np.zeros_like(xz)
     rows, held = np.arange(len(xz)), np.zeros_like(xz)
     while True:
-        due, law_args, water_args = args
-        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args)
+        due, law_args, water_args, tie_args = args
+        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args, *tie_args)
         if n_lost != kernels.LIST_STALE:
             return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
         core.law.contact._update_list(xz)
