@@ -14,6 +14,11 @@ and compared with the reference run from the same starts through ensemble means:
   takes between two independent ensembles of n starts at the reference settings, estimated from
   the spread between the reference's own starts (a difference of two means of n has standard
   deviation sqrt(2/n) times that of one start). An error at the floor is chaos, not error.
+* the noise-corrected (systematic) error of a run (``systematic``): a measured metric m of two
+  ensembles of na and nb starts has E[m^2] = bias^2 + floor^2, floor^2 = (sa^2/na + sb^2/nb) / ref^2
+  (sa, sb the spreads of one start of run and reference, per sample for the pressures); the
+  estimate of the bias is sqrt(max(0, m^2 - floor^2)), its uncertainty the standard deviation of
+  the same estimate over bootstrap resamples of both sets of starts.
 
 ``pareto_front`` marks the settings that no other setting beats on both cost and error.
 Plain NumPy; no YADE.
@@ -70,6 +75,25 @@ def pressure_floor(U_ref):
     return float(np.sqrt(2.0 / n) * _rms(spread) / _rms(np.nanmean(U_ref, axis=0)))
 
 
+def pressure_noise(t, U, t_ref, U_ref):
+    """floor of ``pressure_error`` between these two ensembles: sqrt(mean over samples of
+    (var_run/n_run + var_ref/n_ref)) / RMS(<U_ref>), the variances over starts (ddof 1)."""
+    A, R = _on_grid(t, U, t_ref), np.asarray(U_ref, float)
+    return _pressure_noise(A, R)
+
+
+def _pressure_noise(A, R):
+    var = np.nanvar(A, axis=0, ddof=1) / np.sum(np.isfinite(A), axis=0) + \
+        np.nanvar(R, axis=0, ddof=1) / np.sum(np.isfinite(R), axis=0)
+    return float(np.sqrt(np.nanmean(var)) / _rms(np.nanmean(R, axis=0)))
+
+
+def change_noise(x, x_ref):
+    """floor of ``change_error`` between these two ensembles: sqrt(var/n + var_ref/n_ref) / |<x_ref>|."""
+    x, x_ref = np.asarray(x, float), np.asarray(x_ref, float)
+    return float(np.sqrt(np.var(x, ddof=1) / len(x) + np.var(x_ref, ddof=1) / len(x_ref)) / abs(np.mean(x_ref)))
+
+
 def change_error(x, x_ref):
     """|<x> - <x_ref>| / |<x_ref>| of a scalar change per start (x: (starts,))."""
     return float(abs(np.mean(x) - np.mean(x_ref)) / abs(np.mean(x_ref)))
@@ -85,11 +109,7 @@ def errors(run, ref):
     """{metric: error} of a run's histories against the reference's (dicts as written by
     yade_scripts/tradeoffs.py: t (times,), U (starts, times, blocks), porosity (starts, times),
     height (starts, times) the particles' mean centre height [m])."""
-    U, U_ref = np.asarray(run["U"], float), np.asarray(ref["U"], float)
-    return {"pressure_rms": pressure_error(run["t"], U, ref["t"], U_ref),
-            "porosity_change": change_error(porosity_change(run), porosity_change(ref)),
-            "settlement": change_error(settlement(run), settlement(ref)),
-            "pressure_rms_below_surface": pressure_error(run["t"], U[:, :, :-1], ref["t"], U_ref[:, :, :-1])}
+    return {k: m for k, (m, _) in _metric_pairs(run, ref).items()}
 
 
 def floors(ref):
@@ -97,6 +117,46 @@ def floors(ref):
     U = np.asarray(ref["U"], float)
     return {"pressure_rms": pressure_floor(U), "porosity_change": change_floor(porosity_change(ref)),
             "settlement": change_floor(settlement(ref)), "pressure_rms_below_surface": pressure_floor(U[:, :, :-1])}
+
+
+def corrected(measured, floor):
+    """The systematic part of a measured metric: sqrt(max(0, measured^2 - floor^2))."""
+    return float(np.sqrt(max(0.0, measured * measured - floor * floor)))
+
+
+def _metric_pairs(run, ref):
+    """{metric: (measured, floor)} of a run against the reference (the same arrays as ``errors``)."""
+    A, R = _on_grid(run["t"], run["U"], ref["t"]), np.asarray(ref["U"], float)
+    out = {}
+    for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
+        d = np.nanmean(a, axis=0) - np.nanmean(r, axis=0)
+        out[key] = (_rms(d) / _rms(np.nanmean(r, axis=0)), _pressure_noise(a, r))
+    for key, f in (("porosity_change", porosity_change), ("settlement", settlement)):
+        x, x_ref = f(run), f(ref)
+        out[key] = (change_error(x, x_ref), change_noise(x, x_ref))
+    return out
+
+
+def _subset(run, idx):
+    return {"t": run["t"], **{k: np.asarray(run[k], float)[idx] for k in ("U", "porosity", "height")}}
+
+
+def systematic(run, ref, n_boot=400, seed=0):
+    """{metric: {"measured", "floor", "systematic", "sigma"}}: the metric, its floor between these
+    two ensembles (``pressure_noise``, ``change_noise``), the noise-corrected estimate
+    ``corrected(measured, floor)`` and the standard deviation of that estimate over ``n_boot``
+    bootstrap resamples of the starts of run and reference (module docstring)."""
+    out = {k: {"measured": m, "floor": f, "systematic": corrected(m, f)} for k, (m, f) in _metric_pairs(run, ref).items()}
+    rng = np.random.default_rng(seed)
+    na, nb = len(run["U"]), len(ref["U"])
+    boot = {k: [] for k in out}
+    for _ in range(n_boot):
+        pairs = _metric_pairs(_subset(run, rng.integers(0, na, na)), _subset(ref, rng.integers(0, nb, nb)))
+        for k, (m, f) in pairs.items():
+            boot[k].append(corrected(m, f))
+    for k in out:
+        out[k]["sigma"] = float(np.nanstd(boot[k], ddof=1))
+    return out
 
 
 def porosity_change(run):

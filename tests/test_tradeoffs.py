@@ -50,6 +50,49 @@ def test_floors_follow_the_spread_between_starts():
     assert tr.change_error(x * 1.2, x) == pytest.approx(0.2, rel=1e-12)
 
 
+def test_noise_floor_of_two_ensembles_adds_both_variances_over_their_sizes():
+    # run: 4 starts at 50 +- 3 (alternating), reference: 8 starts at 50 +- 1
+    za, zb = np.array([1, -1] * 2, float), np.array([1, -1] * 4, float)
+    U = 50.0 + 3.0 * za[:, None, None] * np.ones((1, 20, 2))
+    U_ref = 50.0 + 1.0 * zb[:, None, None] * np.ones((1, 20, 2))
+    var_a, var_b = 9.0 * 4 / 3, 1.0 * 8 / 7  # ddof 1
+    t = np.arange(20)
+    assert tr.pressure_noise(t, U, t, U_ref) == pytest.approx(np.sqrt(var_a / 4 + var_b / 8) / 50.0, rel=1e-12)
+    # the same ensembles at the reference: the chaos floor of two sets of n (the reference's floor)
+    assert tr.pressure_noise(t, U_ref, t, U_ref) == pytest.approx(tr.pressure_floor(U_ref), rel=1e-12)
+    x, x_ref = 2e-4 + 3e-5 * za, 2e-4 + 1e-5 * zb
+    assert tr.change_noise(x, x_ref) == pytest.approx(np.sqrt(9e-10 * 4 / 3 / 4 + 1e-10 * 8 / 7 / 8) / 2e-4, rel=1e-12)
+    assert tr.corrected(0.05, 0.03) == pytest.approx(0.04) and tr.corrected(0.03, 0.05) == 0.0
+
+
+@pytest.mark.parametrize("bias", [0.0, 0.04, 0.10])
+def test_systematic_error_recovers_a_known_bias_through_the_chaos(bias):
+    """Histories with a 20 % spread between starts and a relative bias: with 20 starts the raw
+    metric is inflated by the chaos; the noise-corrected estimate finds the bias within 3 sigma."""
+    rng = np.random.default_rng(7)
+    t = np.arange(60) * 5e-4
+    shape = 100 * np.sin(2 * np.pi * 50 * t)[:, None] * np.array([1.0, 0.5, -0.8])
+
+    def ensemble(n, scale):
+        U = scale * shape[None] + 20.0 * rng.standard_normal((n, len(t), 3))
+        d_por = scale * (-0.0175) * (1 + 0.2 * rng.standard_normal(n))
+        d_h = scale * 1.5e-4 * (1 + 0.2 * rng.standard_normal(n))
+        return _run(U, np.outer(np.ones(n), [0.3, 0.3]) + np.column_stack([0 * d_por, d_por]),
+                    np.outer(np.ones(n), [1e-2, 1e-2]) - np.column_stack([0 * d_h, d_h]), t)
+
+    run, ref = ensemble(20, 1.0 + bias), ensemble(20, 1.0)
+    res = tr.systematic(run, ref, n_boot=200)
+    for key in ("pressure_rms", "porosity_change", "settlement"):
+        r = res[key]
+        assert r["measured"] == pytest.approx(tr.errors(run, ref)[key], rel=1e-12)
+        assert r["systematic"] <= r["measured"] and r["sigma"] > 0
+        assert abs(r["systematic"] - bias) < 3 * r["sigma"] + 0.01, (key, r)
+    # the pressures' chaos alone (bias 0) reads as ~10 % raw; the correction removes most of it
+    # (what remains is the scatter of measured^2 - floor^2 over 180 samples, ~0.3 floor)
+    if bias == 0.0:
+        assert res["pressure_rms"]["measured"] > 0.05 and res["pressure_rms"]["systematic"] < 0.5 * res["pressure_rms"]["measured"]
+
+
 def test_errors_use_porosity_change_and_settlement():
     ref = _run(np.ones((2, 3, 1)), [[0.30, 0.31, 0.32], [0.30, 0.30, 0.34]], [[1.0, 0.9, 0.8], [1.0, 0.9, 0.6]])
     run = _run(np.ones((2, 3, 1)), [[0.30, 0.31, 0.33], [0.30, 0.30, 0.36]], [[1.0, 0.9, 0.8], [1.0, 0.9, 0.8]])
@@ -94,7 +137,11 @@ def test_study_points_and_jobs():
     jobs, meta = study.study_jobs()
     assert len({j.name for j in jobs}) == len(jobs) == len(pts)
     argv = dict(zip(jobs[0].argv, jobs[0].argv[1:]))
-    assert argv["--case"] == "liquefaction_case1" and argv["--starts"] == "5" and argv["--window"] == "0.04"
+    assert argv["--case"] == "liquefaction_case1" and argv["--window"] == "0.04"
+    # the rows judged against 5 % get 20 starts (floor / 2), the other knobs STARTS
+    starts = {meta[j.name][1]: dict(zip(j.argv, j.argv[1:]))["--starts"] for j in jobs if meta[j.name][0] == "liquefaction_case1"}
+    assert starts["reference"] == starts["dt"] == starts["defaults"] == "20"
+    assert starts["water_interval"] == starts["smoothing"] == str(study.STARTS)
 
 
 def _fake_result(path, case, over, dt, cpu, scale, rng, n=5, ok=True):
