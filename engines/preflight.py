@@ -125,17 +125,23 @@ def start_darcy_limit(scene, packing):
 
 
 def check_darcy(scene, packing):
-    """The water step water_interval x dt against the explicit Darcy limit at the start (the
-    engine refuses it at step 0 unless [water] substep)."""
-    if not scene.water.enabled or scene.water.substep:
+    """The water step water_interval x dt against the explicit Darcy limit at the start: above it,
+    refused without [water] substep (the engine would refuse it at step 0), and with it refused when
+    it needs more than [water] max_substeps sub-steps."""
+    if not scene.water.enabled:
         return
     num, w = scene.numerics, scene.water
     h = num.water_interval * num.dt
     limit = start_darcy_limit(scene, packing)
-    if h > limit:
+    where = f"the explicit Darcy limit {limit:.3g} s at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s, E_w = {w.E_w:g} N/m)"
+    if not w.substep and h > limit:
         raise InputError(f"[numerics] dt = {num.dt:.3g} s: the water step water_interval x dt = {h:.3g} s exceeds "
-                         f"the explicit Darcy limit {limit:.3g} s at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s, "
-                         f"E_w = {w.E_w:g} N/m); reduce dt or the permeabilities, or set [water] substep = true")
+                         f"{where}; reduce dt or the permeabilities, or set [water] substep = true")
+    n_sub = math.ceil(h / limit * (1 - 1e-12))
+    if w.substep and n_sub > w.max_substeps:
+        raise InputError(f"[numerics] dt = {num.dt:.3g} s: the water step water_interval x dt = {h:.3g} s needs "
+                         f"{n_sub} sub-steps at {where}, more than [water] max_substeps = {w.max_substeps}; "
+                         f"reduce dt or the permeabilities, or raise max_substeps")
 
 
 def check_water_stiffness(scene, packing):

@@ -86,7 +86,9 @@ SCHEMA = {
         "sides": (str, "undrained", ("undrained", "drained"), "side-wall drainage"),
         "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
         "smoothing": (bool, False, None, "eq 45-46"),
-        "substep": (bool, False, None, "sub-step the water instead of refusing a step above the Darcy limit"),
+        "substep": (bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the engine prints the count and its cost); false: refuse such a step (preflight at the start, the engine mid-run)"),
+        # issue 12
+        "max_substeps": (int, 100, (1, math.inf), "with substep: refuse up front a water step that needs more sub-steps than this at the start"),
         # issue 11
         "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.pore_water.conserving_water)"),
     },

@@ -143,7 +143,7 @@ def test_eq52_check_agrees_with_the_engine(packing):
 
 def test_darcy_check_agrees_with_the_engine_at_step_0(packing):
     """Just below the start limit the engine's first water step passes, just above it raises."""
-    sc = scenes.preset("quicksand_case1", {"water": {"k1": 1e5}})
+    sc = scenes.preset("quicksand_case1", {"water": {"k1": 1e5, "substep": False}})  # the strict mode
     limit = start_darcy_limit(sc, packing)
     assert 1e-6 < limit < 1e-5
     for dt, ok in ((0.999 * limit, True), (1.001 * limit, False)):
@@ -158,7 +158,12 @@ def test_darcy_check_agrees_with_the_engine_at_step_0(packing):
             with pytest.raises(DarcyStabilityError):
                 core.step(packing.xz.copy())
     s = sc.with_overrides({"numerics": {"dt": 2 * limit}, "water": {"substep": True}})
-    preflight(s, packing, "out")  # sub-stepping was asked for: nothing to refuse
+    preflight(s, packing, "out")  # sub-stepping (the default): 2 sub-steps, nothing to refuse
+    assert scenes.preset("quicksand_case1").water.substep  # the default
+    s = sc.with_overrides({"numerics": {"dt": 0.9 * limit, "water_interval": 6},   # a water step of 5.4 limits
+                           "water": {"substep": True, "max_substeps": 5}})
+    with pytest.raises(InputError, match=r"needs 6 sub-steps .*Darcy limit .*max_substeps = 5"):
+        preflight(s, packing, "out")
 
 
 @pytest.mark.parametrize("kind,lo,hi,lo_open,text,ok", [

@@ -150,8 +150,9 @@ def test_scene_schema_takes_auto_and_refuses_other_words():
 # -- refusals up front --------------------------------------------------------------------------
 @pytest.mark.parametrize("over,limit", [
     ({"numerics": {"dt": 1.05 * 3.2565e-5}}, "eq 52"),
-    ({"water": {"k1": 1e6}}, "Darcy limit"),
-    ({"water": {"k2": 1e6}}, "Darcy limit"),
+    ({"water": {"k1": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),  # the strict mode
+    ({"water": {"k2": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),
+    ({"water": {"k1": 1e9}}, "sub-steps at the explicit Darcy limit"),                 # sub-stepping, beyond max_substeps
     ({"water": {"E_w": 2.4e8}}, "water-stiffness limit"),
     ({"water": {"E_w": 2.4e5}, "numerics": {"dt": 3.2e-5}}, "water-stiffness limit"),
 ])
@@ -188,3 +189,30 @@ def test_box_and_escape(qs):
     xz[0, 1] = box[2] - 1e-3  # below the bottom wall
     xz[1, 0] = np.nan
     assert st.escaped(xz, box) == 2
+
+
+def test_substepping_by_default_keeps_the_water_bounded_and_conserved(qs, tmp_path):
+    """k1 = 1e6 1/s puts the Darcy limit below dt = 1e-6 s: refused in the strict mode (above), by
+    default sub-stepped. With the discs held still, n sub-steps of dt / n are n water steps of
+    dt / n: the water equals a strict run at dt / n step for step, and the balance closes."""
+    import math
+    from engines.pore_dem import PoreDEM
+    from engines.preflight import start_darcy_limit
+
+    sc, pk = qs
+    s = sc.with_overrides({"water": {"k1": 1e6}, "numerics": {"dt": 1e-6, "rebuild_interval": 10 ** 6}})
+    assert s.water.substep
+    preflight(s, pk, str(tmp_path / "out"))
+    n = math.ceil(1e-6 / start_darcy_limit(s, pk))
+    assert 2 <= n <= s.water.max_substeps
+    sub = PoreDEM(s, pk)
+    fine = PoreDEM(s.with_overrides({"numerics": {"dt": 1e-6 / n}, "water": {"substep": False}}), pk)
+    for k in range(30):
+        sub.step(pk.xz.copy())
+        for _ in range(n):
+            fine.step(pk.xz.copy())
+    assert sub.water_model.substeps_max == n and fine.water_model.substeps_max == 0
+    assert sub.water.balance.inflow > 0 and abs(sub.water.balance_error()) < 1e-12
+    U = sub.water_model.pressures(pk.xz)
+    assert np.all(np.isfinite(U))
+    np.testing.assert_allclose(sub.water.W, fine.water.W, rtol=1e-9, atol=0)
