@@ -15,14 +15,18 @@ Limits [s] (``limits``):
   (engines.pore_water: conductances g, boundary g_b, capacities c = W^2 / (E_w A)), from
   scipy.sparse.linalg.eigsh on the symmetric C^-1/2 G C^-1/2, divided by water_interval (the
   water step is water_interval x dt). The engines check every water step against the Gershgorin
-  bound of the same matrix (0.74-0.8 of 2 / lambda_max on the seismic box), so without
-  [water] substep the chosen dt is also capped at that check ("darcy_check").
+  bound of the same matrix (0.74-0.8 of 2 / lambda_max on the seismic box), so with
+  [water] substep = false the chosen dt is also capped at that check ("darcy_check").
 
-dt = dt_auto_factor x min(contact, ties, water stiffness, darcy), then capped by darcy_check.
-With [water] substep = true the Darcy limits do not bound dt: the water is sub-stepped, and the
-choice reports the sub-steps per water step at the start and their cost.
-The limits are those of the start: the pores change as the discs move (the engines keep checking
-the Darcy limit at every water step; the contact limit does not change).
+With [water] substep = true (the default) the Darcy limits do not bound dt: dt = dt_auto_factor x
+min(contact, ties, water stiffness), the water is sub-stepped where a water step exceeds the
+Darcy check, and the choice reports the sub-steps per water step at the start and their cost.
+With substep = false: dt = dt_auto_factor x min(contact, ties, water stiffness, darcy), then
+capped by darcy_check.
+The limits are those of the start and dt is not changed during the run: the pores change as the
+discs move, and the engines check the Darcy limit at every water step (sub-stepping by default,
+which is the Darcy limit refreshed at every water step rather than at rebuilds); the contact and
+tie limits do not change; the water-stiffness limit is not refreshed.
 """
 import math
 

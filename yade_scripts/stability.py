@@ -4,7 +4,9 @@ eps_m and f_max; each is refused up front, bounded, or unbounded (engines.stabil
     yade -n -j 1 -x yade_scripts/stability.py --out out/stability [--window 0.003]
     make stability
 
-Quick-sand case 1 (spring c) for every knob, the seismic box (liquefaction case 1, spring d) for
+The water is sub-stepped where a step exceeds the Darcy limit (the default, [water] substep =
+true; refused up front beyond [water] max_substeps); two points run the strict mode (substep =
+false), which refuses such a step. Quick-sand case 1 (spring c) for every knob, the seismic box (liquefaction case 1, spring d) for
 dt/dt_crit too; dt_crit is eq 52's 2 sqrt(m_min / kn). Each point runs --window seconds (10 ms for
 the dt points) from the preset's packing; its kinetic energy is compared with its reference: the
 same setting at dt / 4 (rebuild period kept), or for the dt points the preset at
@@ -42,10 +44,10 @@ def map_points():
     pts += [(QS, "E_w", e, {"water": {"E_w": e}}) for e in (24.0, 2.4e3, 2.4e4, 2.4e5, 2.4e6, 2.4e7, 2.4e8)]
     pts += [(QS, "E_w", e, {"water": {"E_w": e}, "numerics": {"dt": 1e-5, "rebuild_interval": 100}})
             for e in (2.4e4, 2.4e5, 2.4e6)]
-    pts += [(QS, "E_w", 2.4e4, {"water": {"E_w": 2.4e4, "substep": True}, "numerics": {"dt": 1e-5, "rebuild_interval": 100}})]
-    pts += [(QS, "k1", k, {"water": {"k1": k}}) for k in (0.0, 1e3, 1e4, 1e5, 1e6)]
-    pts += [(QS, "k1", 1e6, {"water": {"k1": 1e6, "substep": True}})]
+    pts += [(QS, "k1", k, {"water": {"k1": k}}) for k in (0.0, 1e3, 1e4, 1e5, 1e6, 1e9)]
+    pts += [(QS, "k1", 1e6, {"water": {"k1": 1e6, "substep": False}})]  # the strict mode
     pts += [(QS, "k2", k, {"water": {"k2": k}}) for k in (0.0, 1e3, 1e5, 1e6)]
+    pts += [(QS, "k2", 1e6, {"water": {"k2": 1e6, "substep": False}})]
     pts += [(QS, "eps_m", e, {"contact": {"eps_m": e}}) for e in (1e-5, 1e-4, 3e-4, 1e-3)]
     pts += [(QS, "f_max", f, {"contact": {"f_max": f}}) for f in (0.01, 0.1, 10.0, 1000.0)]
     return pts
@@ -162,8 +164,10 @@ def figure(points, path):
                 y = top / 2
             ax.scatter(x, y, c=COLORS[p["outcome"]], marker=MARKERS[p["case"]], s=55, edgecolors="k", linewidths=0.5,
                        zorder=3)
-            if p["overrides"].get("water", {}).get("substep"):
-                ax.annotate("substep", (x, y), fontsize=7, xytext=(4, -10), textcoords="offset points")
+            if p["overrides"].get("water", {}).get("substep") is False:
+                ax.annotate("substep = false", (x, y), fontsize=7, xytext=(4, -10), textcoords="offset points")
+            elif p.get("substeps_max", 0) > 1:
+                ax.annotate(f"{p['substeps_max']} sub-steps", (x, y), fontsize=7, xytext=(4, -10), textcoords="offset points")
             if p["overrides"].get("numerics", {}).get("dt") == 1e-5 and knob == "E_w":
                 ax.annotate("dt 1e-5", (x, y), fontsize=7, xytext=(4, 4), textcoords="offset points")
         ax.axhline(10, color="0.5", ls=":", lw=0.8)
