@@ -201,7 +201,8 @@ def table(doc):
 
 KNOB_STYLE = {"dt": ("tab:blue", "o"), "water_interval": ("tab:orange", "s"), "rebuild_period": ("tab:green", "^"),
               "smoothing": ("tab:red", "D"), "transfer": ("tab:purple", "v"), "E_w_scale": ("tab:brown", "P"),
-              "precision": ("tab:pink", "X"), "law": ("tab:olive", "*"), "defaults": ("black", "*")}
+              "precision": ("tab:pink", "X"), "law": ("tab:olive", "*"), "candidate": ("tab:cyan", "h"),
+              "defaults": ("black", "*")}
 
 
 def figure(doc, case, path):
