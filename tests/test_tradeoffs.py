@@ -186,3 +186,12 @@ def test_analyse_writes_the_issue_format(tmp_path):
     assert d["within_target"] and d["target_met"]
     assert (tmp_path / f"tradeoffs_{case}.png").stat().st_size > 10000
     assert "| liquefaction_case1 | dt | 2e-05 |" in (tmp_path / "table.md").read_text()
+
+
+def test_speed_points_name_the_study_settings():
+    from yade_scripts import tradeoffs as study
+    assert study.named_value("liquefaction_case1", "dt", "1e-06") == 1e-6
+    fast = study.named_value("liquefaction_case1", "defaults", "fast")
+    assert fast is study.CASES["liquefaction_case1"]["defaults"][0]
+    over = study.nested(study.settings_of("liquefaction_case1", "defaults", fast)[0])
+    assert over["numerics"]["dt"] == "auto" and over["numerics"]["water_interval"] == fast["numerics.water_interval"]

@@ -5,6 +5,7 @@
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --analyse-only
     yade -n -j 1 -x yade_scripts/tradeoffs.py run --case liquefaction_case1 --window 0.04 \\
          --set numerics.dt=2e-5 --set numerics.rebuild_interval=50 --out out/one   # one setting
+    yade -n -j 1 -x yade_scripts/tradeoffs.py speed --points dt=1e-06 defaults=fast --repeats 3 --out out/speed
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
 (engines.tradeoffs.perturbed: start s moves the particles by 1e-9 m x N(0, 1), seed s; start 0 is
@@ -13,6 +14,9 @@ pressure, window porosity, particles' mean height and kinetic energy every ``--r
 the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
 water balance and sub-steps. The cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the engines is recorded with
 its message.
+
+``speed`` (inside YADE) measures speed-ups in one process: the settings interleaved, one start
+each per repeat, the median CPU ratio to the first (the paper's settings).
 
 ``study`` builds the jobs of KNOBS (one per case, knob and value), runs them with the sweep runner
 (yade_scripts/sweep.py: resumable, local processes or a Dask scheduler), then computes the
@@ -170,6 +174,54 @@ def run_main(argv):
           f"{sum(1 for s in result['starts'] if s['status'] == 'ok')}/{a.starts} starts ok")
 
 
+def nested(flat):
+    """{"table.field": v} -> {table: {field: v}}."""
+    out = {}
+    for key, v in flat.items():
+        table, field = key.split(".", 1)
+        out.setdefault(table, {})[field] = v
+    return out
+
+
+def named_value(case, knob, text):
+    """The value of a study point from its text in a job name: a number, or a named setting."""
+    named = {v["name"]: v for v in CASES[case].get(knob, []) if isinstance(v, dict)}
+    return named[text] if text in named else float(text)
+
+
+def speed_main(argv):
+    """Speed-ups measured in one YADE process: each setting run from one start per repeat, the
+    settings interleaved (their order rotated every repeat), CPU seconds as in ``run``; the
+    median over the repeats of each over the first setting's (the paper's) -> OUT/speed.json."""
+    from engines.preflight import ArgumentParser, number, output_dir
+    ap = ArgumentParser(prog="tradeoffs.py speed")
+    ap.add_argument("--case", default="liquefaction_case1", choices=sorted(CASES))
+    ap.add_argument("--points", nargs="+", default=["dt=1e-06", "defaults=fast"],
+                    help="KNOB=VALUE of the study (VALUE a number or a setting's name); the first is the base")
+    ap.add_argument("--repeats", type=number(int, 1), default=3)
+    ap.add_argument("--out", type=output_dir, required=True)
+    a = ap.parse_args(argv)
+    spec = CASES[a.case]
+    points = [p.split("=", 1) for p in a.points]
+    cpu = {p: [] for p in a.points}
+    for rep in range(a.repeats):
+        for k in range(len(points)):
+            knob, text = points[(k + rep) % len(points)]
+            over = nested(settings_of(a.case, knob, named_value(a.case, knob, text))[0])
+            over.setdefault("numerics", {})["duration"] = spec["window"]
+            res = run_setting(spec.get("preset", a.case), over, spec["window"], RECORD, 1, a.out)
+            cpu[f"{knob}={text}"].append(res["cpu_s"])
+            print(f"repeat {rep}: {knob}={text}: {res['cpu_s']:.2f} CPU s", flush=True)
+    med = {p: float(np.median(c)) for p, c in cpu.items()}
+    doc = {"case": a.case, "window_s": spec["window"], "repeats": a.repeats, "cpu_s": cpu, "median_cpu_s": med,
+           "speedup": {p: med[a.points[0]] / m for p, m in med.items()}}
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "speed.json"), "w") as f:
+        json.dump(doc, f, indent=1)
+    for p in a.points:
+        print(f"{p}: median {med[p]:.2f} CPU s, speed-up {doc['speedup'][p]:.1f}")
+
+
 def run_setting(case, overrides, window, record, n_starts, out_dir):
     """Run one setting from n_starts perturbed starts; returns the result dict (module docstring)."""
     from yade import O
@@ -272,7 +324,9 @@ def main(argv):
         return run_main(argv[1:])
     if argv and argv[0] == "study":
         return study_main(argv[1:])
-    sys.exit("usage: tradeoffs.py run ... | study ... (see the docstring)")
+    if argv and argv[0] == "speed":
+        return speed_main(argv[1:])
+    sys.exit("usage: tradeoffs.py run ... | study ... | speed ... (see the docstring)")
 
 
 if __name__ == "__main__":
