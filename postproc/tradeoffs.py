@@ -129,6 +129,12 @@ def analyse(out, jobs, meta, log=print):
         if full is not None:  # the whole 0.18 s, against the paper's settings as the reference
             doc["defaults"]["full_duration"] = {k: full[k] for k in ("speedup", "error", "cpu_s")}
             doc["defaults"]["full_duration"]["floor"] = doc["reference"]["liquefaction_case1_full"]["floor"]
+    speed = os.path.join(out, "speed", "speed.json")  # yade_scripts/tradeoffs.py speed: interleaved in one process
+    if os.path.exists(speed):
+        with open(speed) as f:
+            doc["speed_interleaved"] = json.load(f)
+        if doc["defaults"] is not None:
+            doc["defaults"]["speedup_interleaved"] = doc["speed_interleaved"]["speedup"].get("defaults=fast")
     with open(os.path.join(out, "tradeoffs.json"), "w") as f:
         json.dump(doc, f, indent=1, default=float)
     with open(os.path.join(out, "table.md"), "w") as f:
