@@ -165,9 +165,11 @@ def figure(points, path):
             ax.scatter(x, y, c=COLORS[p["outcome"]], marker=MARKERS[p["case"]], s=55, edgecolors="k", linewidths=0.5,
                        zorder=3)
             if p["overrides"].get("water", {}).get("substep") is False:
-                ax.annotate("substep = false", (x, y), fontsize=7, xytext=(4, -10), textcoords="offset points")
+                ax.annotate("substep = false", (x, y), fontsize=7, xytext=(-30, -12), textcoords="offset points")
+            elif "max_substeps" in p.get("reason", ""):
+                ax.annotate("> max_substeps", (x, y), fontsize=7, xytext=(-50, -24), textcoords="offset points")
             elif p.get("substeps_max", 0) > 1:
-                ax.annotate(f"{p['substeps_max']} sub-steps", (x, y), fontsize=7, xytext=(4, -10), textcoords="offset points")
+                ax.annotate(f"{p['substeps_max']} sub-steps", (x, y), fontsize=7, xytext=(-20, -14), textcoords="offset points")
             if p["overrides"].get("numerics", {}).get("dt") == 1e-5 and knob == "E_w":
                 ax.annotate("dt 1e-5", (x, y), fontsize=7, xytext=(4, 4), textcoords="offset points")
         ax.axhline(10, color="0.5", ls=":", lw=0.8)
