@@ -3,11 +3,12 @@
     yade -n -x benchmarks/coupling.py --json out/bench-coupling.json [--sizes 240 2000 10000] [--repeats 3]
 
 Per size, one packing (a jittered polydisperse hexagonal packing, packing.layouts.random_discs,
-mean radius 0.45 mm, a bottom row and two side columns of fixed wall discs) and the seismic
+radii 0.29-0.45 mm, gaps >= eps_m, a bottom row and two side columns of fixed wall discs) and the seismic
 constants of Table 4 with spring (b) (linear, eps_m = 2e-4 m: the same pairs touch in every
 column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
 
-  yade_alone_us        YADE's collider + FrictMat/CundallStrack, radii enlarged by eps_m/2, no Python
+  yade_alone_us        YADE's collider + its linear law (ViscElMat, the scene's kn, eta_n, ks, eta_s,
+                       mu), radii enlarged by eps_m/2, no Python (benchmarks.floor)
   yade_law_dry_us      [contact] law = "yade", dry: our setup, no Python engine
   yade_law_wet_us      law = "yade" + WaterEngine every step (forces as permanent forces)
   yade_law_wet_m10_us  law = "yade" + WaterEngine every 10 steps
@@ -54,8 +55,11 @@ COLUMNS = {
 
 def box_packing(n, seed=0):
     """About n discs: random_discs with the lowest row as bottom wall and the outer columns as
-    side walls (fixed), particles in between."""
-    xz, r = random_discs(n, np.random.default_rng(seed), r_mean=R_MEAN, aspect=1.0)
+    side walls (fixed), particles in between; every gap >= eps_m, so that the springs (eq 26) start
+    unloaded and the packing settles under gravity instead of bursting apart."""
+    grow = 0.5 * TABLE4["contact"]["eps_m"]
+    xz, r = random_discs(n, np.random.default_rng(seed), r_mean=R_MEAN + grow, aspect=1.0)
+    r = r - grow
     group = np.zeros(len(r), np.int64)
     group[xz[:, 1] < xz[:, 1].min() + R_MEAN] = pg.WALL_BOTTOM
     group[(xz[:, 0] < xz[:, 0].min() + R_MEAN) & (group == 0)] = pg.WALL_LEFT
