@@ -7,7 +7,7 @@ from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGe
                           NewtonIntegrator)
 
 from engines.pore_dem import disc_masses
-from engines.yade_coupling import yade_law_material
+from engines.yade_coupling import run_blocking, yade_law_material
 
 
 def native_floor(scene, packing):
@@ -41,7 +41,7 @@ def step_by_step(n):
 def run_steps(n):
     """Advance YADE n steps the way YadeCoupling runs a scene without per-step Python."""
     if n > 1000:
-        O.run(int(n), True)
+        run_blocking(n)
     else:
         step_by_step(n)
 
