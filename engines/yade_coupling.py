@@ -3,15 +3,16 @@
 [contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
 O.step() ``run`` drives the PaperLawEngine (engines.paper_law; it calls PoreDEM.step: the paper's
 law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
-no PyRunner (its dispatch costs 15-40 us a step). No collider: the law keeps its own Verlet list.
+no PyRunner (its dispatch costs ~50 us a call). No collider: the law keeps its own Verlet list.
 Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
 scenes with ``YadeCoupling.run``, not O.run.
 
 [contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
 ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the wall motion, NewtonIntegrator; discs spin about y
 in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.water_engine; pressure forces and buoyancy
-held as permanent forces) is called before O.step() every water_interval steps, the work its
-PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all (O.run).
+held as permanent forces) is called before O.step() every water_interval steps (WaterEngine.drive),
+the work its PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all
+(O.run, ``run_blocking``).
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
