@@ -17,8 +17,9 @@ column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
 
 The six are measured interleaved (one run of each in turn, ``repeats`` times) and the median is
 kept, of wall time (the six columns) and of the process's CPU time ("cpu_us", steadier on a shared
-machine); each run includes the pore rebuilds (every 1000 steps) that fall in it. Read the ratios,
-not the absolute times.
+machine), and "cpu_ratio_paired", the ratio to yade_alone within each repeat, median over the
+repeats (steadier when the load drifts); each run includes the pore rebuilds (every 1000 steps)
+that fall in it. Read the ratios, not the absolute times.
 """
 import argparse
 import json
@@ -102,6 +103,9 @@ def bench_size(n, steps, repeats, log):
     row.update({k: float(np.median(v)) for k, v in wall.items()})
     row["cpu_us"] = {k: float(np.median(v)) for k, v in cpu.items()}
     row["samples_wall_us"], row["samples_cpu_us"] = wall, cpu
+    # the ratio to YADE alone within each repeat (its columns run seconds apart), median over repeats:
+    # steadier than a ratio of medians when the machine's load drifts
+    row["cpu_ratio_paired"] = {k: float(np.median(np.array(v) / np.array(cpu["yade_alone_us"]))) for k, v in cpu.items()}
     return row
 
 
@@ -127,6 +131,9 @@ def main(argv):
         for row in results:
             a = get(row, "yade_alone_us")
             print(f"{'':>4} {row['n_bodies']:7d} " + " ".join(f"{get(row, k):9.1f} ({get(row, k) / a:5.2f})" for k in keys))
+    print("CPU ratio to yade_alone within each repeat, median over the repeats:")
+    for row in results:
+        print(f"{'':>4} {row['n_bodies']:7d} " + " ".join(f"{row['cpu_ratio_paired'][k]:18.2f}" for k in keys))
 
 
 if __name__ == "__main__":
