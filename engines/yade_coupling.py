@@ -47,7 +47,8 @@ POLL_SECONDS = 1e-3    # run_blocking's poll of YADE's thread
 
 def run_blocking(n):
     """O.run(n, True) without its wait's 40 ms poll (measured: a call returns 0-40 ms after YADE
-    stops): poll O.running every POLL_SECONDS, then O.wait() re-raises an error of YADE's thread."""
+    stops): poll O.running every POLL_SECONDS. An engine that fails stops YADE early, as with
+    O.run (our callbacks keep their errors for yade_io.raise_pending)."""
     O.run(int(n))
     while O.running:
         time.sleep(POLL_SECONDS)
