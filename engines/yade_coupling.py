@@ -43,6 +43,7 @@ from engines.water_engine import WaterEngine
 PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
 CHUNK_SECONDS = 0.2    # wall time of one blocking O.run (a stop's latency)
 POLL_SECONDS = 1e-3    # run_blocking's poll of YADE's thread
+X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
 
 
 def run_blocking(n):
@@ -53,7 +54,6 @@ def run_blocking(n):
     while O.running:
         time.sleep(POLL_SECONDS)
     O.wait()
-X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
 
 
 def yade_law_material(scene):
