@@ -2,20 +2,21 @@
 import time
 
 from yade import O, utils
-from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
-                          InteractionLoop, Ip2_FrictMat_FrictMat_FrictPhys, Law2_ScGeom_FrictPhys_CundallStrack,
+from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
+                          InteractionLoop, Ip2_ViscElMat_ViscElMat_ViscElPhys, Law2_ScGeom_ViscElPhys_Basic,
                           NewtonIntegrator)
 
 from engines.pore_dem import disc_masses
+from engines.yade_coupling import run_blocking, yade_law_material
 
 
 def native_floor(scene, packing):
-    """The same discs in plain YADE with its collider and a native linear law (FrictMat /
-    CundallStrack, E chosen so kn ~ the scene's), radii enlarged by eps_m/2 so the same pairs touch
-    as with the paper's eps_m (eq 26). No Python engine."""
+    """The same discs in plain YADE with its collider and its native linear spring-dashpot law
+    (ViscElMat / Law2_ScGeom_ViscElPhys_Basic with the scene's kn, eta_n, ks, eta_s, mu: the same
+    pair constants as [contact] law = "yade"), radii enlarged by eps_m/2 so the same pairs touch as
+    with the paper's eps_m (eq 26). No Python engine."""
     O.reset()
-    young = scene.contact.kn / float(packing.r.mean())  # FrictPhys: kn = E r for equal radii
-    mat = O.materials.append(FrictMat(young=young, poisson=0.25, frictionAngle=0.78, density=scene.material.rho))
+    mat = O.materials.append(yade_law_material(scene))
     mass, inertia = disc_masses(scene, packing)
     grow = 0.5 * scene.contact.eps_m
     for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
@@ -25,14 +26,14 @@ def native_floor(scene, packing):
             b.state.blockedDOFs = "yXZ"
         O.bodies.append(b)
     O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
-                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_FrictMat_FrictMat_FrictPhys()],
-                                 [Law2_ScGeom_FrictPhys_CundallStrack()]),
+                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
+                                 [Law2_ScGeom_ViscElPhys_Basic()]),
                  NewtonIntegrator(gravity=(0, 0, -scene.material.g), damping=0.0)]
     O.dt = scene.numerics.dt
 
 
 def step_by_step(n):
-    """Advance YADE n steps without O.run's thread wait (about 40 ms a call)."""
+    """Advance YADE n steps from Python, without starting YADE's thread (few steps)."""
     for _ in range(n):
         O.step()
 
@@ -40,7 +41,7 @@ def step_by_step(n):
 def run_steps(n):
     """Advance YADE n steps the way YadeCoupling runs a scene without per-step Python."""
     if n > 1000:
-        O.run(int(n), True)
+        run_blocking(n)
     else:
         step_by_step(n)
 

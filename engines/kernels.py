@@ -416,34 +416,53 @@ def _c_bulk_call(typingctx, address, ids, n, data):
 
 
 @jit
-def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
-    """get_pos(ids_in -> xz), dem_step(xz, F_out, *args), set_perm(ids_out <- F_out) if its status
-    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
-    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
-    if rc != 0:
-        return rc, -1, 0
-    status, info = dem_step(xz, F_out, *args)
-    if status >= 0:
-        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
-    return rc, status, info
+def _read_positions(get_pos, ids, xz):
+    return _c_bulk_call(get_pos, ids.ctypes.data, ids.size, xz.ctypes.data)
 
 
 @jit
-def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, *args):
-    """As dem_step_bulk_io for water_forces_step."""
-    rc = _c_bulk_call(get_pos, ids_in.ctypes.data, ids_in.size, xz.ctypes.data)
+def _write_forces(status, set_perm, ids, F):
+    """set_perm(ids <- F) when status >= 0; the bridge's error code (0 when nothing was written)."""
+    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
+
+
+# The two steps between a position read and a force write. Their arguments are spelled out: with
+# *args numba types the argument tuple in Python at every call (measured: 10-120 us a call).
+@jit
+def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held, water_due,
+                     xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
+                     F, M, acc_j, lost,
+                     h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                     tie_pairs, tie_rest, tie_prm, T):
+    """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), set_perm(ids_out <- F_out) if its status
+    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
+    rc = _read_positions(get_pos, ids_in, xz)
     if rc != 0:
         return rc, -1, 0
-    status, info = water_forces_step(xz, F_out, *args)
-    if status >= 0:
-        rc = _c_bulk_call(set_perm, ids_out.ctypes.data, ids_out.size, F_out.ctypes.data)
-    return rc, status, info
+    status, info = dem_step(xz, F_out, rows, held, water_due,
+                            xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm,
+                            spring, F, M, acc_j, lost,
+                            h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                            tie_pairs, tie_rest, tie_prm, T)
+    return _write_forces(status, set_perm, ids_out, F_out), status, info
+
+
+@jit
+def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
+                              h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """As dem_step_bulk_io for water_forces_step."""
+    rc = _read_positions(get_pos, ids_in, xz)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+                                     ints, i_at, floats, f_at)
+    return _write_forces(status, set_perm, ids_out, F_out), status, info
 
 
 @jit
 def read_bulk_io(get_pos, ids, xz):
     """get_pos(ids -> xz): the bridge's position read; returns its error code."""
-    return _c_bulk_call(get_pos, ids.ctypes.data, ids.size, xz.ctypes.data)
+    return _read_positions(get_pos, ids, xz)
 
 
 @jit
@@ -453,7 +472,7 @@ def write_rows_bulk_io(set_perm, ids, F, rows, add, out):
     for k in range(len(rows)):
         out[k, 0] = F[rows[k], 0] + add[k, 0]
         out[k, 1] = F[rows[k], 1] + add[k, 1]
-    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, out.ctypes.data)
+    return _write_forces(0, set_perm, ids, out)
 
 
 with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}

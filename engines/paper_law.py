@@ -89,7 +89,7 @@ class PaperLawEngine:
 
     or without a PyRunner, driven from Python: ``law.drive(n)`` does the same work before each of n
     O.step() calls and holds the forces as permanent forces (with ``held`` added, e.g. buoyancy);
-    this saves the PyRunner's dispatch (15-40 us a step).
+    this saves the PyRunner's dispatch (~50 us a call).
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit

@@ -3,15 +3,16 @@
 [contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
 O.step() ``run`` drives the PaperLawEngine (engines.paper_law; it calls PoreDEM.step: the paper's
 law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
-no PyRunner (its dispatch costs 15-40 us a step). No collider: the law keeps its own Verlet list.
+no PyRunner (its dispatch costs ~50 us a call). No collider: the law keeps its own Verlet list.
 Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
 scenes with ``YadeCoupling.run``, not O.run.
 
 [contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
 ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the wall motion, NewtonIntegrator; discs spin about y
 in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.water_engine; pressure forces and buoyancy
-held as permanent forces) is called before O.step() every water_interval steps, the work its
-PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all (O.run).
+held as permanent forces) is called before O.step() every water_interval steps (WaterEngine.drive),
+the work its PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all
+(O.run, ``run_blocking``).
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
@@ -40,8 +41,19 @@ from engines.trajectory import Trajectory
 from engines.water_engine import WaterEngine
 
 PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
-CHUNK_SECONDS = 0.2    # wall time of one blocking O.run (a stop's latency; each call costs YADE ~4 ms of waiting)
+CHUNK_SECONDS = 0.2    # wall time of one blocking O.run (a stop's latency)
+POLL_SECONDS = 1e-3    # run_blocking's poll of YADE's thread
 X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
+
+
+def run_blocking(n):
+    """O.run(n, True) without its wait's 40 ms poll (measured: a call returns 0-40 ms after YADE
+    stops): poll O.running every POLL_SECONDS. An engine that fails stops YADE early, as with
+    O.run (our callbacks keep their errors for yade_io.raise_pending)."""
+    O.run(int(n))
+    while O.running:
+        time.sleep(POLL_SECONDS)
+    O.wait()
 
 
 def yade_law_material(scene):
@@ -164,11 +176,13 @@ class YadeCoupling:
             while done < n and not stop():  # blocking chunks: YADE is idle whenever Python looks
                 m = min(int(n) - done, self._chunk)
                 t0 = time.perf_counter()
-                O.run(m, True)
+                run_blocking(m)
                 done += m
                 if m == self._chunk:
                     self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), PER_STEP_CHUNK), 1e6))
-        else:  # law = 'yade': the water engine on its steps, the base velocity of the step
+        elif self.base is None and self.water_engine is not None:  # law = 'yade', wet: water before O.step on its steps
+            self.water_engine.drive(n, _stop_or_error(stop))
+        else:  # law = 'yade': the base velocity of each step, the water engine on its steps
             water, base = self.water_engine, self.base
             for _ in range(int(n)):
                 if water is not None and water.due(O.iter):
@@ -315,6 +329,16 @@ def simulate(scene, packing, n_steps, record_every, hooks=()):
 
 def _never():
     return False
+
+
+class _stop_or_error:
+    """stop() or an error kept by an engine callback (yade_io.ERRORS)."""
+
+    def __init__(self, stop):
+        self.stop = stop
+
+    def __call__(self):
+        return bool(yade_io.ERRORS) or self.stop()
 
 
 class WallVelocity:

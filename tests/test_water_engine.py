@@ -67,6 +67,32 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
     assert water.model.water.balance_error() < 1e-12
 
 
+def test_drive_is_the_runner_without_the_pyrunner():
+    """WaterEngine.drive(n) (the engine before O.step on its steps) and the PyRunner with O.run(n)
+    give the same run bit for bit (example_engine's column: water every 10 steps, a rebuild)."""
+    from yade import O
+    from yade_scripts import example_engine as ex
+    from engines.pore_water import WaterSettings
+    from engines.water_engine import WaterEngine
+    runs = []
+    for driven in (False, True):
+        bottom, left, right, grains = ex.build_column()
+        O.engines = ex.engines()
+        O.dt = 1e-6
+        water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
+                            settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
+                            rebuild_interval=500, water_interval=10)
+        if driven:
+            water.drive(1205)
+        else:
+            O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+            O.run(1205, True)
+        runs.append((O.iter, water.k, water.model.n_rebuilds, water.io.positions(), water.model.water.W.copy()))
+    (k0, w0, b0, x0, W0), (k1, w1, b1, x1, W1) = runs
+    assert (k0, w0, b0) == (k1, w1, b1) == (1205, 1200, 2)
+    assert np.array_equal(x0, x1) and np.array_equal(W0, W1)
+
+
 def test_dry_yade_law_scene_runs_no_python_engine(packing):
     from yade import O
     from yade.wrapper import PyRunner

@@ -56,6 +56,14 @@ def build_column(n_wide=10, n_rows=8):
     return bottom, left, right, grains
 
 
+def engines():
+    """YADE's own engine list: its collider, the ViscEl law, gravity."""
+    return [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
+            InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
+                            [Law2_ScGeom_ViscElPhys_Basic()]),
+            NewtonIntegrator(gravity=(0, 0, -9.81))]
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=20000)
@@ -63,10 +71,7 @@ def main(argv):
     args = ap.parse_args(argv)
 
     bottom, left, right, grains = build_column()
-    O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
-                 InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
-                                 [Law2_ScGeom_ViscElPhys_Basic()]),
-                 NewtonIntegrator(gravity=(0, 0, -9.81))]
+    O.engines = engines()
     O.dt = 1e-6
 
     # the pore water, in a few lines: disc ids, wall groups, water constants; the runner goes
@@ -77,7 +82,7 @@ def main(argv):
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
     freeze_gc()  # optional: keeps Python's garbage collector off the scene's objects (faster writes)
 
-    O.run(args.steps, True)
+    O.run(args.steps, True)  # or, with no runner added, water.drive(args.steps): no PyRunner dispatch
     raise_pending()  # an error inside the water engine paused YADE: raise it here
     net, U = water.model.water.net, water.pressures()
     print(f"{len(grains)} grains, {net.n_pores} pores after {O.iter} steps ({O.time * 1e3:.1f} ms): "
