@@ -98,9 +98,10 @@ liquefaction: deps
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
 
 # Speed against accuracy (issue 12; docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
-# and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts against a dt = 5e-7 s
-# reference, through the sweep runner (resumable: a re-run skips the finished settings; about
-# 25 CPU-minutes, one process at a time so that the costs are comparable; SCHEDULER=tcp://host:8786
+# and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows
+# that are judged) against a dt = 5e-7 s reference, through the sweep runner (resumable: a re-run
+# skips the finished settings; about 60 CPU-minutes, one process at a time so that the costs are
+# comparable; SCHEDULER=tcp://host:8786
 # runs it on a Dask cluster) -> $(OUT)/tradeoffs/{tradeoffs.json,table.md,tradeoffs_*.png}.
 tradeoffs: deps
 	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --out $(OUT)/tradeoffs $(if $(SCHEDULER),--scheduler $(SCHEDULER))
