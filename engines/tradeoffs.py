@@ -62,9 +62,13 @@ def pressure_error(t, U, t_ref, U_ref):
     """RMS(<U> - <U_ref>) / RMS(<U_ref>) of block pressure histories U (starts, times, blocks)
     sampled at t, against U_ref (starts, times_ref, blocks) at t_ref (the run is interpolated onto
     t_ref; nan samples, blocks without pores, are left out)."""
-    mean = np.nanmean(_on_grid(t, U, t_ref), axis=0)
-    mean_ref = np.nanmean(np.asarray(U_ref, float), axis=0)
-    return _rms(mean - mean_ref) / _rms(mean_ref)
+    return _pressure_error(_on_grid(t, U, t_ref), np.asarray(U_ref, float))
+
+
+def _pressure_error(A, R):
+    """``pressure_error`` of ensembles already on the same times."""
+    mean_ref = np.nanmean(R, axis=0)
+    return _rms(np.nanmean(A, axis=0) - mean_ref) / _rms(mean_ref)
 
 
 def pressure_floor(U_ref):
@@ -129,8 +133,7 @@ def _metric_pairs(run, ref):
     A, R = _on_grid(run["t"], run["U"], ref["t"]), np.asarray(ref["U"], float)
     out = {}
     for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
-        d = np.nanmean(a, axis=0) - np.nanmean(r, axis=0)
-        out[key] = (_rms(d) / _rms(np.nanmean(r, axis=0)), _pressure_noise(a, r))
+        out[key] = (_pressure_error(a, r), _pressure_noise(a, r))
     for key, f in (("porosity_change", porosity_change), ("settlement", settlement)):
         x, x_ref = f(run), f(ref)
         out[key] = (change_error(x, x_ref), change_noise(x, x_ref))
