@@ -15,7 +15,8 @@ column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
   paper_law_dry_us     law = "paper" (PaperLawEngine, compiled kernels), dry
   paper_law_wet_us     law = "paper" + water every step, in the paper's step order
 
-The six are measured interleaved (one run of each in turn, ``repeats`` times) and the median is
+The six are measured interleaved (one run of each in turn, ``repeats`` times, each repeat starting
+one column later: at 10,000 bodies the first column of a round ran 10-20 % slower) and the median is
 kept, of wall time (the six columns) and of the process's CPU time ("cpu_us", steadier on a shared
 machine), and "cpu_ratio_paired", the ratio to yade_alone within each repeat, median over the
 repeats (steadier when the load drifts); each run includes the pore rebuilds (every 1000 steps)
@@ -93,8 +94,10 @@ def bench_size(n, steps, repeats, log):
     for name, over in COLUMNS.items():
         setups[name] = (lambda over=over: YadeCoupling(scene_for(over), packing).run)
     wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
+    names = list(setups)
     for rep in range(repeats):
-        for name, setup in setups.items():
+        for name in names[rep % len(names):] + names[:rep % len(names)]:  # each column first in turn
+            setup = setups[name]
             w, c = timed(setup, steps, warmup=200)
             wall[name].append(w)
             cpu[name].append(c)
