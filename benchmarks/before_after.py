@@ -20,6 +20,10 @@ import time
 _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
 PACKING = os.path.join(ROOT, "yade_scripts", "scenes", "liquefaction_packing.csv")
+sys.path.insert(1, ROOT)  # behind the tree a timing process puts first (time_tree)
+
+from benchmarks import write_json  # noqa: E402
+
 TABLE4 = {"contact": {"spring": "d", "kn": 1.4e5, "eta_n": 2.6, "ks": 3.5e4, "eta_s": 0.6, "mu": 1.0, "f_max": 1.5,
                       "eps_m": 2e-4},
           "water": {"E_w": 2400.0, "k1": 1e3, "k2": 1e2, "l_m": 3.5e-4},
@@ -77,9 +81,7 @@ def main(argv):
     res = {"steps": args.steps, "repeats": args.repeats, "cpu_us": med, "samples_cpu_us": samples,
            "speedup": med["before"] / med["after"], "old_tree": old}
     print(json.dumps(res, indent=1))
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump(res, f, indent=1)
+    write_json(args.json, res)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,6 @@ so the ratio is meaningful on a busy machine even when the absolute times are no
 eq 28 pairs the Delaunay candidates leave out and the pairs the insertion puts in.
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -20,6 +19,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from engines import pore_geometry as pg  # noqa: E402
 from engines.scene import SCENE_DIR  # noqa: E402
 from packing.layouts import random_sequential  # noqa: E402
@@ -74,9 +74,7 @@ def main(argv=None):
     for k, n in enumerate(args.sizes):
         rows += bench("random_sequential", *random_packing(n, k), args.repeat)
     if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        with open(args.json, "w") as f:
-            json.dump({"results": rows}, f, indent=1)
+        write_json(args.json, {"results": rows})
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ repeats (steadier when the load drifts); each run includes the pore rebuilds (ev
 that fall in it. Read the ratios, not the absolute times.
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -33,6 +32,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 import numpy as np  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from benchmarks.floor import native_floor, run_steps  # noqa: E402
 from engines import pore_geometry as pg  # noqa: E402
 from engines import scene as scenes  # noqa: E402
@@ -120,12 +120,11 @@ def main(argv):
     ap.add_argument("--steps", type=float, default=4.8e6, help="bodies x steps per timed run")
     args = ap.parse_args(argv)
     results = []
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
     for n in args.sizes:
         steps = int(max(1000, args.steps / n))  # >= 1000: a pore rebuild falls in every run
         results.append(bench_size(n, steps, args.repeats, lambda s: print(s, flush=True)))
-        with open(args.json, "w") as f:  # after each size: a long run stopped keeps the sizes done
-            json.dump({"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results}, f, indent=1)
+        # after each size: a long run stopped keeps the sizes done
+        write_json(args.json, {"io_backend": yade_io.BACKEND, "constants": TABLE4, "results": results})
     keys = ["yade_alone_us"] + list(COLUMNS)
     print(f"I/O backend: {yade_io.BACKEND}; us/step (ratio to yade_alone), medians of {args.repeats}; "
           f"one shared machine: noisy")

@@ -9,7 +9,6 @@ quick-sand constants and a bottom row as wall. The floor is a dry YADE step of t
 Writes {"results": [{"n_discs": N, "rebuild_ms": x, "step_ms": y, "yade_dry_step_ms": z, ...}, ...]}.
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -19,6 +18,7 @@ sys.path.append("/usr/lib/x86_64-linux-gnu/yade-double/py")  # YADE's package fo
 
 import numpy as np  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from benchmarks.floor import native_floor, per_step, step_by_step  # noqa: E402
 from engines import pore_geometry as pg  # noqa: E402
 from engines import scene as scenes  # noqa: E402
@@ -86,9 +86,7 @@ def main(argv=None):
         print(f"{res['n_discs']:8d} {res['n_pores']:8d} {res['n_links']:8d} {res['rebuild_ms']:11.2f} "
               f"{res['step_ms']:9.3f} {res['step_compiled_ms']:12.3f} {res['numpy_over_compiled']:11.1f} "
               f"{res['yade_dry_step_ms']:12.3f} {res['compiled_step_over_yade_dry']:9.2f}")
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump({"results": results}, f, indent=1)
+    write_json(args.json, {"results": results})
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ _SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
 sys.path.insert(0, ROOT)
 
+from benchmarks import write_json  # noqa: E402
 from engines import scene as scenes  # noqa: E402
 from engines import yade_io  # noqa: E402
 from packing.packing import Packing  # noqa: E402
@@ -179,9 +180,7 @@ def main(argv):
     if args.breakdown:
         out["breakdown_cpu_us"] = breakdown(scene, packing)
     print(json.dumps(out, indent=1))
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump(out, f, indent=1)
+    write_json(args.json, out)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,6 @@ Runs quick-sand case 1 with M = 1, 2, 5, 10, 20 and compares with M = 1: the blo
 (max |U_M - U_1| / max |U_1| over the samples) and the disc positions (max |x_M - x_1| / mean r).
 """
 import argparse
-import json
 import os
 import sys
 import time
@@ -16,6 +15,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
 
 import numpy as np  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from engines import scene as scenes  # noqa: E402
 from engines.yade_coupling import simulate  # noqa: E402
 from packing.deposition import scene_packing  # noqa: E402
@@ -46,9 +46,7 @@ def main(argv):
                "us_per_step": cost, "cost_ratio": cost / cost1, "water_balance_error": float(np.nanmax(err))}
         rows.append(row)
         print(f"{M:4d} {row['block_U_rel_error']:10.2e} {row['position_error_rel_r']:12.2e} {cost:9.1f} {row['cost_ratio']:10.2f}")
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump({"duration": args.duration, "results": rows}, f, indent=1)
+    write_json(args.json, {"duration": args.duration, "results": rows})
 
 
 if __name__ == "__main__":

@@ -11,7 +11,6 @@ Vector3s for forces). All variants are interleaved in every repeat; medians are 
 ratio python/bulk, and the bare YADE step (ForceResetter + NewtonIntegrator) on the same bodies.
 """
 import argparse
-import json
 import os
 import statistics
 import sys
@@ -24,6 +23,7 @@ import numpy as np  # noqa: E402
 from yade import O, Vector3, utils  # noqa: E402
 from yade.wrapper import ForceResetter, NewtonIntegrator  # noqa: E402
 
+from benchmarks import write_json  # noqa: E402
 from engines import yadebulk  # noqa: E402
 
 
@@ -170,9 +170,7 @@ def main(argv):
                   f"{m.get('python_best_over_bulk', float('nan')):9.1f} {m['bulk_us'] / r['yade_step_us']:9.2f}")
         print(f"{r['n_bodies']:>7} {'bare YADE step':>18} {r['yade_step_us']:8.1f}")
     out = {"probe_ms": probe_ms, "repeats": args.repeats, "layout": yadebulk.layout(), "results": results}
-    os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump(out, f, indent=1)
+    write_json(args.json, out)
 
 
 if __name__ == "__main__":
