@@ -5,21 +5,13 @@ import numpy as np
 import pytest
 
 from engines import pore_geometry as pg
-from engines import scene as sc
 from engines import pore_dem
 from engines.pore_dem import PoreDEM, disc_masses, moving_walls
 from packing.layouts import hex_lattice
 from packing.packing import Packing
+from scene_helpers import make_scene as scene
 
 R = 0.45e-3
-
-
-def scene(**tables):
-    raw = {"scene": {"name": "t"}, "material": {"g": 0.0}, "water": {"enabled": False},
-           "contact": {"separation_adjustment": False}, "numerics": {"dt": 1e-7}}
-    for table, fields in tables.items():
-        raw.setdefault(table, {}).update(fields)
-    return sc.validate(raw)
 
 
 def wet_box(seed=2, jitter=0.0):

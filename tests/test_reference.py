@@ -16,17 +16,9 @@ from engines import scene as sc
 from engines import reference as ref
 from packing.layouts import hex_lattice
 from packing.packing import Packing
+from scene_helpers import make_scene
 
 R = 0.45e-3  # disc radius [m]
-
-
-def make_scene(**tables):
-    """A validated scene: dry, no gravity, no separation adjustment unless overridden."""
-    raw = {"scene": {"name": "test"}, "material": {"g": 0.0}, "water": {"enabled": False},
-           "contact": {"separation_adjustment": False}, "numerics": {"dt": 1e-7}}
-    for table, fields in tables.items():
-        raw.setdefault(table, {}).update(fields)
-    return sc.validate(raw)
 
 
 def packing(xz, group):
