@@ -253,9 +253,9 @@ class WaterEngine:
         them that is a water step (the same work: nothing moves the bodies between NewtonIntegrator
         and the next step's PyRunner). ``stop()`` true ends early."""
         from yade import O
-        k0, m = self.k0, self.model.water_interval
+        due = self.due
         for _ in range(int(n)):
-            if (O.iter - k0) % m == 0:
+            if due(O.iter):
                 self()
             O.step()
             if stop is not None and stop():
