@@ -3,7 +3,7 @@
 PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
-DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc libc6-dev \
+DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc g++ libc6-dev \
            python3-distributed python3-venv
 EXT_SO  := engines/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
@@ -21,11 +21,11 @@ deps:
 	fi
 	@$(MAKE) --no-print-directory ext || echo "warning: engines/yadebulk not built: YADE I/O falls back to per-body calls"
 
-# The bulk-I/O bridge to YADE (engines/yadebulk: C, no YADE headers, seconds to build).
+# The bulk-I/O bridge to YADE (engines/yadebulk: C and a little C++, no YADE headers, seconds to build).
 ext: $(EXT_SO)
 
-$(EXT_SO): engines/yadebulk/yadebulk.c
-	gcc -O2 -fPIC -shared -Wall -Wextra -o $@ $< -ldl
+$(EXT_SO): engines/yadebulk/yadebulk.c engines/yadebulk/steps.cpp
+	g++ -O2 -fPIC -shared -Wall -Wextra -o $@ -x c engines/yadebulk/yadebulk.c -x c++ engines/yadebulk/steps.cpp -ldl
 
 # The main job: Tarumi & Hakuno quick sand, case 1, with its figures.
 demo: deps

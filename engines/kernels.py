@@ -5,7 +5,7 @@ Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, 
 reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
 
   contact_forces    engines.contact.ContactLaw.forces          (eq 1-13, 26-27)
-  measure           engines.pore_geometry.measure              (eq 29, 43b)
+  measure           engines.pore_geometry.measure              (eq 29, 43b; see below)
   darcy_flows       engines.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
   darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
@@ -22,7 +22,12 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~6
 
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
 functions of engines.yadebulk, passed as addresses (so that this module stays cacheable and free of
-YADE): read, step, write in one call.
+YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the bridge's O.step())
+between its water steps: many DEM steps in one call.
+
+The pore measure takes each link's turn since the build from its build vector (``turn``: a short
+series for the small turns between rebuilds, else atan2) where pore_geometry.measure differences
+two atan2 angles: the same angles to round-off at a third of the cost.
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
@@ -154,19 +159,41 @@ def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
     return n_lost
 
 
+# atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 7 terms leave < 1e-22 relative
+SMALL_TURN = 0.03
+ATAN_SERIES = np.array([(-1.0) ** k / (2 * k + 1) for k in range(7)])
+
+
 @jit
-def measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
-            poly, sect, void, length, contact, theta, vec, phi, cross):
+def turn(s, c):
+    """atan2(s, c) [rad]: the angle whose sine and cosine are proportional to s and c. A link
+    turns little between rebuilds (s small against c > 0): then the series of atan(s / c), about
+    a quarter of the cost of atan2, equal to it to round-off; else atan2."""
+    if c > 0.0 and abs(s) <= SMALL_TURN * c:
+        t = s / c
+        t2 = t * t
+        acc = 0.0
+        for k in range(len(ATAN_SERIES) - 1, -1, -1):  # Horner, highest term first
+            acc = ATAN_SERIES[k] + t2 * acc
+        return t * acc
+    return math.atan2(s, c)
+
+
+@jit
+def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, void, length, contact, theta, vec, rot, cross):
     """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
 
-    phi, cross (L,) are scratch. ``contact`` is a bool array.
+    vec0 (L, 2): the link vectors at the build. rot, cross (L,) are scratch: rot is each link's
+    turn since the build, so that a corner's change (pore_geometry.measure's phi - phi - raw0) is
+    the difference of two turns. ``contact`` is a bool array.
     """
     for l in range(len(links)):
         i, j = links[l, 0], links[l, 1]
         xi, zi = xz[i, 0], xz[i, 1]
         dx, dz = xz[j, 0] - xi, xz[j, 1] - zi
         length[l] = math.sqrt(dx * dx + dz * dz)
-        phi[l] = math.atan2(dz, dx)
+        rot[l] = turn(vec0[l, 0] * dz - vec0[l, 1] * dx, vec0[l, 0] * dx + vec0[l, 1] * dz)
         cross[l] = xi * dz - dx * zi
         vec[l, 0], vec[l, 1] = dx, dz
         contact[l] = r[i] + r[j] + eps_m >= length[l]
@@ -176,7 +203,7 @@ def measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2
     for c in range(len(c_pore)):
         p = c_pore[c]
         poly[p] += c_sign[c] * cross[c_link[c]]
-        x = phi[c_link[c]] - phi[c_next[c]] - c_raw0[c] + math.pi
+        x = rot[c_link[c]] - rot[c_next[c]] + math.pi
         if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
             x = x % two_pi
         theta[c] = c_theta0[c] + x - math.pi                    # eq 29
@@ -253,9 +280,9 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
 # unboxes each array argument, ~0.2 us each): the parts in this order, each flattened.
 WATER_INTS = ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link", "throat_i", "throat_j",
               "throat_link")
-WATER_FLOATS = ("corner_sign", "corner_raw0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
+WATER_FLOATS = ("corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
                 "bottom", "wp", "eps_m_a_min", "r",                                      # inputs
-                "poly", "sect", "void", "length", "contact", "theta", "vec", "phi", "cross",  # measure
+                "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",  # measure
                 "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",             # flows
                 "balance", "Fj", "lam")                                                  # update, forces
 
@@ -292,22 +319,22 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints
     links, link_pores = _part2(ints, i_at, 0), _part2(ints, i_at, 1)
     c_pore, c_link, c_next = _part(ints, i_at, 2), _part(ints, i_at, 3), _part(ints, i_at, 4)
     ti, tj, t_link = _part(ints, i_at, 5), _part(ints, i_at, 6), _part(ints, i_at, 7)
-    c_sign, c_raw0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part(floats, f_at, 1), _part(floats, f_at, 2),
-                                      _part(floats, f_at, 3))
+    c_sign, vec0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part2(floats, f_at, 1), _part(floats, f_at, 2),
+                                    _part(floats, f_at, 3))
     rattler_area, surface, drained, bottom = (_part(floats, f_at, 4), _part(floats, f_at, 5), _part(floats, f_at, 6),
                                               _part(floats, f_at, 7))
     wp, eps_m, a_min, r = _part(floats, f_at, 8), floats[f_at[9]], floats[f_at[9] + 1], _part(floats, f_at, 10)
     poly, sect, A_measured, length = (_part(floats, f_at, 11), _part(floats, f_at, 12), _part(floats, f_at, 13),
                                       _part(floats, f_at, 14))
     contact, theta, vec = _part(floats, f_at, 15), _part(floats, f_at, 16), _part2(floats, f_at, 17)
-    phi, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
+    rot, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
     q, q_s, q_d, q_in = _part(floats, f_at, 20), _part(floats, f_at, 21), _part(floats, f_at, 22), _part(floats, f_at, 23)
     g, g_b, U = _part(floats, f_at, 24), _part(floats, f_at, 25), _part(floats, f_at, 26)
     acc_i, acc_j, balance = _part(floats, f_at, 27), _part(floats, f_at, 28), _part(floats, f_at, 29)
     Fj, lam = _part2(floats, f_at, 30), _part(floats, f_at, 31)
 
-    measure(xz, r, links, c_pore, c_sign, c_link, c_next, c_raw0, c_theta0, c_r2, rattler_area, eps_m,
-            poly, sect, A_measured, length, contact, theta, vec, phi, cross)
+    measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, A_measured, length, contact, theta, vec, rot, cross)
     A = A_measured
     if smoothing:  # eq 45
         for p in range(len(A_prev)):
@@ -457,6 +484,40 @@ def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, row
     status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
                                      ints, i_at, floats, f_at)
     return _write_forces(status, set_perm, ids_out, F_out), status, info
+
+
+BALANCE = WATER_FLOATS.index("balance")
+
+
+@jit
+def water_drive_bulk_io(steps, n, k, k0, water_interval, totals, get_pos, set_perm, ids_in, xz, ids_out, F_out, rows,
+                        held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """WaterEngine.drive without Python: n DEM steps from step index k, each step whose
+    (index - k0) is a multiple of water_interval preceded by water_forces_step_bulk_io (arguments
+    from get_pos on), each step made by steps() (YADE's O.step(), engines.yadebulk.c_steps).
+    totals (3,) [m^2] gets the water balance (inflow, surface, side) of every water step that
+    needed no sub-steps. Stops before stepping after a water step that did not answer 1 (sub-steps
+    or a failure: its bookkeeping is the caller's) or at an error code. Returns (DEM steps done,
+    water steps done, the last water step's answer or 1, the bridge's error code)."""
+    balance = _part(floats, f_at, BALANCE)
+    n_water = 0
+    for s in range(n):
+        if (k + s - k0) % water_interval == 0:
+            rc, status, n_sub = water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
+                                                          h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+                                                          ints, i_at, floats, f_at)
+            if rc != 0:
+                return s, n_water, n_sub, rc
+            n_water += 1
+            has_q_prev = has_q_prev or smoothing  # eq 46 from the second water step on
+            if n_sub != 1:
+                return s, n_water, n_sub, 0
+            for a in range(3):
+                totals[a] += balance[a]
+        rc = _c_bulk_call(steps, 0, 1, 0)
+        if rc != 0:
+            return s, n_water, 1, rc
+    return n, n_water, 1, 0
 
 
 @jit

@@ -26,12 +26,15 @@ step above the limit is split into n = ceil(dt_w / limit) sub-steps; the engine 
 when it first sub-steps and whenever the count doubles, and keeps ``substeps_max``/``substeps_total``.
 """
 import math
+import time
 
 import numpy as np
 
 from engines import kernels
 from engines import pore_geometry as pg
 from engines.pore_water import DarcyStabilityError, PoreWater
+
+CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
 
 WALL_CODES = {"bottom": pg.WALL_BOTTOM, "left": pg.WALL_LEFT, "right": pg.WALL_RIGHT}
 
@@ -61,25 +64,27 @@ class WaterModel:
         self.last_limit = np.inf  # Darcy limit of the last water step [s]
         net = self._build(xz)
         self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
-        self._buffers()
+        self._buffers(xz)
 
     def _build(self, xz):
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls)
 
-    def _buffers(self):
-        """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
+    def _buffers(self, xz):
+        """The network's arrays for kernels.water_step, packed (allocated once per rebuild at
+        centres xz [m])."""
         net, n = self.water.net, len(self.r)
         n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
         surface, drained, bottom = self.water._boundary_masks()
         ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
                 "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
                 "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
-        floats = {"corner_sign": net.corner_sign, "corner_raw0": net.corner_raw0, "corner_theta0": net.corner_theta0,
+        floats = {"corner_sign": net.corner_sign, "vec0": xz[net.links[:, 1]] - xz[net.links[:, 0]],
+                  "corner_theta0": net.corner_theta0,
                   "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
                   "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m_a_min": [self.eps_m, net.a_min],
                   "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
                   "lam": np.zeros(2)}  # the rest: outputs and scratch of the kernels, by length
-        for names, size in (("poly sect void", n_p), ("length contact phi cross", n_l), ("theta", n_k),
+        for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
                             ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
             floats.update((name, np.zeros(size)) for name in names.split())
         self._ints, self._i_at = kernels.pack([np.asarray(ints[k], np.int64) for k in kernels.WATER_INTS])
@@ -123,7 +128,7 @@ class WaterModel:
         old, new = self.water.net, self._build(xz)
         self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz)
         self.n_rebuilds += 1
-        self._buffers()
+        self._buffers(xz)
 
     def advance(self, h, xz):
         """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
@@ -153,10 +158,8 @@ class WaterModel:
         """Book a water_step(xz, *args) that returned n_sub: the Darcy limit, sub-steps, balance;
         raise DarcyStabilityError if it refused or a pore fell dry."""
         w = self.water
-        if self.settings.smoothing:
-            w.q_prev = args[3]
+        self.after_kernel_steps(args)
         lam = self._lam
-        self.last_limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
         if n_sub != 1:
             n = self._substeps(h)  # raises above the limit without settings.substep
             if n_sub < 0:
@@ -167,6 +170,14 @@ class WaterModel:
         b.inflow += inflow
         b.surface_outflow += surface
         b.side_outflow += side
+
+    def after_kernel_steps(self, args):
+        """After water steps run by kernels with ``args``: the eq 46 state they hold and the Darcy
+        limit of the last one."""
+        if self.settings.smoothing:
+            self.water.q_prev = args[3]
+        lam = self._lam
+        self.last_limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
 
     def _substeps(self, h):
         """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
@@ -237,6 +248,7 @@ class WaterEngine:
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
         self._run_kernel = yade_io.run_kernel
         self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
+        self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
 
     def due(self, k):
         """True when step k is a water step (every water_interval steps from the engine's creation)."""
@@ -251,15 +263,65 @@ class WaterEngine:
     def drive(self, n, stop=None):
         """Instead of the runner and O.run(n): n O.step() calls, this engine's work before each of
         them that is a water step (the same work: nothing moves the bodies between NewtonIntegrator
-        and the next step's PyRunner). ``stop()`` true ends early."""
+        and the next step's PyRunner). ``stop()`` true, or an error kept by an engine callback
+        (yade_io.ERRORS), ends early. Without ``stop`` and without a PyRunner among O.engines, with
+        the bulk bridge, the steps between two rebuilds run in compiled calls of about CHUNK_SECONDS
+        (``_drive_compiled``): the same run without Python per step."""
         from yade import O
-        due = self.due
-        for _ in range(int(n)):
+        from yade.wrapper import PyRunner
+
+        from engines import yade_io
+        n, done = int(n), 0
+        fast = (stop is None and self.model.compiled and yade_io.BACKEND == "yadebulk"
+                and not any(isinstance(e, PyRunner) for e in O.engines))
+        due, errors = self.due, yade_io.ERRORS
+        while done < n:
+            m = min(n - done, self._steps_before_rebuild(O.iter), self._chunk) if fast else 0
+            if m > 0:
+                t0 = time.perf_counter()
+                done += self._drive_compiled(m)
+                if m == self._chunk:
+                    self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), 10), 1e6))
+                continue
             if due(O.iter):
                 self()
             O.step()
-            if stop is not None and stop():
+            done += 1
+            if errors or (stop is not None and stop()):
                 break
+
+    def _steps_before_rebuild(self, k):
+        """Steps from step k to the first water step whose call rebuilds the pores."""
+        wi = self.model.water_interval
+        t = max(k, self.k_built + self.model.rebuild_interval)
+        return t + (self.k0 - t) % wi - k
+
+    def _drive_compiled(self, n):
+        """Up to n steps by kernels.water_drive_bulk_io, no rebuild among them; returns the steps
+        done (fewer after a water step that needed sub-steps: its bookkeeping and its step follow
+        here; an error is raised)."""
+        from yade import O
+
+        from engines import yade_io
+        m = self.model
+        h = m.water_interval * O.dt
+        args = m.kernel_args(h)
+        b = m.water.balance
+        totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
+        k = O.iter
+        done, n_water, n_sub, rc = yade_io.drive_water(n, k, self.k0, m.water_interval, totals, self.io, self._xz,
+                                                       self.forced, self._F_out, self._dynamic, self.F_const, args)
+        b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+        if n_water:
+            last = k + done - (1 if n_sub == 1 else 0)  # the last water step
+            self.k = last - (last - self.k0) % m.water_interval
+            m.after_kernel_steps(args)
+        yade_io.check(rc)
+        if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
+            m.finish_kernel_step(h, n_sub, args)
+            O.step()
+            done += 1
+        return done
 
     def __call__(self):
         """One water step: rebuild at the first call at least rebuild_interval steps after the last

@@ -181,7 +181,7 @@ class YadeCoupling:
                 if m == self._chunk:
                     self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), PER_STEP_CHUNK), 1e6))
         elif self.base is None and self.water_engine is not None:  # law = 'yade', wet: water before O.step on its steps
-            self.water_engine.drive(n, _stop_or_error(stop))
+            self.water_engine.drive(n, None if stop is _never else stop)
         else:  # law = 'yade': the base velocity of each step, the water engine on its steps
             water, base = self.water_engine, self.base
             for _ in range(int(n)):
@@ -329,16 +329,6 @@ def simulate(scene, packing, n_steps, record_every, hooks=()):
 
 def _never():
     return False
-
-
-class _stop_or_error:
-    """stop() or an error kept by an engine callback (yade_io.ERRORS)."""
-
-    def __init__(self, stop):
-        self.stop = stop
-
-    def __call__(self):
-        return bool(yade_io.ERRORS) or self.stop()
 
 
 class WallVelocity:

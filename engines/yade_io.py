@@ -38,8 +38,9 @@ def _load_bulk():
 
 _BULK = _load_bulk()
 BACKEND = "yadebulk" if _BULK is not None else "python"
-if _BULK is not None:  # addresses of the bridge's position read and permanent-force write, for kernels
-    _GET_POS, _SET_PERM = (ctypes.cast(f, ctypes.c_void_p).value for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz))
+if _BULK is not None:  # addresses of the bridge's position read, permanent-force write and step, for kernels
+    _GET_POS, _SET_PERM, _STEPS = (ctypes.cast(f, ctypes.c_void_p).value
+                                   for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_steps))
 
 
 class Bodies:
@@ -60,7 +61,7 @@ class Bodies:
         """Centres (n, 2) [m]; a new array."""
         out = np.empty((self.n, 2))
         if _BULK is not None:
-            _check(kernels.read_bulk_io(_GET_POS, self.ids, out), self.ids)
+            check(kernels.read_bulk_io(_GET_POS, self.ids, out), self.ids)
             return out
         x = utils.coordsAndDisplacements(0)[0]
         z = utils.coordsAndDisplacements(2)[0]
@@ -114,7 +115,7 @@ class Bodies:
         if rows is None:
             rows, add = self._all, self._zero
         if _BULK is not None:
-            _check(kernels.write_rows_bulk_io(_SET_PERM, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
+            check(kernels.write_rows_bulk_io(_SET_PERM, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
                    self.ids)
         else:
             np.add(F[rows], add, out=self._F)
@@ -133,16 +134,23 @@ def run_kernel(kernel, reader, xz, writer, out, *args):
             writer.set_permanent_forces(out)
         return status, info
     rc, status, info = kernels.with_bulk_io[kernel](_GET_POS, _SET_PERM, reader.ids, xz, writer.ids, out, *args)
-    _check(rc, reader.ids if status < 0 else writer.ids)
+    check(rc, reader.ids if status < 0 else writer.ids)
     return status, info
 
 
-def _check(rc, ids):
-    """Raise on a bridge function's error code (engines.yadebulk)."""
-    if rc > 0:
-        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
-    if rc < 0:
-        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
+def drive_water(n, k, k0, water_interval, totals, reader, xz, writer, out, rows, held, args):
+    """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps from step
+    k, the water steps' positions read from ``reader`` and forces out written to ``writer``
+    (Bodies), args those of kernels.water_step after xz. Returns its (steps, water steps, answer,
+    error code)."""
+    return kernels.water_drive_bulk_io(_STEPS, n, k, k0, water_interval, totals, _GET_POS, _SET_PERM, reader.ids, xz,
+                                       writer.ids, out, rows, held, *args)
+
+
+def check(rc, ids=None):
+    """Raise on a bridge function's error code (engines.yadebulk); nothing on 0."""
+    if rc != 0:
+        _BULK.raise_error(rc, ids)
 
 
 def freeze_gc():

@@ -95,12 +95,13 @@ def test_paper_law_step_compiled_equals_numpy():
     assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
 
 
-def _kernel_measure(net, xz, r):
+def _kernel_measure(net, xz, r, xz_build):
     n_p, n_l = net.n_pores, len(net.links)
     out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
            np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
-    kernels.measure(xz, r, net.links, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
-                    net.corner_raw0, net.corner_theta0, net.corner_r2, net.rattler_area, net.eps_m, *out)
+    vec0 = xz_build[net.links[:, 1]] - xz_build[net.links[:, 0]]
+    kernels.measure(xz, r, net.links, vec0, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
+                    net.corner_theta0, net.corner_r2, net.rattler_area, net.eps_m, *out)
     return out
 
 
@@ -113,15 +114,31 @@ def test_measure_compiled_equals_numpy(layout):
     else:
         xz, r, walls, rng = _column()
         net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.3, walls=walls)
-        if layout == "moved":  # corners turn after the build (eq 29 relative to the build angles)
-            xz = xz + 0.05 * rng.standard_normal(xz.shape)
+    xz_build = xz
+    if layout == "moved":  # corners turn after the build (eq 29 relative to the build angles)
+        xz = xz + 0.12 * rng.standard_normal(xz.shape)
     m = pg.measure(net, xz, r)
-    poly, sect, void, length, contact, theta, vec, _, _ = _kernel_measure(net, xz, r)
+    poly, sect, void, length, contact, theta, vec, turns, _ = _kernel_measure(net, xz, r, xz_build)
+    if layout == "moved":  # links that turned both less and more than the series' range
+        assert (np.abs(turns) < 0.5 * kernels.SMALL_TURN).sum() > 50 and (np.abs(turns) > 0.15).sum() > 5
     for a, b, what in ((poly, m.polygon_area, "polygon"), (sect, m.sector_area, "sectors"), (void, m.void_area, "void"),
                        (length, m.link_length, "length"), (theta, m.corner_angle, "angles"), (vec, m.link_vector, "vectors")):
         assert_close(a, b, what)
     np.testing.assert_array_equal(contact, m.link_contact)
     assert net.n_pores > 40
+
+
+def test_turn_is_atan2():
+    """kernels.turn (a series for small turns, else atan2) against np.arctan2 to 2 ulp, at every quadrant,
+    the series' edge and zero."""
+    rng = np.random.default_rng(5)
+    angles = np.concatenate([rng.uniform(-np.pi, np.pi, 2000), rng.uniform(-0.11, 0.11, 2000),
+                             [0.0, np.arctan(kernels.SMALL_TURN), -np.arctan(kernels.SMALL_TURN), np.pi, -np.pi / 2]])
+    scale = 10.0 ** rng.uniform(-6, 3, len(angles))
+    for a, k in zip(angles, scale):
+        s, c = k * np.sin(a), k * np.cos(a)
+        assert abs(kernels.turn(s, c) - np.arctan2(s, c)) <= 4.5e-16 * abs(np.arctan2(s, c)), (a, k)  # 2 ulp
+    assert kernels.turn(0.0, 1.0) == 0.0
 
 
 def test_pressure_forces_compiled_equals_numpy():

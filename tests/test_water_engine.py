@@ -67,30 +67,48 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
     assert water.model.water.balance_error() < 1e-12
 
 
-def test_drive_is_the_runner_without_the_pyrunner():
-    """WaterEngine.drive(n) (the engine before O.step on its steps) and the PyRunner with O.run(n)
-    give the same run bit for bit (example_engine's column: water every 10 steps, a rebuild)."""
+@pytest.mark.parametrize("water_interval, smoothing, k1", [(10, False, 200.0), (1, True, 5.8e5)])
+def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1):
+    """WaterEngine.drive(n) (the engine before O.step on its steps), in Python and compiled between
+    rebuilds (kernels.water_drive_bulk_io), and the PyRunner with O.run(n) give the same run bit for
+    bit: example_engine's column with two rebuilds; water every 10 steps, or every step with the
+    eq 45-46 smoothing and a k1 at which one water step needs sub-steps."""
     from yade import O
     from yade_scripts import example_engine as ex
+    from engines import yade_io
     from engines.pore_water import WaterSettings
     from engines.water_engine import WaterEngine
     runs = []
-    for driven in (False, True):
+    for how in ("runner", "python", "compiled"):
         bottom, left, right, grains = ex.build_column()
         O.engines = ex.engines()
         O.dt = 1e-6
         water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                            settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
-                            rebuild_interval=500, water_interval=10)
-        if driven:
-            water.drive(1205)
-        else:
+                            settings=WaterSettings(E_w=240.0, k1=k1, k2=2.0, q_w=5e-4, smoothing=smoothing, substep=True),
+                            l_m=1.3e-4,
+                            rebuild_interval=500, water_interval=water_interval)
+        chunks = []
+        if how == "compiled":
+            compiled = water._drive_compiled
+            water._drive_compiled = lambda n: chunks.append(n) or compiled(n)
+        if how == "runner":
             O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
             O.run(1205, True)
-        runs.append((O.iter, water.k, water.model.n_rebuilds, water.io.positions(), water.model.water.W.copy()))
-    (k0, w0, b0, x0, W0), (k1, w1, b1, x1, W1) = runs
-    assert (k0, w0, b0) == (k1, w1, b1) == (1205, 1200, 2)
-    assert np.array_equal(x0, x1) and np.array_equal(W0, W1)
+        else:
+            water.drive(1205, (lambda: False) if how == "python" else None)
+        b = water.model.water.balance
+        runs.append((O.iter, water.k, water.model.n_rebuilds, water.model.substeps_total, water.io.positions(),
+                     water.model.water.W.copy(), (b.inflow, b.surface_outflow, b.side_outflow), water.model.last_limit))
+    last = 1200 if water_interval == 10 else 1204
+    assert runs[0][:3] == (1205, last, 2)
+    if k1 > 1e3:
+        assert runs[0][3] > 0  # some water steps were sub-stepped
+    for other in runs[1:]:
+        assert other[:4] == runs[0][:4]
+        assert np.array_equal(other[4], runs[0][4]) and np.array_equal(other[5], runs[0][5])
+        assert other[6:] == runs[0][6:]
+    if yade_io.BACKEND == "yadebulk":
+        assert len(chunks) >= 3  # the compiled loop ran between the rebuilds
 
 
 def test_dry_yade_law_scene_runs_no_python_engine(packing):
@@ -105,10 +123,12 @@ def test_dry_yade_law_scene_runs_no_python_engine(packing):
     assert not any(isinstance(e, PyRunner) for e in O.engines)
     calls = []
     model = cp.water_engine.model
-    water_step = model.kernel_args  # called once per water step (in one compiled call with the bridge)
+    water_step = model.kernel_args  # called once per water step on the Python path (a stop function)
     model.kernel_args = lambda h: (calls.append(O.iter), water_step(h))[1]
-    cp.run(35)
+    cp.run(35, stop=lambda: False)
     assert calls == [0, 10, 20, 30]
+    cp.run(35)  # compiled between rebuilds with the bridge: the same water steps
+    assert cp.water_engine.k == 60 and O.iter == 70
 
 
 def test_yade_law_refuses_springs_c_and_d():

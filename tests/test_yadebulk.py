@@ -181,6 +181,48 @@ def test_trajectories_with_bridge_forces_equal_those_with_o_forces_bit_for_bit(b
     assert np.ptp(runs["python"][:, 2]) > 0.1  # the discs moved and touched: a real trajectory
 
 
+def test_steps_equal_o_step_bit_for_bit(bulk):
+    """yadebulk.steps(n) (Scene::moveToNextTimeStep from C++) is n O.step() calls: the same
+    trajectory to the bit, O.iter and O.time; a PyRunner inside the steps still runs."""
+    global _HOOK
+    calls = []
+    runs = []
+    for step in (lambda n: [O.step() for _ in range(n)], bulk.steps):
+        ids = _box_of_discs()
+        _HOOK = lambda: calls.append(O.iter)  # noqa: E731
+        try:
+            step(300)
+        finally:
+            _HOOK = None
+        runs.append((O.iter, O.time, np.array([[*b.state.pos, *b.state.vel, *b.state.angVel, *b.state.ori]
+                                               for b in (O.bodies[int(i)] for i in ids)])))
+    assert runs[0][:2] == runs[1][:2] and runs[0][0] == 300
+    assert np.array_equal(runs[0][2], runs[1][2]) and np.ptp(runs[0][2][:, 2]) > 0.01
+    assert calls == list(range(1, 300)) * 2  # the PyRunner, from step 1 (initRun=False)
+
+
+def test_steps_raise_what_an_engine_threw_and_refuse_a_running_simulation(bulk):
+    global _HOOK
+    _box_of_discs()
+
+    def fail():
+        if O.iter == 3:
+            raise ValueError("boom at step 3")
+    _HOOK = fail
+    try:
+        with pytest.raises(RuntimeError, match="boom at step 3"):
+            bulk.steps(10)
+        assert O.iter == 3  # as O.step(): the step that threw did not count
+        _HOOK = lambda: None  # noqa: E731
+        O.run(10 ** 6)
+        with pytest.raises(RuntimeError, match="running"):
+            bulk.steps(1)
+    finally:
+        O.pause()
+        O.wait()
+        _HOOK = None
+
+
 def test_bad_ids_are_refused_and_nothing_is_done(bulk):
     ids = _discs(10)
     O.bodies.erase(4)

@@ -12,14 +12,17 @@ each); these functions move arrays. They work in the x-z plane of our discs::
 
 ``add_force_xz``, ``add_torque_y`` and ``set_perm_force_xz`` call YADE's own ForceContainer
 functions, the ones ``O.forces.addF``/``addT``/``setPermF`` call, so results are bit-identical to
-those. The compiled part (``_yadebulk.so``, built by ``make ext`` from ``yadebulk.c``) uses no YADE
+those. The compiled part (``_yadebulk.so``, built by ``make ext`` from ``yadebulk.c`` and
+``steps.cpp``) uses no YADE
 headers; it runs only on a libyade.so build listed in ``KNOWN_LIBYADE``, and the data offsets it
 needs are discovered and verified at first use by ``probe.py`` on a scratch scene (the user's scene
 is left untouched): nothing is read or written before that succeeded. Call ``available()`` before ``O.run()``: the probe refuses to run during a simulation.
 
-For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` are the ctypes function objects,
+``yadebulk.steps(n)`` is n O.step() calls, and ``c_steps`` lets a compiled loop step YADE between
+its own work. For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` and ``c_steps`` are the ctypes function objects,
 ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready (``available()`` not yet
-True), -2 no scene, k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit`` function calls
+True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps`` (``yb_error`` says
+what), k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit`` function calls
 them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``.
 Like YADE's Python API, call them from the thread that runs the simulation (a PyRunner) or while it
 is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
@@ -37,11 +40,12 @@ SO_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_yadebulk.so
 # returned through a hidden pointer, and the call would write into Omega). The data layout is
 # still probed at every load. YADEBULK_UNPINNED=1 probes an unlisted build anyway: if
 # tests/test_yadebulk.py then passes, add its hash here.
+STEP_THREW = -4  # c_steps: an engine threw; _lib.yb_error() holds its message
 KNOWN_LIBYADE = {
     "6dab813fb5cb5be6adb80d973e52cc4ebc763a266317ebd1bab487264d8a391b": "Debian yade 2023.02a-1 amd64, yade-double",
 }
 NAMES = ("get_pos_xz", "get_vel_xz", "set_vel_xz", "get_angvel_y", "add_torque_y", "add_force_xz",
-         "set_perm_force_xz")
+         "set_perm_force_xz", "steps")
 
 
 def _open():
@@ -70,7 +74,7 @@ _final = False       # available() has its answer for this process
 _layout = {}
 
 c_get_pos_xz, c_get_vel_xz, c_set_vel_xz, c_get_angvel_y, c_add_torque_y, c_add_force_xz, \
-    c_set_perm_force_xz = (getattr(_lib, "yb_" + name) if _lib else None for name in NAMES)
+    c_set_perm_force_xz, c_steps = (getattr(_lib, "yb_" + name) if _lib else None for name in NAMES)
 
 
 def available():
@@ -131,6 +135,16 @@ def sha256(path):
         return hashlib.sha256(f.read()).hexdigest()
 
 
+def raise_error(rc, ids=None):
+    """Raise on a bulk function's error code."""
+    if rc > 0:
+        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
+    if rc == STEP_THREW:
+        raise RuntimeError(f"a YADE engine failed in the step: {_lib.yb_error().decode()}")
+    if rc < 0:
+        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
+
+
 def _call(fn, ids, arr, width, writes_arr):
     """Check the arrays and call one bulk function of the library."""
     if not (_ready or _probing or available()):
@@ -144,11 +158,7 @@ def _call(fn, ids, arr, width, writes_arr):
         raise TypeError(f"the value array must be a C-contiguous float64 array of shape {shape}")
     if writes_arr and not arr.flags.writeable:
         raise ValueError("the output array is read-only")
-    rc = fn(ids.ctypes.data, n, arr.ctypes.data)
-    if rc > 0:
-        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
-    if rc < 0:
-        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
+    raise_error(fn(ids.ctypes.data, n, arr.ctypes.data), ids)
 
 
 def get_pos_xz(ids, out):
@@ -184,4 +194,15 @@ def add_force_xz(ids, F):
 def set_perm_force_xz(ids, F):
     """O.forces.setPermF(ids[k], (F[k, 0], 0, F[k, 1])) for every k (N), held until changed."""
     _call(c_set_perm_force_xz, ids, F, 2, False)
+
+
+def steps(n):
+    """O.step() n times (YADE's Scene::moveToNextTimeStep; compiled loops call c_steps between
+    their own work). An engine's exception stops it and is raised as RuntimeError with its message."""
+    if not (_ready or _probing or available()):
+        raise RuntimeError(f"engines.yadebulk is not available: {_reason}")
+    from yade import O
+    if O.running:
+        raise RuntimeError("steps() while the simulation is running (O.run): O.pause() first")
+    raise_error(c_steps(None, int(n), None), None)
 

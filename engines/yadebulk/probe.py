@@ -208,7 +208,8 @@ def _apply_step_forces():
 
 def _verify_newton_step(bridge, n):
     """Bodies n..2n-1 are twins of 0..n-1; each step (after ForceResetter) the twins get their forces
-    through the bridge, the originals through O.forces; after two steps each pair must be identical."""
+    through the bridge, the originals through O.forces; after two steps (O.step(), then the bridge's
+    steps(1)) each pair must be identical."""
     global _step_forces
     hook = f"__import__('sys').modules[{__name__!r}]._apply_step_forces()"
     # updateGlobals=False: by default PyRunner copies the locals of O.step()'s caller into __main__
@@ -236,11 +237,13 @@ def _verify_newton_step(bridge, n):
         bridge.add_force_xz(twins, F)
         bridge.add_torque_y(twins, T)
     _step_forces = forces
+    iter0 = O.iter
     try:
         O.step()
-        O.step()
+        bridge.steps(1)  # the bridge's O.step()
     finally:
         _step_forces = None
+    _expect(O.iter == iter0 + 2, "the bridge's step advanced O.iter by one")
     for i in range(n):
         a, b = O.bodies[i].state, O.bodies[n + i].state
         _expect(all(tuple(getattr(a, f)) == tuple(getattr(b, f)) for f in ("pos", "vel", "angVel", "ori")),

@@ -15,6 +15,7 @@
  * and returns 0, a negative YB_E* code, or k >= 1 when ids[k-1] is out of range or erased.
  * Forces and torques go through ForceContainer::addForce/addTorque/setPermForce, the functions
  * O.forces.addF/addT/setPermF call, so YADE's per-thread buffers and sync flags behave as theirs.
+ * yb_steps (steps.cpp, C++ to catch what YADE throws) is O.step(): Scene::moveToNextTimeStep.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -33,6 +34,7 @@ typedef void *const *(*body_by_id_fn)(int, void *);    /* const shared_ptr<Body>
 typedef size_t (*bodies_size_fn)(const void *);        /* size_t BodyContainer::size() const */
 typedef void *const *(*bodies_at_fn)(void *, unsigned); /* shared_ptr<Body>& BodyContainer::operator[](unsigned) */
 typedef void (*force_fn)(void *, int, const double *); /* void ForceContainer::xxx(int, const Vector3r&) */
+typedef void (*scene_step_fn)(void *);                 /* void Scene::moveToNextTimeStep() */
 
 static struct {
     omega_instance_fn omega;
@@ -41,6 +43,7 @@ static struct {
     bodies_size_fn bodies_size;
     bodies_at_fn bodies_at;
     force_fn add_force, add_torque, set_perm_force;
+    scene_step_fn scene_step;
 } Y;
 
 static struct {
@@ -51,6 +54,8 @@ static struct {
 static char error_text[512];
 
 const char *yb_error(void) { return error_text; }
+
+void yb_set_error(const char *text) { snprintf(error_text, sizeof error_text, "%s", text); }
 
 /* Resolve YADE's functions in the libyade.so already loaded at `path`. 0 or YB_ENOTREADY. */
 int yb_open(const char *path)
@@ -65,6 +70,7 @@ int yb_open(const char *path)
         {"_ZN4yade14ForceContainer9addTorqueEiRKN5Eigen6MatrixIdLi3ELi1ELi0ELi3ELi1EEE", (void **)&Y.add_torque},
         {"_ZN4yade14ForceContainer12setPermForceEiRKN5Eigen6MatrixIdLi3ELi1ELi0ELi3ELi1EEE",
          (void **)&Y.set_perm_force},
+        {"_ZN4yade5Scene18moveToNextTimeStepEv", (void **)&Y.scene_step},
     };
     L.ready = 0;
     void *lib = dlopen(path, RTLD_NOW | RTLD_NOLOAD);
@@ -108,6 +114,9 @@ void yb_configure(int64_t forces, int64_t bodies, int64_t state, int64_t pos, in
 }
 
 int yb_ready(void) { return L.ready; }
+
+/* Scene::moveToNextTimeStep, for yb_steps (steps.cpp); NULL before yb_open succeeded. */
+scene_step_fn yb_scene_step(void) { return Y.omega ? Y.scene_step : NULL; }
 
 typedef struct {
     char *scene;
