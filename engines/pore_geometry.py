@@ -36,6 +36,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
+from engines import kernels_pores as kp
+
 WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT = 0, 1, 2, 3
 WALL_NAMES = {WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
 OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
@@ -217,6 +219,9 @@ def regular_triangulation(xz, r, compiled=False):
         hull = ConvexHull(points)
     except QhullError:
         return None
+    if compiled:
+        tri = kp.lower_ccw(hull.simplices, hull.equations[:, 2], n, xz, LOWER_FACET_TOL)
+        return tri if len(tri) else None
     lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
     return _ccw(xz, hull.simplices[lower]) if lower.any() else None
 
@@ -341,12 +346,15 @@ def insert_missing_links(xz, r, tri, reach, compiled=False):
 
     Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m].
     """
-    n = len(r)
-    pairs = eq28_pairs(xz, r, reach)
-    is_vertex = np.zeros(n, bool)
-    is_vertex[tri.ravel()] = True
-    edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
-    missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
+    if compiled:
+        missing = kp.missing_pairs(xz, r, float(reach), tri)
+    else:
+        n = len(r)
+        pairs = eq28_pairs(xz, r, reach)
+        is_vertex = np.zeros(n, bool)
+        is_vertex[tri.ravel()] = True
+        edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
+        missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
     if not len(missing):
         return tri, 0
     d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
@@ -410,7 +418,6 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     if candidates == "regular":
         tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
     if compiled:
-        from engines import kernels_pores as kp  # numba only where asked for
         faces, links_and_corners = kp.faces, kp.links_and_corners
     else:
         faces, links_and_corners = _faces, _links_and_corners
@@ -420,8 +427,7 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     (tri_k, tp, links, link_pores, throat_link, pore_surface, pv_pore, pv_disc, ptr, he_org, he_dst, he_left,
      he_next, h, theta0, raw0, rattler_area) = links_and_corners(
         xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores, off_mesh[p_in >= 0], p_in[p_in >= 0])
-    signature = np.zeros(n_pores, np.uint64)
-    np.add.at(signature, pv_pore, _mix64(pv_disc))
+    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # every pore has discs
     pore_touches = {name: np.bincount(pv_pore[walls[pv_disc] == code], minlength=n_pores) > 0
                     for code, name in WALL_NAMES.items()}
     n_l = len(links)
@@ -539,7 +545,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     linked = np.zeros(n, bool)
     linked[links.ravel()] = True
     rat = ~linked[pv_disc]
-    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores)
+    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)  # float if empty
     return (tri[in_pore], tp, links, link_pores, np.flatnonzero(is_throat), pore_surface, pv_pore, pv_disc, ptr,
             he_org, he_dst, he_left, he_next, h, theta0, raw0, rattler_area)
 

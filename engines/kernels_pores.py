@@ -1,0 +1,347 @@
+"""Compiled (numba) kernels of the pore rebuild: the network of engines.pore_geometry.build_pores and
+the re-meshing of engines.pore_water.PoreWater.remesh. No YADE.
+
+Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, which stays the
+reference path and is tested against it (tests/test_kernels_pores.py: integer arrays equal, floats
+to 1e-12 relative):
+
+  lower_ccw          pore_geometry.regular_triangulation  the lower hull facets, counter-clockwise
+  missing_pairs      pore_geometry.insert_missing_links   the eq 28 pairs that are no edge
+  faces              pore_geometry._faces                 neighbours, eq 28 links, faces (a union-find
+                                                          over triangles across non-link edges), eq 29
+  links_and_corners  pore_geometry._links_and_corners     links, throats, surface, vertex sets, the
+                                                          half-edge walk, corner angles (eq 29)
+  near_vertex_sets   pore_water.pressures_by_rule         rule (b): old vertex sets that contain or are
+                                                          contained in a new one
+  clip_areas         pore_geometry._clip_areas            triangle-triangle overlap areas
+
+Numbering follows the NumPy functions (pores in the order of their first triangle, links by (i, j),
+half-edges sorted by disc then angle), so the networks are the same array for array. numba compiles
+on first use and caches the machine code beside this file (``cache=True``); fastmath is off.
+"""
+import numba as nb
+import numpy as np
+
+jit = nb.njit(cache=True, nogil=True)
+OUTER = -1  # pore_geometry.OUTER
+
+
+@jit
+def lower_ccw(simplices, normal_lift, n, xz, tol):
+    """Triangles (T, 3) of the hull facets whose normal's lift component is < -tol and whose corners
+    are all discs (< n), counter-clockwise in xz."""
+    keep = np.zeros(len(simplices), np.bool_)
+    for f in range(len(simplices)):
+        keep[f] = normal_lift[f] < -tol and simplices[f, 0] < n and simplices[f, 1] < n and simplices[f, 2] < n
+    tri = np.empty((keep.sum(), 3), np.int64)
+    t = 0
+    for f in range(len(simplices)):
+        if keep[f]:
+            i, j, k = simplices[f, 0], simplices[f, 1], simplices[f, 2]
+            if _signed_area(xz, i, j, k) < 0:
+                j, k = k, j
+            tri[t, 0], tri[t, 1], tri[t, 2] = i, j, k
+            t += 1
+    return tri
+
+
+@jit
+def _signed_area(xz, i, j, k):
+    """Signed area of the triangle i, j, k; > 0 counter-clockwise."""
+    return 0.5 * ((xz[j, 0] - xz[i, 0]) * (xz[k, 1] - xz[i, 1]) - (xz[j, 1] - xz[i, 1]) * (xz[k, 0] - xz[i, 0]))
+
+
+@jit
+def _groups(key, n_groups):
+    """Counting sort: (ptr (n_groups + 1,), order) with order[ptr[g]:ptr[g + 1]] the indices of the
+    entries of key == g, increasing."""
+    ptr = np.zeros(n_groups + 1, np.int64)
+    for g in key:
+        ptr[g + 1] += 1
+    for g in range(n_groups):
+        ptr[g + 1] += ptr[g]
+    fill = ptr[:-1].copy()
+    order = np.empty(len(key), np.int64)
+    for e in range(len(key)):
+        order[fill[key[e]]] = e
+        fill[key[e]] += 1
+    return ptr, order
+
+
+@jit
+def _sort_by(idx, key):
+    """Sort the few entries of idx in place by key[idx], stably (insertion sort)."""
+    for s in range(1, len(idx)):
+        e = idx[s]
+        q = s
+        while q > 0 and key[idx[q - 1]] > key[e]:
+            idx[q] = idx[q - 1]
+            q -= 1
+        idx[q] = e
+
+
+@jit
+def _half_edges(tri):
+    """Origins a and ends b (3T,) of the triangles' half-edges h = 3 t + k (the edge opposite corner k)."""
+    a = np.empty(3 * len(tri), np.int64)
+    b = np.empty(3 * len(tri), np.int64)
+    for t in range(len(tri)):
+        for k in range(3):
+            a[3 * t + k], b[3 * t + k] = tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]
+    return a, b
+
+
+@jit
+def _twin(a, b, ptr, order, h):
+    """The half-edge b[h] -> a[h] (-1: none); ptr, order: the half-edges grouped by origin."""
+    for s in range(ptr[b[h]], ptr[b[h] + 1]):
+        if b[order[s]] == a[h]:
+            return order[s]
+    return -1
+
+
+@jit
+def missing_pairs(xz, r, reach, tri):
+    """The disc pairs (M, 2), i < j, with r_i + r_j + reach >= R_ij (eq 28) that are no edge of the
+    triangles, both discs being vertices; in no particular order. A grid of cells of side
+    2 max(r) + reach finds the pairs."""
+    n = len(r)
+    a, b = _half_edges(tri)
+    ptr, order = _groups(a, n)
+    cell = 2.0 * r.max() + reach
+    x0, z0 = xz[:, 0].min(), xz[:, 1].min()
+    nx = int((xz[:, 0].max() - x0) / cell) + 1
+    nz = int((xz[:, 1].max() - z0) / cell) + 1
+    while nx * nz > 4 * n + 16:  # scattered discs: fewer, larger cells
+        cell *= 2.0
+        nx = int((xz[:, 0].max() - x0) / cell) + 1
+        nz = int((xz[:, 1].max() - z0) / cell) + 1
+    cx = ((xz[:, 0] - x0) / cell).astype(np.int64)
+    cz = ((xz[:, 1] - z0) / cell).astype(np.int64)
+    start, in_cell = _groups(cx * nz + cz, nx * nz)
+    out = np.empty((16 * n + 16, 2), np.int64)
+    m = 0
+    for i in range(n):
+        if ptr[i] == ptr[i + 1]:
+            continue  # not a vertex
+        for gx in range(max(cx[i] - 1, 0), min(cx[i] + 2, nx)):
+            for gz in range(max(cz[i] - 1, 0), min(cz[i] + 2, nz)):
+                g = gx * nz + gz
+                for s in range(start[g], start[g + 1]):
+                    j = in_cell[s]
+                    if j <= i or ptr[j] == ptr[j + 1]:
+                        continue
+                    if not r[i] + r[j] + reach >= np.hypot(xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]):  # eq 28
+                        continue
+                    edge = False
+                    for e in range(ptr[i], ptr[i + 1]):
+                        edge = edge or b[order[e]] == j
+                    for e in range(ptr[j], ptr[j + 1]):
+                        edge = edge or b[order[e]] == i
+                    if edge:
+                        continue
+                    if m == len(out):
+                        grown = np.empty((2 * m, 2), np.int64)
+                        grown[:m] = out
+                        out = grown
+                    out[m, 0], out[m, 1] = i, j
+                    m += 1
+    return out[:m].copy()
+
+
+@jit
+def _find(parent, x):
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@jit
+def faces(xz, r, tri, reach, a_min):
+    """pore_geometry._faces compiled: (nb (3T,), is_link (3T,), tri_pore (T,), bounded (T,), n_pores,
+    n_closed, off_mesh)."""
+    t_count, n = len(tri), len(r)
+    m = 3 * t_count
+    a, b = _half_edges(tri)
+    ptr, order = _groups(a, n)
+    nb_ = np.full(m, -1, np.int64)
+    is_link = np.empty(m, np.bool_)
+    parent = np.arange(t_count + 1)
+    for h in range(m):
+        twin = _twin(a, b, ptr, order, h)
+        if twin >= 0:
+            nb_[h] = twin // 3
+        is_link[h] = r[a[h]] + r[b[h]] + reach >= np.hypot(xz[b[h], 0] - xz[a[h], 0], xz[b[h], 1] - xz[a[h], 1])  # eq 28
+        if not is_link[h]:  # triangles joined across non-link edges; a non-link hull edge joins the outer face
+            u, v = _find(parent, h // 3), _find(parent, nb_[h] if nb_[h] >= 0 else t_count)
+            if u != v:
+                parent[max(u, v)] = min(u, v)
+    outer = _find(parent, t_count)
+    face_of_root = np.full(t_count + 1, -1, np.int64)
+    face = np.full(t_count, -1, np.int64)
+    n_faces = 0
+    for t in range(t_count):
+        root = _find(parent, t)
+        if root != outer:
+            if face_of_root[root] < 0:
+                face_of_root[root] = n_faces
+                n_faces += 1
+            face[t] = face_of_root[root]
+    void = np.zeros(n_faces)  # eq 29 at build, to close degenerate faces
+    for t in range(t_count):
+        if face[t] >= 0:
+            sectors = 0.0
+            for k in range(3):
+                i, j, l = tri[t, k], tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]
+                e1x, e1z = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
+                e2x, e2z = xz[l, 0] - xz[i, 0], xz[l, 1] - xz[i, 1]
+                sectors += np.arctan2(e1x * e2z - e1z * e2x, e1x * e2x + e1z * e2z) * r[i] ** 2
+            void[face[t]] += _signed_area(xz, tri[t, 0], tri[t, 1], tri[t, 2]) - 0.5 * sectors
+    pore_of_face = np.full(n_faces, OUTER, np.int64)
+    n_pores = 0
+    for f in range(n_faces):
+        if void[f] > a_min:
+            pore_of_face[f] = n_pores
+            n_pores += 1
+    tri_pore = np.full(t_count, OUTER, np.int64)
+    on_mesh = np.zeros(n, np.bool_)
+    for t in range(t_count):
+        if face[t] >= 0:
+            tri_pore[t] = pore_of_face[face[t]]
+        for k in range(3):
+            on_mesh[tri[t, k]] = True
+    return nb_, is_link, tri_pore, face >= 0, n_pores, n_faces - n_pores, np.flatnonzero(~on_mesh)
+
+
+@jit
+def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pores, rat_disc, rat_pore):
+    """pore_geometry._links_and_corners compiled: the same 17 arrays."""
+    n, t_count = len(r), len(tri)
+    # links: one per undirected edge (its first half-edge), sorted by (i, j), i < j
+    a, b = _half_edges(tri)
+    ptr, order = _groups(a, n)
+    first = np.zeros(len(a), np.bool_)
+    for h in range(len(a)):
+        if is_link[h]:
+            twin = _twin(a, b, ptr, order, h)
+            first[h] = twin < 0 or twin > h
+    lk = np.flatnonzero(first)
+    lo = np.minimum(a[lk], b[lk])
+    hi = np.maximum(a[lk], b[lk])
+    i_ptr, by_i = _groups(lo, n)
+    for g in range(n):  # by j within each i (few)
+        _sort_by(by_i[i_ptr[g]:i_ptr[g + 1]], hi)
+    lk = lk[by_i]
+    n_l = len(lk)
+    links = np.empty((n_l, 2), np.int64)
+    link_pores = np.empty((n_l, 2), np.int64)
+    is_throat = np.zeros(n_l, np.bool_)
+    pore_surface = np.zeros(n_pores, np.bool_)
+    for u_ in range(n_l):
+        h = lk[u_]
+        t = h // 3
+        la, lb = a[h], b[h]
+        rt = nb_[h]
+        left_p, right_p = tri_pore[t], tri_pore[rt] if rt >= 0 else OUTER
+        flip = la > lb
+        lp0, lp1 = (right_p, left_p) if flip else (left_p, right_p)
+        i, j = min(la, lb), max(la, lb)
+        links[u_, 0], links[u_, 1] = i, j
+        link_pores[u_, 0], link_pores[u_, 1] = lp0, lp1
+        is_throat[u_] = lp0 >= 0 and lp1 >= 0 and lp0 != lp1
+        wall_edge = walls[i] != 0 and walls[j] != 0
+        outer_link = ((lp0 == OUTER) != (lp1 == OUTER)) and not wall_edge
+        # a link next to a closed face is not on the free surface: only the true outer face counts
+        left_b, right_b = bounded[t], rt >= 0 and bounded[rt]
+        outer_side_is_outer = not (right_b if flip else left_b) if lp0 == OUTER else not (left_b if flip else right_b)
+        if outer_link and outer_side_is_outer:
+            sp = lp1 if lp0 == OUTER else lp0
+            if sp >= 0:
+                pore_surface[sp] = True
+
+    # pore vertex sets: the discs of each pore, sorted, each once
+    in_pore = tri_pore >= 0
+    n_in = in_pore.sum()
+    tri_k = np.empty((n_in, 3), np.int64)
+    tp = np.empty(n_in, np.int64)
+    ent_pore = np.empty(3 * n_in + len(rat_disc), np.int64)
+    ent_disc = np.empty(3 * n_in + len(rat_disc), np.int64)
+    c = 0
+    for t in range(t_count):
+        if in_pore[t]:
+            tri_k[c] = tri[t]
+            tp[c] = tri_pore[t]
+            ent_pore[3 * c:3 * c + 3] = tri_pore[t]
+            ent_disc[3 * c:3 * c + 3] = tri[t]
+            c += 1
+    ent_pore[3 * n_in:] = rat_pore
+    ent_disc[3 * n_in:] = rat_disc
+    p_ptr, by_pore = _groups(ent_pore, n_pores)
+    ent_disc = ent_disc[by_pore]
+    pv_pore = np.empty(len(ent_disc), np.int64)
+    pv_disc = np.empty(len(ent_disc), np.int64)
+    ptr = np.zeros(n_pores + 1, np.int64)
+    c = 0
+    for p in range(n_pores):
+        discs = ent_disc[p_ptr[p]:p_ptr[p + 1]]
+        discs.sort()
+        for s in range(len(discs)):
+            if s == 0 or discs[s] != discs[s - 1]:
+                pv_pore[c], pv_disc[c] = p, discs[s]
+                c += 1
+        ptr[p + 1] = c
+    pv_pore, pv_disc = pv_pore[:c].copy(), pv_disc[:c].copy()
+
+    # the half-edges of the links and the paper's walk: next = clockwise turn at the end disc
+    he_org = np.concatenate((links[:, 0], links[:, 1]))
+    he_dst = np.concatenate((links[:, 1], links[:, 0]))
+    he_left = np.concatenate((link_pores[:, 0], link_pores[:, 1]))
+    n_he = 2 * n_l
+    ang = np.empty(n_he)
+    for e in range(n_he):
+        ang[e] = np.arctan2(xz[he_dst[e], 1] - xz[he_org[e], 1], xz[he_dst[e], 0] - xz[he_org[e], 0])
+    o_ptr, order = _groups(he_org, n)
+    for g in range(n):  # by disc, then angle
+        _sort_by(order[o_ptr[g]:o_ptr[g + 1]], ang)
+    pos = np.empty(n_he, np.int64)
+    prev = np.empty(n_he, np.int64)  # the previous half-edge around the same disc, cyclic
+    g0 = 0
+    for s in range(n_he):
+        pos[order[s]] = s
+        if s > 0 and he_org[order[s]] != he_org[order[s - 1]]:
+            g0 = s
+        prev[s] = s - 1
+        if s == n_he - 1 or he_org[order[s + 1]] != he_org[order[s]]:
+            prev[g0] = s
+    he_next = np.empty(n_he, np.int64)
+    for e in range(n_he):
+        twin = e + n_l if e < n_l else e - n_l
+        he_next[e] = order[prev[pos[twin]]]
+
+    # corners of the pores (eq 29)
+    phi = ang[:n_l]
+    h = np.flatnonzero(he_left >= 0)
+    theta0 = np.empty(len(h))
+    raw0 = np.empty(len(h))
+    for s in range(len(h)):
+        e, f = h[s], he_next[h[s]]
+        twin = e + n_l if e < n_l else e - n_l
+        raw0[s] = phi[e % n_l] - phi[f % n_l]  # the corner angle up to a multiple of pi
+        if f == twin:
+            theta0[s] = 2 * np.pi  # the end of a dangling link: all around the disc
+        else:
+            phi_twin = phi[twin % n_l] + (np.pi if twin >= n_l else 0.0)
+            phi_f = phi[f % n_l] + (np.pi if f >= n_l else 0.0)
+            theta0[s] = np.mod(phi_twin - phi_f, 2 * np.pi)  # eq 29, in [0, 2 pi)
+
+    # unlinked discs (rattlers) inside a pore are void-free: subtract them whole
+    linked = np.zeros(n, np.bool_)
+    for e in range(n_he):
+        linked[he_org[e]] = True
+    rattler_area = np.zeros(n_pores)
+    for s in range(len(pv_disc)):
+        if not linked[pv_disc[s]]:
+            rattler_area[pv_pore[s]] += np.pi * r[pv_disc[s]] ** 2
+    return (tri_k, tp, links, link_pores, np.flatnonzero(is_throat), pore_surface, pv_pore, pv_disc, ptr,
+            he_org, he_dst, he_left, he_next, h, theta0, raw0, rattler_area)

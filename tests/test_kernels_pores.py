@@ -1,0 +1,129 @@
+"""Compiled rebuild (engines.kernels_pores) against the readable NumPy path: the same network (integer
+arrays equal, floats to 1e-12 relative) and the same re-meshing, on packings that exercise every
+branch: lattices (cocircular ties), random packings with walls, holes (dangling links, pinches),
+rattlers in and off the triangulation, a hidden eq 28 pair put in by flips, closed faces, and inputs
+without pores."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from engines import kernels_pores as kp
+from engines import pore_geometry as pg
+from engines.pore_water import PoreWater, WaterSettings, pressure, pressures_by_rule
+from packing.layouts import hex_lattice, random_discs, random_sequential, square_lattice
+from packing.psd import sample_diameters
+
+RTOL = 1e-12
+
+
+def assert_same(a, b, what):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape, what
+    if a.dtype.kind == "f" or b.dtype.kind == "f":
+        scale = max(np.max(np.abs(b), initial=0.0), 1e-300)
+        assert np.max(np.abs(a - b), initial=0.0) <= RTOL * scale, what
+    else:
+        assert a.dtype == b.dtype and np.array_equal(a, b), what
+
+
+def assert_same_network(a, b):
+    for f in dataclasses.fields(pg.PoreNetwork):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, dict):
+            assert x.keys() == y.keys(), f.name
+            for k in x:
+                assert_same(x[k], y[k], f"{f.name}[{k}]")
+        else:
+            assert_same(x, y, f.name)
+
+
+def _holes(seed):
+    """Random discs with a third removed: dangling links, pinched pores, islands."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(300, rng)
+    keep = rng.random(len(r)) > 0.35
+    return xz[keep], r[keep], None, 0.0, 0.9 * r[keep].mean()
+
+
+def _walled(seed):
+    """Random discs squeezed together (overlaps) with a bottom row and side columns as walls."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(300, rng)
+    xz = 0.98 * xz
+    walls = np.zeros(len(r), np.int64)
+    walls[xz[:, 1] < xz[:, 1].min() + 0.5] = pg.WALL_BOTTOM
+    walls[(xz[:, 0] < xz[:, 0].min() + 0.5) & (walls == 0)] = pg.WALL_LEFT
+    walls[(xz[:, 0] > xz[:, 0].max() - 0.5) & (walls == 0)] = pg.WALL_RIGHT
+    return xz, r, walls, 0.02, 0.1
+
+
+def _loose(seed, eps_m, l_m):
+    """Random sequential addition of the paper's diameters: gaps of all sizes, hidden eq 28 pairs."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_sequential(sample_diameters(450, 0.9e-3, 0.25e-3, 0.4e-3, 2e-3, rng), 0.021, 0.021, rng)
+    return xz, r, None, eps_m, l_m
+
+
+def _rattlers():
+    """Small discs: one linked to nobody inside a pore, one with an empty power cell, one dangling."""
+    big = np.array([[0.0, 0.0], [4.2, 0.0], [2.1, 4.2 * np.sqrt(3) / 2]])
+    centre = big.mean(axis=0)
+    dangling = big[0] + 2.1 * (centre - big[0]) / np.linalg.norm(centre - big[0])
+    far = big + [[10.0, 0.0]]
+    xz = np.vstack([big, dangling, far, far.mean(axis=0), far[0] + [0.3, 0.2]])
+    r = np.array([2.0, 2.0, 2.0, 0.05, 2.0, 2.0, 2.0, 0.05, 0.1])
+    return xz, r, None, 0.0, 0.25
+
+
+def _kite():
+    return np.array([[-1.6, 0.0], [1.6, 0.0], [0.0, 1.2], [0.0, -2.1]]), np.ones(4), None, 0.0, 1.25
+
+
+PACKINGS = {
+    "hex": lambda: (hex_lattice(9, 8, 2.05), np.ones(72), None, 0.0, 0.1),
+    "square": lambda: (square_lattice(7, 6, 2.0), np.ones(42), None, 0.0, 0.1),
+    "holes-14": lambda: _holes(14),
+    "holes-3": lambda: _holes(3),
+    "walled": lambda: _walled(5),
+    "loose-seismic": lambda: _loose(0, 2e-4, 3.5e-4),
+    "loose-quicksand": lambda: _loose(1, 0.0, 1.3e-4),
+    "rattlers": _rattlers,
+    "kite": _kite,
+    "closed-face": lambda: (np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05], [1.0, 3.0]]), np.ones(4), None, 0.0, 0.1),
+    "collinear": lambda: (np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), np.full(3, 0.5), None, 0.0, 0.1),
+    "two": lambda: (np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, 0.5), None, 0.0, 0.1),
+}
+
+
+@pytest.mark.parametrize("name", PACKINGS)
+def test_compiled_build_gives_the_same_network(name):
+    xz, r, walls, eps_m, l_m = PACKINGS[name]()
+    for candidates in ("regular", "delaunay"):
+        ref = pg.build_pores(xz, r, eps_m, l_m, walls=walls, candidates=candidates)
+        assert_same_network(pg.build_pores(xz, r, eps_m, l_m, walls=walls, candidates=candidates, compiled=True), ref)
+
+
+def test_the_packings_exercise_every_branch():
+    """The cases above are not vacuous: flips, closed faces, rattlers, dangling links, walls occur."""
+    nets = {name: pg.build_pores(*PACKINGS[name]()[:2], PACKINGS[name]()[3], PACKINGS[name]()[4],
+                                 walls=PACKINGS[name]()[2]) for name in PACKINGS}
+    assert nets["kite"].n_inserted == 1 and nets["loose-seismic"].n_inserted > 0
+    assert nets["closed-face"].n_closed == 1 and nets["collinear"].n_pores == 0
+    np.testing.assert_allclose(nets["rattlers"].rattler_area, [0.0, np.pi * (0.05**2 + 0.1**2)], rtol=1e-12)
+    assert 8 not in nets["rattlers"].tri and 8 in nets["rattlers"].pore_vertex_idx  # empty power cell
+    for name in ("rattlers", "holes-14"):
+        twin = np.r_[np.arange(len(nets[name].links)) + len(nets[name].links), np.arange(len(nets[name].links))]
+        assert np.any(nets[name].he_next == twin), name  # a dangling link
+    assert nets["walled"].pore_touches["bottom"].any() and nets["walled"].pore_surface.any()
+
+
+@pytest.mark.parametrize("name", ["loose-seismic", "holes-14", "walled"])
+def test_missing_pairs_are_those_of_the_numpy_search(name):
+    xz, r, _, eps_m, l_m = PACKINGS[name]()
+    tri = pg.regular_triangulation(xz, r)
+    pairs = pg.eq28_pairs(xz, r, eps_m + l_m)
+    edges = {tuple(sorted(e)) for t in tri.tolist() for e in zip(t, t[1:] + t[:1])}
+    vertex = np.isin(np.arange(len(r)), tri)
+    expected = sorted(tuple(p) for p in pairs.tolist() if tuple(p) not in edges and vertex[p].all())
+    assert sorted(map(tuple, kp.missing_pairs(xz, r, eps_m + l_m, tri).tolist())) == expected
