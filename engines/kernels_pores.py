@@ -345,3 +345,118 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
             rattler_area[pv_pore[s]] += np.pi * r[pv_disc[s]] ** 2
     return (tri_k, tp, links, link_pores, np.flatnonzero(is_throat), pore_surface, pv_pore, pv_disc, ptr,
             he_org, he_dst, he_left, he_next, h, theta0, raw0, rattler_area)
+
+
+@jit
+def _subset_or_superset(x, y):
+    """Sorted sets x, y: one contains the other."""
+    i = j = 0
+    x_in_y = y_in_x = True
+    while i < len(x) and j < len(y):
+        if x[i] == y[j]:
+            i += 1
+            j += 1
+        elif x[i] < y[j]:
+            x_in_y = False
+            i += 1
+        else:
+            y_in_x = False
+            j += 1
+    return (x_in_y and i == len(x)) or (y_in_x and j == len(y))
+
+
+@jit
+def near_vertex_sets(old_ptr, old_idx, old_valid, new_ptr, new_idx, todo, U_old, n_discs):
+    """Rule (b) of pore_water.pressures_by_rule: for each new pore in todo, the mean U_old of the
+    valid old pores whose vertex set contains or is contained in its own (nan: none)."""
+    n_old = len(old_ptr) - 1
+    owner = np.empty(len(old_idx), np.int64)
+    for q in range(n_old):
+        owner[old_ptr[q]:old_ptr[q + 1]] = q
+    v_ptr, by_disc = _groups(old_idx, n_discs)  # the old pores of each disc
+    seen = np.full(n_old, -1, np.int64)
+    U = np.full(len(todo), np.nan)
+    for s in range(len(todo)):
+        p = todo[s]
+        mine = new_idx[new_ptr[p]:new_ptr[p + 1]]
+        total, count = 0.0, 0
+        for v in mine:
+            for e in range(v_ptr[v], v_ptr[v + 1]):
+                q = owner[by_disc[e]]
+                if seen[q] == p or not old_valid[q]:
+                    continue
+                seen[q] = p
+                if _subset_or_superset(old_idx[old_ptr[q]:old_ptr[q + 1]], mine):
+                    total += U_old[q]
+                    count += 1
+        if count:
+            U[s] = total / count
+    return U
+
+
+@jit
+def spread_to_neighbours(U, rule, conns):
+    """Rule (c) of pore_water.pressures_by_rule, in place: in rounds, each pore with U nan takes the
+    mean U of its distinct neighbours (pairs conns) that had one at the round's start, rule 3."""
+    n = len(U)
+    ends = np.concatenate((conns[:, 0], conns[:, 1]))
+    others = np.concatenate((conns[:, 1], conns[:, 0]))
+    ptr, order = _groups(ends, n)
+    seen = np.full(n, -1, np.int64)
+    known = np.empty(n)
+    while True:
+        known[:] = U
+        changed = False
+        for p in range(n):
+            if not np.isnan(known[p]):
+                continue
+            total, count = 0.0, 0
+            for e in range(ptr[p], ptr[p + 1]):
+                q = others[order[e]]
+                if seen[q] != p and q != p and not np.isnan(known[q]):
+                    total += known[q]
+                    count += 1
+                seen[q] = p
+            if count:
+                U[p] = total / count
+                rule[p] = 3
+                changed = True
+        seen[:] = -1
+        if not changed:
+            return
+
+
+@jit
+def clip_areas(subj, clip):
+    """pore_geometry._clip_areas compiled: areas (K,) of the intersections of the counter-clockwise
+    triangles subj (K, 3, 2) and clip (K, 3, 2) (Sutherland-Hodgman)."""
+    out = np.zeros(len(subj))
+    poly = np.empty((9, 2))
+    cut = np.empty((9, 2))
+    for k in range(len(subj)):
+        m = 3
+        poly[:3] = subj[k]
+        for e in range(3):
+            ax, az = clip[k, e, 0], clip[k, e, 1]
+            bx, bz = clip[k, (e + 1) % 3, 0], clip[k, (e + 1) % 3, 1]
+            c = 0
+            for i in range(m):
+                nx_, nz_ = poly[(i + 1) % m, 0], poly[(i + 1) % m, 1]
+                s = (bx - ax) * (poly[i, 1] - az) - (bz - az) * (poly[i, 0] - ax)
+                s_next = (bx - ax) * (nz_ - az) - (bz - az) * (nx_ - ax)
+                if s >= 0:
+                    cut[c] = poly[i]
+                    c += 1
+                if (s >= 0) != (s_next >= 0):
+                    t = s / (s - s_next)
+                    cut[c, 0] = poly[i, 0] + t * (nx_ - poly[i, 0])
+                    cut[c, 1] = poly[i, 1] + t * (nz_ - poly[i, 1])
+                    c += 1
+            m = c
+            poly[:m] = cut[:m]
+        if m >= 3:
+            area = 0.0
+            for i in range(m):
+                area += poly[i, 0] * poly[(i + 1) % m, 1] - poly[(i + 1) % m, 0] * poly[i, 1]
+            out[k] = 0.5 * area
+    return out

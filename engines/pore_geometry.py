@@ -724,12 +724,13 @@ def _clip_areas(subj, clip):
     return np.where(count >= 3, 0.5 * np.sum(np.where(i < count[:, None], cr, 0.0), axis=1), 0.0)
 
 
-def pore_overlaps(old_net, new_net, xz):
+def pore_overlaps(old_net, new_net, xz, compiled=False):
     """Polygon overlap areas of the pores of two networks at positions xz (N, 2) [m].
 
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
-    others are clipped against the nearby triangles of the other network (``_clip_areas``).
+    others are clipped against the nearby triangles of the other network (``_clip_areas``, or
+    ``kernels_pores.clip_areas`` when ``compiled``).
     """
     n = len(xz)
     to, tn = old_net.tri, new_net.tri
@@ -751,7 +752,7 @@ def pore_overlaps(old_net, new_net, xz):
         rq = np.max(np.hypot(*(Q - cq[:, None]).transpose(2, 0, 1)), axis=1)
         near = cKDTree(cp).sparse_distance_matrix(cKDTree(cq), rp.max() + rq.max(), output_type="ndarray")
         near = near[near["v"] < rp[near["i"]] + rq[near["j"]]]
-        a = _clip_areas(P[near["i"]], Q[near["j"]])
+        a = (kp.clip_areas if compiled else _clip_areas)(P[near["i"]], Q[near["j"]])
         p.append(old_net.tri_pore[ro[near["i"]]])
         q.append(new_net.tri_pore[rn[near["j"]]])
         area.append(a)

@@ -64,7 +64,7 @@ class WaterModel:
         self._buffers()
 
     def _build(self, xz):
-        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls)
+        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, compiled=self.compiled)
 
     def _buffers(self):
         """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
@@ -121,7 +121,8 @@ class WaterModel:
     def rebuild(self, xz):
         """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
-        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz)
+        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz,
+                          compiled=self.compiled)
         self.n_rebuilds += 1
         self._buffers()
 

@@ -127,3 +127,71 @@ def test_missing_pairs_are_those_of_the_numpy_search(name):
     vertex = np.isin(np.arange(len(r)), tri)
     expected = sorted(tuple(p) for p in pairs.tolist() if tuple(p) not in edges and vertex[p].all())
     assert sorted(map(tuple, kp.missing_pairs(xz, r, eps_m + l_m, tri).tolist())) == expected
+
+
+def _moved(seed, jitter):
+    """An old network of a loose packing and a new one after every disc moved by ~jitter radii."""
+    xz, r, walls, eps_m, l_m = _loose(seed, 2e-4, 3.5e-4)
+    rng = np.random.default_rng(seed)
+    xz2 = xz + jitter * r.mean() * rng.standard_normal(xz.shape)
+    old = pg.build_pores(xz, r, eps_m, l_m, walls=walls)
+    new = pg.build_pores(xz2, r, eps_m, l_m, walls=walls)
+    return old, new, xz2, r, rng
+
+
+@pytest.mark.parametrize("seed,jitter", [(0, 0.02), (1, 0.1), (2, 0.3)])
+def test_compiled_rules_give_the_same_pressures(seed, jitter):
+    old, new, xz2, r, rng = _moved(seed, jitter)
+    U_old = rng.standard_normal(old.n_pores)
+    valid = rng.random(old.n_pores) > 0.2  # pinched old pores pass on nothing
+    U, rule = pressures_by_rule(old, U_old, valid, new)
+    Uc, rule_c = pressures_by_rule(old, U_old, valid, new, compiled=True)
+    assert_same(rule_c, rule, "rule")
+    assert_same(Uc, U, "U")
+    assert set(np.unique(rule)) >= {1, 2, 3}
+
+
+def test_spread_reaches_pores_far_from_any_known_one_in_rounds():
+    """Rule (c) on a chain 0-1-2-3 with U known at 0 only: one pore further each round."""
+    conns = np.array([[0, 1], [2, 1], [2, 3], [1, 0]])
+    for spread in (kp.spread_to_neighbours, __import__("engines.pore_water", fromlist=["x"]).spread_to_neighbours):
+        U, rule = np.array([2.0, np.nan, np.nan, np.nan, np.nan]), np.zeros(5, np.int8)
+        spread(U, rule, conns)
+        np.testing.assert_array_equal(U[:4], 2.0)
+        assert np.isnan(U[4]) and rule.tolist() == [0, 3, 3, 3, 0]
+
+
+@pytest.mark.parametrize("jitter", [0.02, 0.3])
+def test_compiled_overlaps_are_the_same(jitter):
+    old, new, xz2, r, _ = _moved(3, jitter)
+    for got, want in zip(pg.pore_overlaps(old, new, xz2, compiled=True), pg.pore_overlaps(old, new, xz2)):
+        assert_same(got, want, "overlaps")
+
+
+def test_compiled_clip_areas_of_triangles_in_all_positions():
+    rng = np.random.default_rng(7)
+    subj, clip = rng.random((2000, 3, 2)), rng.random((2000, 3, 2))
+    for t in (subj, clip):
+        cw = pg._signed_area(t) < 0
+        t[cw] = t[cw][:, [0, 2, 1]]
+    assert_same(kp.clip_areas(subj, clip), pg._clip_areas(subj, clip), "areas")
+    assert_same(kp.clip_areas(subj, subj), np.abs(pg._signed_area(subj)), "a triangle with itself")
+
+
+@pytest.mark.parametrize("transfer", ["paper", "conserving"])
+def test_compiled_remesh_moves_the_same_water(transfer):
+    old, new, xz2, r, rng = _moved(4, 0.05)
+    A_old, A_new = pg.measure(old, xz2, r).void_area, pg.measure(new, xz2, r).void_area
+    W0 = A_old * (1 + 0.1 * rng.random(old.n_pores))
+    waters = []
+    for compiled in (False, True):
+        w = PoreWater(old, A_old, WaterSettings(E_w=2400.0, k1=1e3, k2=1e2, transfer=transfer), W=W0)
+        counts = w.remesh(new, A_new, A_old, xz=xz2, compiled=compiled)
+        waters.append((w, counts))
+    (w, counts), (wc, counts_c) = waters
+    assert counts_c == counts and counts["b"] > 0
+    assert_same(wc.W, w.W, "W")
+    assert_same(wc.rule, w.rule, "rule")
+    for f in dataclasses.fields(w.balance):
+        assert getattr(wc.balance, f.name) == pytest.approx(getattr(w.balance, f.name), rel=RTOL, abs=1e-12 * w.total_water())
+    assert_same(pressure(wc.W, A_new, 2400.0), pressure(w.W, A_new, 2400.0), "U")
