@@ -70,7 +70,10 @@ def _groups(key, n_groups):
 
 @jit
 def _sort_by(idx, key):
-    """Sort the few entries of idx in place by key[idx], stably (insertion sort)."""
+    """Sort the entries of idx in place by key[idx], stably (insertion sort when they are few)."""
+    if len(idx) > 32:
+        idx[:] = idx[np.argsort(key[idx], kind="mergesort")]
+        return
     for s in range(1, len(idx)):
         e = idx[s]
         q = s
@@ -270,25 +273,24 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
     c = 0
     for t in range(t_count):
         if in_pore[t]:
-            tri_k[c] = tri[t]
             tp[c] = tri_pore[t]
-            ent_pore[3 * c:3 * c + 3] = tri_pore[t]
-            ent_disc[3 * c:3 * c + 3] = tri[t]
+            for k in range(3):
+                tri_k[c, k] = tri[t, k]
+                ent_pore[3 * c + k], ent_disc[3 * c + k] = tri_pore[t], tri[t, k]
             c += 1
-    ent_pore[3 * n_in:] = rat_pore
-    ent_disc[3 * n_in:] = rat_disc
+    for s in range(len(rat_disc)):
+        ent_pore[3 * n_in + s], ent_disc[3 * n_in + s] = rat_pore[s], rat_disc[s]
     p_ptr, by_pore = _groups(ent_pore, n_pores)
-    ent_disc = ent_disc[by_pore]
     pv_pore = np.empty(len(ent_disc), np.int64)
     pv_disc = np.empty(len(ent_disc), np.int64)
     ptr = np.zeros(n_pores + 1, np.int64)
     c = 0
     for p in range(n_pores):
-        discs = ent_disc[p_ptr[p]:p_ptr[p + 1]]
-        discs.sort()
-        for s in range(len(discs)):
-            if s == 0 or discs[s] != discs[s - 1]:
-                pv_pore[c], pv_disc[c] = p, discs[s]
+        _sort_by(by_pore[p_ptr[p]:p_ptr[p + 1]], ent_disc)
+        for s in range(p_ptr[p], p_ptr[p + 1]):
+            v = ent_disc[by_pore[s]]
+            if s == p_ptr[p] or v != pv_disc[c - 1]:
+                pv_pore[c], pv_disc[c] = p, v
                 c += 1
         ptr[p + 1] = c
     pv_pore, pv_disc = pv_pore[:c].copy(), pv_disc[:c].copy()

@@ -76,6 +76,13 @@ def _rattlers():
     return xz, r, None, 0.0, 0.25
 
 
+def _ring():
+    """40 discs in a ring, linked to their neighbours only: one pore of 38 triangles (many vertices)."""
+    a = np.arange(40) * 2 * np.pi / 40
+    rad = 13.1 * (1 + 1e-3 * np.random.default_rng(2).standard_normal(40))
+    return np.column_stack([rad * np.cos(a), rad * np.sin(a)]), np.ones(40), None, 0.0, 0.1
+
+
 def _kite():
     return np.array([[-1.6, 0.0], [1.6, 0.0], [0.0, 1.2], [0.0, -2.1]]), np.ones(4), None, 0.0, 1.25
 
@@ -90,6 +97,7 @@ PACKINGS = {
     "loose-quicksand": lambda: _loose(1, 0.0, 1.3e-4),
     "rattlers": _rattlers,
     "kite": _kite,
+    "ring": _ring,
     "closed-face": lambda: (np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05], [1.0, 3.0]]), np.ones(4), None, 0.0, 0.1),
     "collinear": lambda: (np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), np.full(3, 0.5), None, 0.0, 0.1),
     "two": lambda: (np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, 0.5), None, 0.0, 0.1),
@@ -116,6 +124,7 @@ def test_the_packings_exercise_every_branch():
         twin = np.r_[np.arange(len(nets[name].links)) + len(nets[name].links), np.arange(len(nets[name].links))]
         assert np.any(nets[name].he_next == twin), name  # a dangling link
     assert nets["walled"].pore_touches["bottom"].any() and nets["walled"].pore_surface.any()
+    assert nets["ring"].n_pores == 1 and len(nets["ring"].tri) == 38
 
 
 @pytest.mark.parametrize("name", ["loose-seismic", "holes-14", "walled"])
