@@ -729,9 +729,11 @@ def pore_overlaps(old_net, new_net, xz, compiled=False):
 
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
-    others are clipped against the nearby triangles of the other network (``_clip_areas``, or
-    ``kernels_pores.clip_areas`` when ``compiled``).
+    others are clipped against the nearby triangles of the other network (``_clip_areas``).
+    ``compiled``: by kernels_pores.pore_overlaps (the same pairs, the areas summed in another order).
     """
+    if compiled:
+        return kp.pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)
     n = len(xz)
     to, tn = old_net.tri, new_net.tri
 
@@ -752,7 +754,7 @@ def pore_overlaps(old_net, new_net, xz, compiled=False):
         rq = np.max(np.hypot(*(Q - cq[:, None]).transpose(2, 0, 1)), axis=1)
         near = cKDTree(cp).sparse_distance_matrix(cKDTree(cq), rp.max() + rq.max(), output_type="ndarray")
         near = near[near["v"] < rp[near["i"]] + rq[near["j"]]]
-        a = (kp.clip_areas if compiled else _clip_areas)(P[near["i"]], Q[near["j"]])
+        a = _clip_areas(P[near["i"]], Q[near["j"]])
         p.append(old_net.tri_pore[ro[near["i"]]])
         q.append(new_net.tri_pore[rn[near["j"]]])
         area.append(a)
