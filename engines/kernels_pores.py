@@ -104,6 +104,22 @@ def _twin(a, b, ptr, order, h):
 
 
 @jit
+def _grid(x, z, cell):
+    """Square cells of side >= cell over the points (x, z): (x0, z0, cell, nx, nz, start, members),
+    the points of cell (gx, gz) being members[start[g]:start[g + 1]], g = gx nz + gz, where
+    gx = floor((x - x0) / cell)."""
+    x0, z0 = x.min(), z.min()
+    nx = int((x.max() - x0) / cell) + 1
+    nz = int((z.max() - z0) / cell) + 1
+    while nx * nz > 4 * len(x) + 16:  # scattered points: fewer, larger cells
+        cell *= 2.0
+        nx = int((x.max() - x0) / cell) + 1
+        nz = int((z.max() - z0) / cell) + 1
+    start, members = _groups(((x - x0) / cell).astype(np.int64) * nz + ((z - z0) / cell).astype(np.int64), nx * nz)
+    return x0, z0, cell, nx, nz, start, members
+
+
+@jit
 def missing_pairs(xz, r, reach, tri):
     """The disc pairs (M, 2), i < j, with r_i + r_j + reach >= R_ij (eq 28) that are no edge of the
     triangles, both discs being vertices; in no particular order. A grid of cells of side
@@ -111,24 +127,15 @@ def missing_pairs(xz, r, reach, tri):
     n = len(r)
     a, b = _half_edges(tri)
     ptr, order = _groups(a, n)
-    cell = 2.0 * r.max() + reach
-    x0, z0 = xz[:, 0].min(), xz[:, 1].min()
-    nx = int((xz[:, 0].max() - x0) / cell) + 1
-    nz = int((xz[:, 1].max() - z0) / cell) + 1
-    while nx * nz > 4 * n + 16:  # scattered discs: fewer, larger cells
-        cell *= 2.0
-        nx = int((xz[:, 0].max() - x0) / cell) + 1
-        nz = int((xz[:, 1].max() - z0) / cell) + 1
-    cx = ((xz[:, 0] - x0) / cell).astype(np.int64)
-    cz = ((xz[:, 1] - z0) / cell).astype(np.int64)
-    start, in_cell = _groups(cx * nz + cz, nx * nz)
+    x0, z0, cell, nx, nz, start, in_cell = _grid(xz[:, 0], xz[:, 1], 2.0 * r.max() + reach)
     out = np.empty((16 * n + 16, 2), np.int64)
     m = 0
     for i in range(n):
         if ptr[i] == ptr[i + 1]:
             continue  # not a vertex
-        for gx in range(max(cx[i] - 1, 0), min(cx[i] + 2, nx)):
-            for gz in range(max(cz[i] - 1, 0), min(cz[i] + 2, nz)):
+        cx, cz = int((xz[i, 0] - x0) / cell), int((xz[i, 1] - z0) / cell)
+        for gx in range(max(cx - 1, 0), min(cx + 2, nx)):
+            for gz in range(max(cz - 1, 0), min(cz + 2, nz)):
                 g = gx * nz + gz
                 for s in range(start[g], start[g + 1]):
                     j = in_cell[s]
@@ -521,17 +528,7 @@ def pore_overlaps(to, tp_old, tn, tp_new, xz, n_new):
         for s in range(len(rn)):
             Q[s] = _corners(xz, tn[rn[s]])
             cq[s, 0], cq[s, 1], cq[s, 2] = _bounding_circle(Q[s])
-        cell = cp[:, 2].max() + cq[:, 2].max()
-        x0, z0 = cq[:, 0].min(), cq[:, 1].min()
-        nx = int((cq[:, 0].max() - x0) / cell) + 1
-        nz = int((cq[:, 1].max() - z0) / cell) + 1
-        while nx * nz > 4 * len(rn) + 16:
-            cell *= 2.0
-            nx = int((cq[:, 0].max() - x0) / cell) + 1
-            nz = int((cq[:, 1].max() - z0) / cell) + 1
-        gx = ((cq[:, 0] - x0) / cell).astype(np.int64)
-        gz = ((cq[:, 1] - z0) / cell).astype(np.int64)
-        start, in_cell = _groups(gx * nz + gz, nx * nz)
+        x0, z0, cell, nx, nz, start, in_cell = _grid(cq[:, 0], cq[:, 1], cp[:, 2].max() + cq[:, 2].max())
         poly, cut = np.empty((9, 2)), np.empty((9, 2))
         for s in range(len(ro)):
             ix = int(np.floor((cp[s, 0] - x0) / cell))
