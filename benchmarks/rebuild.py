@@ -9,8 +9,8 @@ after every disc moved by a Gaussian of ``--jitter`` mean radii (0.02: about wha
 1e-6 s move the grains of the seismic case). The two paths are timed interleaved, part by part
 (medians of repeats), so the ratios hold on a busy machine even when the absolute times do not.
 Parts: triangulation (qhull and the lower facets), insertion of hidden eq 28 pairs, the rest of
-build_pores (faces, links, corners), the two void measures, the rules (a)-(d), the overlaps, and
-the whole rebuild. Writes {"results": [{"n_discs": N, "<part>_numpy_ms": x, "<part>_compiled_ms": y,
+build_pores (faces, links, corners), the void areas of the new and the old network, the rules
+(a)-(d), the overlaps, and the whole rebuild. Writes {"results": [{"n_discs": N, "<part>_numpy_ms": x, "<part>_compiled_ms": y,
 "<part>_ratio": x / y, ...}, ...]}.
 """
 import argparse
@@ -51,7 +51,7 @@ def parts(packing, xz, compiled):
         "triangulation": lambda: pg.regular_triangulation(xz, r, compiled),
         "insertion": lambda: pg.insert_missing_links(xz, r, tri, EPS_M + L_M, compiled),
         "build_pores": lambda: pg.build_pores(xz, r, EPS_M, L_M, walls=walls, compiled=compiled),
-        "measures": lambda: (pg.measure(new, xz, r), pg.measure(old, xz, r)),
+        "measures": lambda: (model._void_area(new, xz), model._void_area(old, xz)),
         "rules": lambda: pw.pressures_by_rule(old, U_old, A_old > old.a_min, new, compiled),
         "overlaps": lambda: pg.pore_overlaps(old, new, xz, compiled),
         "rebuild": rebuild,

@@ -160,6 +160,15 @@ def missing_pairs(xz, r, reach, tri):
 
 
 @jit
+def _mix64(v):
+    """pore_geometry._mix64 of one disc index (splitmix64; uint64 arithmetic wraps)."""
+    z = np.uint64(v) + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@jit
 def _find(parent, x):
     while parent[x] != x:
         parent[x] = parent[parent[x]]
@@ -226,7 +235,7 @@ def faces(xz, r, tri, reach, a_min):
 
 @jit
 def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pores, rat_disc, rat_pore):
-    """pore_geometry._links_and_corners compiled: the same 17 arrays."""
+    """pore_geometry._links_and_corners compiled: the same arrays."""
     n, t_count = len(r), len(tri)
     # links: one per undirected edge (its first half-edge), sorted by (i, j), i < j
     a, b = _half_edges(tri)
@@ -301,6 +310,11 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
                 c += 1
         ptr[p + 1] = c
     pv_pore, pv_disc = pv_pore[:c].copy(), pv_disc[:c].copy()
+    signature = np.zeros(n_pores, np.uint64)
+    touches = np.zeros((4, n_pores), np.bool_)
+    for s in range(c):
+        signature[pv_pore[s]] += _mix64(pv_disc[s])
+        touches[walls[pv_disc[s]], pv_pore[s]] = True
 
     # the half-edges of the links and the paper's walk: next = clockwise turn at the end disc
     he_org = np.concatenate((links[:, 0], links[:, 1]))
@@ -352,8 +366,16 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
     for s in range(len(pv_disc)):
         if not linked[pv_disc[s]]:
             rattler_area[pv_pore[s]] += np.pi * r[pv_disc[s]] ** 2
-    return (tri_k, tp, links, link_pores, np.flatnonzero(is_throat), pore_surface, pv_pore, pv_disc, ptr,
-            he_org, he_dst, he_left, he_next, h, theta0, raw0, rattler_area)
+    throat_link = np.flatnonzero(is_throat)
+    corner_link, corner_next_link = np.empty(len(h), np.int64), np.empty(len(h), np.int64)
+    corner_sign, corner_r2 = np.empty(len(h)), np.empty(len(h))
+    for s in range(len(h)):
+        corner_link[s], corner_next_link[s] = h[s] % n_l, he_next[h[s]] % n_l
+        corner_sign[s] = 1.0 if h[s] < n_l else -1.0
+        corner_r2[s] = r[he_dst[h[s]]] ** 2
+    return (tri_k, tp, links, link_pores, link_pores[throat_link], throat_link, pore_surface, ptr, pv_disc, signature,
+            he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], corner_link, corner_next_link, corner_sign,
+            corner_r2, theta0, raw0, rattler_area, touches)
 
 
 @jit

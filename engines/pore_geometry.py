@@ -408,6 +408,8 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     walls = np.zeros(n, np.int64) if walls is None else np.asarray(walls, np.int64)
     if walls.shape != (n,):
         raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
+    if np.any((walls < WALL_NONE) | (walls > WALL_RIGHT)):
+        raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[(walls < WALL_NONE) | (walls > WALL_RIGHT)][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     if candidates not in ("regular", "delaunay"):
         raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
@@ -424,25 +426,20 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = faces(xz, r, tri, eps_m + l_m, a_min)
     t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
-    (tri_k, tp, links, link_pores, throat_link, pore_surface, pv_pore, pv_disc, ptr, he_org, he_dst, he_left,
-     he_next, h, theta0, raw0, rattler_area) = links_and_corners(
-        xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores, off_mesh[p_in >= 0], p_in[p_in >= 0])
-    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # every pore has discs
-    pore_touches = {name: np.bincount(pv_pore[walls[pv_disc] == code], minlength=n_pores) > 0
-                    for code, name in WALL_NAMES.items()}
-    n_l = len(links)
+    *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
+                                         off_mesh[p_in >= 0], p_in[p_in >= 0])
     return PoreNetwork(
-        n_discs=n, tri=tri_k, tri_pore=tp, links=links, link_pores=link_pores,
-        throat_conns=link_pores[throat_link], throat_link=throat_link,
-        pore_surface=pore_surface, pore_touches=pore_touches,
-        pore_vertex_ptr=ptr, pore_vertex_idx=pv_disc, pore_signature=signature,
-        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next,
-        corner_pore=he_left[h], corner_disc=he_dst[h], corner_link=h % max(n_l, 1),
-        corner_next_link=he_next[h] % max(n_l, 1), corner_sign=np.where(h < n_l, 1.0, -1.0),
-        corner_r2=r[he_dst[h]] ** 2, corner_theta0=theta0, corner_raw0=raw0, rattler_area=rattler_area,
-        a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m),
-        l_m=float(l_m), n_inserted=n_inserted,
+        n_discs=n, **dict(zip(NETWORK_ARRAYS, arrays)), pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
+        a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
+
+
+NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link", "pore_surface",
+                  "pore_vertex_ptr", "pore_vertex_idx", "pore_signature", "he_org", "he_dst", "he_left", "he_next",
+                  "corner_pore", "corner_disc", "corner_link", "corner_next_link", "corner_sign", "corner_r2",
+                  "corner_theta0", "corner_raw0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
+
+
 def _faces(xz, r, tri, reach, a_min):
     """The faces of the link graph from counter-clockwise triangles ``tri`` (T, 3).
 
@@ -485,11 +482,8 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     """Links, throats, free surface, vertex sets and pore corners of the faces of ``_faces``;
     rat_disc, rat_pore: the discs in no triangle that lie in a pore, and that pore.
 
-    Returns (tri_k, tp: the triangles in pores and their pore; links (L, 2), link_pores (L, 2),
-    throat_link (Nt,), pore_surface (Np,); pv_pore, pv_disc: the vertex sets as (pore, disc) pairs
-    sorted, ptr (Np + 1,) their CSR pointer; he_org, he_dst, he_left, he_next (2L,) the link
-    half-edges; h (K,) the boundary half-edges of pores, theta0 (K,) and raw0 (K,) their corner
-    angle (eq 29) and raw link-angle difference; rattler_area (Np,)).
+    Returns the arrays of PoreNetwork named in NETWORK_ARRAYS, in that order, then touches (4, Np):
+    touches[code, p] is True when pore p has a disc of wall code ``code`` as a vertex.
     """
     n, t_count = len(r), len(tri)
     a = tri[:, [1, 2, 0]].ravel()
@@ -528,6 +522,9 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri[in_pore].ravel(), rat_pore * n + rat_disc]))
     pv_pore, pv_disc = pv_key // n, pv_key % n
     ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
+    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # every pore has discs
+    touches = np.zeros((WALL_RIGHT + 1, n_pores), bool)
+    touches[walls[pv_disc], pv_pore] = True
 
     # Boundary corners of the pores: the paper's walk over the link half-edges.
     he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
@@ -546,8 +543,9 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     linked[links.ravel()] = True
     rat = ~linked[pv_disc]
     rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)  # float if empty
-    return (tri[in_pore], tp, links, link_pores, np.flatnonzero(is_throat), pore_surface, pv_pore, pv_disc, ptr,
-            he_org, he_dst, he_left, he_next, h, theta0, raw0, rattler_area)
+    return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
+            ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
+            he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, raw0, rattler_area, touches)
 
 
 def _mix64(v):

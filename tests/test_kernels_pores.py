@@ -205,3 +205,12 @@ def test_compiled_remesh_moves_the_same_water(transfer):
     for f in dataclasses.fields(w.balance):
         assert getattr(wc.balance, f.name) == pytest.approx(getattr(w.balance, f.name), rel=RTOL, abs=1e-12 * w.total_water())
     assert_same(pressure(wc.W, A_new, 2400.0), pressure(w.W, A_new, 2400.0), "U")
+
+
+def test_a_wall_code_out_of_range_is_refused():
+    xz, r, _, eps_m, l_m = PACKINGS["hex"]()
+    walls = np.zeros(len(r), np.int64)
+    walls[5] = 7
+    for compiled in (False, True):
+        with pytest.raises(ValueError, match="walls: codes must be 0-3, got 7"):
+            pg.build_pores(xz, r, eps_m, l_m, walls=walls, compiled=compiled)
