@@ -15,8 +15,9 @@ the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure for
 buoyancy (eq 34b) as permanent forces: between water steps no Python runs.
 
 ``WaterModel`` is the same work without YADE (engines.pore_dem uses it for the paper's step order;
-the tests use it directly): the compiled kernels of engines.kernels, or with ``compiled=False`` the
-readable NumPy functions of engines.pore_geometry and engines.pore_water.
+the tests use it directly): the compiled kernels of engines.kernels (and of engines.kernels_pores
+for the pore rebuild), or with ``compiled=False`` the readable NumPy functions of
+engines.pore_geometry and engines.pore_water.
 
 Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.pore_water),
 checked at every water step: the bound is one more pass over throats and pores inside the flow
