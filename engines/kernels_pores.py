@@ -5,6 +5,7 @@ Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, 
 reference path and is tested against it (tests/test_kernels_pores.py: integer arrays equal, floats
 to 1e-12 relative):
 
+  lifted_points      pore_geometry._lifted_points         the points of the regular triangulation's hull
   lower_ccw          pore_geometry.regular_triangulation  the lower hull facets, counter-clockwise
   missing_pairs      pore_geometry.insert_missing_links   the eq 28 pairs that are no edge
   faces              pore_geometry._faces                 neighbours, eq 28 links, faces (a union-find
@@ -24,6 +25,20 @@ import numpy as np
 
 jit = nb.njit(cache=True, nogil=True)
 OUTER = -1  # pore_geometry.OUTER
+
+
+@jit
+def lifted_points(xz, r, centre):
+    """pore_geometry._lifted_points compiled (the same arithmetic), centre = xz.mean(axis=0)."""
+    scale = max(xz[:, 0].max() - xz[:, 0].min(), xz[:, 1].max() - xz[:, 1].min())
+    if not scale > 0:
+        return None
+    points = np.empty((len(r) + 1, 3))
+    for i in range(len(r)):
+        px, pz, q = (xz[i, 0] - centre[0]) / scale, (xz[i, 1] - centre[1]) / scale, r[i] / scale
+        points[i, 0], points[i, 1], points[i, 2] = px, pz, px * px + pz * pz - q * q
+    points[-1, 0], points[-1, 1], points[-1, 2] = 0.0, 0.0, points[:-1, 2].max() + 1.0
+    return points
 
 
 @jit

@@ -209,12 +209,9 @@ def regular_triangulation(xz, r, compiled=False):
     n = len(xz)
     if n < 3:
         return None
-    scale = float(np.ptp(xz, axis=0).max())
-    if not scale > 0:
+    points = kp.lifted_points(xz, r, xz.mean(axis=0)) if compiled else _lifted_points(xz, r)
+    if points is None:
         return None
-    p = (xz - xz.mean(axis=0)) / scale
-    lift = np.einsum("ij,ij->i", p, p) - (r / scale) ** 2
-    points = np.vstack([np.column_stack([p, lift]), [0.0, 0.0, lift.max() + 1.0]])
     try:
         hull = ConvexHull(points)
     except QhullError:
@@ -224,6 +221,16 @@ def regular_triangulation(xz, r, compiled=False):
         return tri if len(tri) else None
     lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
     return _ccw(xz, hull.simplices[lower]) if lower.any() else None
+
+
+def _lifted_points(xz, r):
+    """The points of regular_triangulation's hull (N + 1, 3), or None when the centres coincide."""
+    scale = float(np.ptp(xz, axis=0).max())
+    if not scale > 0:
+        return None
+    p = (xz - xz.mean(axis=0)) / scale
+    lift = np.einsum("ij,ij->i", p, p) - (r / scale) ** 2
+    return np.vstack([np.column_stack([p, lift]), [0.0, 0.0, lift.max() + 1.0]])
 
 
 def _neighbours(tri):

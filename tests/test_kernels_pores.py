@@ -100,6 +100,7 @@ PACKINGS = {
     "ring": _ring,
     "closed-face": lambda: (np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05], [1.0, 3.0]]), np.ones(4), None, 0.0, 0.1),
     "collinear": lambda: (np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), np.full(3, 0.5), None, 0.0, 0.1),
+    "coincident": lambda: (np.zeros((3, 2)), np.full(3, 0.5), None, 0.0, 0.1),
     "two": lambda: (np.array([[0.0, 0.0], [1.0, 0.0]]), np.full(2, 0.5), None, 0.0, 0.1),
 }
 
@@ -125,6 +126,15 @@ def test_the_packings_exercise_every_branch():
         assert np.any(nets[name].he_next == twin), name  # a dangling link
     assert nets["walled"].pore_touches["bottom"].any() and nets["walled"].pore_surface.any()
     assert nets["ring"].n_pores == 1 and len(nets["ring"].tri) == 38
+
+
+@pytest.mark.parametrize("name", PACKINGS)
+def test_the_lifted_points_are_bit_for_bit_those_of_numpy(name):
+    """The hull of the same points: qhull makes the same choices, even between cocircular discs."""
+    xz, r = PACKINGS[name]()[:2]
+    want = pg._lifted_points(xz, r)
+    got = kp.lifted_points(xz, r, xz.mean(axis=0))
+    assert (got is None and want is None) or np.array_equal(got, want)
 
 
 @pytest.mark.parametrize("name", ["loose-seismic", "holes-14", "walled"])
