@@ -10,8 +10,8 @@ after every disc moved by a Gaussian of ``--jitter`` mean radii (0.02: about wha
 (medians of repeats), so the ratios hold on a busy machine even when the absolute times do not.
 Parts: triangulation (qhull and the lower facets), insertion of hidden eq 28 pairs, the rest of
 build_pores (faces, links, corners), the void areas of the new and the old network, the rules
-(a)-(d), the overlaps, and the whole rebuild. Writes {"results": [{"n_discs": N, "<part>_numpy_ms": x, "<part>_compiled_ms": y,
-"<part>_ratio": x / y, ...}, ...]}.
+(a)-(d), the overlaps, and the whole rebuild. Writes {"results": [{"n_discs": N,
+"<part>_numpy_ms": x, "<part>_compiled_ms": y, "<part>_ratio": x / y, ...}, ...]}.
 """
 import argparse
 import os

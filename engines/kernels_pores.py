@@ -14,11 +14,16 @@ to 1e-12 relative):
                                                           half-edge walk, corner angles (eq 29)
   near_vertex_sets   pore_water.pressures_by_rule         rule (b): old vertex sets that contain or are
                                                           contained in a new one
-  clip_areas         pore_geometry._clip_areas            triangle-triangle overlap areas
+  spread_to_neighbours  pore_water.spread_to_neighbours   rule (c)
+  pore_overlaps      pore_geometry.pore_overlaps          overlap areas of old and new pores (clipping
+                                                          as pore_geometry._clip_areas)
 
 Numbering follows the NumPy functions (pores in the order of their first triangle, links by (i, j),
-half-edges sorted by disc then angle), so the networks are the same array for array. numba compiles
-on first use and caches the machine code beside this file (``cache=True``); fastmath is off.
+half-edges sorted by disc then angle), so the networks are the same array for array. Sorting is by
+counting sort over discs or pores and insertion sort of the few entries of each (the sorts of the
+NumPy path cost more than the rest at these sizes); pairs are found on grids of cells. Sums that
+NumPy makes in another order (means of rules (b), (c), overlap sums) agree to round-off. numba
+compiles on first use and caches the machine code beside this file (``cache=True``); fastmath is off.
 """
 import numba as nb
 import numpy as np
@@ -206,7 +211,8 @@ def faces(xz, r, tri, reach, a_min):
         twin = _twin(a, b, ptr, order, h)
         if twin >= 0:
             nb_[h] = twin // 3
-        is_link[h] = r[a[h]] + r[b[h]] + reach >= np.hypot(xz[b[h], 0] - xz[a[h], 0], xz[b[h], 1] - xz[a[h], 1])  # eq 28
+        dx, dz = xz[b[h], 0] - xz[a[h], 0], xz[b[h], 1] - xz[a[h], 1]
+        is_link[h] = r[a[h]] + r[b[h]] + reach >= np.hypot(dx, dz)  # eq 28
         if not is_link[h]:  # triangles joined across non-link edges; a non-link hull edge joins the outer face
             u, v = _find(parent, h // 3), _find(parent, nb_[h] if nb_[h] >= 0 else t_count)
             if u != v:

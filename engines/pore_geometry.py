@@ -22,6 +22,9 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
 
+Every step of a build but qhull, and of the re-meshing in engines.pore_water, has a compiled twin in
+engines.kernels_pores (``compiled=True``, what the water engine uses), tested to give the same network.
+
 Degenerate pores: a face whose void area is <= ``a_min`` when the pores are built is *closed*: it is
 not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
 Fewer than three discs or collinear centres give a network with no pores. A disc whose power cell
@@ -403,8 +406,9 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     ``candidates``: "regular" (the regular triangulation plus the eq 28 pairs it hides, see the
     module docstring) or "delaunay" (Delaunay edges of the centres only; misses some eq 28 pairs
     at a long l_m).
-    ``compiled``: the faces, links and corners by the kernels of engines.kernels_pores instead of
-    the readable ``_faces`` and ``_links_and_corners`` (the same network, tested).
+    ``compiled``: everything but qhull by the kernels of engines.kernels_pores instead of the
+    readable NumPy functions (``_lifted_points``, ``_faces``, ``_links_and_corners``, ...): the
+    same network (tests/test_kernels_pores.py).
     Returns a PoreNetwork; positions may then move and ``measure`` gives the new areas.
     """
     xz, r = check_discs(xz, r)
@@ -415,8 +419,9 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     walls = np.zeros(n, np.int64) if walls is None else np.asarray(walls, np.int64)
     if walls.shape != (n,):
         raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
-    if np.any((walls < WALL_NONE) | (walls > WALL_RIGHT)):
-        raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[(walls < WALL_NONE) | (walls > WALL_RIGHT)][0]}")
+    bad = (walls < WALL_NONE) | (walls > WALL_RIGHT)
+    if bad.any():
+        raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     if candidates not in ("regular", "delaunay"):
         raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
@@ -436,7 +441,8 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
                                          off_mesh[p_in >= 0], p_in[p_in >= 0])
     return PoreNetwork(
-        n_discs=n, **dict(zip(NETWORK_ARRAYS, arrays)), pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
+        n_discs=n, **dict(zip(NETWORK_ARRAYS, arrays)),
+        pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
         a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
 
@@ -529,7 +535,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri[in_pore].ravel(), rat_pore * n + rat_disc]))
     pv_pore, pv_disc = pv_key // n, pv_key % n
     ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
-    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # every pore has discs
+    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # no empty pore
     touches = np.zeros((WALL_RIGHT + 1, n_pores), bool)
     touches[walls[pv_disc], pv_pore] = True
 
@@ -549,7 +555,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     linked = np.zeros(n, bool)
     linked[links.ravel()] = True
     rat = ~linked[pv_disc]
-    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)  # float if empty
+    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)
     return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
             ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
             he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, raw0, rattler_area, touches)
