@@ -105,18 +105,20 @@ PACKINGS = {
 }
 
 
+def _build(name, **kw):
+    xz, r, walls, eps_m, l_m = PACKINGS[name]()
+    return pg.build_pores(xz, r, eps_m, l_m, walls=walls, **kw)
+
+
 @pytest.mark.parametrize("name", PACKINGS)
 def test_compiled_build_gives_the_same_network(name):
-    xz, r, walls, eps_m, l_m = PACKINGS[name]()
     for candidates in ("regular", "delaunay"):
-        ref = pg.build_pores(xz, r, eps_m, l_m, walls=walls, candidates=candidates)
-        assert_same_network(pg.build_pores(xz, r, eps_m, l_m, walls=walls, candidates=candidates, compiled=True), ref)
+        assert_same_network(_build(name, candidates=candidates, compiled=True), _build(name, candidates=candidates))
 
 
 def test_the_packings_exercise_every_branch():
     """The cases above are not vacuous: flips, closed faces, rattlers, dangling links, walls occur."""
-    nets = {name: pg.build_pores(*PACKINGS[name]()[:2], PACKINGS[name]()[3], PACKINGS[name]()[4],
-                                 walls=PACKINGS[name]()[2]) for name in PACKINGS}
+    nets = {name: _build(name) for name in PACKINGS}
     assert nets["kite"].n_inserted == 1 and nets["loose-seismic"].n_inserted > 0
     assert nets["closed-face"].n_closed == 1 and nets["collinear"].n_pores == 0
     np.testing.assert_allclose(nets["rattlers"].rattler_area, [0.0, np.pi * (0.05**2 + 0.1**2)], rtol=1e-12)
