@@ -52,6 +52,7 @@ mutants: deps $(MUTANT_VENV)/bin/mutmut
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
 	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
+	$(PY) benchmarks/rebuild.py --json $(OUT)/bench-rebuild.json
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json

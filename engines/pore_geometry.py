@@ -22,6 +22,9 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
 
+Every step of a build but qhull, and of the re-meshing in engines.pore_water, has a compiled twin in
+engines.kernels_pores (``compiled=True``, what the water engine uses), tested to give the same network.
+
 Degenerate pores: a face whose void area is <= ``a_min`` when the pores are built is *closed*: it is
 not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
 Fewer than three discs or collinear centres give a network with no pores. A disc whose power cell
@@ -35,6 +38,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+
+from engines import kernels_pores as kp
 
 WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT = 0, 1, 2, 3
 WALL_NAMES = {WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
@@ -195,7 +200,7 @@ def _delaunay(xz):
 LOWER_FACET_TOL = 1e-12  # a hull facet is lower when its unit normal's lift component is below -this
 
 
-def regular_triangulation(xz, r):
+def regular_triangulation(xz, r, compiled=False):
     """Counter-clockwise triangles (T, 3) of the regular (power) triangulation of the discs, or None.
 
     The lower convex hull of the lifted points (x, z, x^2 + z^2 - r^2) (centred and scaled by the
@@ -207,18 +212,28 @@ def regular_triangulation(xz, r):
     n = len(xz)
     if n < 3:
         return None
+    points = kp.lifted_points(xz, r, xz.mean(axis=0)) if compiled else _lifted_points(xz, r)
+    if points is None:
+        return None
+    try:
+        hull = ConvexHull(points)
+    except QhullError:
+        return None
+    if compiled:
+        tri = kp.lower_ccw(hull.simplices, hull.equations[:, 2], n, xz, LOWER_FACET_TOL)
+        return tri if len(tri) else None
+    lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
+    return _ccw(xz, hull.simplices[lower]) if lower.any() else None
+
+
+def _lifted_points(xz, r):
+    """The points of regular_triangulation's hull (N + 1, 3), or None when the centres coincide."""
     scale = float(np.ptp(xz, axis=0).max())
     if not scale > 0:
         return None
     p = (xz - xz.mean(axis=0)) / scale
     lift = np.einsum("ij,ij->i", p, p) - (r / scale) ** 2
-    points = np.vstack([np.column_stack([p, lift]), [0.0, 0.0, lift.max() + 1.0]])
-    try:
-        hull = ConvexHull(points)
-    except QhullError:
-        return None
-    lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
-    return _ccw(xz, hull.simplices[lower]) if lower.any() else None
+    return np.vstack([np.column_stack([p, lift]), [0.0, 0.0, lift.max() + 1.0]])
 
 
 def _neighbours(tri):
@@ -334,19 +349,22 @@ class _FlipTriangulation:
         self._star(d).add(c)
 
 
-def insert_missing_links(xz, r, tri, reach):
+def insert_missing_links(xz, r, tri, reach, compiled=False):
     """Make every eq 28 pair between triangulation vertices that crosses no link an edge (and so a
     link), by edge flips, the pairs in order of their gap R - r_i - r_j (then of their indices).
     Only edges that are not links are flipped, so no link is lost.
 
     Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m].
     """
-    n = len(r)
-    pairs = eq28_pairs(xz, r, reach)
-    is_vertex = np.zeros(n, bool)
-    is_vertex[tri.ravel()] = True
-    edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
-    missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
+    if compiled:
+        missing = kp.missing_pairs(xz, r, float(reach), tri)
+    else:
+        n = len(r)
+        pairs = eq28_pairs(xz, r, reach)
+        is_vertex = np.zeros(n, bool)
+        is_vertex[tri.ravel()] = True
+        edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
+        missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
     if not len(missing):
         return tri, 0
     d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
@@ -379,7 +397,8 @@ def _locate(xz, tri, points):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, candidates="regular"):
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, candidates="regular",
+                compiled=False):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
@@ -387,6 +406,9 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     ``candidates``: "regular" (the regular triangulation plus the eq 28 pairs it hides, see the
     module docstring) or "delaunay" (Delaunay edges of the centres only; misses some eq 28 pairs
     at a long l_m).
+    ``compiled``: everything but qhull by the kernels of engines.kernels_pores instead of the
+    readable NumPy functions (``_lifted_points``, ``_faces``, ``_links_and_corners``, ...): the
+    same network (tests/test_kernels_pores.py).
     Returns a PoreNetwork; positions may then move and ``measure`` gives the new areas.
     """
     xz, r = check_discs(xz, r)
@@ -397,54 +419,95 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     walls = np.zeros(n, np.int64) if walls is None else np.asarray(walls, np.int64)
     if walls.shape != (n,):
         raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
+    bad = (walls < WALL_NONE) | (walls > WALL_RIGHT)
+    if bad.any():
+        raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     if candidates not in ("regular", "delaunay"):
         raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
-    tri = regular_triangulation(xz, r) if candidates == "regular" else _delaunay(xz)
+    tri = regular_triangulation(xz, r, compiled) if candidates == "regular" else _delaunay(xz)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
     n_inserted = 0
     if candidates == "regular":
-        tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m)
-    nb = _neighbours(tri)
-    t_count = len(tri)
+        tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
+    if compiled:
+        faces, links_and_corners = kp.faces, kp.links_and_corners
+    else:
+        faces, links_and_corners = _faces, _links_and_corners
+    nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = faces(xz, r, tri, eps_m + l_m, a_min)
+    t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
+    p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
+    *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
+                                         off_mesh[p_in >= 0], p_in[p_in >= 0])
+    return PoreNetwork(
+        n_discs=n, **dict(zip(NETWORK_ARRAYS, arrays)),
+        pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
+        a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
+    )
 
-    # Half-edges of the triangulation: corner k of triangle t owns the edge opposite it,
-    # a = tri[t, k+1] -> b = tri[t, k+2], with t on its left and nb[t, k] on its right.
+
+NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link", "pore_surface",
+                  "pore_vertex_ptr", "pore_vertex_idx", "pore_signature", "he_org", "he_dst", "he_left", "he_next",
+                  "corner_pore", "corner_disc", "corner_link", "corner_next_link", "corner_sign", "corner_r2",
+                  "corner_theta0", "corner_raw0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
+
+
+def _faces(xz, r, tri, reach, a_min):
+    """The faces of the link graph from counter-clockwise triangles ``tri`` (T, 3).
+
+    Half-edge h = 3 t + k of triangle t runs a = tri[t, k+1] -> b = tri[t, k+2] (the edge opposite
+    corner k), with t on its left and nb[h] on its right (-1: none). Returns (nb (3T,), is_link (3T,)
+    (eq 28 with reach = eps_m + l_m), tri_pore (T,) pore of each triangle (OUTER: the outer face or
+    a closed one), bounded (T,) the triangle is not in the outer face, n_pores, n_closed faces,
+    off_mesh: the discs in no triangle). Pores are numbered in the order of their first triangle.
+    """
+    t_count, n = len(tri), len(r)
+    nb = _neighbours(tri).ravel()
     a = tri[:, [1, 2, 0]].ravel()
     b = tri[:, [2, 0, 1]].ravel()
-    right_tri = nb.ravel()
     d = xz[b] - xz[a]
-    length = np.hypot(d[:, 0], d[:, 1])
-    is_link = r[a] + r[b] + eps_m + l_m >= length  # eq 28
+    is_link = r[a] + r[b] + reach >= np.hypot(d[:, 0], d[:, 1])  # eq 28
 
     # Pores: triangles joined across non-link edges; a non-link hull edge joins the outer face.
-    left_tri = np.repeat(np.arange(t_count), 3)
     joins = ~is_link
-    other = np.where(right_tri >= 0, right_tri, t_count)
+    other = np.where(nb >= 0, nb, t_count)
+    left_tri = np.repeat(np.arange(t_count), 3)
     graph = coo_matrix((np.ones(joins.sum()), (left_tri[joins], other[joins])), shape=(t_count + 1, t_count + 1))
     _, comp = connected_components(graph, directed=False)
-    outer_comp = comp[t_count]
     face = comp[:t_count]
+    bounded = face != comp[t_count]
 
     # Void area per face at build (eq 29) to close degenerate faces.
-    bounded = face != outer_comp
     labels, face_id = np.unique(face[bounded], return_inverse=True)
-    tri_in = tri[bounded]
-    sig_area, sectors = _triangle_void(xz, r, tri_in)
+    sig_area, sectors = _triangle_void(xz, r, tri[bounded])
     void = np.bincount(face_id, sig_area - sectors, minlength=len(labels))
     is_open = void > a_min
     pore_of_face = np.full(len(labels), OUTER)
     pore_of_face[is_open] = np.arange(is_open.sum())
-    tri_pore_all = np.full(t_count, OUTER)
-    tri_pore_all[np.flatnonzero(bounded)] = pore_of_face[face_id]
-    n_pores = int(is_open.sum())
+    tri_pore = np.full(t_count, OUTER)
+    tri_pore[bounded] = pore_of_face[face_id]
+    return (nb, is_link, tri_pore, bounded, int(is_open.sum()), int((~is_open).sum()),
+            np.setdiff1d(np.arange(n), tri.ravel()))
+
+
+def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pores, rat_disc, rat_pore):
+    """Links, throats, free surface, vertex sets and pore corners of the faces of ``_faces``;
+    rat_disc, rat_pore: the discs in no triangle that lie in a pore, and that pore.
+
+    Returns the arrays of PoreNetwork named in NETWORK_ARRAYS, in that order, then touches (4, Np):
+    touches[code, p] is True when pore p has a disc of wall code ``code`` as a vertex.
+    """
+    n, t_count = len(r), len(tri)
+    a = tri[:, [1, 2, 0]].ravel()
+    b = tri[:, [2, 0, 1]].ravel()
 
     # Links: one record per undirected link, pores on the left and right of i->j (i < j).
     lk = np.flatnonzero(is_link)
     la, lb = a[lk], b[lk]
-    left_p = tri_pore_all[left_tri[lk]]
-    right_p = np.where(right_tri[lk] >= 0, tri_pore_all[np.maximum(right_tri[lk], 0)], OUTER)
+    left_tri, right_tri = lk // 3, nb[lk]
+    left_p = tri_pore[left_tri]
+    right_p = np.where(right_tri >= 0, tri_pore[np.maximum(right_tri, 0)], OUTER)
     key = np.minimum(la, lb) * n + np.maximum(la, lb)
     ukey, first = np.unique(key, return_index=True)
     links = np.column_stack([ukey // n, ukey % n])
@@ -458,30 +521,23 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     wall_edge = (walls[links[:, 0]] != WALL_NONE) & (walls[links[:, 1]] != WALL_NONE)
     outer_link = ((lp0 == OUTER) ^ (lp1 == OUTER)) & ~wall_edge
     # a link next to a closed face is not on the free surface: only the true outer face counts
-    outer_side_is_outer = _side_is_outer_face(lk[first], left_tri, right_tri, bounded, flip, lp0 == OUTER)
+    left_bounded = bounded[left_tri[first]]
+    right_bounded = np.where(right_tri[first] >= 0, bounded[np.maximum(right_tri[first], 0)], False)
+    outer_side_is_outer = np.where(lp0 == OUTER, ~np.where(flip, right_bounded, left_bounded),
+                                   ~np.where(flip, left_bounded, right_bounded))
     surface_pores = np.where(lp0 == OUTER, lp1, lp0)[outer_link & outer_side_is_outer]
     pore_surface = np.zeros(n_pores, bool)
     pore_surface[surface_pores[surface_pores >= 0]] = True
 
-    # Pore vertex sets and wall contacts.
-    tri_k = tri[tri_pore_all >= 0]
-    tp = tri_pore_all[tri_pore_all >= 0]
-    pv_key = np.repeat(tp, 3) * n + tri_k.ravel()
-    off_mesh = np.setdiff1d(np.arange(n), tri.ravel())  # empty power cells: rattlers where they lie
-    if len(off_mesh):
-        t_in = _locate(xz, tri, xz[off_mesh])
-        p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
-        pv_key = np.concatenate([pv_key, p_in[p_in >= 0] * n + off_mesh[p_in >= 0]])
-    pv_key = np.unique(pv_key)
-    pv = np.column_stack([pv_key // n, pv_key % n])
-    ptr = np.searchsorted(pv[:, 0], np.arange(n_pores + 1))
-    signature = np.zeros(n_pores, np.uint64)
-    np.add.at(signature, pv[:, 0], _mix64(pv[:, 1]))
-    pore_touches = {}
-    for code, name in WALL_NAMES.items():
-        touches = np.zeros(n_pores, bool)
-        touches[pv[walls[pv[:, 1]] == code, 0]] = True
-        pore_touches[name] = touches
+    # Pore vertex sets.
+    in_pore = tri_pore >= 0
+    tp = tri_pore[in_pore]
+    pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri[in_pore].ravel(), rat_pore * n + rat_disc]))
+    pv_pore, pv_disc = pv_key // n, pv_key % n
+    ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
+    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # no empty pore
+    touches = np.zeros((WALL_RIGHT + 1, n_pores), bool)
+    touches[walls[pv_disc], pv_pore] = True
 
     # Boundary corners of the pores: the paper's walk over the link half-edges.
     he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
@@ -498,20 +554,11 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     # Unlinked discs (rattlers) inside a pore are void-free: subtract them whole.
     linked = np.zeros(n, bool)
     linked[links.ravel()] = True
-    rat = pv[~linked[pv[:, 1]]]
-    rattler_area = np.bincount(rat[:, 0], np.pi * r[rat[:, 1]] ** 2, minlength=n_pores)
-
-    return PoreNetwork(
-        n_discs=n, tri=tri_k, tri_pore=tp, links=links, link_pores=link_pores,
-        throat_conns=link_pores[is_throat], throat_link=np.flatnonzero(is_throat),
-        pore_surface=pore_surface, pore_touches=pore_touches,
-        pore_vertex_ptr=ptr, pore_vertex_idx=pv[:, 1], pore_signature=signature,
-        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next,
-        corner_pore=he_left[h], corner_disc=he_dst[h], corner_link=he_link[h],
-        corner_next_link=he_link[he_next[h]], corner_sign=np.where(h < n_l, 1.0, -1.0),
-        corner_r2=r[he_dst[h]] ** 2, corner_theta0=theta0, corner_raw0=raw0, rattler_area=rattler_area,
-        a_min=a_min, n_closed=int((~is_open).sum()), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
-    )
+    rat = ~linked[pv_disc]
+    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)
+    return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
+            ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
+            he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, raw0, rattler_area, touches)
 
 
 def _mix64(v):
@@ -527,18 +574,6 @@ def _mix64(v):
 def _link_angles(xz, links):
     d = xz[links[:, 1]] - xz[links[:, 0]]
     return np.arctan2(d[:, 1], d[:, 0])
-
-
-def _side_is_outer_face(link_he, left_tri, right_tri, bounded, flip, left_is_outer_label):
-    """For links with one OUTER side: is that side the true outer face (not a closed pore)?"""
-    lt = left_tri[link_he]
-    rt = right_tri[link_he]
-    left_bounded = bounded[lt]
-    right_bounded = np.where(rt >= 0, bounded[np.maximum(rt, 0)], False)
-    # (left, right) of i->j: swap when the stored half-edge ran j->i
-    l_b = np.where(flip, right_bounded, left_bounded)
-    r_b = np.where(flip, left_bounded, right_bounded)
-    return np.where(left_is_outer_label, ~l_b, ~r_b)
 
 
 def _triangle_void(xz, r, tri):
@@ -700,13 +735,16 @@ def _clip_areas(subj, clip):
     return np.where(count >= 3, 0.5 * np.sum(np.where(i < count[:, None], cr, 0.0), axis=1), 0.0)
 
 
-def pore_overlaps(old_net, new_net, xz):
+def pore_overlaps(old_net, new_net, xz, compiled=False):
     """Polygon overlap areas of the pores of two networks at positions xz (N, 2) [m].
 
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
     others are clipped against the nearby triangles of the other network (``_clip_areas``).
+    ``compiled``: by kernels_pores.pore_overlaps (the same pairs, the areas summed in another order).
     """
+    if compiled:
+        return kp.pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)
     n = len(xz)
     to, tn = old_net.tri, new_net.tri
 

@@ -38,6 +38,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from engines import kernels_pores as kp
 from engines import pore_geometry as pg
 from engines.pore_geometry import check_nonnegative
 
@@ -234,7 +235,7 @@ class PoreWater:
         return fl
 
     # -- re-meshing --------------------------------------------------------------------------------
-    def remesh(self, new_net, A_new, A_old, xz=None):
+    def remesh(self, new_net, A_new, A_old, xz=None, compiled=False):
         """Move the water onto a rebuilt network (§3.4(2)); A_new, A_old: void areas of the new and
         the old network at the current positions xz (N, 2) [m].
 
@@ -246,13 +247,14 @@ class PoreWater:
         transfer = "paper": W is recomputed from U and the new A (eq 32).
         transfer = "conserving": W from ``conserving_water`` (needs xz); new pores that overlap no
         old pore take the water of the pressure of rules (a)-(d) (counted as "unmatched").
+        ``compiled``: rules (b), (c) and the overlaps by engines.kernels_pores (the same results).
         Returns the counts per rule.
         """
         U_old = pressure(self.W, A_old, self.settings.E_w)
-        U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net)
+        U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net, compiled)
         counts = rule_counts(rule)
         A_new, A_old = np.asarray(A_new, float), np.asarray(A_old, float)
-        overlaps = None if xz is None else pg.pore_overlaps(self.net, new_net, xz)
+        overlaps = None if xz is None else pg.pore_overlaps(self.net, new_net, xz, compiled)
         if self.settings.transfer == "conserving":
             if xz is None:
                 raise ValueError("transfer = 'conserving' needs the positions xz at re-meshing")
@@ -290,8 +292,9 @@ def rule_counts(rule):
     return {name: int(np.sum(rule == k)) for k, name in enumerate(RULES, 1)}
 
 
-def pressures_by_rule(old_net, U_old, old_valid, new_net):
-    """(U_new (Np_new,), rule code 1-4 of (a)-(d) (Np_new,) int8): see ``inherit_pressures``."""
+def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
+    """(U_new (Np_new,), rule code 1-4 of (a)-(d) (Np_new,) int8): see ``inherit_pressures``;
+    ``compiled``: rules (b) and (c) by engines.kernels_pores."""
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.zeros(n_new, np.int8)
@@ -304,7 +307,12 @@ def pressures_by_rule(old_net, U_old, old_valid, new_net):
         same = sorted_sig[pos] == new_net.pore_signature
         U[same], rule[same] = U_old[order[pos[same]]], 1
     todo = np.flatnonzero(np.isnan(U))
-    if len(todo):  # (b) split or merge: old vertex set contains or is contained in the new one
+    if len(todo) and compiled:  # (b) split or merge: old vertex set contains or is contained in the new one
+        U_b = kp.near_vertex_sets(old_net.pore_vertex_ptr, old_net.pore_vertex_idx, np.asarray(old_valid, bool),
+                                  new_net.pore_vertex_ptr, new_net.pore_vertex_idx, todo, U_old, new_net.n_discs)
+        U[todo] = U_b
+        rule[todo[~np.isnan(U_b)]] = 2
+    elif len(todo):
         by_vertex = {}
         for q in valid:
             for v in old_net.vertices_of(q).tolist():
@@ -316,23 +324,30 @@ def pressures_by_rule(old_net, U_old, old_valid, new_net):
             if near:
                 U[p], rule[p] = float(np.mean(U_old[near])), 2
     # (c) mean over the assigned neighbouring pores ("まわりのすべての図形"); the outside is not a pore
-    i, j = np.unique(np.sort(new_net.throat_conns, axis=1), axis=0).T  # distinct neighbours
-    while True:
-        unset = np.isnan(U)
-        if not unset.any():
-            break
-        known = np.where(unset, 0.0, U)
-        has = (~unset).astype(float)
-        s = np.bincount(i, known[j], n_new) + np.bincount(j, known[i], n_new)
-        c = np.bincount(i, has[j], n_new) + np.bincount(j, has[i], n_new)
-        assign = unset & (c > 0)
-        if not assign.any():
-            break
-        U[assign] = s[assign] / c[assign]
-        rule[assign] = 3
+    (kp.spread_to_neighbours if compiled else spread_to_neighbours)(U, rule, new_net.throat_conns)
     left = np.isnan(U)  # (d)
     U[left], rule[left] = 0.0, 4
     return U, rule
+
+
+def spread_to_neighbours(U, rule, conns):
+    """Rule (c), in place: in rounds, each pore with U nan takes the mean U of its distinct
+    neighbours (the pore pairs conns (Nt, 2)) that had one at the round's start; rule code 3."""
+    n = len(U)
+    i, j = np.unique(np.sort(conns, axis=1), axis=0).T  # distinct neighbours
+    while True:
+        unset = np.isnan(U)
+        if not unset.any():
+            return
+        known = np.where(unset, 0.0, U)
+        has = (~unset).astype(float)
+        s = np.bincount(i, known[j], n) + np.bincount(j, known[i], n)
+        c = np.bincount(i, has[j], n) + np.bincount(j, has[i], n)
+        assign = unset & (c > 0)
+        if not assign.any():
+            return
+        U[assign] = s[assign] / c[assign]
+        rule[assign] = 3
 
 
 def _subset_or_superset(a, b):

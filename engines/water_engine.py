@@ -15,8 +15,9 @@ the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure for
 buoyancy (eq 34b) as permanent forces: between water steps no Python runs.
 
 ``WaterModel`` is the same work without YADE (engines.pore_dem uses it for the paper's step order;
-the tests use it directly): the compiled kernels of engines.kernels, or with ``compiled=False`` the
-readable NumPy functions of engines.pore_geometry and engines.pore_water.
+the tests use it directly): the compiled kernels of engines.kernels (and of engines.kernels_pores
+for the pore rebuild), or with ``compiled=False`` the readable NumPy functions of
+engines.pore_geometry and engines.pore_water.
 
 Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.pore_water),
 checked at every water step: the bound is one more pass over throats and pores inside the flow
@@ -67,7 +68,7 @@ class WaterModel:
         self._buffers(xz)
 
     def _build(self, xz):
-        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls)
+        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, compiled=self.compiled)
 
     def _buffers(self, xz):
         """The network's arrays for kernels.water_step, packed (allocated once per rebuild at
@@ -126,9 +127,21 @@ class WaterModel:
     def rebuild(self, xz):
         """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
-        self.water.remesh(new, pg.measure(new, xz, self.r).void_area, pg.measure(old, xz, self.r).void_area, xz=xz)
+        self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, compiled=self.compiled)
         self.n_rebuilds += 1
         self._buffers(xz)
+
+    def _void_area(self, net, xz):
+        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)."""
+        if not self.compiled:
+            return pg.measure(net, xz, self.r).void_area
+        n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
+        void = np.empty(n_p)
+        kernels.measure(xz, self.r, net.links, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
+                        net.corner_raw0, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
+                        np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
+                        np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
+        return void
 
     def advance(self, h, xz):
         """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
