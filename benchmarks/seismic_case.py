@@ -94,10 +94,10 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     h = water_args[0]
     F_out = np.zeros_like(eng.held)
     part = wm._part
-    geometry = (xz, wm.r, net.links, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
-                net.corner_raw0, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m, part("poly"),
+    geometry = (xz, wm.r, net.links, part("vec0").reshape(-1, 2), net.corner_pore, net.corner_sign, net.corner_link,
+                net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m, part("poly"),
                 part("sect"), part("void"), part("length"), part("contact") > 0, part("theta"),
-                part("vec").reshape(-1, 2), part("phi"), part("cross")) if (net := wm.water.net) else ()
+                part("vec").reshape(-1, 2), part("rot"), part("cross")) if (net := wm.water.net) else ()
     flow = (wm.water.W, part("void"), geometry[16], net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
             part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))

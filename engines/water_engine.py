@@ -127,18 +127,21 @@ class WaterModel:
     def rebuild(self, xz):
         """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
-        self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, compiled=self.compiled)
+        A_old = self._void_area(old, xz, self._part("vec0").reshape(-1, 2))
+        self.water.remesh(new, self._void_area(new, xz, xz[new.links[:, 1]] - xz[new.links[:, 0]]), A_old, xz=xz,
+                          compiled=self.compiled)
         self.n_rebuilds += 1
         self._buffers(xz)
 
-    def _void_area(self, net, xz):
-        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)."""
+    def _void_area(self, net, xz, vec0):
+        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)
+        with the network's link vectors at its build, vec0 (L, 2) [m]."""
         if not self.compiled:
             return pg.measure(net, xz, self.r).void_area
         n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
         void = np.empty(n_p)
-        kernels.measure(xz, self.r, net.links, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
-                        net.corner_raw0, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
+        kernels.measure(xz, self.r, net.links, vec0, net.corner_pore, net.corner_sign, net.corner_link,
+                        net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
                         np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
                         np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
         return void
