@@ -116,7 +116,8 @@ def test_pressure_forces_use_the_area_of_eq45(compiled):
         m = pg.measure(core.water.net, xz, core.r)
         A_used = (A_used + m.void_area) / 2
         expected = pg.pressure_forces(core.water.net, core.r, core.water.pressure(A_used), m)
-        np.testing.assert_allclose(core.water_model.F, expected, rtol=1e-12, atol=1e-18)
+        # to 1e-12 of the largest force: a disc's force is a sum of pressure differences (cancellation)
+        np.testing.assert_allclose(core.water_model.F, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
         core.step(xz)
         core.step(xz)   # two steps without a water step: the force is held
     raw = pg.pressure_forces(core.water.net, core.r, core.water.pressure(m.void_area), m)
