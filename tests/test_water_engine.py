@@ -67,12 +67,12 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
     assert water.model.water.balance_error() < 1e-12
 
 
-@pytest.mark.parametrize("water_interval, smoothing, k1", [(10, False, 200.0), (1, True, 5.8e5)])
-def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1):
+@pytest.mark.parametrize("water_interval, smoothing, k1, k3", [(10, False, 200.0, 100.0), (1, True, 5.8e5, 0.0)])
+def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1, k3):
     """WaterEngine.drive(n) (the engine before O.step on its steps), in Python and compiled between
     rebuilds (kernels.water_drive_bulk_io), and the PyRunner with O.run(n) give the same run bit for
-    bit: example_engine's column with two rebuilds; water every 10 steps, or every step with the
-    eq 45-46 smoothing and a k1 at which one water step needs sub-steps."""
+    bit: example_engine's column with two rebuilds; water every 10 steps with drained sides, or
+    every step with the eq 45-46 smoothing and a k1 at which one water step needs sub-steps."""
     from yade import O
     from yade_scripts import example_engine as ex
     from engines import yade_io
@@ -84,7 +84,8 @@ def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1)
         O.engines = ex.engines()
         O.dt = 1e-6
         water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                            settings=WaterSettings(E_w=240.0, k1=k1, k2=2.0, q_w=5e-4, smoothing=smoothing, substep=True),
+                            settings=WaterSettings(E_w=240.0, k1=k1, k2=2.0, k3=k3, q_w=5e-4, smoothing=smoothing, substep=True,
+                                                   sides="drained" if k3 else "undrained"),
                             l_m=1.3e-4,
                             rebuild_interval=500, water_interval=water_interval)
         chunks = []
@@ -103,6 +104,7 @@ def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1)
     assert runs[0][:3] == (1205, last, 2)
     if k1 > 1e3:
         assert runs[0][3] > 0  # some water steps were sub-stepped
+    assert min(runs[0][6]) > 0 if k3 else runs[0][6][2] == 0  # every balance term counts
     for other in runs[1:]:
         assert other[:4] == runs[0][:4]
         assert np.array_equal(other[4], runs[0][4]) and np.array_equal(other[5], runs[0][5])
