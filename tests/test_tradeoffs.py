@@ -177,7 +177,8 @@ def test_analyse_writes_the_issue_format(tmp_path):
     case = "liquefaction_case1"
     spec = [("ref", "reference", 5e-7, 5e-7, 100.0, 1.0, True), ("paper", "dt", 1e-6, 1e-6, 50.0, 1.0, True),
             ("fast", "dt", 2e-5, 2e-5, 2.5, 1.02, True), ("bad", "dt", 2e-4, 2e-4, 0.1, 1.0, False),
-            ("def", "defaults", {"name": "fast", "numerics.dt": "auto"}, 2e-5, 2.0, 1.03, True)]
+            ("def", "defaults", {"name": "fast", "numerics.dt": "auto"}, 2e-5, 2.0, 1.03, True),
+            ("pert", "perturbation", 3e-7, 2e-5, 2.5, 1.0, True)]
     jobs, meta = [], {}
     for name, knob, value, dt, cpu, scale, ok in spec:
         _fake_result(str(tmp_path / "runs" / name), case, {"numerics": {"dt": dt}}, dt, cpu, scale, rng, ok=ok)
@@ -197,6 +198,7 @@ def test_analyse_writes_the_issue_format(tmp_path):
     assert d["systematic"]["pressure_rms"]["systematic"] == pytest.approx(0.03, rel=0.1)
     assert d["within_target"] and d["target_met"]
     assert (tmp_path / f"tradeoffs_{case}.png").stat().st_size > 10000
+    assert (tmp_path / f"perturbation_{case}.png").stat().st_size > 10000  # the reference and the perturbation row
     assert "| liquefaction_case1 | dt | 2e-05 |" in (tmp_path / "table.md").read_text()
 
 
