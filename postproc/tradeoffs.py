@@ -154,13 +154,15 @@ def _label(point, res):
     return f"{knob} {_value({'value': value})}: dt {res['dt']:g} s, starts perturbed by {res.get('perturbation', 1e-9):g} m"
 
 
-def histories_figure(series, path, title, blocks=(0, 1, 2, 3)):
+def histories_figure(series, path, title, n_blocks=4):
     """The ensemble-mean block pressure histories [N/m] of ``series`` [(label, data of ``load``)],
-    one panel per block, each mean with a band of ± its standard error over the starts."""
+    one panel for each of the first ``n_blocks`` blocks, each mean with a band of ± its standard
+    error over the starts."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    blocks = range(min(n_blocks, series[0][1]["U"].shape[2]))
     fig, axes = plt.subplots(1, len(blocks), figsize=(4 * len(blocks), 4), sharex=True)
     for label, data in series:
         t, U = 1e3 * data["t"], data["U"]
