@@ -209,3 +209,13 @@ def test_speed_points_name_the_study_settings():
     assert fast is study.CASES["liquefaction_case1"]["defaults"][0]
     over = study.nested(study.settings_of("liquefaction_case1", "defaults", fast)[0])
     assert over["numerics"]["dt"] == "auto" and over["numerics"]["water_interval"] == fast["numerics.water_interval"]
+
+
+def test_presets_are_the_study_defaults():
+    """liquefaction_case1_fast/accurate.toml hold the numerics the study measured under their names."""
+    from yade_scripts import tradeoffs as study
+    for setting in study.CASES["liquefaction_case1"]["defaults"]:
+        num = scenes.preset(f"liquefaction_case1_{setting['name']}").numerics
+        for key, value in setting.items():
+            if key.startswith("numerics."):
+                assert getattr(num, key.split(".", 1)[1]) == value, (setting["name"], key)
