@@ -3,7 +3,7 @@
     make tradeoffs                                   # the study -> out/tradeoffs/ (resumable)
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs [--workers 1] [--scheduler ADDR]
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --analyse-only
-    /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --cases liquefaction_case1 \
+    /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --cases liquefaction_case1 \\
          --knobs reference dt defaults perturbation          # the judged rows only
     yade -n -j 1 -x yade_scripts/tradeoffs.py run --case liquefaction_case1 --window 0.04 \\
          --set numerics.dt=2e-5 --set numerics.rebuild_interval=50 --out out/one   # one setting
@@ -11,9 +11,9 @@
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
 (engines.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
-the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's packing) for ``--window`` seconds and writes OUT/result.json: per start the block
-pressure, window porosity, particles' mean height and kinetic energy every ``--record`` seconds,
-the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
+the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's
+packing) for ``--window`` seconds and writes OUT/result.json: per start the block pressure,
+window porosity, particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
 water balance and sub-steps. The cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the engines is recorded with
 its message.
 
