@@ -11,11 +11,12 @@
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
 (engines.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
-the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's
-packing) for ``--window`` seconds and writes OUT/result.json: per start the block pressure,
-window porosity, particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
-water balance and sub-steps. The cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the engines is recorded with
-its message.
+the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's packing)
+for ``--window`` seconds and writes OUT/result.json: per start the block pressure, window porosity,
+particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of
+the run (after a warm-up that loads the compiled kernels), the water balance and sub-steps. The
+cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the
+engines is recorded with its message.
 
 ``speed`` (inside YADE) measures speed-ups in one process: the settings interleaved, one start
 each per repeat, the median CPU ratio to the first (the paper's settings).
