@@ -112,7 +112,7 @@ SCHEMA = {
         "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
         # issue 12: the automatic time step (engines.time_step; dt = "auto") and its safety factor
-        "dt_auto_factor": (float, 0.45, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.45 the study's fast setting (docs/TRADEOFFS.md)"),
+        "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.36 the study's fast setting (docs/TRADEOFFS.md)"),
     },
     "output": {
         "history_interval": (int, 100, (1, math.inf), "steps between history rows"),

@@ -141,7 +141,48 @@ def analyse(out, jobs, meta, log=print):
         f.write(table(doc))
     for case in doc["reference"]:
         log("figure:", figure(doc, case, os.path.join(out, f"tradeoffs_{case}.png")))
+        shown = [n for n, (c, k, v) in meta.items() if c == case and k in ("reference", "perturbation")
+                 and (results[n] or {}).get("data") is not None]
+        if len(shown) > 1:  # the ensemble means against the size of the perturbation of the starts
+            series = [(_label(meta[n], results[n]), results[n]["data"]) for n in shown]
+            log("figure:", histories_figure(series, os.path.join(out, f"perturbation_{case}.png"), case))
     return doc
+
+
+def _label(point, res):
+    _, knob, value = point
+    return f"{knob} {_value({'value': value})}: dt {res['dt']:g} s, starts perturbed by {res.get('perturbation', 1e-9):g} m"
+
+
+def histories_figure(series, path, title, n_blocks=4):
+    """The ensemble-mean block pressure histories [N/m] of ``series`` [(label, data of ``load``)],
+    one panel for each of the first ``n_blocks`` blocks, each mean with a band of ± its standard
+    error over the starts."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    blocks = range(min(n_blocks, series[0][1]["U"].shape[2]))
+    fig, axes = plt.subplots(1, len(blocks), figsize=(4 * len(blocks), 4), sharex=True)
+    for label, data in series:
+        t, U = 1e3 * data["t"], data["U"]
+        mean, se = np.nanmean(U, axis=0), np.nanstd(U, axis=0, ddof=1) / np.sqrt(len(U))
+        for ax, b in zip(axes, blocks):
+            line, = ax.plot(t, mean[:, b], lw=1.2, label=label)
+            ax.fill_between(t, mean[:, b] - se[:, b], mean[:, b] + se[:, b], color=line.get_color(), alpha=0.25, lw=0)
+    for ax, b in zip(axes, blocks):
+        ax.axhline(0, color="0.5", lw=0.6)
+        ax.set_title(f"block {b + 1} (from the bottom)", fontsize=10)
+        ax.set_xlabel("t [ms]")
+        ax.grid(True, alpha=0.3)
+    axes[0].set_ylabel("ensemble-mean excess pore pressure U [N/m]")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8)
+    fig.suptitle(f"{title}: mean over the starts ± its standard error (band)", fontsize=10)
+    fig.tight_layout(rect=(0, 0.14, 1, 0.95))
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
 
 
 def judge(rows):
@@ -211,7 +252,7 @@ def table(doc):
 KNOB_STYLE = {"dt": ("tab:blue", "o"), "water_interval": ("tab:orange", "s"), "rebuild_period": ("tab:green", "^"),
               "smoothing": ("tab:red", "D"), "transfer": ("tab:purple", "v"), "E_w_scale": ("tab:brown", "P"),
               "precision": ("tab:pink", "X"), "law": ("tab:olive", "*"), "candidate": ("tab:cyan", "h"),
-              "defaults": ("black", "*")}
+              "defaults": ("black", "*"), "perturbation": ("tab:gray", "<")}
 
 
 def figure(doc, case, path):

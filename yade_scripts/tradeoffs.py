@@ -3,17 +3,20 @@
     make tradeoffs                                   # the study -> out/tradeoffs/ (resumable)
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs [--workers 1] [--scheduler ADDR]
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --analyse-only
+    /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --cases liquefaction_case1 \\
+         --knobs reference dt defaults perturbation          # the judged rows only
     yade -n -j 1 -x yade_scripts/tradeoffs.py run --case liquefaction_case1 --window 0.04 \\
          --set numerics.dt=2e-5 --set numerics.rebuild_interval=50 --out out/one   # one setting
     yade -n -j 1 -x yade_scripts/tradeoffs.py speed --points dt=1e-06 defaults=fast --repeats 3 --out out/speed
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
-(engines.tradeoffs.perturbed: start s moves the particles by 1e-9 m x N(0, 1), seed s; start 0 is
-the preset's packing) for ``--window`` seconds and writes OUT/result.json: per start the block
-pressure, window porosity, particles' mean height and kinetic energy every ``--record`` seconds,
-the CPU and wall seconds of the run (after a warm-up that loads the compiled kernels), the
-water balance and sub-steps. The cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the engines is recorded with
-its message.
+(engines.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
+the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's packing)
+for ``--window`` seconds and writes OUT/result.json: per start the block pressure, window porosity,
+particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of
+the run (after a warm-up that loads the compiled kernels), the water balance and sub-steps. The
+cost leaves out the recording's own time (cpu_record_s). A start refused by preflight or by the
+engines is recorded with its message.
 
 ``speed`` (inside YADE) measures speed-ups in one process: the settings interleaved, one start
 each per repeat, the median CPU ratio to the first (the paper's settings).
@@ -39,39 +42,42 @@ RECORD = 5e-4      # s between samples of the histories (a multiple of every dt 
 REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
 STARTS = 5         # perturbed starts per setting, unless the case's "starts" says more for a knob
 REFERENCE_DT = 5e-7
+PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (engines.tradeoffs.perturbed)
 PAPER_DT = 1e-6
 
 # Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
 # the values of each knob; "preset" (default: the key) and "reference_dt" (default REFERENCE_DT)
 # where they differ; "starts": {knob: starts} where a knob needs more than STARTS (the chaos floor
-# falls as 1/sqrt(starts)). "defaults" are the named settings chosen from the study.
+# falls as 1/sqrt(starts)); "perturbation_size": the size of the perturbation of the starts [m] (default
+# PERTURBATION), large enough that the ensemble means no longer depend on it (the knob
+# "perturbation" checks that; docs/TRADEOFFS.md). "defaults" are the named settings chosen from the study.
 CASES = {
-    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5, "starts": {"reference": 20, "dt": 20, "defaults": 20, "candidate": 20},
+    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5, "perturbation_size": 1e-7,
+                           "starts": {"reference": 20, "dt": 20, "defaults": 20, "candidate": 20, "perturbation": 20},
                            "dt": [1e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4],
+                           # the ensemble's convergence in the size of the perturbation (at fast_dt)
+                           "perturbation": [1e-9, 1e-8, 3e-7],
                            "water_interval": [2, 5, 10], "rebuild_period": [2e-4, 5e-4, 2e-3, 5e-3],
                            "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
                            "precision": ["longdouble"],
-                           "defaults": [{"name": "fast", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.45,
-                                         "numerics.rebuild_interval": 20, "numerics.water_interval": 2},
+                           "defaults": [{"name": "fast", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.36,
+                                         "numerics.rebuild_interval": 25, "numerics.water_interval": 1},
                                         {"name": "accurate", "numerics.dt": 1e-6, "numerics.rebuild_interval": 1000,
                                          "numerics.water_interval": 1}],
-                           # settings tried for the fast setting between dt = 1e-5 s (5 %, 7x) and 2e-5 s (12 %, 9x):
-                           # dt_auto_factor x eq 52 (1.108e-4 s), rebuilds every ~1-2 ms, the water every M steps
-                           # (and with the smoothing of eq 45-46, which cost nothing at 2e-5 s); for the accurate
-                           # setting dt = 2e-6 s and 5.5e-6 s (the earlier accurate setting)
-                           "candidate": [{"name": f"f{f:g}_M{m}_rb{rb}" + ("_smooth" if sm else ""), "numerics.dt": "auto",
+                           # settings tried for the fast setting around the largest dt still within 5 % (2e-5 s at
+                           # 1e-7 m starts; 5e-5 s is at 5 %): dt_auto_factor x eq 52 (1.108e-4 s), rebuilds every
+                           # ~1 ms, the water every M steps; f0.45_M2_rb20 is the earlier fast setting
+                           "candidate": [{"name": f"f{f:g}_M{m}_rb{rb}", "numerics.dt": "auto",
                                           "numerics.dt_auto_factor": f, "numerics.rebuild_interval": rb,
-                                          "numerics.water_interval": m, **({"water.smoothing": True} if sm else {})}
-                                         for f, m, rb, sm in ((0.09, 2, 100, 0), (0.09, 2, 200, 0), (0.113, 1, 80, 0),
-                                                              (0.113, 2, 80, 0), (0.135, 2, 70, 0), (0.45, 2, 20, 1),
-                                                              (0.18, 1, 50, 1), (0.135, 1, 70, 1), (0.018, 1, 500, 0),
-                                                              (0.05, 1, 200, 0))]},
+                                          "numerics.water_interval": m}
+                                         for f, m, rb in ((0.27, 1, 33), (0.27, 2, 33), (0.36, 1, 25), (0.36, 2, 25),
+                                                          (0.45, 1, 20), (0.45, 2, 20))]},
     "quicksand_case1": {"window": 0.03, "fast_dt": 1e-5,
                         "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
                         "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
                         "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
     # the fast setting over the whole 0.18 s against the paper's settings as the reference
-    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT,
+    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT, "perturbation_size": 1e-7,
                                 "fast_dt": 2e-5, "defaults": []},
     "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
 }
@@ -93,6 +99,8 @@ def settings_of(case, knob, value):
         return dt_settings(spec.get("reference_dt", REFERENCE_DT)), "yade"
     if knob == "dt":
         return dt_settings(value), "yade"
+    if knob == "perturbation":  # the base settings; the size goes to the job's --perturbation
+        return base, "yade"
     if knob == "water_interval":
         return {**base, "numerics.water_interval": value}, "yade"
     if knob == "rebuild_period":
@@ -112,7 +120,7 @@ def settings_of(case, knob, value):
     raise ValueError(f"unknown knob {knob!r}")
 
 
-PRIORITY = (("reference", "dt", "defaults", "candidate", "water_interval", "rebuild_period"),
+PRIORITY = (("reference", "dt", "defaults", "perturbation", "candidate", "water_interval", "rebuild_period"),
             ("smoothing", "transfer", "E_w_scale", "precision", "law"))
 LAST = ("liquefaction_case1_full", "liquefaction_case4")  # run after every knob of the other cases
 
@@ -142,6 +150,11 @@ def starts_of(case, knob):
     return CASES[case].get("starts", {}).get(knob, STARTS)
 
 
+def perturbation_of(case, knob, value):
+    """The size [m] of the perturbation of the starts of one point of the study."""
+    return value if knob == "perturbation" else CASES[case].get("perturbation_size", PERTURBATION)
+
+
 def job_name(case, knob, value):
     text = value if isinstance(value, str) else value["name"] if isinstance(value, dict) else repr(value)
     safe = "".join(c if c.isalnum() or c in "._=,+-" else "_" for c in text)
@@ -162,13 +175,15 @@ def run_main(argv):
     ap.add_argument("--window", type=number(lo=0, lo_open=True, unit="s"), required=True)
     ap.add_argument("--record", type=number(lo=0, lo_open=True, unit="s"), default=RECORD)
     ap.add_argument("--starts", type=number(int, 1), default=STARTS)
+    ap.add_argument("--perturbation", type=number(lo=0, unit="m"), default=PERTURBATION,
+                    help="size of the perturbation of the starts [m] (engines.tradeoffs.perturbed)")
     ap.add_argument("--out", type=output_dir, required=True)
     a = ap.parse_args(argv)
     over = {}
     for table, field, value in a.set:
         over.setdefault(table, {})[field] = value
     over.setdefault("numerics", {})["duration"] = a.window
-    result = run_setting(a.case, over, a.window, a.record, a.starts, a.out)
+    result = run_setting(a.case, over, a.window, a.record, a.starts, a.out, a.perturbation)
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "result.json"), "w") as f:
         json.dump(result, f)
@@ -211,7 +226,8 @@ def speed_main(argv):
             knob, text = points[(k + rep) % len(points)]
             over = nested(settings_of(a.case, knob, named_value(a.case, knob, text))[0])
             over.setdefault("numerics", {})["duration"] = spec["window"]
-            res = run_setting(spec.get("preset", a.case), over, spec["window"], RECORD, 1, a.out)
+            res = run_setting(spec.get("preset", a.case), over, spec["window"], RECORD, 1, a.out,
+                              perturbation_of(a.case, knob, named_value(a.case, knob, text)))
             cpu[f"{knob}={text}"].append(res["cpu_s"])
             print(f"repeat {rep}: {knob}={text}: {res['cpu_s']:.2f} CPU s", flush=True)
     med = {p: float(np.median(c)) for p, c in cpu.items()}
@@ -224,8 +240,9 @@ def speed_main(argv):
         print(f"{p}: median {med[p]:.2f} CPU s, speed-up {doc['speedup'][p]:.1f}")
 
 
-def run_setting(case, overrides, window, record, n_starts, out_dir):
-    """Run one setting from n_starts perturbed starts; returns the result dict (module docstring)."""
+def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None):
+    """Run one setting from n_starts starts perturbed by ``perturbation`` [m] (default
+    PERTURBATION); returns the result dict (module docstring)."""
     from yade import O
     from engines import scene as scenes
     from engines.preflight import InputError, preflight
@@ -243,7 +260,7 @@ def run_setting(case, overrides, window, record, n_starts, out_dir):
     YadeCoupling(sc, packing).run(10)  # loads the compiled kernels (numba's cache) outside the timing
     starts, cpu, wall = [], 0.0, 0.0
     for s in range(n_starts):
-        pk = perturbed(packing, s)
+        pk = perturbed(packing, s, PERTURBATION if perturbation is None else perturbation)
         rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
         try:
             preflight(sc, pk, out_dir)
@@ -281,21 +298,26 @@ def run_setting(case, overrides, window, record, n_starts, out_dir):
         starts.append(rec)
     ok = [r for r in starts if r["status"] == "ok"]
     return {"case": case, "overrides": overrides, "dt": dt, "window": window, "record": record,
+            "perturbation": PERTURBATION if perturbation is None else perturbation,
             "n_steps": n_steps, "cpu_s": cpu / max(len(ok), 1), "wall_s": wall / max(len(ok), 1),
             "starts": starts, "program": os.path.basename(sys.argv[0]) if sys.argv else "yade"}
 
 
 # -- study (Debian's Python) ----------------------------------------------------------------------
-def study_jobs(cases=None, yade_args=("-n", "-j", "1")):
-    """(jobs for yade_scripts.sweep, {job name: (case, knob, value)}) of the study's points."""
+def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
+    """(jobs for yade_scripts.sweep, {job name: (case, knob, value)}) of the study's points (of the
+    knobs ``knobs`` only, when given)."""
     from yade_scripts.sweep import Job
     jobs, meta = [], {}
     for case, knob, value in points(cases):
+        if knobs and knob not in knobs:
+            continue
         over, program = settings_of(case, knob, value)
         name = job_name(case, knob, value)
         argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run",
                 "--case", CASES[case].get("preset", case), "--window", repr(CASES[case]["window"]),
-                "--starts", str(starts_of(case, knob)), "--out", "{out}"]
+                "--starts", str(starts_of(case, knob)), "--perturbation", repr(perturbation_of(case, knob, value)),
+                "--out", "{out}"]
         for k, v in over.items():
             argv += ["--set", f"{k}={json.dumps(v)}"]
         jobs.append(Job(name, argv, {"PYTHONPATH": ROOT}))
@@ -311,9 +333,10 @@ def study_main(argv):
                     help="local processes at a time (default 1: the study is timed)")
     ap.add_argument("--scheduler", help="Dask scheduler address (timings then come from the workers)")
     ap.add_argument("--cases", nargs="+", choices=sorted(CASES), help="a subset of the cases")
+    ap.add_argument("--knobs", nargs="+", help="a subset of the knobs (e.g. reference dt defaults)")
     ap.add_argument("--analyse-only", action="store_true", help="skip the runs, analyse what is there")
     a = ap.parse_args(argv)
-    jobs, meta = study_jobs(a.cases)
+    jobs, meta = study_jobs(a.cases, knobs=a.knobs)
     if not a.analyse_only:
         from yade_scripts.sweep import run_sweep
         run_sweep(jobs, os.path.join(a.out, "runs"), workers=a.workers, scheduler=a.scheduler)
