@@ -13,19 +13,20 @@ each); these functions move arrays. They work in the x-z plane of our discs::
 ``add_force_xz``, ``add_torque_y`` and ``set_perm_force_xz`` call YADE's own ForceContainer
 functions, the ones ``O.forces.addF``/``addT``/``setPermF`` call, so results are bit-identical to
 those. The compiled part (``_yadebulk.so``, built by ``make ext`` from ``yadebulk.c`` and
-``steps.cpp``) uses no YADE
-headers; it runs only on a libyade.so build listed in ``KNOWN_LIBYADE``, and the data offsets it
-needs are discovered and verified at first use by ``probe.py`` on a scratch scene (the user's scene
-is left untouched): nothing is read or written before that succeeded. Call ``available()`` before ``O.run()``: the probe refuses to run during a simulation.
+``steps.cpp``) uses no YADE headers; it runs only on a libyade.so build listed in
+``KNOWN_LIBYADE``, and the data offsets it needs are discovered and verified at first use by
+``probe.py`` on a scratch scene (the user's scene is left untouched): nothing is read or written
+before that succeeded. Call ``available()`` before ``O.run()``: the probe refuses to run during a
+simulation.
 
 ``yadebulk.steps(n)`` is n O.step() calls, and ``c_steps`` lets a compiled loop step YADE between
-its own work. For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` and ``c_steps`` are the ctypes function objects,
-``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready (``available()`` not yet
-True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps`` (``yb_error`` says
-what), k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit`` function calls
-them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``.
-Like YADE's Python API, call them from the thread that runs the simulation (a PyRunner) or while it
-is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
+its own work. For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` and ``c_steps`` are the
+ctypes function objects, ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready
+(``available()`` not yet True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps``
+(``yb_error`` says what), k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit``
+function calls them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after
+``available()``. Like YADE's Python API, call them from the thread that runs the simulation (a
+PyRunner) or while it is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
 """
 import ctypes
 import hashlib
@@ -40,10 +41,10 @@ SO_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "_yadebulk.so
 # returned through a hidden pointer, and the call would write into Omega). The data layout is
 # still probed at every load. YADEBULK_UNPINNED=1 probes an unlisted build anyway: if
 # tests/test_yadebulk.py then passes, add its hash here.
-STEP_THREW = -4  # c_steps: an engine threw; _lib.yb_error() holds its message
 KNOWN_LIBYADE = {
     "6dab813fb5cb5be6adb80d973e52cc4ebc763a266317ebd1bab487264d8a391b": "Debian yade 2023.02a-1 amd64, yade-double",
 }
+STEP_THREW = -4  # c_steps: an engine threw; _lib.yb_error() holds its message
 NAMES = ("get_pos_xz", "get_vel_xz", "set_vel_xz", "get_angvel_y", "add_torque_y", "add_force_xz",
          "set_perm_force_xz", "steps")
 
