@@ -61,7 +61,7 @@ CASES = {
                            "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
                            "precision": ["longdouble"],
                            "defaults": [{"name": "fast", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.36,
-                                         "numerics.rebuild_interval": 25, "numerics.water_interval": 1},
+                                         "numerics.rebuild_interval": 50, "numerics.water_interval": 1},
                                         {"name": "accurate", "numerics.dt": 1e-6, "numerics.rebuild_interval": 1000,
                                          "numerics.water_interval": 1}],
                            # settings tried for the fast setting around the largest dt still within 5 % (2e-5 s at
@@ -71,7 +71,7 @@ CASES = {
                                           "numerics.dt_auto_factor": f, "numerics.rebuild_interval": rb,
                                           "numerics.water_interval": m}
                                          for f, m, rb in ((0.27, 1, 33), (0.27, 2, 33), (0.36, 1, 25), (0.36, 2, 25),
-                                                          (0.45, 1, 20), (0.45, 2, 20))]},
+                                                          (0.45, 1, 20), (0.45, 2, 20), (0.36, 1, 50))]},
     "quicksand_case1": {"window": 0.03, "fast_dt": 1e-5,
                         "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
                         "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
