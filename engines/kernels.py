@@ -5,7 +5,7 @@ Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, 
 reference path and is tested against it (tests/test_kernels.py, 1e-12 relative):
 
   contact_forces    engines.contact.ContactLaw.forces          (eq 1-13, 26-27)
-  measure           engines.pore_geometry.measure              (eq 29, 43b; see below)
+  measure           engines.pore_geometry.measure              (eq 29, 43b; ``turn`` below)
   darcy_flows       engines.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
   darcy_update      engines.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.pore_geometry.pressure_forces      (eq 33, telescoped over links)
@@ -25,9 +25,9 @@ functions of engines.yadebulk, passed as addresses (so that this module stays ca
 YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the bridge's O.step())
 between its water steps: many DEM steps in one call.
 
-The pore measure takes each link's turn since the build from its build vector (``turn``: a short
-series for the small turns between rebuilds, else atan2) where pore_geometry.measure differences
-two atan2 angles: the same angles to round-off at a third of the cost.
+The pore measure takes each link's turn since the build with ``turn`` (a short series for the
+small turns between rebuilds, else atan2) where pore_geometry.measure calls arctan2: the same
+angles to round-off, the measure 30 % cheaper.
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
@@ -184,9 +184,9 @@ def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, 
             poly, sect, void, length, contact, theta, vec, rot, cross):
     """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
 
-    vec0 (L, 2): the link vectors at the build. rot, cross (L,) are scratch: rot is each link's
-    turn since the build, so that a corner's change (pore_geometry.measure's phi - phi - raw0) is
-    the difference of two turns. ``contact`` is a bool array.
+    vec0 (L, 2): the link vectors at the build (PoreNetwork.link_vec0). rot, cross (L,) are
+    scratch: rot is each link's turn since the build, so that a corner's change is the difference
+    of two turns, as in pore_geometry.measure. ``contact`` is a bool array.
     """
     for l in range(len(links)):
         i, j = links[l, 0], links[l, 1]

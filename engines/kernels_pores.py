@@ -367,11 +367,9 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
     phi = ang[:n_l]
     h = np.flatnonzero(he_left >= 0)
     theta0 = np.empty(len(h))
-    raw0 = np.empty(len(h))
     for s in range(len(h)):
         e, f = h[s], he_next[h[s]]
         twin = e + n_l if e < n_l else e - n_l
-        raw0[s] = phi[e % n_l] - phi[f % n_l]  # the corner angle up to a multiple of pi
         if f == twin:
             theta0[s] = 2 * np.pi  # the end of a dangling link: all around the disc
         else:
@@ -396,7 +394,7 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
         corner_r2[s] = r[he_dst[h[s]]] ** 2
     return (tri_k, tp, links, link_pores, link_pores[throat_link], throat_link, pore_surface, ptr, pv_disc, signature,
             he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], corner_link, corner_next_link, corner_sign,
-            corner_r2, theta0, raw0, rattler_area, touches)
+            corner_r2, theta0, rattler_area, touches)
 
 
 @jit

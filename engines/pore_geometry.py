@@ -93,7 +93,9 @@ class PoreNetwork:
                      next half-edge of that pore's boundary (the paper's clockwise turn)
       corner_*       per boundary half-edge h of a pore (K of them): the pore, the disc dst(h) at
                      the corner, the links of h and next(h), the shoelace sign, r^2 of the disc,
-                     and the build-time angle (eq 29) and raw link-angle difference
+                     and the build-time angle (eq 29)
+      link_vec0      (L, 2) the link vectors x_j - x_i at the build [m]: ``measure`` turns the
+                     corner angles by the links' turns since
       rattler_area   (Np,) area of the unlinked discs inside each pore [m^2]
       a_min          area below which a face is closed [m^2]; n_closed faces closed at build
       n_inserted     eq 28 pairs the regular triangulation hid, put in by edge flips at build
@@ -122,8 +124,8 @@ class PoreNetwork:
     corner_sign: np.ndarray
     corner_r2: np.ndarray
     corner_theta0: np.ndarray
-    corner_raw0: np.ndarray
     rattler_area: np.ndarray
+    link_vec0: np.ndarray
     a_min: float
     n_closed: int = 0
     eps_m: float = 0.0
@@ -169,8 +171,8 @@ def _empty_network(n, a_min, eps_m, l_m):
         pore_touches={name: np.zeros(0, bool) for name in WALL_NAMES.values()},
         pore_vertex_ptr=np.zeros(1, np.int64), pore_vertex_idx=zi, pore_signature=np.zeros(0, np.uint64),
         he_org=zi, he_dst=zi, he_left=zi, he_next=zi, corner_pore=zi, corner_disc=zi, corner_link=zi,
-        corner_next_link=zi, corner_sign=zf, corner_r2=zf, corner_theta0=zf, corner_raw0=zf,
-        rattler_area=zf, a_min=a_min, eps_m=eps_m, l_m=l_m,
+        corner_next_link=zi, corner_sign=zf, corner_r2=zf, corner_theta0=zf,
+        rattler_area=zf, link_vec0=np.zeros((0, 2)), a_min=a_min, eps_m=eps_m, l_m=l_m,
     )
 
 
@@ -440,8 +442,10 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
     *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
                                          off_mesh[p_in >= 0], p_in[p_in >= 0])
+    arrays = dict(zip(NETWORK_ARRAYS, arrays))
+    links = arrays["links"]
     return PoreNetwork(
-        n_discs=n, **dict(zip(NETWORK_ARRAYS, arrays)),
+        n_discs=n, **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]],
         pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
         a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
@@ -450,7 +454,7 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
 NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link", "pore_surface",
                   "pore_vertex_ptr", "pore_vertex_idx", "pore_signature", "he_org", "he_dst", "he_left", "he_next",
                   "corner_pore", "corner_disc", "corner_link", "corner_next_link", "corner_sign", "corner_r2",
-                  "corner_theta0", "corner_raw0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
+                  "corner_theta0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
 
 
 def _faces(xz, r, tri, reach, a_min):
@@ -545,7 +549,6 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     h = np.flatnonzero(he_left >= 0)
     he_link = np.concatenate([np.arange(n_l), np.arange(n_l)])
     phi = _link_angles(xz, links)
-    raw0 = phi[he_link[h]] - phi[he_link[he_next[h]]]  # the corner angle up to a multiple of pi
     twin = np.concatenate([np.arange(n_l, 2 * n_l), np.arange(n_l)])
     phi_he = phi[he_link] + np.pi * (np.arange(2 * n_l) >= n_l)
     theta0 = np.mod(phi_he[twin[h]] - phi_he[he_next[h]], 2 * np.pi)  # eq 29, in [0, 2 pi)
@@ -558,7 +561,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)
     return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
             ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
-            he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, raw0, rattler_area, touches)
+            he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, rattler_area, touches)
 
 
 def _mix64(v):
@@ -631,20 +634,20 @@ def measure(net, xz, r):
     """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43).
 
     Polygon area: shoelace over each pore's boundary links. Interior angle at each corner (eq 29):
-    the build-time angle plus the change of the link directions since, taken in (-pi, pi], so a
-    link direction crossing the +-pi cut does not matter (valid while no corner turns by pi
-    between rebuilds).
+    the build-time angle plus the difference of its two links' turns since the build (from
+    ``link_vec0``), taken in (-pi, pi] (valid while no corner turns by pi between rebuilds).
     """
     i, j = net.links[:, 0], net.links[:, 1]
     x, z = np.ascontiguousarray(xz[:, 0]), np.ascontiguousarray(xz[:, 1])
     xi, zi = x[i], z[i]
     dx, dz = x[j] - xi, z[j] - zi
     length = np.sqrt(dx * dx + dz * dz)
-    phi = np.arctan2(dz, dx)
+    d0 = net.link_vec0
+    turn = np.arctan2(d0[:, 0] * dz - d0[:, 1] * dx, d0[:, 0] * dx + d0[:, 1] * dz)
     cross = xi * dz - dx * zi  # x_i z_j - x_j z_i
     n_p = net.n_pores
     poly = 0.5 * np.bincount(net.corner_pore, net.corner_sign * cross[net.corner_link], minlength=n_p)
-    change = phi[net.corner_link] - phi[net.corner_next_link] - net.corner_raw0
+    change = turn[net.corner_link] - turn[net.corner_next_link]
     theta = net.corner_theta0 + np.mod(change + np.pi, 2 * np.pi) - np.pi  # eq 29
     sect = 0.5 * np.bincount(net.corner_pore, theta * net.corner_r2, minlength=n_p) + net.rattler_area
     contact = r[i] + r[j] + net.eps_m >= length  # eq 43b

@@ -65,22 +65,20 @@ class WaterModel:
         self.last_limit = np.inf  # Darcy limit of the last water step [s]
         net = self._build(xz)
         self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
-        self._buffers(xz)
+        self._buffers()
 
     def _build(self, xz):
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, compiled=self.compiled)
 
-    def _buffers(self, xz):
-        """The network's arrays for kernels.water_step, packed (allocated once per rebuild at
-        centres xz [m])."""
+    def _buffers(self):
+        """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
         net, n = self.water.net, len(self.r)
         n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
         surface, drained, bottom = self.water._boundary_masks()
         ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
                 "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
                 "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
-        floats = {"corner_sign": net.corner_sign, "vec0": xz[net.links[:, 1]] - xz[net.links[:, 0]],
-                  "corner_theta0": net.corner_theta0,
+        floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
                   "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
                   "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m_a_min": [self.eps_m, net.a_min],
                   "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
@@ -127,20 +125,17 @@ class WaterModel:
     def rebuild(self, xz):
         """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
-        A_old = self._void_area(old, xz, self._part("vec0").reshape(-1, 2))
-        self.water.remesh(new, self._void_area(new, xz, xz[new.links[:, 1]] - xz[new.links[:, 0]]), A_old, xz=xz,
-                          compiled=self.compiled)
+        self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, compiled=self.compiled)
         self.n_rebuilds += 1
-        self._buffers(xz)
+        self._buffers()
 
-    def _void_area(self, net, xz, vec0):
-        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)
-        with the network's link vectors at its build, vec0 (L, 2) [m]."""
+    def _void_area(self, net, xz):
+        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)."""
         if not self.compiled:
             return pg.measure(net, xz, self.r).void_area
         n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
         void = np.empty(n_p)
-        kernels.measure(xz, self.r, net.links, vec0, net.corner_pore, net.corner_sign, net.corner_link,
+        kernels.measure(xz, self.r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
                         net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
                         np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
                         np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))

@@ -95,12 +95,11 @@ def test_paper_law_step_compiled_equals_numpy():
     assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
 
 
-def _kernel_measure(net, xz, r, xz_build):
+def _kernel_measure(net, xz, r):
     n_p, n_l = net.n_pores, len(net.links)
     out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
            np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
-    vec0 = xz_build[net.links[:, 1]] - xz_build[net.links[:, 0]]
-    kernels.measure(xz, r, net.links, vec0, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
+    kernels.measure(xz, r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
                     net.corner_theta0, net.corner_r2, net.rattler_area, net.eps_m, *out)
     return out
 
@@ -114,11 +113,10 @@ def test_measure_compiled_equals_numpy(layout):
     else:
         xz, r, walls, rng = _column()
         net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.3, walls=walls)
-    xz_build = xz
     if layout == "moved":  # corners turn after the build (eq 29 relative to the build angles)
         xz = xz + 0.12 * rng.standard_normal(xz.shape)
     m = pg.measure(net, xz, r)
-    poly, sect, void, length, contact, theta, vec, turns, _ = _kernel_measure(net, xz, r, xz_build)
+    poly, sect, void, length, contact, theta, vec, turns, _ = _kernel_measure(net, xz, r)
     if layout == "moved":  # links that turned both less and more than the series' range
         assert (np.abs(turns) < 0.5 * kernels.SMALL_TURN).sum() > 50 and (np.abs(turns) > 0.15).sum() > 5
     for a, b, what in ((poly, m.polygon_area, "polygon"), (sect, m.sector_area, "sectors"), (void, m.void_area, "void"),

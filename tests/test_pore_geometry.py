@@ -245,12 +245,12 @@ def test_a_network_without_pores_is_well_formed_and_usable(xz):
     net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.1, walls=np.full(len(xz), pg.WALL_BOTTOM))
     assert (net.n_discs, net.n_pores, net.n_closed, net.eps_m, net.l_m) == (len(xz), 0, 0, 0.01, 0.1)
     assert net.a_min == pytest.approx(1e-4 * np.pi * 0.25 if len(xz) else 0.0)
-    for name in ("links", "link_pores", "throat_conns"):
+    for name in ("links", "link_pores", "throat_conns", "link_vec0"):
         assert getattr(net, name).shape == (0, 2), name
     assert net.tri.shape == (0, 3) and net.pore_vertex_ptr.tolist() == [0]
     for name in ("tri_pore", "throat_link", "pore_surface", "pore_vertex_idx", "pore_signature", "he_org",
                  "he_dst", "he_left", "he_next", "corner_pore", "corner_disc", "corner_link",
-                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "corner_raw0", "rattler_area"):
+                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "rattler_area"):
         assert getattr(net, name).shape == (0,), name
     assert sorted(net.pore_touches) == ["bottom", "left", "right"]
     assert all(v.shape == (0,) and v.dtype == bool for v in net.pore_touches.values())
