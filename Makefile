@@ -5,11 +5,11 @@ YADE    := yade
 OUT     ?= out
 DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc g++ libc6-dev \
            python3-distributed python3-venv
-EXT_SO  := engines/yadebulk/_yadebulk.so
+EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
+.PHONY: deps ext demo test test-fast bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -19,13 +19,13 @@ deps:
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y $$missing; \
 	fi
-	@$(MAKE) --no-print-directory ext || echo "warning: engines/yadebulk not built: YADE I/O falls back to per-body calls"
+	@$(MAKE) --no-print-directory ext || echo "warning: engines/yade/yadebulk not built: YADE I/O falls back to per-body calls"
 
-# The bulk-I/O bridge to YADE (engines/yadebulk: C and a little C++, no YADE headers, seconds to build).
+# The bulk-I/O bridge to YADE (engines/yade/yadebulk: C and a little C++, no YADE headers, seconds to build).
 ext: $(EXT_SO)
 
-$(EXT_SO): engines/yadebulk/yadebulk.c engines/yadebulk/steps.cpp
-	g++ -O2 -fPIC -shared -Wall -Wextra -o $@ -x c engines/yadebulk/yadebulk.c -x c++ engines/yadebulk/steps.cpp -ldl
+$(EXT_SO): engines/yade/yadebulk/yadebulk.c engines/yade/yadebulk/steps.cpp
+	g++ -O2 -fPIC -shared -Wall -Wextra -o $@ -x c engines/yade/yadebulk/yadebulk.c -x c++ engines/yade/yadebulk/steps.cpp -ldl
 
 # The main job: Tarumi & Hakuno quick sand, case 1, with its figures.
 demo: deps
@@ -36,6 +36,11 @@ demo: deps
 test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q tests
+
+# The NumPy core alone (tests of engines/model, engines/compiled, engines/reference, packing/ and the
+# layering of the tree): no YADE needed, about 15 s. Run `make deps` once first.
+test-fast:
+	$(PY) -m pytest -q tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
 
 # Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,770 mutants, one to several hours
 # on a shared machine): out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
@@ -51,8 +56,8 @@ mutants: deps $(MUTANT_VENV)/bin/mutmut
 # Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
-	$(PY) benchmarks/pores.py --json $(OUT)/bench-pores.json
-	$(PY) benchmarks/rebuild.py --json $(OUT)/bench-rebuild.json
+	$(YADE) -n -x benchmarks/pores.py --json $(OUT)/bench-pores.json
+	$(YADE) -n -x benchmarks/rebuild.py --json $(OUT)/bench-rebuild.json
 	$(YADE) -n -x benchmarks/coupling.py --json $(OUT)/bench-coupling.json
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
@@ -60,12 +65,14 @@ bench: deps
 bench-seismic: deps
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
-# The engine issue 10 was filed against (commit 26fe280, checked out under $(OUT)) and today's, on
-# the seismic box, in turns on this machine: the speed-up (a few minutes).
-OLD_TREE := $(OUT)/tree-26fe280
+# An older engine (OLD, by default commit 26fe280, which issue 10 was filed against; checked out
+# under $(OUT)) and today's, on the seismic box, in turns on this machine: the speed-up (a few minutes).
+OLD ?= 26fe280
+OLD_TREE := $(OUT)/tree-$(OLD)
 bench-before-after: deps
-	test -d $(OLD_TREE) || git worktree add --detach $(OLD_TREE) 26fe280
-	$(YADE) -n -x benchmarks/before_after.py --old-tree $(OLD_TREE) --json $(OUT)/bench-before-after.json
+	test -d $(OLD_TREE) || git worktree add --detach $(OLD_TREE) $(OLD)
+	-$(MAKE) --no-print-directory -C $(OLD_TREE) ext 2>/dev/null
+	$(YADE) -n -x benchmarks/before_after.py --old-tree $(OLD_TREE) --json $(OUT)/bench-before-after-$(OLD).json
 
 # Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.

@@ -17,12 +17,12 @@ import subprocess
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
+ROOT = sys.path[0]  # not engines.ROOT: engines is imported from the timed tree only (time_tree)
 PACKING = os.path.join(ROOT, "yade_scripts", "scenes", "liquefaction_packing.csv")
-sys.path.insert(1, ROOT)  # behind the tree a timing process puts first (time_tree)
 
-from benchmarks import write_json  # noqa: E402
+from benchmarks import write_json
 
 TABLE4 = {"contact": {"spring": "d", "kn": 1.4e5, "eta_n": 2.6, "ks": 3.5e4, "eta_s": 0.6, "mu": 1.0, "f_max": 1.5,
                       "eps_m": 2e-4},
@@ -34,13 +34,18 @@ WARMUP = 1100  # steps before the timing: past the first pore rebuild, whose ker
 
 def time_tree(tree, steps):
     """CPU microseconds per step of ``steps`` steps (after WARMUP) in this process, with the engines
-    of ``tree`` (the old tree: a scene built from TABLE4; today's: the liquefaction_case1 preset)."""
+    of ``tree``: a tree with the liquefaction_case1 preset runs it, an older one a scene built from
+    TABLE4; a tree from before the layered engines/ imports by the old module paths."""
     sys.path.insert(0, tree)
-    from engines import scene as scenes
-    from engines.yade_coupling import YadeCoupling
+    if os.path.isdir(os.path.join(tree, "engines", "run")):
+        from engines.run import scene as scenes
+        from engines.yade.coupling import YadeCoupling
+    else:
+        from engines import scene as scenes
+        from engines.yade_coupling import YadeCoupling
     from packing.packing import Packing
     packing = Packing.load(PACKING)
-    if tree == ROOT:
+    if os.path.isfile(os.path.join(tree, "yade_scripts", "scenes", "liquefaction_case1.toml")):
         scene = scenes.preset("liquefaction_case1")
     else:
         raw = {"scene": {"name": "before"}, "packing": {"source": "file", "file": PACKING},
@@ -68,12 +73,12 @@ def main(argv):
     if not (args.old_tree and args.json):
         ap.error("--old-tree and --json are required")
     old = os.path.abspath(args.old_tree)
-    if not os.path.isfile(os.path.join(old, "engines", "yade_coupling.py")):
-        ap.error(f"--old-tree {old}: no engines/yade_coupling.py there")
+    if not os.path.isdir(os.path.join(old, "engines")):
+        ap.error(f"--old-tree {old}: no engines/ there")
     samples = {"before": [], "after": []}
     for rep in range(args.repeats):
         for name, tree in (("before", old), ("after", ROOT)):
-            out = subprocess.run(["yade", "-n", "-x", os.path.abspath(_SCRIPT), "--one", tree, "--steps", str(args.steps)],
+            out = subprocess.run(["yade", "-n", "-x", os.path.abspath(sys.argv[0]), "--one", tree, "--steps", str(args.steps)],
                                  capture_output=True, text=True, check=True).stdout
             us = json.loads(out.strip().splitlines()[-1])["cpu_us"]
             samples[name].append(us)

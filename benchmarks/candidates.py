@@ -15,16 +15,17 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from benchmarks import write_json  # noqa: E402
-from engines import pore_geometry as pg  # noqa: E402
-from engines.scene import SCENE_DIR  # noqa: E402
-from packing.layouts import random_sequential  # noqa: E402
-from packing.packing import Packing  # noqa: E402
-from packing.psd import sample_diameters  # noqa: E402
+from benchmarks import write_json
+from engines.model import pores as pg
+from engines.run.scene import SCENE_DIR
+from packing.layouts import random_sequential
+from packing.packing import Packing
+from packing.psd import sample_diameters
 
 RANGES = {"seismic": (2e-4, 3.5e-4), "quicksand": (0.0, 1.3e-4)}
 

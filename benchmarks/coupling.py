@@ -27,19 +27,19 @@ import os
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from benchmarks import write_json  # noqa: E402
-from benchmarks.floor import native_floor, run_steps  # noqa: E402
-from engines import pore_geometry as pg  # noqa: E402
-from engines import scene as scenes  # noqa: E402
-from engines import yade_io  # noqa: E402
-from engines.yade_coupling import YadeCoupling  # noqa: E402
-from packing.layouts import random_discs  # noqa: E402
-from packing.packing import Packing  # noqa: E402
+from benchmarks import write_json
+from benchmarks.floor import native_floor, run_steps
+from engines.model import pores as pg
+from engines.run import scene as scenes
+from engines.yade import yade_io
+from engines.yade.coupling import YadeCoupling
+from packing.layouts import random_discs
+from packing.packing import Packing
 
 R_MEAN = 0.45e-3
 TABLE4 = {"contact": {"spring": "b", "kn": 1.4e5, "eta_n": 2.6, "ks": 3.5e4, "eta_s": 0.6, "mu": 1.0,

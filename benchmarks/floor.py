@@ -2,12 +2,19 @@
 import time
 
 from yade import O, utils
-from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,
-                          InteractionLoop, Ip2_ViscElMat_ViscElMat_ViscElPhys, Law2_ScGeom_ViscElPhys_Basic,
-                          NewtonIntegrator)
+from yade.wrapper import (
+    Bo1_Sphere_Aabb,
+    ForceResetter,
+    Ig2_Sphere_Sphere_ScGeom,
+    InsertionSortCollider,
+    InteractionLoop,
+    Ip2_ViscElMat_ViscElMat_ViscElPhys,
+    Law2_ScGeom_ViscElPhys_Basic,
+    NewtonIntegrator,
+)
 
-from engines.pore_dem import disc_masses
-from engines.yade_coupling import run_blocking, yade_law_material
+from engines.model.pore_dem import disc_masses
+from engines.yade.coupling import run_blocking, yade_law_material
 
 
 def native_floor(scene, packing):

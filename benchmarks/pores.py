@@ -1,7 +1,7 @@
 """Cost of the pore core: rebuild (links, pores, re-meshing) and one water step (areas + flow + forces),
-NumPy path and compiled kernels (engines.water_engine.WaterModel).
+NumPy path and compiled kernels (engines.model.water_model.WaterModel).
 
-    /usr/bin/python3 benchmarks/pores.py --json out/bench-pores.json [--sizes 239 2000 10000]
+    yade -n -x benchmarks/pores.py --json out/bench-pores.json [--sizes 239 2000 10000]
 
 Packings are jittered polydisperse hexagonal packings (packing.layouts.random_discs) with the
 quick-sand constants and a bottom row as wall. The floor is a dry YADE step of the same discs
@@ -13,19 +13,19 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.append("/usr/lib/x86_64-linux-gnu/yade-double/py")  # YADE's package for Debian's python3
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from benchmarks import write_json  # noqa: E402
-from benchmarks.floor import native_floor, per_step, step_by_step  # noqa: E402
-from engines import pore_geometry as pg  # noqa: E402
-from engines import scene as scenes  # noqa: E402
-from engines.pore_water import PoreWater, WaterSettings  # noqa: E402
-from engines.water_engine import WaterModel  # noqa: E402
-from packing.layouts import random_discs  # noqa: E402
-from packing.packing import Packing  # noqa: E402
+from benchmarks import write_json
+from benchmarks.floor import native_floor, per_step, step_by_step
+from engines.model import pores as pg
+from engines.model.pore_water import PoreWater, WaterSettings
+from engines.model.water_model import WaterModel
+from engines.run import scene as scenes
+from packing.layouts import random_discs
+from packing.packing import Packing
 
 
 def best_of(fn, repeat):

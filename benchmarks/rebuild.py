@@ -1,7 +1,7 @@
-"""Cost of a pore rebuild (engines.water_engine.WaterModel.rebuild) by part, the readable NumPy path
-against the compiled one (engines.kernels_pores), at about 240, 2,000 and 10,000 discs.
+"""Cost of a pore rebuild (engines.model.water_model.WaterModel.rebuild) by part, the readable NumPy path
+against the compiled one (engines.compiled.pores), at about 240, 2,000 and 10,000 discs.
 
-    /usr/bin/python3 benchmarks/rebuild.py --json out/bench-rebuild.json [--sizes 240 2000 10000]
+    yade -n -x benchmarks/rebuild.py --json out/bench-rebuild.json [--sizes 240 2000 10000]
 
 Packing: the box of benchmarks/coupling.py (random_discs with wall rows and columns), the seismic
 link range (eps_m = 2e-4 m, l_m = 3.5e-4 m); the old network is built at the packing, the new one
@@ -18,16 +18,16 @@ import os
 import sys
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.append("/usr/lib/x86_64-linux-gnu/yade-double/py")  # YADE's package for Debian's python3
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from benchmarks import write_json  # noqa: E402
-from benchmarks.coupling import box_packing  # noqa: E402
-from engines import pore_geometry as pg  # noqa: E402
-from engines import pore_water as pw  # noqa: E402
-from engines.water_engine import WaterModel  # noqa: E402
+from benchmarks import write_json
+from benchmarks.coupling import box_packing
+from engines.model import pore_water as pw
+from engines.model import pores as pg
+from engines.model.water_model import WaterModel
 
 EPS_M, L_M = 2e-4, 3.5e-4
 SETTINGS = pw.WaterSettings(E_w=2400.0, k1=1e3, k2=1e2)

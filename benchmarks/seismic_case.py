@@ -5,7 +5,7 @@
 The liquefaction_case1 preset (seed 000 §6, SPEC §2.5) on its packing: 192 particles and 47 wall
 discs, Table 4 constants, spring (d), eps_m = 2e-4 m, the top particles and walls 10x denser,
 saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 gal, 50 Hz cosine
-(engines.ground_motion.BaseMotion), the side-wall columns moving in x on their springs (Fig. 27),
+(engines.model.ground_motion.BaseMotion), the side-wall columns moving in x on their springs (Fig. 27),
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}}: the comparison times YADE alone on the same discs (fixed walls), our step
@@ -20,14 +20,13 @@ import os
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
-sys.path.insert(0, ROOT)
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from benchmarks import write_json  # noqa: E402
-from engines import scene as scenes  # noqa: E402
-from engines import yade_io  # noqa: E402
-from packing.packing import Packing  # noqa: E402
+from benchmarks import write_json
+from engines.run import scene as scenes
+from engines.yade import yade_io
+from packing.packing import Packing
 
 PRESET = "liquefaction_case1"
 
@@ -38,8 +37,9 @@ def compare(scene, packing, steps, repeats):
     with the NumPy path, interleaved;
     medians of wall and CPU microseconds per step and their ratios to YADE alone."""
     import numpy as np
+
     from benchmarks.floor import native_floor, run_steps
-    from engines.yade_coupling import YadeCoupling
+    from engines.yade.coupling import YadeCoupling
 
     def floor():
         native_floor(scene, packing)
@@ -79,8 +79,9 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     YADE's own step (ForceResetter, TranslationEngine, NewtonIntegrator) last, on held forces."""
     import numpy as np
     from yade import O
-    from engines import kernels
-    from engines.yade_coupling import YadeCoupling
+
+    from engines.compiled import kernels
+    from engines.yade.coupling import YadeCoupling
 
     cp = YadeCoupling(scene, packing)
     cp.run(warmup)
@@ -161,7 +162,7 @@ def main(argv):
     args = ap.parse_args(argv)
     scene = scenes.preset(PRESET)
     packing = Packing.load(scene.packing.file)
-    from engines.yade_coupling import YadeCoupling
+    from engines.yade.coupling import YadeCoupling
     cp = YadeCoupling(scene, packing)
     cp.run(10)  # numba loads its cached kernels on the first call
     t0, c0 = time.perf_counter(), time.process_time()

@@ -10,15 +10,15 @@ import os
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from benchmarks import write_json  # noqa: E402
-from engines import scene as scenes  # noqa: E402
-from engines.yade_coupling import simulate  # noqa: E402
-from packing.deposition import scene_packing  # noqa: E402
+from benchmarks import write_json
+from engines.run import scene as scenes
+from engines.yade.coupling import simulate
+from engines.yade.deposition import scene_packing
 
 
 def main(argv):

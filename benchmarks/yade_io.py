@@ -1,4 +1,4 @@
-"""Cost of moving body state and forces between YADE and NumPy: the bulk bridge (engines/yadebulk)
+"""Cost of moving body state and forces between YADE and NumPy: the bulk bridge (engines/yade/yadebulk)
 against YADE's per-body Python API, at several body counts.
 
     yade -n -x benchmarks/yade_io.py --json out/bench-yade-io.json [--sizes 240,2000,10000] [--repeats 11]
@@ -16,15 +16,15 @@ import statistics
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
-from yade import O, Vector3, utils  # noqa: E402
-from yade.wrapper import ForceResetter, NewtonIntegrator  # noqa: E402
+import numpy as np
+from yade import O, Vector3, utils
+from yade.wrapper import ForceResetter, NewtonIntegrator
 
-from benchmarks import write_json  # noqa: E402
-from engines import yadebulk  # noqa: E402
+from benchmarks import write_json
+from engines.yade import yadebulk
 
 
 def discs(n, seed=0):
@@ -155,7 +155,7 @@ def main(argv):
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     if not yadebulk.available():
-        sys.exit(f"engines.yadebulk is not available: {yadebulk.reason()}")
+        sys.exit(f"engines.yade.yadebulk is not available: {yadebulk.reason()}")
     probe_ms = 1e3 * (time.perf_counter() - t0)
     nj = njit_callers()
     results = [measure(int(n), args.repeats, nj) for n in args.sizes.split(",")]

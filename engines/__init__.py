@@ -1,0 +1,44 @@
+"""The pore-water DEM of Tarumi & Hakuno (seed 000) for YADE, and the three companion models.
+
+The packages, each importing only those before it (tests/test_layers.py checks it):
+
+  model/      the seed-000 physics, NumPy only, no YADE
+  compiled/   its numba twins (the same arithmetic, tested equal to round-off)
+  reference/  the independent reference, written from the paper; imports nothing of the above
+  yade/       everything that talks to YADE: bulk I/O, the two engines, the coupling, checkpoints
+  run/        a run as a user starts it: scene files, preflight, command line, runner, provenance
+  studies/    the speed-accuracy and stability studies
+  seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
+
+Outside engines/: packing/ (the Packing file format, size distributions, lattices), postproc/
+(reads run files, draws figures; never imports yade/ or run/), yade_scripts/ (thin command-line
+scripts, scenes/ presets), tests/ (mirrors this tree).
+
+One step k of the model (model/pore_dem.py, PoreDEM.step; the YADE law skips a-c and e):
+  a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
+  b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
+  c. velocity adjustment at separation                model/contact.py          eq 18-24
+  d. pores: build, measure, re-mesh rules a-d         model/pores.py, model/pore_water.py  eq 28-31
+     water: pressure, Darcy flows, update, forces    model/pore_water.py, model/water_model.py
+                                                                                eq 32-46
+  e. spin                                             model/paper_law.py        eq 14c, 16c
+  f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
+Time-step limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/time_step.py.
+Observables (window porosity, block means): model/observe.py.
+
+Where to add ...
+  a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
+    a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WaterSettings
+    (model/pore_water.py) and in the [water] table of SCHEMA (run/scene.py).
+  a wall type: the wall codes of model/pores.py (WALL_*), which link discs to walls in
+    build_pores; boundary flows in PoreWater.flows; the group codes of a packing file in
+    packing/packing.py; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
+  an output column: Recorder in run/runner.py (its ``columns`` and ``row``), from what the
+    coupling (yade/coupling.py) measured at the step.
+  a scene option: SCHEMA in run/scene.py (field, unit, default, range: validated there), read
+    where the setting is used (the settings dataclasses, yade/coupling.py); run/preflight.py
+    if it needs a check before the run.
+"""
+import os
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's folder

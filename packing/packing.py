@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engines.pore_geometry import WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT, check_discs
+from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT, check_discs
 
 GROUP_NAMES = {WALL_NONE: "particle", WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
 
@@ -12,7 +12,7 @@ GROUP_NAMES = {WALL_NONE: "particle", WALL_BOTTOM: "bottom", WALL_LEFT: "left", 
 @dataclass
 class Packing:
     """Discs of a scene. ``group``: 0 particle, 1 bottom wall, 2 left wall, 3 right wall (the wall
-    codes of engines.pore_geometry). ``density_factor`` multiplies the material density (the
+    codes of engines.model.pores). ``density_factor`` multiplies the material density (the
     paper's denser top discs and walls)."""
 
     xz: np.ndarray

@@ -6,7 +6,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from engines.biaxial import mohr_coulomb_fit  # noqa: E402
+from engines.seeds.biaxial.specimen import mohr_coulomb_fit  # noqa: E402
 
 PHI_COLOURS = {5.0: "C0", 10.0: "C1", 15.0: "C2"}
 
@@ -19,7 +19,7 @@ def _save(fig, path):
 
 def plot_deviator_strain(curves, path, title):
     """Fig. 4(A)/9(A): deviator σ1 − σ3 against axial strain, one line per σ3, the peak and the
-    E50 secant marked; volumetric strain below. ``curves``: engines.biaxial.Curve list."""
+    E50 secant marked; volumetric strain below. ``curves``: engines.seeds.biaxial.specimen.Curve list."""
     fig, (ax, axv) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     for k, c in enumerate(sorted(curves, key=lambda c: c.sigma3)):
         col = f"C{k}"

@@ -1,4 +1,4 @@
-"""Readers of what a run writes (engines/yade_run.py): history.csv, snapshot_*.npz, summary.json."""
+"""Readers of what a run writes (engines/run/runner.py): history.csv, snapshot_*.npz, summary.json."""
 import csv
 import glob
 import json
@@ -23,7 +23,7 @@ def snapshot_files(run_dir):
 
 def read_snapshot(path):
     """One snapshot as a dict of arrays (t, xz, r, group, density_factor, vel, pairs, f_n, f_s
-    and, with water, tri, tri_pore, U, W, A, rule; engines.yade_run.snapshot_data)."""
+    and, with water, tri, tri_pore, U, W, A, rule; engines.run.runner.snapshot_data)."""
     with np.load(path, allow_pickle=False) as z:
         return dict(z)
 

@@ -1,7 +1,7 @@
 """The speed/accuracy study's tables and figures (yade_scripts/tradeoffs.py; docs/TRADEOFFS.md).
 
 ``analyse(out, jobs, meta)`` reads OUT/runs/<job>/result.json, computes each setting's errors
-against its case's reference (engines.tradeoffs: ensemble means over the starts, chaos floors),
+against its case's reference (engines.studies.tradeoffs: ensemble means over the starts, chaos floors),
 and writes OUT/tradeoffs.json, OUT/table.md and OUT/tradeoffs_<case>.png (error against cost,
 log axes, the Pareto front marked). Cost is CPU seconds per start (the machine is shared, so
 CPU time is steadier than wall time; both are kept); the speed-up is against the case's run at
@@ -10,7 +10,7 @@ the paper's settings (dt = 1e-6 s, water every step, rebuilds every 1000 steps).
 Each row carries the raw metrics (``error``) and the noise-corrected estimate of the systematic
 error (``systematic``: per metric the measured value, its floor between the run's and the
 reference's ensembles, the estimate sqrt(max(0, measured^2 - floor^2)) and its bootstrap sigma;
-engines.tradeoffs.systematic). The judgement against the 5 % target (``within_target``) is on the
+engines.studies.tradeoffs.systematic). The judgement against the 5 % target (``within_target``) is on the
 estimate, the raw metric being the estimate plus the chaos of finite ensembles; ``resolved`` says
 whether the estimate plus 2 sigma is within 5 % too. ``within_target_raw`` is kept for comparison.
 """
@@ -19,7 +19,7 @@ import os
 
 import numpy as np
 
-from engines import tradeoffs as tr
+from engines.studies import tradeoffs as tr
 
 METRICS = ("pressure_rms", "porosity_change", "settlement")  # judged; pressure_rms_below_surface: a diagnostic
 LABELS = {"pressure_rms": "block pressure RMS", "porosity_change": "porosity change", "settlement": "settlement"}
@@ -78,7 +78,7 @@ def analyse(out, jobs, meta, log=print):
     record_cost(results, meta)
     cases = sorted({c for c, _, _ in meta.values()}, key=[c for c, _, _ in meta.values()].index)
     doc = {"reference": {}, "runs": [], "defaults": None, "alternatives": {},
-           "notes": "error: ensemble means over the starts against the reference's (engines.tradeoffs), as fractions; "
+           "notes": "error: ensemble means over the starts against the reference's (engines.studies.tradeoffs), as fractions; "
                     "floor: the same metric between two sets of starts at the reference settings (chaos); "
                     "speedup: CPU seconds per start at the paper's settings of the case over the run's"}
     for case in cases:

@@ -206,7 +206,7 @@ def signed_area(xz, polygon):
 
 
 def snapshot_frame(snap):
-    """write keyword dicts (discs, forces, pores) of one snapshot .npz (engines/yade_run.Recorder)."""
+    """write keyword dicts (discs, forces, pores) of one snapshot .npz (engines.run.runner.Recorder)."""
     xz = snap["xz"]
     discs = dict(xz=xz, r=snap["r"], vel=snap["vel"], density_factor=snap["density_factor"], group=snap["group"])
     forces = dict(pairs=snap["pairs"], f_n=snap["f_n"], f_s=snap["f_s"] if "f_s" in snap else None)

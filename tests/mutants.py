@@ -32,11 +32,11 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MODULES = ["engines/pore_water.py", "engines/pore_geometry.py", "engines/contact.py", "engines/pore_dem.py"]
-EXTRA = ["engines/water_engine.py", "engines/paper_law.py"]
-TESTS = ["tests/test_pore_water.py", "tests/test_pore_geometry.py", "tests/test_contact.py",
-         "tests/test_pore_dem.py", "tests/test_scene.py", "tests/test_pore_candidates.py",
-         "tests/test_remesh_transfer.py", "tests/test_kernels.py"]
+MODULES = ["engines/model/pore_water.py", "engines/model/pores.py", "engines/model/contact.py", "engines/model/pore_dem.py"]
+EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py"]
+TESTS = ["tests/model/test_pore_water.py", "tests/model/test_pores.py", "tests/model/test_contact.py",
+         "tests/model/test_pore_dem.py", "tests/run/test_scene.py", "tests/model/test_pore_candidates.py",
+         "tests/model/test_remesh_transfer.py", "tests/compiled/test_kernels.py"]
 COPY = ["engines", "packing", "yade_scripts", "tests"]
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_mutants.txt")
 KILLED = {"killed", "timeout", "segfault"}
@@ -100,7 +100,7 @@ def results(work, mutmut):
 
 
 def module_of(name, modules):
-    """The source path a mutant name (engines.pore_water.x...__mutmut_3) belongs to."""
+    """The source path a mutant name (engines.model.pore_water.x...__mutmut_3) belongs to."""
     for m in modules:
         if name.startswith(m[:-3].replace("/", ".") + "."):
             return m

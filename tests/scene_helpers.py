@@ -1,5 +1,5 @@
 """Scenes for the tests of the model step and the reference (no YADE)."""
-from engines import scene as sc
+from engines.run import scene as sc
 
 
 def make_scene(**tables):

@@ -22,12 +22,12 @@ import math
 import os
 import sys
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
+from engines.run.preflight import ArgumentParser, number, output_dir
 
 PERCENT_PER_MIN = 1.0 / 6000.0  # 1 %/min in 1/s
 
@@ -67,7 +67,7 @@ def parser():
     ap.add_argument("--seed", type=number(int, 0), default=1, help="seed of the random placement")
     ap.add_argument("--dt", type=number(float, 0, lo_open=True, unit="s"),
                     help="time step [s] (default: the paper's 0.5e-4, smaller for stiffer contacts: "
-                    "engines.cem_contact.stable_dt)")
+                    "engines.seeds.biaxial.cem_contact.stable_dt)")
     ap.add_argument("--packing-dt", type=number(float, 0, lo_open=True, unit="s"),
                     help="time step of the packing [s] (default: --dt)")
     ap.add_argument("--strain-rate", type=number(float, 0, lo_open=True, unit="%/min"), default=100.0,
@@ -83,8 +83,8 @@ def parser():
 def check(args, ap):
     """The contact constants and the time steps (refused in one line naming the argument, before
     anything is written; the other arguments are checked by their argparse types)."""
-    from engines.cem_contact import CemContact, check_dt, stable_dt
-    from packing.periodic import table1_radii
+    from engines.seeds.biaxial.cem_contact import CemContact, check_dt, stable_dt
+    from engines.seeds.biaxial.periodic import table1_radii
 
     contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho)
     r = table1_radii(args.n_discs)
@@ -121,7 +121,7 @@ def table_argv(ap):
 
 
 def write_outputs(out, args, contact, blocks, results, wall_s, error=None):
-    from engines.biaxial import mohr_coulomb_fit
+    from engines.seeds.biaxial.specimen import mohr_coulomb_fit
     from postproc.biaxial_plots import plot_deviator_strain, plot_mohr
 
     rows = []
@@ -170,8 +170,8 @@ def main(argv):
         argv = table_argv(ap)
     args = ap.parse_args(argv)
     contact = check(args, ap)
-    from engines.biaxial import BiaxialSettings, run_biaxial
-    from packing.periodic import PackingSettings, pack_periodic, table1_radii
+    from engines.seeds.biaxial.periodic import PackingSettings, pack_periodic, table1_radii
+    from engines.seeds.biaxial.specimen import BiaxialSettings, run_biaxial
 
     t0 = time.time()
     os.makedirs(args.out, exist_ok=True)

@@ -1,5 +1,5 @@
 """Which time steps let a packed seed-003 specimen stay at rest: the evidence behind the contact
-width and engines.cem_contact.stable_dt (docs/BIAXIAL.md).
+width and engines.seeds.biaxial.cem_contact.stable_dt (docs/BIAXIAL.md).
 
     yade -n -x yade_scripts/biaxial_stability.py --block DIR/packing_sigma3_200 --out DIR2
 
@@ -14,10 +14,10 @@ import json
 import os
 import sys
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines.preflight import ArgumentParser, output_dir  # noqa: E402
+from engines.run.preflight import ArgumentParser, output_dir
 
 # (contact width factor f_w, kn [Pa/m], ks/kn, dt [s]); the paper's constants are (1, 1e8, 0.25)
 CASES = [(1.0, 1e8, 0.25, 2.5e-5), (1.0, 1e8, 0.25, 5e-5), (1.0, 1e8, 0.25, 7e-5), (1.0, 1e8, 0.25, 1e-4),
@@ -33,8 +33,8 @@ def relax(block, contact, dt):
     second half."""
     from yade import O, utils
 
-    from engines.cem_contact import add_discs, yade_engines
-    from packing.periodic import yade_cell_stress
+    from engines.seeds.biaxial.cem_contact import add_discs, yade_engines
+    from engines.seeds.biaxial.periodic import yade_cell_stress
 
     depth = block.info["depth_m"]
     O.reset()
@@ -55,8 +55,8 @@ def main(argv):
     ap.add_argument("--block", required=True, help="a packed block, path without .csv/.json")
     ap.add_argument("--out", type=output_dir, required=True, help="output directory")
     args = ap.parse_args(argv)
-    from engines.cem_contact import CemContact, stable_dt
-    from packing.periodic import PeriodicBlock
+    from engines.seeds.biaxial.cem_contact import CemContact, stable_dt
+    from engines.seeds.biaxial.periodic import PeriodicBlock
 
     try:
         block = PeriodicBlock.load(args.block)

@@ -31,15 +31,16 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from engines.biaxial import Curve, mohr_coulomb_fit  # noqa: E402
-from engines.calibration import Calibration, eq4_e50, fit_eq4  # noqa: E402
-from yade_scripts.sweep import Job, read_record, run_sweep  # noqa: E402
+from engines import ROOT
+from engines.run.sweep import Job, read_record, run_sweep
+from engines.seeds.biaxial.calibration import Calibration, eq4_e50, fit_eq4
+from engines.seeds.biaxial.specimen import Curve, mohr_coulomb_fit
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIAXIAL = os.path.join(ROOT, "yade_scripts", "biaxial.py")
 STABILITY = os.path.join(ROOT, "yade_scripts", "biaxial_stability.py")
 PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "sideload")
@@ -141,9 +142,9 @@ def predicted_cpu_s(job):
     """Predicted CPU seconds of a biaxial.py or biaxial_stability.py job: its steps × MS_PER_STEP_1000
     × discs / 1000. Steps: PACK_STEPS and EQUILIBRIUM_STEPS (scaled to the job's Δt), and the
     compression's max_strain / rate / Δt plus the ramp, per σ3."""
-    from engines.biaxial import BiaxialSettings
-    from engines.cem_contact import CemContact, stable_dt
-    from packing.periodic import table1_radii
+    from engines.seeds.biaxial.cem_contact import CemContact, stable_dt
+    from engines.seeds.biaxial.periodic import table1_radii
+    from engines.seeds.biaxial.specimen import BiaxialSettings
     from yade_scripts.biaxial import parser
     from yade_scripts.biaxial_stability import CASES, REST_TIME
 
@@ -162,7 +163,7 @@ def predicted_cpu_s(job):
 def estimate(jobs, runs, log=print):
     """Print (``log``; None = quiet) the predicted CPU minutes of the jobs not yet done; returns
     their sum [s]."""
-    from yade_scripts.sweep import is_done
+    from engines.run.sweep import is_done
 
     log = log or (lambda *a: None)
     todo = [j for j in jobs if not is_done(j, runs)]
@@ -225,7 +226,7 @@ def analyse_main(runs, seeds):
             per["c_star_pa"].append(c_star)
             out["rows"].append({"phi_e_deg": p, "seed": s, "phi_star_deg": phi, "c_star_pa": c_star})
             per["curves"][s] = curves
-            for s3, c in sorted(curves.items()):  # peak and E50 from the records (engines.biaxial)
+            for s3, c in sorted(curves.items()):  # peak and E50 from the records (engines.seeds.biaxial.specimen)
                 eps_f, q_f = c.peak()
                 per["peak"][s3].append(q_f)
                 per["e50"][s3].append(c.e50())
@@ -385,8 +386,15 @@ def write_table(study, path):
 
 
 def figures(out, main, sens):
-    from postproc.biaxial_plots import (plot_A_m, plot_e50_sigma3, plot_eq4, plot_phi_star, plot_sensitivity,
-                                        plot_sigma3_kn_collapse, plot_study_curves)
+    from postproc.biaxial_plots import (
+        plot_A_m,
+        plot_e50_sigma3,
+        plot_eq4,
+        plot_phi_star,
+        plot_sensitivity,
+        plot_sigma3_kn_collapse,
+        plot_study_curves,
+    )
 
     if main["rows"]:
         plot_phi_star(main["rows"], {15.0: 27.4}, os.path.join(out, "fig12_phi_star.png"))

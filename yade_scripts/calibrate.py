@@ -15,15 +15,16 @@ import json
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from engines.calibration import Calibration  # noqa: E402
-from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
-from engines.biaxial import mohr_coulomb_fit  # noqa: E402
-from yade_scripts.biaxial_study import biaxial_job, read_run  # noqa: E402
-from yade_scripts.sweep import read_record, run_sweep  # noqa: E402
+from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.run.sweep import read_record, run_sweep
+from engines.seeds.biaxial.calibration import Calibration
+from engines.seeds.biaxial.specimen import mohr_coulomb_fit
+from yade_scripts.biaxial_study import biaxial_job, read_run
 
 VERIFY_SIGMA3 = (100.0, 400.0)  # Pa, with the target's σ3: φ* over the study's range
 

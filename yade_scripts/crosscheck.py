@@ -1,4 +1,4 @@
-"""Cross-check of the YADE path (engines.yade_coupling) against the NumPy reference (engines.reference).
+"""Cross-check of the YADE path (engines.yade.coupling) against the NumPy reference (engines.reference.model).
 
 Run:  yade -n -x yade_scripts/crosscheck.py --out DIR   -> DIR/crosscheck.json, exit 1 if a case fails.
 Importable headless: ``run_cases(yade_simulate, ref_simulate, ...)`` and ``precision_study`` take the
@@ -35,15 +35,14 @@ from dataclasses import dataclass
 import numpy as np
 
 # under `yade -x` the script runs in YADE's globals, where __file__ is /usr/bin/yade
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__)))
-if ROOT not in sys.path:
-    sys.path.insert(0, ROOT)
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines import scene as sc  # noqa: E402
-from engines.reference import (BOTTOM, PAPER_READINGS, WALL_STEPS, porosity, simulate_reference,  # noqa: E402
-                               wall_displacements)
-from engines.trajectory import Trajectory  # noqa: E402
-from packing.packing import Packing  # noqa: E402
+from engines import ROOT
+from engines.reference.model import BOTTOM, PAPER_READINGS, WALL_STEPS, porosity, simulate_reference, wall_displacements
+from engines.reference.trajectory import Trajectory
+from engines.run import scene as sc
+from packing.packing import Packing
 
 R = 0.45e-3            # disc radius of the contact cases [m]
 TINY = 1e-30
@@ -169,7 +168,7 @@ def pressed_case(spring):
 
     def force_path(traj):
         """max |m x'' - F(delta)| / f_max along the release, F of the spring (module docstring of
-        engines.contact), and the overlap where the force first vanished."""
+        engines.model.contact), and the overlap where the force first vanished."""
         t, x, *_ = traj.arrays()
         xs = np.concatenate([pk.xz[1:2, 0], x[:, 1, 0]])
         force = mass * np.diff(xs, 2) / dt**2          # the force of step k = 1, 2, ...
@@ -243,12 +242,12 @@ class FeatureCase:
 
 
 def preset_build(name, **overrides):
-    """The preset ``name`` (with ``overrides``) and its packing (packing.deposition.scene_packing)."""
+    """The preset ``name`` (with ``overrides``) and its packing (engines.yade.deposition.scene_packing)."""
     def build():
         try:
-            from packing.deposition import scene_packing
+            from engines.yade.deposition import scene_packing
         except ImportError as e:
-            raise RuntimeError(f"missing prerequisite packing.deposition.scene_packing: {e}") from None
+            raise RuntimeError(f"missing prerequisite engines.yade.deposition.scene_packing: {e}") from None
         scene = sc.preset(name, overrides or None)
         return scene, scene_packing(scene)
     return build
@@ -407,7 +406,7 @@ def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
 
 
 def wall_reading(traj, scene, pk):
-    """The wall kinematics (engines.reference WALL_STEPS) the run ``traj`` followed, told from its
+    """The wall kinematics (engines.reference.model WALL_STEPS) the run ``traj`` followed, told from its
     bottom-wall positions: {"wall_step": name} of the reading they match to WALL_TOL of the largest
     displacement, {} without loading. Raises ValueError (with each reading's error) when none
     matches. The readings differ by ~a dt t / 2, 1e-4-1e-3 of the displacement in these cases."""
@@ -625,7 +624,7 @@ def main(argv):
     ap.add_argument("--skip-precision", action="store_true", help="leave out the float32/longdouble study")
     ap.add_argument("--only", nargs="+", metavar="CASE", help="run only these cases (names as in the docstring)")
     args = ap.parse_args(argv)
-    from engines.yade_coupling import simulate  # needs YADE: run under `yade -n -x`
+    from engines.yade.coupling import simulate  # needs YADE: run under `yade -n -x`
     t0 = time.time()
     cases, features = contact_cases(), feature_cases()
     if args.only:

@@ -10,14 +10,14 @@ import argparse
 import os
 import sys
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser, InputError, check_output_dir  # noqa: E402
-from packing.deposition import deposit  # noqa: E402
-from packing.psd import plot_distribution  # noqa: E402
-from postproc.plots import plot_packing  # noqa: E402
+from engines.run import scene as scenes
+from engines.run.preflight import ArgumentParser, InputError, check_output_dir
+from engines.yade.deposition import deposit
+from packing.psd import plot_distribution
+from postproc.plots import plot_packing
 
 
 def main(argv):

@@ -12,18 +12,26 @@ import math
 import os
 import sys
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
-from yade import O, utils  # noqa: E402
-from yade.wrapper import (Bo1_Sphere_Aabb, ForceResetter, Ig2_Sphere_Sphere_ScGeom, InsertionSortCollider,  # noqa: E402
-                          InteractionLoop, Ip2_ViscElMat_ViscElMat_ViscElPhys, Law2_ScGeom_ViscElPhys_Basic,
-                          NewtonIntegrator, ViscElMat)
+import numpy as np
+from yade import O, utils
+from yade.wrapper import (
+    Bo1_Sphere_Aabb,
+    ForceResetter,
+    Ig2_Sphere_Sphere_ScGeom,
+    InsertionSortCollider,
+    InteractionLoop,
+    Ip2_ViscElMat_ViscElMat_ViscElPhys,
+    Law2_ScGeom_ViscElPhys_Basic,
+    NewtonIntegrator,
+    ViscElMat,
+)
 
-from engines.pore_water import WaterSettings  # noqa: E402
-from engines.water_engine import WaterEngine  # noqa: E402
-from engines.yade_io import freeze_gc, raise_pending  # noqa: E402
+from engines.model.pore_water import WaterSettings
+from engines.yade.water_engine import WaterEngine
+from engines.yade.yade_io import freeze_gc, raise_pending
 
 R, RHO = 0.45e-3, 2700.0  # grain radius [m], density [kg/m^3]
 

@@ -19,12 +19,12 @@ import argparse
 import os
 import sys
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines import scene as scenes  # noqa: E402
-from engines.preflight import ArgumentParser  # noqa: E402
-from engines.run_options import add_run_arguments, job_argv, run_script  # noqa: E402
+from engines.run import scene as scenes
+from engines.run.command_line import add_run_arguments, job_argv, run_script
+from engines.run.preflight import ArgumentParser
 
 CASES = tuple(range(1, 8))
 

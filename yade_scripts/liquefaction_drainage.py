@@ -1,5 +1,5 @@
 """How fast the seismic box drains: a uniform excess pore pressure U0 in the still packing, the
-water advanced alone (engines.water_engine.WaterModel, the compiled kernels) with the surface at
+water advanced alone (engines.model.water_model.WaterModel, the compiled kernels) with the surface at
 U = 0 and undrained (case 1) or drained (case 3) sides, at Table 5's permeabilities and at
 ``--k-scale`` times them. Tells whether drained sides can keep U small within the 0.18-s run
 (docs/LIQUEFACTION.md, trend 2). No YADE:
@@ -16,13 +16,14 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines import pore_geometry as pg  # noqa: E402
-from engines import scene as scenes  # noqa: E402
-from engines.pore_dem import water_model  # noqa: E402
-from engines.preflight import ArgumentParser, number  # noqa: E402
-from packing.packing import Packing  # noqa: E402
+from engines.model import pores as pg
+from engines.model.pore_dem import water_model
+from engines.run import scene as scenes
+from engines.run.preflight import ArgumentParser, number
+from packing.packing import Packing
 
 TIMES = (0.02, 0.06, 0.18)  # one input period, a third of the run, the run [s]
 LOW_BLOCKS = 4
@@ -54,7 +55,7 @@ def drainage(case, k_scale, U0=100.0, times=TIMES):
 
 def time_constants(water, A, link_contact, n=3):
     """The n slowest time constants 1/lambda [s] of the linearised drainage dU/dt = -C^-1 G U
-    (engines.pore_water, Stability): G the conductance Laplacian of the throats plus the boundary
+    (engines.model.pore_water, Stability): G the conductance Laplacian of the throats plus the boundary
     conductances, C the capacities; the symmetric form C^-1/2 G C^-1/2 has the same eigenvalues."""
     fl = water.flows(A, link_contact)
     i, j = water.net.throat_conns.T

@@ -22,7 +22,7 @@ column, 1 m elsewhere: 3 m in all).
 Yield (§4: "載荷応力 26t/m² (ヒズミにして8.5%) で降伏"): the limit load under top-load control, where
 the equilibrium followed from the unloaded state stops existing; found by marching the load and
 halving the increment from the last stable state until the yield load moves by < 2 %
-(engines.particle_potential.limit_load), so it depends on neither the increment nor the trust box.
+(engines.seeds.particle_potential.limit_load), so it depends on neither the increment nor the trust box.
 
 Stress is the applied top stress (load control) or the top reaction over the 3 m half width
 (displacement control), positive in compression; strain is the tributary-weighted mean top
@@ -33,18 +33,30 @@ import os
 import sys
 from dataclasses import dataclass
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import matplotlib  # noqa: E402
+import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from engines.particle_potential import (  # noqa: E402
-    Kind, Model, Potential, SolverSettings, Step, TONNE_FORCE, find_pairs, limit_load, pa_to_tf_m2,
-    pair_stiffness_at_well, run_path, tf_m2_to_pa)
-from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
+from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.seeds.particle_potential import (
+    TONNE_FORCE,
+    Kind,
+    Model,
+    Potential,
+    SolverSettings,
+    Step,
+    find_pairs,
+    limit_load,
+    pa_to_tf_m2,
+    pair_stiffness_at_well,
+    run_path,
+    tf_m2_to_pa,
+)
 
 SPACING = 1.0      # m
 HALF_COLUMNS = 3   # columns x = 0..3, axis at x = 3

@@ -3,9 +3,9 @@
     /usr/bin/python3 yade_scripts/sand_layer.py --realisations 25 --seed 0 --out out/sand-layer
 
 Plain NumPy/SciPy, no YADE. Builds `--realisations` model sand layers of 26 × 5 elements
-(V = 1.2 mm³, N = 100 grains, default medium sand of packing/sand_layer.py), loads each with a
+(V = 1.2 mm³, N = 100 grains, default medium sand of engines/seeds/sand_layer/layer.py), loads each with a
 strip load on the surface centre and computes the transmitted vertical stress (eq 5–8) and the
-surface settlement (Fig. 11–12, engines/sand_layer_mechanics.py).
+surface settlement (Fig. 11–12, engines/seeds/sand_layer/mechanics.py).
 
 Load (the paper: a unit distributed load on the central surface element; with 26 columns there
 is no single centre): a strip of `--load-width` = 2 elements, columns 12 and 13 (2.1 mm wide),
@@ -23,21 +23,30 @@ import os
 import sys
 from dataclasses import asdict, dataclass
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import matplotlib  # noqa: E402
+import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from engines.preflight import ArgumentParser, number, output_dir  # noqa: E402
-from engines.sand_layer_mechanics import (CC_REFERENCE_VOID_RATIO, CC_SLOPE,  # noqa: E402
-                                          MechanicsSettings, analyse_layer)
-from packing.sand_layer import (GrainSizeDistribution, SandLayerSettings,  # noqa: E402
-                                build_layers, discrete_diameters, grain_volume,
-                                mass_distribution, number_distribution, require,
-                                sample_diameters, void_ratio, DISCRETE_LEVELS)
+from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.seeds.sand_layer.layer import (
+    DISCRETE_LEVELS,
+    GrainSizeDistribution,
+    SandLayerSettings,
+    build_layers,
+    discrete_diameters,
+    grain_volume,
+    mass_distribution,
+    number_distribution,
+    require,
+    sample_diameters,
+    void_ratio,
+)
+from engines.seeds.sand_layer.mechanics import CC_REFERENCE_VOID_RATIO, CC_SLOPE, MechanicsSettings, analyse_layer
 
 LOAD_STRESS = 98066.5      # Pa, 1 kgf/cm²
 LOAD_WIDTH = 2             # elements
@@ -54,7 +63,7 @@ class Study:
         seed: seed of the numpy.random.Generator used for everything [-].
         gsd, layer_settings, mechanics: the model's settings.
         surface_stress: stress on the surface elements, (n_columns,) [Pa].
-        layers: the realisations (packing.sand_layer.SandLayer).
+        layers: the realisations (engines.seeds.sand_layer.layer.SandLayer).
         responses: their LayerResponse, same order.
         grain_pool: diameters of POOL_SIZE untruncated element fills, (POOL_SIZE, N) [m].
     """

@@ -1,5 +1,5 @@
 """The stability map (issue 12 item 3): short runs at the extremes of dt/dt_crit, E_w, k1, k2,
-eps_m and f_max; each is refused up front, bounded, or unbounded (engines.stability).
+eps_m and f_max; each is refused up front, bounded, or unbounded (engines.studies.stability).
 
     yade -n -j 1 -x yade_scripts/stability.py --out out/stability [--window 0.003]
     make stability
@@ -20,10 +20,10 @@ import os
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT))))
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 QS, LIQ = "quicksand_case1", "liquefaction_case1"
 DT_RATIOS = (0.25, 0.5, 0.75, 0.9, 0.99, 1.05)
@@ -56,9 +56,10 @@ def map_points():
 def run_point(sc, packing, window, out_dir):
     """Run ``sc`` for ``window`` seconds; the record of the run, or {"outcome": "refused", "reason"}."""
     from yade import O
-    from engines.preflight import InputError, preflight
-    from engines.yade_coupling import YadeCoupling
-    from engines import stability as st
+
+    from engines.run.preflight import InputError, preflight
+    from engines.studies import stability as st
+    from engines.yade.coupling import YadeCoupling
 
     try:
         preflight(sc, packing, out_dir)
@@ -88,12 +89,12 @@ def run_point(sc, packing, window, out_dir):
 
 
 def main(argv):
-    from engines import scene as scenes
-    from engines import stability as st
-    from engines.contact import critical_time_step
-    from engines.pore_dem import disc_masses
-    from engines.preflight import output_dir
-    from packing.deposition import scene_packing
+    from engines.model.contact import critical_time_step
+    from engines.model.pore_dem import disc_masses
+    from engines.run import scene as scenes
+    from engines.run.preflight import output_dir
+    from engines.studies import stability as st
+    from engines.yade.deposition import scene_packing
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=output_dir, default=os.path.join("out", "stability"))

@@ -10,7 +10,7 @@
     yade -n -j 1 -x yade_scripts/tradeoffs.py speed --points dt=1e-06 defaults=fast --repeats 3 --out out/speed
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
-(engines.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
+(engines.studies.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
 the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's packing)
 for ``--window`` seconds and writes OUT/result.json: per start the block pressure, window porosity,
 particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of
@@ -23,7 +23,7 @@ each per repeat, the median CPU ratio to the first (the paper's settings).
 
 ``study`` builds the jobs of KNOBS (one per case, knob and value), runs them with the sweep runner
 (yade_scripts/sweep.py: resumable, local processes or a Dask scheduler), then computes the
-errors (engines.tradeoffs) against each case's reference and writes out/tradeoffs/tradeoffs.json,
+errors (engines.studies.tradeoffs) against each case's reference and writes out/tradeoffs/tradeoffs.json,
 table.md and the error-against-cost figures (docs/TRADEOFFS.md explains them).
 """
 import argparse
@@ -32,17 +32,18 @@ import os
 import sys
 import time
 
-_SCRIPT = __file__ if __file__.endswith(".py") else sys.argv[0]  # under `yade -x`, __file__ is yade
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(_SCRIPT)))
-sys.path.insert(0, ROOT)
+# the project's folder first: `yade -x` puts only YADE's folders on sys.path
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-import numpy as np  # noqa: E402
+import numpy as np
+
+from engines import ROOT
 
 RECORD = 5e-4      # s between samples of the histories (a multiple of every dt below)
 REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
 STARTS = 5         # perturbed starts per setting, unless the case's "starts" says more for a knob
 REFERENCE_DT = 5e-7
-PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (engines.tradeoffs.perturbed)
+PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (engines.studies.tradeoffs.perturbed)
 PAPER_DT = 1e-6
 
 # Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
@@ -108,7 +109,7 @@ def settings_of(case, knob, value):
     if knob in ("smoothing", "transfer"):
         return {**base, f"water.{knob}": value}, "yade"
     if knob == "E_w_scale":
-        from engines import scene as scenes
+        from engines.run import scene as scenes
         E_w = scenes.preset(case).water.E_w * value
         return {**base, "water.E_w": E_w, "water.substep": True}, "yade"
     if knob == "law":
@@ -163,12 +164,12 @@ def job_name(case, knob, value):
 
 # -- run (inside YADE) ----------------------------------------------------------------------------
 def parse_set(text):
-    from engines.run_options import scene_setting
+    from engines.run.command_line import scene_setting
     return scene_setting(text)
 
 
 def run_main(argv):
-    from engines.preflight import ArgumentParser, number, output_dir
+    from engines.run.preflight import ArgumentParser, number, output_dir
     ap = ArgumentParser(prog="tradeoffs.py run")
     ap.add_argument("--case", required=True, help="a preset of yade_scripts/scenes (e.g. liquefaction_case1)")
     ap.add_argument("--set", type=parse_set, action="append", default=[], metavar="TABLE.FIELD=VALUE")
@@ -176,7 +177,7 @@ def run_main(argv):
     ap.add_argument("--record", type=number(lo=0, lo_open=True, unit="s"), default=RECORD)
     ap.add_argument("--starts", type=number(int, 1), default=STARTS)
     ap.add_argument("--perturbation", type=number(lo=0, unit="m"), default=PERTURBATION,
-                    help="size of the perturbation of the starts [m] (engines.tradeoffs.perturbed)")
+                    help="size of the perturbation of the starts [m] (engines.studies.tradeoffs.perturbed)")
     ap.add_argument("--out", type=output_dir, required=True)
     a = ap.parse_args(argv)
     over = {}
@@ -210,7 +211,7 @@ def speed_main(argv):
     """Speed-ups measured in one YADE process: each setting run from one start per repeat, the
     settings interleaved (their order rotated every repeat), CPU seconds as in ``run``; the
     median over the repeats of each over the first setting's (the paper's) -> OUT/speed.json."""
-    from engines.preflight import ArgumentParser, number, output_dir
+    from engines.run.preflight import ArgumentParser, number, output_dir
     ap = ArgumentParser(prog="tradeoffs.py speed")
     ap.add_argument("--case", default="liquefaction_case1", choices=sorted(CASES))
     ap.add_argument("--points", nargs="+", default=["dt=1e-06", "defaults=fast"],
@@ -244,12 +245,13 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
     """Run one setting from n_starts starts perturbed by ``perturbation`` [m] (default
     PERTURBATION); returns the result dict (module docstring)."""
     from yade import O
-    from engines import scene as scenes
-    from engines.preflight import InputError, preflight
-    from engines.time_step import resolve_dt
-    from engines.tradeoffs import perturbed
-    from engines.yade_coupling import YadeCoupling
-    from packing.deposition import scene_packing
+
+    from engines.model.time_step import resolve_dt
+    from engines.run import scene as scenes
+    from engines.run.preflight import InputError, preflight
+    from engines.studies.tradeoffs import perturbed
+    from engines.yade.coupling import YadeCoupling
+    from engines.yade.deposition import scene_packing
 
     sc = scenes.preset(case, overrides)
     packing = scene_packing(sc)
@@ -305,9 +307,9 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
 
 # -- study (Debian's Python) ----------------------------------------------------------------------
 def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
-    """(jobs for yade_scripts.sweep, {job name: (case, knob, value)}) of the study's points (of the
+    """(jobs for engines.run.sweep, {job name: (case, knob, value)}) of the study's points (of the
     knobs ``knobs`` only, when given)."""
-    from yade_scripts.sweep import Job
+    from engines.run.sweep import Job
     jobs, meta = [], {}
     for case, knob, value in points(cases):
         if knobs and knob not in knobs:
@@ -326,7 +328,7 @@ def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
 
 
 def study_main(argv):
-    from engines.preflight import ArgumentParser, number
+    from engines.run.preflight import ArgumentParser, number
     ap = ArgumentParser(prog="tradeoffs.py study")
     ap.add_argument("--out", default=os.path.join("out", "tradeoffs"))
     ap.add_argument("--workers", type=number(int, 1), default=int(os.environ.get("TRADE_JOBS", "1")),
@@ -338,7 +340,7 @@ def study_main(argv):
     a = ap.parse_args(argv)
     jobs, meta = study_jobs(a.cases, knobs=a.knobs)
     if not a.analyse_only:
-        from yade_scripts.sweep import run_sweep
+        from engines.run.sweep import run_sweep
         run_sweep(jobs, os.path.join(a.out, "runs"), workers=a.workers, scheduler=a.scheduler)
     from postproc.tradeoffs import analyse
     analyse(a.out, jobs, meta)

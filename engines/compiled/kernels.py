@@ -1,0 +1,578 @@
+"""Compiled (numba) per-step kernels: the paper's contact law, the pore measure, the Darcy step and
+the eq 33 pressure forces. No YADE.
+
+Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, which stays the
+reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 relative):
+
+  contact_forces    engines.model.contact.ContactLaw.forces          (eq 1-13, 26-27)
+  measure           engines.model.pores.measure              (eq 29, 43b; ``turn`` below)
+  darcy_flows       engines.model.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
+  darcy_update      engines.model.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
+  pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
+  tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
+
+and two per-step kernels chain them, so that a step costs one call from Python (each array passed to
+a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~60 arrays):
+
+  law_step          engines.model.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
+  water_step        engines.model.water_model.WaterModel.advance  (measure, flows, update, eq 32, 33)
+  dem_step          engines.model.pore_dem.PoreDEM.step: law_step, tie_forces, water_step when due, the
+                    forces to write
+  water_forces_step engines.yade.water_engine.WaterEngine: water_step and the forces to write
+
+``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
+functions of engines.yade.yadebulk, passed as addresses (so that this module stays cacheable and free of
+YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the bridge's O.step())
+between its water steps: many DEM steps in one call.
+
+The pore measure takes each link's turn since the build with ``turn`` (a short series for the
+small turns between rebuilds, else atan2) where pore_geometry.measure calls arctan2: the same
+angles to round-off, the measure 30 % cheaper.
+
+Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
+(the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
+written into arrays the caller owns (allocated once per network or contact list). numba compiles on
+first use and caches the machine code beside this file (``cache=True``); fastmath is off.
+"""
+import math
+
+import numba as nb
+import numpy as np
+from llvmlite import ir
+from numba.extending import intrinsic
+
+jit = nb.njit(cache=True, nogil=True)
+
+# columns of the per-pair contact state (engines.model.contact.ContactLaw.state)
+TOUCHING, U_N, E_N, E_S, VN_COLL, F_N = range(6)
+SPRING_CODE = {"a": 0, "b": 0, "c": 1, "d": 2}  # linear, capped elastic, capped hysteretic
+
+
+def contact_params(s, dt):
+    """The float parameters of ``contact_forces`` from ContactSettings ``s`` and dt [s]."""
+    return np.array([s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m, dt])
+
+
+@jit
+def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+    """Forces F (N, 2) and moments M (N,) of all pairs (pi, pj); updates ``state`` (m, 6) in place.
+
+    prm = (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); spring = SPRING_CODE; acc_j (N, 3) is scratch.
+    Writes the indices of the pairs that stopped touching into ``lost``; returns their number.
+    """
+    kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7]
+    F[:] = 0.0
+    M[:] = 0.0
+    acc_j[:] = 0.0
+    n_lost = 0
+    for k in range(len(pi)):
+        i, j = pi[k], pj[k]
+        dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
+        R = math.sqrt(dx * dx + dz * dz)
+        nx, nz = dx / R, dz / R                                 # eq 2
+        delta = r[i] + r[j] + eps_m - R
+        now = delta >= 0                                        # eq 1, 26
+        was = state[k, TOUCHING] != 0.0
+        new = now and not was
+        dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
+        dun = dux * nx + duz * nz                               # eq 3a
+        if not (now or was):  # apart before and now: no force, the state of a pair out of reach
+            state[k, U_N] += dun
+            state[k, E_N] = state[k, E_S] = state[k, F_N] = 0.0
+            continue
+        dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]   # eq 3b
+        u_n = delta if new else state[k, U_N] + dun
+        if spring == 0:
+            e_n = kn * u_n                                      # eq 4a, 5a
+        elif spring == 1:
+            e_n = min(kn * u_n, f_max)                          # eq 27, elastic
+        else:
+            e_n = min(kn * delta if new else state[k, E_N] + kn * dun, f_max)  # eq 27, hysteretic
+        d_n = eta_n * dun / dt                                  # eq 4b, 5b
+        e_s = (0.0 if new else state[k, E_S]) + ks * dus        # eq 8a, 9a
+        d_s = eta_s * dus / dt                                  # eq 8b, 9b
+        if e_n < 0 or not now:                                  # eq 6, 10
+            e_n = d_n = e_s = d_s = 0.0
+        if abs(e_s) > mu * e_n:                                 # eq 11
+            e_s = mu * e_n * (1.0 if e_s > 0 else -1.0)
+            d_s = 0.0
+        f_n, f_s = e_n + d_n, e_s + d_s                         # eq 7, 12
+        fx = -f_n * nx + f_s * nz                               # eq 13a, on i
+        fz = -f_n * nz - f_s * nx                               # eq 13b
+        F[i, 0] += fx
+        F[i, 1] += fz
+        M[i] += r[i] * f_s
+        acc_j[j, 0] += fx
+        acc_j[j, 1] += fz
+        acc_j[j, 2] += r[j] * f_s
+        if was and not now:
+            lost[n_lost] = k
+            n_lost += 1
+        if new:
+            state[k, VN_COLL] = dun / dt
+        state[k, TOUCHING] = 1.0 if now else 0.0
+        state[k, U_N] = u_n
+        state[k, E_N] = e_n
+        state[k, E_S] = e_s if now else 0.0
+        state[k, F_N] = f_n if now else 0.0
+    for a in range(len(F)):
+        F[a, 0] -= acc_j[a, 0]
+        F[a, 1] -= acc_j[a, 1]
+        M[a] = -(M[a] + acc_j[a, 2])                            # eq 13c: -r f_s on both
+    return n_lost
+
+
+@jit
+def max_sq_displacement(xz, xz_ref):
+    """max_a |xz_a - xz_ref_a|^2 [m^2] (the Verlet-list check)."""
+    out = 0.0
+    for a in range(len(xz)):
+        dx, dz = xz[a, 0] - xz_ref[a, 0], xz[a, 1] - xz_ref[a, 1]
+        out = max(out, dx * dx + dz * dz)
+    return out
+
+
+@jit
+def spin_update(omega, M, inertia, mobile, dt):
+    """omega += M / I dt for mobile discs (eq 14c, 16c)."""
+    for a in range(len(omega)):
+        if mobile[a]:
+            omega[a] += M[a] / inertia[a] * dt
+
+
+@jit
+def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+             r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+    """One step of PaperLaw: du = xz - xz_prev (eq 17), dpsi = omega dt, the contact forces F, M
+    (``contact_forces``, its arguments from r on), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
+    Returns the number of pairs that stopped touching (indices in ``lost``), or -1, having changed
+    nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
+    if max_sq_displacement(xz, xz_list) >= half_skin2:
+        return -1
+    for a in range(len(xz)):
+        du[a, 0] = xz[a, 0] - xz_prev[a, 0]
+        du[a, 1] = xz[a, 1] - xz_prev[a, 1]
+        dpsi[a] = omega[a] * dt
+    n_lost = contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    spin_update(omega, M, inertia, mobile, dt)
+    xz_prev[:] = xz
+    return n_lost
+
+
+# atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 7 terms leave < 1e-22 relative
+SMALL_TURN = 0.03
+ATAN_SERIES = np.array([(-1.0) ** k / (2 * k + 1) for k in range(7)])
+
+
+@jit
+def turn(s, c):
+    """atan2(s, c) [rad]: the angle whose sine and cosine are proportional to s and c. A link
+    turns little between rebuilds (s small against c > 0): then the series of atan(s / c), about
+    a quarter of the cost of atan2, equal to it to round-off; else atan2."""
+    if c > 0.0 and abs(s) <= SMALL_TURN * c:
+        t = s / c
+        t2 = t * t
+        acc = 0.0
+        for k in range(len(ATAN_SERIES) - 1, -1, -1):  # Horner, highest term first
+            acc = ATAN_SERIES[k] + t2 * acc
+        return t * acc
+    return math.atan2(s, c)
+
+
+@jit
+def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, void, length, contact, theta, vec, rot, cross):
+    """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
+
+    vec0 (L, 2): the link vectors at the build (PoreNetwork.link_vec0). rot, cross (L,) are
+    scratch: rot is each link's turn since the build, so that a corner's change is the difference
+    of two turns, as in pore_geometry.measure. ``contact`` is a bool array.
+    """
+    for l in range(len(links)):
+        i, j = links[l, 0], links[l, 1]
+        xi, zi = xz[i, 0], xz[i, 1]
+        dx, dz = xz[j, 0] - xi, xz[j, 1] - zi
+        length[l] = math.sqrt(dx * dx + dz * dz)
+        rot[l] = turn(vec0[l, 0] * dz - vec0[l, 1] * dx, vec0[l, 0] * dx + vec0[l, 1] * dz)
+        cross[l] = xi * dz - dx * zi
+        vec[l, 0], vec[l, 1] = dx, dz
+        contact[l] = r[i] + r[j] + eps_m >= length[l]
+    poly[:] = 0.0
+    sect[:] = 0.0
+    two_pi = 2 * math.pi
+    for c in range(len(c_pore)):
+        p = c_pore[c]
+        poly[p] += c_sign[c] * cross[c_link[c]]
+        x = rot[c_link[c]] - rot[c_next[c]] + math.pi
+        if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
+            x = x % two_pi
+        theta[c] = c_theta0[c] + x - math.pi                    # eq 29
+        sect[p] += theta[c] * c_r2[c]
+    for p in range(len(poly)):
+        poly[p] = 0.5 * poly[p]
+        sect[p] = 0.5 * sect[p] + rattler_area[p]
+        void[p] = poly[p] - sect[p]
+
+
+@jit
+def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bottom, wp,
+                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j):
+    """Throat flows q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and inflow
+    q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too.
+
+    wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
+    bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
+    exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j (Np,) are scratch.
+    """
+    E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
+    for p in range(len(W)):
+        U[p] = E_w * (W[p] - A[p]) / W[p]                       # eq 32
+        per_k = W[p] / E_w if A[p] > a_min else 0.0             # outside at U = 0: A_ij -> W_i
+        g_s = k1 * surface[p] * per_k
+        g_d = k3 * drained[p] * per_k
+        q_s[p] = g_s * U[p]
+        q_d[p] = g_d * U[p]
+        q_in[p] = q_w * bottom[p]
+        g_b[p] = g_s + g_d
+        acc_i[p] = acc_j[p] = 0.0
+    for t in range(len(ti)):
+        i, j = ti[t], tj[t]
+        if A[i] > a_min and A[j] > a_min:
+            k = k2 if link_contact[t_link[t]] else k1           # eq 43
+            g[t] = k * (W[i] * W[j] / (A[i] + A[j])) / E_w      # eq 40
+        else:
+            g[t] = 0.0
+        q[t] = g[t] * (U[i] - U[j])                             # eq 39, 41
+        acc_i[i] += g[t]
+        acc_j[j] += g[t]
+    lam = 0.0
+    for p in range(len(W)):
+        if A[p] > a_min:
+            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) / (W[p] ** 2 / (E_w * A[p])))
+    return lam
+
+
+@jit
+def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
+    """W <- W - (sum of throat outflow + q_s + q_d - q_in) h (eq 42); balance += (inflow, surface,
+    side) volumes [m^2]. Returns the first pore whose W would fall to <= 0 (nothing changed), or -1."""
+    out_i[:] = 0.0
+    out_j[:] = 0.0
+    for t in range(len(ti)):
+        out_i[ti[t]] += q[t]
+        out_j[tj[t]] += q[t]
+    for p in range(len(W)):
+        if W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h <= 0:
+            return p
+    s_in = s_s = s_d = 0.0
+    for p in range(len(W)):
+        W[p] = W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h
+        s_in += q_in[p]
+        s_s += q_s[p]
+        s_d += q_d[p]
+    balance[0] += s_in * h
+    balance[1] += s_s * h
+    balance[2] += s_d * h
+    return -1
+
+
+# The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
+# unboxes each array argument, ~0.2 us each): the parts in this order, each flattened.
+WATER_INTS = ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link", "throat_i", "throat_j",
+              "throat_link")
+WATER_FLOATS = ("corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
+                "bottom", "wp", "eps_m_a_min", "r",                                      # inputs
+                "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",  # measure
+                "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",             # flows
+                "balance", "Fj", "lam")                                                  # update, forces
+
+
+def pack(parts):
+    """(buffer, offsets): the arrays ``parts`` flattened one after the other into one buffer; part k
+    is buffer[offsets[k]:offsets[k + 1]]."""
+    at = np.cumsum([0] + [np.size(p) for p in parts]).astype(np.int64)
+    return np.concatenate([np.ravel(p) for p in parts]), at
+
+
+@jit
+def _part(buf, at, k):
+    return buf[at[k]:at[k + 1]]
+
+
+@jit
+def _part2(buf, at, k):
+    """Part k as an (n, 2) array."""
+    p = buf[at[k]:at[k + 1]]
+    return p.reshape((len(p) // 2, 2))
+
+
+@jit
+def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """Advance the water by h [s] at centres xz and recompute the pressure forces F (N, 2) [N]
+    (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
+    n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
+    throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
+    arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (``pack``);
+    "lam" gets the Gershgorin bound of the first and of the last flows, "balance" the water of this
+    step. Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or
+    -1 - p when pore p would fall dry (W as after the previous sub-step)."""
+    links, link_pores = _part2(ints, i_at, 0), _part2(ints, i_at, 1)
+    c_pore, c_link, c_next = _part(ints, i_at, 2), _part(ints, i_at, 3), _part(ints, i_at, 4)
+    ti, tj, t_link = _part(ints, i_at, 5), _part(ints, i_at, 6), _part(ints, i_at, 7)
+    c_sign, vec0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part2(floats, f_at, 1), _part(floats, f_at, 2),
+                                    _part(floats, f_at, 3))
+    rattler_area, surface, drained, bottom = (_part(floats, f_at, 4), _part(floats, f_at, 5), _part(floats, f_at, 6),
+                                              _part(floats, f_at, 7))
+    wp, eps_m, a_min, r = _part(floats, f_at, 8), floats[f_at[9]], floats[f_at[9] + 1], _part(floats, f_at, 10)
+    poly, sect, A_measured, length = (_part(floats, f_at, 11), _part(floats, f_at, 12), _part(floats, f_at, 13),
+                                      _part(floats, f_at, 14))
+    contact, theta, vec = _part(floats, f_at, 15), _part(floats, f_at, 16), _part2(floats, f_at, 17)
+    rot, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
+    q, q_s, q_d, q_in = _part(floats, f_at, 20), _part(floats, f_at, 21), _part(floats, f_at, 22), _part(floats, f_at, 23)
+    g, g_b, U = _part(floats, f_at, 24), _part(floats, f_at, 25), _part(floats, f_at, 26)
+    acc_i, acc_j, balance = _part(floats, f_at, 27), _part(floats, f_at, 28), _part(floats, f_at, 29)
+    Fj, lam = _part2(floats, f_at, 30), _part(floats, f_at, 31)
+
+    measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+            poly, sect, A_measured, length, contact, theta, vec, rot, cross)
+    A = A_measured
+    if smoothing:  # eq 45
+        for p in range(len(A_prev)):
+            A_prev[p] = 0.5 * (A_prev[p] + A_measured[p])
+        A = A_prev
+    flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
+    lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
+    limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
+    n_sub = 1
+    if h > limit:
+        if not substep:
+            return 0
+        n_sub = int(math.ceil(h / limit))
+    balance[:] = 0.0
+    for sub in range(n_sub):
+        if sub > 0:
+            lam[1] = darcy_flows(W, A, contact, *flow)
+        if smoothing:  # eq 46
+            for t in range(len(q)):
+                if has_q_prev:
+                    q[t] = 0.5 * (q_prev[t] + q[t])
+                q_prev[t] = q[t]
+            has_q_prev = True
+        bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
+        if bad >= 0:
+            return -1 - bad
+    pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
+    pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
+    return n_sub
+
+
+LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
+
+
+@jit
+def tie_forces(xz, du, dt, pairs, rest, prm, T):
+    """x-forces T[0] (N,) [N] of the side-wall ties (engines.model.side_walls) at centres xz (N, 2) with
+    velocities du / dt: tie t pulls its upper disc pairs[t, 1] by f = -k's [(x_u - x_l) - rest[t]]
+    - eta's (v_u - v_l) and its lower disc pairs[t, 0] by -f; prm = (k's, eta's); T (2, N), T[1]
+    is scratch."""
+    ks, eta = prm[0], prm[1]
+    T[:] = 0.0
+    for t in range(len(rest)):
+        lo, up = pairs[t, 0], pairs[t, 1]
+        f = -ks * ((xz[up, 0] - xz[lo, 0]) - rest[t]) - eta * (du[up, 0] / dt - du[lo, 0] / dt)
+        T[0, up] += f
+        T[1, lo] += f
+    for a in range(T.shape[1]):
+        T[0, a] -= T[1, a]
+
+
+@jit
+def dem_step(xz, F_out, rows, held, water_due,
+             xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
+             acc_j, lost,
+             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+             tie_pairs, tie_rest, tie_prm, T):
+    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (its arguments from xz_prev
+    to lost), ``tie_forces`` of the side walls (from tie_pairs on; no ties: empty arrays),
+    ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water), then
+    F_out = (F + T + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
+    answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list is stale."""
+    n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+                      r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+    if n_lost == LIST_STALE:
+        return n_lost, 0
+    tied = len(tie_rest) > 0
+    if tied:
+        tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T)
+    n_sub = 1
+    if water_due:
+        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at)
+    wet = len(F_water) > 0
+    for k in range(len(rows)):
+        a = rows[k]
+        fx, fz = F[a, 0], F[a, 1]
+        if tied:
+            fx = fx + T[0, a]
+        if wet:
+            fx, fz = fx + F_water[a, 0], fz + F_water[a, 1]
+        F_out[k, 0], F_out[k, 1] = fx + held[k, 0], fz + held[k, 1]
+    return n_lost, n_sub
+
+
+@jit
+def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at,
+                      floats, f_at):
+    """``water_step`` (arguments from h on), then F_out = held + F[rows] (n, 2) [N], the forces to
+    write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n) when it failed."""
+    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at)
+    for k in range(len(rows)):
+        F_out[k, 0] = held[k, 0] + F[rows[k], 0]
+        F_out[k, 1] = held[k, 1] + F[rows[k], 1]
+    return (n_sub if n_sub > 0 else -1), n_sub
+
+
+@intrinsic
+def _c_bulk_call(typingctx, address, ids, n, data):
+    """(*address)(ids, n, data) for the C function int64 f(const int64 *ids, int64 n, double *data)
+    at the integer ``address`` (engines.yade.yadebulk's bulk functions), ids and data addresses too."""
+    def codegen(context, builder, signature, args):
+        i64, ptr = ir.IntType(64), ir.IntType(8).as_pointer()
+        fn = builder.inttoptr(args[0], ir.FunctionType(i64, [ptr, i64, ptr]).as_pointer())
+        return builder.call(fn, [builder.inttoptr(args[1], ptr), args[2], builder.inttoptr(args[3], ptr)])
+    return nb.types.int64(address, ids, n, data), codegen
+
+
+@jit
+def _read_positions(get_pos, ids, xz):
+    return _c_bulk_call(get_pos, ids.ctypes.data, ids.size, xz.ctypes.data)
+
+
+@jit
+def _write_forces(status, set_perm, ids, F):
+    """set_perm(ids <- F) when status >= 0; the bridge's error code (0 when nothing was written)."""
+    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
+
+
+# The two steps between a position read and a force write. Their arguments are spelled out: with
+# *args numba types the argument tuple in Python at every call (measured: 10-120 us a call).
+@jit
+def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held, water_due,
+                     xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
+                     F, M, acc_j, lost,
+                     h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                     tie_pairs, tie_rest, tie_prm, T):
+    """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), set_perm(ids_out <- F_out) if its status
+    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
+    rc = _read_positions(get_pos, ids_in, xz)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = dem_step(xz, F_out, rows, held, water_due,
+                            xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm,
+                            spring, F, M, acc_j, lost,
+                            h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                            tie_pairs, tie_rest, tie_prm, T)
+    return _write_forces(status, set_perm, ids_out, F_out), status, info
+
+
+@jit
+def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
+                              h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """As dem_step_bulk_io for water_forces_step."""
+    rc = _read_positions(get_pos, ids_in, xz)
+    if rc != 0:
+        return rc, -1, 0
+    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+                                     ints, i_at, floats, f_at)
+    return _write_forces(status, set_perm, ids_out, F_out), status, info
+
+
+BALANCE = WATER_FLOATS.index("balance")
+
+
+@jit
+def water_drive_bulk_io(steps, n, k, k0, water_interval, totals, get_pos, set_perm, ids_in, xz, ids_out, F_out, rows,
+                        held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+    """WaterEngine.drive without Python: n DEM steps from step index k, each step whose
+    (index - k0) is a multiple of water_interval preceded by water_forces_step_bulk_io (arguments
+    from get_pos on), each step made by steps() (YADE's O.step(), engines.yade.yadebulk.c_steps).
+    totals (3,) [m^2] gets the water balance (inflow, surface, side) of every water step that
+    needed no sub-steps. Stops before stepping after a water step that did not answer 1 (sub-steps
+    or a failure: its bookkeeping is the caller's) or at an error code. Returns (DEM steps done,
+    water steps done, the last water step's answer or 1, the bridge's error code)."""
+    balance = _part(floats, f_at, BALANCE)
+    n_water = 0
+    for s in range(n):
+        if (k + s - k0) % water_interval == 0:
+            rc, status, n_sub = water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
+                                                          h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+                                                          ints, i_at, floats, f_at)
+            if rc != 0:
+                return s, n_water, n_sub, rc
+            n_water += 1
+            has_q_prev = has_q_prev or smoothing  # eq 46 from the second water step on
+            if n_sub != 1:
+                return s, n_water, n_sub, 0
+            for a in range(3):
+                totals[a] += balance[a]
+        rc = _c_bulk_call(steps, 0, 1, 0)
+        if rc != 0:
+            return s, n_water, 1, rc
+    return n, n_water, 1, 0
+
+
+@jit
+def read_bulk_io(get_pos, ids, xz):
+    """get_pos(ids -> xz): the bridge's position read; returns its error code."""
+    return _read_positions(get_pos, ids, xz)
+
+
+@jit
+def write_rows_bulk_io(set_perm, ids, F, rows, add, out):
+    """out = F[rows] + add, then set_perm(ids <- out): the bridge's permanent-force write of
+    some rows of F plus held forces; returns its error code."""
+    for k in range(len(rows)):
+        out[k, 0] = F[rows[k], 0] + add[k, 0]
+        out[k, 1] = F[rows[k], 1] + add[k, 1]
+    return _write_forces(0, set_perm, ids, out)
+
+
+with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}
+
+
+def dry_water_args():
+    """Arguments of dem_step from h to f_at for a scene without water."""
+    no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
+    return 0.0, no_f, no_f, no_f, False, False, False, np.zeros((0, 2)), no_i, np.zeros(1, np.int64), no_f, \
+        np.zeros(1, np.int64)
+
+
+def no_tie_args():
+    """Arguments of dem_step from tie_pairs on for a scene without side-wall ties."""
+    return np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(2), np.zeros((2, 0))
+
+
+@jit
+def pore_pressures(W, A, E_w, U):
+    """U = E_w (W - A) / W [N/m] (eq 32) into U."""
+    for p in range(len(W)):
+        U[p] = E_w * (W[p] - A[p]) / W[p]
+
+
+@jit
+def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
+    """Force of the pore pressures U on every disc, F (N, 2) [N] (eq 33); Fj (N, 2) is scratch.
+    The outer face and closed faces (link_pores = -1) have U = 0."""
+    F[:] = 0.0
+    Fj[:] = 0.0
+    for l in range(len(links)):
+        p0, p1 = link_pores[l, 0], link_pores[l, 1]
+        s = ((U[p1] if p1 >= 0 else 0.0) - (U[p0] if p0 >= 0 else 0.0)) / length[l]
+        px, pz = -vec[l, 1] * s, vec[l, 0] * s
+        i, j = links[l, 0], links[l, 1]
+        F[i, 0] += r[i] * px
+        F[i, 1] += r[i] * pz
+        Fj[j, 0] += r[j] * px
+        Fj[j, 1] += r[j] * pz
+    for a in range(len(F)):
+        F[a, 0] += Fj[a, 0]
+        F[a, 1] += Fj[a, 1]

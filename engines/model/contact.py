@@ -1,0 +1,297 @@
+"""The paper's contact law between discs (seed 000 §2, eq 1-13, 18-27), vectorised. No YADE.
+
+Per unit thickness: forces in N, stiffnesses in N/m, dashpots in N s/m. Sign conventions are the
+paper's: for a pair (i, j) the normal n points from i to j (cos a = (x_j - x_i)/R, eq 2), the
+tangent t = (-sin a, cos a); normal forces are positive in compression, Delta u_n is positive
+on approach (eq 3a), Delta u_s counter-clockwise (eq 3b, rolling included).
+
+Normal spring variants (Fig. 5): the elastic force follows
+  a, b  e_n = kn u_n                      linear (b is a with eps_m > 0, eq 26)
+  c     e_n = min(kn u_n, f_max)          nonlinear elastic: same path on unloading
+  d     e_n <- min(e_n + kn du_n, f_max)  hysteretic: unloads along kn from the cap (eq 27)
+where u_n is the overlap accumulated by the increments of eq 3a from the moment the pair
+touched (it starts at the overlap reached in that step). Then eq 4-12: d_n = eta_n du_n/dt;
+e_n < 0 -> e_n = d_n = e_s = d_s = 0 (eq 6, 10); |e_s| > mu e_n -> e_s = mu e_n sign(e_s),
+d_s = 0 (eq 11). Forces on i (eq 13): F = -f_n n - f_s t, moment -r_i f_s; j gets the opposite
+force and moment -r_j f_s.
+
+Velocity adjustment at separation (eq 18-24) is in ``separation_adjustment``.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from engines.compiled import kernels
+from engines.model.pores import check_nonnegative
+
+
+@dataclass
+class ContactSettings:
+    """Constants of the contact law; field names match the scene file's [contact] table."""
+
+    spring: str = "c"
+    kn: float = 1.4e6
+    eta_n: float = 5.2
+    ks: float = 3.5e5
+    eta_s: float = 1.3
+    mu: float = 1.0
+    restitution: float = 0.001
+    f_max: float = 2.5
+    eps_m: float = 0.0
+    separation_adjustment: bool = True
+
+    def __post_init__(self):
+        if self.spring not in ("a", "b", "c", "d"):
+            raise ValueError(f"spring must be one of a, b, c, d, got {self.spring!r}")
+        if not np.isfinite(self.kn) or self.kn <= 0:
+            raise ValueError(f"kn must be > 0, got {self.kn}")
+        for name in ("eta_n", "ks", "eta_s", "mu", "restitution", "eps_m"):
+            check_nonnegative(name, getattr(self, name))
+        if self.spring in ("c", "d") and not self.f_max > 0:
+            raise ValueError(f"f_max must be > 0 for spring {self.spring}, got {self.f_max}")
+
+
+def critical_time_step(mass, kn):
+    """Cundall's bound dt < 2 sqrt(m / kn) over the lightest disc [s] (eq 52)."""
+    return 2.0 * np.sqrt(np.min(mass) / kn)
+
+
+@dataclass
+class SeparationEvent:
+    """A pair that touched at the previous step and does not now."""
+
+    i: int
+    j: int
+    normal: np.ndarray   # unit vector from i to j at separation
+    vn_collision: float  # approach velocity at first touch [m/s] (eq 21, positive)
+
+
+class ContactLaw:
+    """State and forces of all disc pairs. Pairs come from a Verlet list (cKDTree) rebuilt when
+    a disc has moved by more than half the skin; state is carried over by pair key.
+
+    ``state`` (m, 6) holds per pair the columns of engines.compiled.kernels (TOUCHING, U_N, E_N, E_S,
+    VN_COLL, F_N): touching flag, accumulated overlap u_n [m], elastic forces e_n, e_s [N],
+    approach velocity at first touch [m/s], last normal force [N]. ``compiled=True`` runs the
+    per-step loop in engines.compiled.kernels.contact_forces (the same arithmetic as the NumPy code below,
+    which stays the readable path); the returned F, M are then buffers reused by the next call.
+    """
+
+    def __init__(self, settings, r, mobile, skin=None, compiled=False):
+        self.s = settings
+        self.r = np.ascontiguousarray(r, float)
+        self.mobile = np.asarray(mobile, bool)
+        self.n = len(self.r)
+        self.skin = 0.25 * self.r.min() if skin is None else skin
+        self.reach = 2 * self.r.max() + settings.eps_m
+        self.i = self.j = np.zeros(0, np.int64)
+        self.xz_list = None
+        self.state = np.zeros((0, 6))
+        self.list_builds = 0
+        self.compiled = compiled
+        if compiled:
+            self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
+            self._spring = kernels.SPRING_CODE[settings.spring]
+            self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
+            self._args = None
+
+    @property
+    def half_skin2(self):
+        """(skin / 2)^2 [m^2]: the list is rebuilt once a disc has moved that far (squared)."""
+        return (0.5 * self.skin) ** 2
+
+    def kernel_args(self, dt):
+        """The arguments of kernels.contact_forces after (xz, du, dpsi), for time step dt [s]."""
+        if self._prm[-1] != dt:
+            self._prm = kernels.contact_params(self.s, dt)
+            self._args = None
+        if self._args is None:
+            self._args = (self.r, self.i, self.j, self.state, self._prm, self._spring, self._F, self._M, self._acc,
+                          self._lost)
+        return self._args
+
+    @property
+    def touching(self):
+        return self.state[:, kernels.TOUCHING] != 0
+
+    @property
+    def f_n(self):
+        """Normal force of each pair at the last step [N] (0 when not touching)."""
+        return self.state[:, kernels.F_N]
+
+    def _update_list(self, xz):
+        """Rebuild the pair list at xz if a disc has moved by half the skin since the last build:
+        the pairs with a mobile disc and R <= r_i + r_j + eps_m + skin, so that no other pair can
+        touch before the next build."""
+        if self.xz_list is not None:
+            if self.compiled:
+                moved = kernels.max_sq_displacement(xz, self.xz_list)
+            else:
+                moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
+            if moved < self.half_skin2:
+                return
+        pairs = cKDTree(xz).query_pairs(self.reach + self.skin, output_type="ndarray").astype(np.int64)
+        d = xz[pairs[:, 1]] - xz[pairs[:, 0]]
+        near = np.hypot(d[:, 0], d[:, 1]) <= self.r[pairs[:, 0]] + self.r[pairs[:, 1]] + self.s.eps_m + self.skin
+        pairs = pairs[near & (self.mobile[pairs[:, 0]] | self.mobile[pairs[:, 1]])]
+        pairs.sort(axis=1)
+        key_new = pairs[:, 0] * self.n + pairs[:, 1]
+        order = np.argsort(key_new)
+        pairs, key_new = pairs[order], key_new[order]
+        key_old = self.i * self.n + self.j  # sorted by construction
+        old, self.state = self.state, np.zeros((len(pairs), 6))
+        if len(key_old):
+            pos = np.minimum(np.searchsorted(key_old, key_new), len(key_old) - 1)
+            hit = key_old[pos] == key_new
+            self.state[hit] = old[pos[hit]]
+        self.i, self.j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
+        self.xz_list = xz.copy()
+        self.list_builds += 1
+        self._lost = np.zeros(len(pairs), np.int64)
+        self._args = None
+
+    def forces(self, xz, du, dpsi, dt):
+        """Contact forces (N, 2) [N] and moments (N,) [N m, counter-clockwise] at positions xz.
+
+        du (N, 2): displacement increments of the last step [m] (eq 17); dpsi (N,): rotation
+        increments [rad, counter-clockwise]. Returns (F, M, separations).
+        """
+        self._update_list(xz)
+        if self.compiled:
+            n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
+            return self._F, self._M, self._separations(xz, self._lost[:n_lost])
+        s, r, i, j = self.s, self.r, self.i, self.j
+        touching, u_n_old, e_n_old, e_s_old, vn_coll, _ = self.state.T
+        touching = touching != 0
+        d = xz[j] - xz[i]
+        R = np.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2)
+        nx, nz = d[:, 0] / R, d[:, 1] / R  # cos a, sin a (eq 2)
+        delta = r[i] + r[j] + s.eps_m - R
+        now = delta >= 0  # eq 1, 26
+        new = now & ~touching
+        dux, duz = du[i, 0] - du[j, 0], du[i, 1] - du[j, 1]
+        dun = dux * nx + duz * nz  # eq 3a
+        dus = -dux * nz + duz * nx + r[i] * dpsi[i] + r[j] * dpsi[j]  # eq 3b
+        u_n = np.where(new, delta, u_n_old + dun)
+        if s.spring in ("a", "b"):
+            e_n = s.kn * u_n  # eq 4a, 5a
+        elif s.spring == "c":
+            e_n = np.minimum(s.kn * u_n, s.f_max)  # eq 27, elastic
+        else:
+            e_n = np.minimum(np.where(new, s.kn * delta, e_n_old + s.kn * dun), s.f_max)  # eq 27
+        d_n = s.eta_n * dun / dt  # eq 4b, 5b
+        cut = (e_n < 0) | ~now  # eq 6 (and no force out of reach)
+        e_n = np.where(cut, 0.0, e_n)
+        d_n = np.where(cut, 0.0, d_n)
+        e_s = np.where(new, 0.0, e_s_old) + s.ks * dus  # eq 8a, 9a
+        d_s = s.eta_s * dus / dt  # eq 8b, 9b
+        e_s = np.where(cut, 0.0, e_s)  # eq 10
+        d_s = np.where(cut, 0.0, d_s)
+        slip = np.abs(e_s) > s.mu * e_n
+        e_s = np.where(slip, s.mu * e_n * np.sign(e_s), e_s)  # eq 11a
+        d_s = np.where(slip, 0.0, d_s)  # eq 11b
+        f_n, f_s = e_n + d_n, e_s + d_s  # eq 7, 12
+        fx = -f_n * nx + f_s * nz  # eq 13a, on i
+        fz = -f_n * nz - f_s * nx  # eq 13b, on i
+        n = self.n
+        F = np.column_stack([np.bincount(i, fx, minlength=n) - np.bincount(j, fx, minlength=n),
+                             np.bincount(i, fz, minlength=n) - np.bincount(j, fz, minlength=n)])
+        M = -(np.bincount(i, r[i] * f_s, minlength=n) + np.bincount(j, r[j] * f_s, minlength=n))  # eq 13c
+        separations = self._separations(xz, np.flatnonzero(touching & ~now))
+        self.state = np.column_stack([now, u_n, e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
+                                      np.where(now, f_n, 0.0)])
+        return F, M, separations
+
+    def _separations(self, xz, lost):
+        """SeparationEvents of the pairs ``lost`` (their vn_coll is that of their first touch)."""
+        out = []
+        for k in lost.tolist():
+            a, b = self.i[k], self.j[k]
+            d = xz[b] - xz[a]
+            R = np.sqrt(d[0] ** 2 + d[1] ** 2)
+            out.append(SeparationEvent(int(a), int(b), np.array([d[0] / R, d[1] / R]),
+                                       float(self.state[k, kernels.VN_COLL])))
+        return out
+
+    def touch_count(self):
+        """Number of touching partners of each disc."""
+        t = self.touching
+        return np.bincount(self.i[t], minlength=self.n) + np.bincount(self.j[t], minlength=self.n)
+
+    def contact_pairs(self):
+        """(pairs (K, 2), normal force f_n (K,), elastic shear force e_s (K,) [N]) of the touching
+        pairs, for plots and VTK (e_s along t of eq 3b; the dashpot part d_s is not kept)."""
+        t = self.touching
+        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy(), self.state[t, kernels.E_S].copy()
+
+
+def separation_adjustment(events, touch_count, vel, mass, mobile, e):
+    """New velocities of discs that became free this step (eq 18-24, Fig. 3). Returns {disc: v}.
+
+    A disc is free when it touches nothing now. For a free disc i that left j:
+      Vn_i = v_i . n, Vn_j = -v_j . n (eq 20), approach positive; the collision value Vn_ij is
+      the approach velocity recorded when the pair first touched (eq 21).
+      Only a separation faster than restitution allows (-Vn'_ij > e Vn_ij, eq 18) is adjusted.
+      (a) j still touches others or is a wall: scale i's normal velocity so -Vn''_ij/Vn_ij = e
+          (eq 22-23). (b) i left several discs: the smallest factor Rk_i, along that pair's normal.
+      (c) j is free too but had other partners: j is adjusted first, then i against the new j.
+      (d) i and j touched only each other: both, conserving their normal momentum (eq 24).
+    Eq 24b's left side is read with the separation velocities (the momentum the adjustment keeps).
+    """
+    by_disc = {}
+    for ev in events:
+        by_disc.setdefault(ev.i, []).append(ev)
+        by_disc.setdefault(ev.j, []).append(ev)
+    free = {k for k in by_disc if mobile[k] and touch_count[k] == 0}
+    v = {k: np.asarray(vel[k], float).copy() for k in by_disc}
+    done = set()
+
+    def normal_parts(ev, a):
+        """(Vn_a, Vn_b, n from a to b) for disc a of the event, eq 20."""
+        b, n = (ev.j, ev.normal) if ev.i == a else (ev.i, -ev.normal)
+        return float(v[a] @ n), float(-(v[b] @ n)), b, n
+
+    # (d) isolated pairs first, then (a)/(b) against discs that are not free, then (c)
+    for a in sorted(free):
+        evs = by_disc[a]
+        if a in done or len(evs) != 1:
+            continue
+        vn_a, vn_b, b, n = normal_parts(evs[0], a)
+        if b in free and len(by_disc[b]) == 1:
+            target = -e * evs[0].vn_collision
+            if -(vn_a + vn_b) > e * evs[0].vn_collision > 0:
+                P = mass[a] * vn_a - mass[b] * vn_b  # eq 24b
+                new_a = (P + mass[b] * target) / (mass[a] + mass[b])  # Rk_a Vn_a
+                new_b = target - new_a  # eq 24a
+                v[a] -= (vn_a - new_a) * n
+                v[b] += (vn_b - new_b) * n
+            done |= {a, b}
+    def adjust(a, evs):  # eq 22-23 against the given separations; (b): the smallest Rk_a
+        best = None
+        for ev in evs:
+            vn_a, vn_b, b, n = normal_parts(ev, a)
+            if vn_a == 0 or not -(vn_a + vn_b) > e * ev.vn_collision > 0:
+                continue
+            rk = (-e * ev.vn_collision - vn_b) / vn_a  # eq 22
+            if best is None or rk < best[0]:
+                best = (rk, vn_a, n)
+        if best is not None:
+            rk, vn_a, n = best
+            v[a] -= (1 - rk) * vn_a * n  # eq 23
+        done.add(a)
+
+    def partner(ev, a):
+        return ev.j if ev.i == a else ev.i
+
+    pending = sorted(free - done)
+    for a in pending:  # (a), (b): every partner is a wall or still touches others
+        if all(partner(ev, a) not in free for ev in by_disc[a]):
+            adjust(a, by_disc[a])
+    for a in sorted(free - done):  # (c) first the partner j, against the discs that are not free
+        fixed = [ev for ev in by_disc[a] if partner(ev, a) not in free]
+        if fixed:
+            adjust(a, fixed)
+    for a in sorted(free - done):  # (c) then i, against the adjusted j
+        adjust(a, by_disc[a])
+    return {k: v[k] for k in done if mobile[k]}

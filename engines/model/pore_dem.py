@@ -1,0 +1,225 @@
+"""One DEM step of the seed-000 model without YADE: contact law, spin, pores and pore water, loading.
+
+With the paper's law, the YADE engine (engines.yade.paper_law_engine.PaperLawEngine, set up by
+engines/yade/coupling.py) reads the disc centres in bulk, calls ``PoreDEM.step`` and writes the
+forces back; YADE's NewtonIntegrator then integrates the translations
+(v += F/m dt, x += v dt: eq 14-17) with gravity. The order within step k (t = k dt) is the
+contract shared with the reference (engines/reference/model.py):
+
+  a. du = x_t - x_{t-dt}, dpsi = omega dt (zero at k = 0)
+  b. contact forces (engines.model.contact, eq 1-13)
+  c. velocity adjustment of discs that became free (eq 18-24)
+  d. water: pores rebuilt when k > 0 and k % rebuild_interval == 0; water advanced when
+     k % water_interval == 0 by water_interval dt at the areas of x_t; pressure forces (eq 33)
+     recomputed then and held in between
+  e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
+     it lives in the law, computed in b's call and independent of d)
+  f. moving walls: the base motion (engines.model.ground_motion.BaseMotion, constant average
+     acceleration) is advanced from t to t + dt; ``wall_velocity`` = (u(t + dt) - u(t)) / dt is the
+     velocity the caller gives the driven walls for this step, so x += v dt lands them on u(t + dt)
+Side walls on springs ([loading] side_walls = "springs", Fig. 27): the side-wall discs move in x
+under the contact forces, the pore pressure forces of eq 33 (they bound pores like any disc) and
+the ties of engines.model.side_walls (added to the law's forces in b, with the tie velocities du/dt of
+this step); the caller integrates them in x only.
+Gravity -m g and buoyancy +rho_w pi r^2 g (water scenes: the buoyant weight of eq 34b) are
+constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent forces).
+"""
+import numpy as np
+
+from engines.compiled import kernels
+from engines.model import ground_motion
+from engines.model import pores as pg
+from engines.model.contact import critical_time_step
+from engines.model.observe import block_means, box_window, porosity
+from engines.model.paper_law import PaperLaw
+from engines.model.side_walls import SideWallTies
+from engines.model.water_model import WaterModel
+
+
+def disc_masses(scene, packing):
+    """Mass rho f pi r^2 [kg per m thickness] and moment of inertia m r^2/2 (SPEC §1, eq 15)."""
+    m = scene.material.rho * packing.density_factor * np.pi * packing.r**2
+    return m, 0.5 * m * packing.r**2
+
+
+def check_time_step(scene, mobile_mass):
+    """Refuse dt above dt_safety x 2 sqrt(m_min / kn) (eq 52)."""
+    dt = scene.numerics.dt
+    limit = scene.numerics.dt_safety * critical_time_step(mobile_mass, scene.contact.kn)
+    if dt > limit:
+        raise ValueError(f"[numerics] dt = {dt:.3e} s exceeds the stability limit {limit:.3e} s "
+                         f"(dt_safety x 2 sqrt(m_min/kn), eq 52)")
+
+
+def side_wall_ties(scene, packing):
+    """The Fig. 27 ties of the side-wall columns (engines.model.side_walls.SideWallTies) when
+    [loading] side_walls = "springs", else None."""
+    if scene.loading.side_walls != "springs":
+        return None
+    c = scene.contact
+    return SideWallTies(packing.xz, packing.group, c.ks_wall, c.eta_s_wall)
+
+
+def check_tie_time_step(scene, ties, mass):
+    """Refuse dt above sqrt(m_min / k'_s) of the side-wall ties (engines.model.side_walls)."""
+    if ties is None:
+        return
+    limit = ties.stable_time_step(mass)
+    if scene.numerics.dt > limit:
+        raise ValueError(f"[numerics] dt = {scene.numerics.dt:.3e} s exceeds the stability limit {limit:.3e} s of "
+                         f"the side-wall ties (sqrt(m_min / k's), k's = [contact] ks_wall = {ties.ks:.3g} N/m)")
+
+
+def moving_walls(scene, packing):
+    """(N,) bool: the wall discs that follow the input acceleration ([loading] moves)."""
+    if scene.loading.type == "none":
+        return np.zeros(len(packing.r), bool)
+    groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[scene.loading.moves]
+    return np.isin(packing.group, groups)
+
+
+def water_model(scene, packing, compiled=True):
+    """The scene's WaterModel on the packing's discs (true radii), or None for a dry scene."""
+    settings = scene.water_settings()
+    if settings is None:
+        return None
+    num = scene.numerics
+    return WaterModel(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
+                      num.dt, num.rebuild_interval, num.water_interval, compiled)
+
+
+def pore_state(water, xz, r):
+    """(network, measures, U) of PoreWater ``water`` at xz, or None for a dry scene."""
+    if water is None:
+        return None
+    m = pg.measure(water.net, xz, r)
+    return water.net, m, water.pressure(m.void_area)
+
+
+def block_pressures(water, xz, r, bounds):
+    """Mean excess pore pressure of each output block [N/m] (nan where no pore or dry)."""
+    state = pore_state(water, xz, r)
+    if state is None:
+        return np.full(len(bounds), np.nan)
+    net, _, U = state
+    return block_means(pg.pore_centroids(net, xz)[:, 1], U, bounds)
+
+
+def porosity_window(scene, packing):
+    """The fixed rectangle whose void fraction is the reported porosity ([output] porosity_window,
+    engines.model.observe.box_window), or None for a packing without both side-wall columns."""
+    if not (np.any(packing.group == pg.WALL_LEFT) and np.any(packing.group == pg.WALL_RIGHT)):
+        return None
+    return box_window(packing, scene.output.porosity_window)
+
+
+def window_porosity(packing, window, xz, base_disp=0.0):
+    """Void fraction of ``window`` moved with the base by ``base_disp`` [m] around the particles
+    at xz (exact disc-rectangle areas; independent of the pore mesh); nan without a window."""
+    if window is None:
+        return np.nan
+    mob = packing.mobile
+    return porosity(xz[mob], packing.r[mob], window.shifted(base_disp))
+
+
+def kinetic_energy(mass, inertia, mobile, vel, omega):
+    """Translational + rotational kinetic energy of the mobile discs [J per m]."""
+    v2 = np.sum(vel**2, axis=1)
+    return float(0.5 * np.sum(mass[mobile] * v2[mobile]) + 0.5 * np.sum(inertia[mobile] * omega[mobile] ** 2))
+
+
+class PoreDEM:
+    """State and per-step work of one scene (see the module docstring for the order).
+
+    ``law``: the paper's contact law (engines.model.paper_law.PaperLaw); ``water_model``: the pores and
+    water (engines.model.water_model.WaterModel) or None for a dry scene. ``compiled=False`` runs the
+    readable NumPy path of both (the compiled kernels are tested against it)."""
+
+    def __init__(self, scene, packing, compiled=True):
+        self.scene, self.packing = scene, packing
+        self.r = packing.r
+        self.mobile = packing.mobile
+        self.mass, self.inertia = disc_masses(scene, packing)
+        self.dt = scene.numerics.dt
+        check_time_step(scene, self.mass[self.mobile])
+        if scene.numerics.damping_eq44:
+            raise ValueError("[numerics] damping_eq44: not available in the YADE path (NewtonIntegrator "
+                             "moves x by v dt); the reference implements it")
+        self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
+        self.k = 0
+        accel = ground_motion.input_acceleration(scene)
+        self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
+        self.wall_velocity = 0.0
+        self.ties = side_wall_ties(scene, packing)
+        if self.ties is not None:
+            check_tie_time_step(scene, self.ties, self.mass)
+        self._tie_args = kernels.no_tie_args() if self.ties is None else self.ties.kernel_args()
+        self.water_model = water_model(scene, packing, compiled)
+
+    def _tie_forces(self, xz, du):
+        """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""
+        F = np.zeros_like(xz)
+        F[:, 0] = self.ties.forces(xz[:, 0], du[:, 0] / self.dt)
+        return F
+
+    @property
+    def water(self):
+        """The PoreWater state (W, network, balance), or None for a dry scene."""
+        return None if self.water_model is None else self.water_model.water
+
+    @property
+    def contact(self):
+        return self.law.contact
+
+    @property
+    def omega(self):
+        return self.law.omega
+
+    @property
+    def du(self):
+        return self.law.du
+
+    # -- per step -------------------------------------------------------------------------------
+    def step(self, xz, vel=None):
+        """Forces (N, 2) [N] at positions xz (N, 2) of step k, and {disc: new velocity} (eq 18-24).
+
+        ``vel`` (N, 2): current velocities if the caller has them; else du/dt is used.
+        """
+        F, fixes = self.law.step(xz, vel)                               # a, b, c, e
+        if self.ties is not None:                                       # b: side-wall ties
+            F = F + self._tie_forces(xz, self.law.du)
+        if self.water_model is not None:                                # d
+            self.water_model.step(self.k, xz)
+            F = F + self.water_model.F
+        self._move_walls()
+        return F, fixes
+
+    def _move_walls(self):
+        if self.base is not None:                                       # f
+            self.wall_velocity = self.base.step()
+        self.k += 1
+
+    # -- the same step as one compiled call (engines.compiled.kernels.dem_step) ----------------------------
+    def kernel_step_args(self):
+        """(water due, law_step's arguments, water_step's, tie_forces') for kernels.dem_step at
+        step k, or None when this step needs the general ``step`` (NumPy path, first step, a
+        rebuild of the pores)."""
+        law, wm = self.law, self.water_model
+        if not law.compiled or law.xz_prev is None:
+            return None
+        if wm is None:
+            return False, law.kernel_args(), kernels.dry_water_args(), self._tie_args
+        if self.k > 0 and self.k % wm.rebuild_interval == 0:
+            return None
+        return (self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt),
+                self._tie_args)
+
+    def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
+        """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
+        kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
+        due, _, water_args, _ = args
+        fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
+        if due:
+            self.water_model.finish_kernel_step(water_args[0], n_sub, water_args)
+        self._move_walls()
+        return fixes

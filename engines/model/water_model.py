@@ -1,0 +1,197 @@
+"""The pores and water of N discs stepping, without YADE (seed 000 §3, eq 28-46).
+
+``WaterModel`` builds the pore network (engines.model.pores), holds the water
+(engines.model.pore_water) and advances it by water steps: with ``compiled=True`` (the default)
+through the kernels of engines.compiled, otherwise through the readable NumPy functions. The
+paper's step order (engines.model.pore_dem) and the YADE water engine (engines.yade.water_engine)
+both step it.
+
+Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.model.pore_water),
+checked at every water step: the bound is one more pass over throats and pores inside the flow
+kernel (measured at a few per cent of a water step), about what testing whether the areas changed
+enough to need a new check would cost, so the check is exact at every step instead. With
+``settings.substep`` a water step above the limit is split into n = ceil(dt_w / limit) sub-steps.
+"""
+import math
+
+import numpy as np
+
+from engines.compiled import kernels
+from engines.model import pores as pg
+from engines.model.pore_water import DarcyStabilityError, PoreWater
+
+
+class WaterModel:
+    """Pores and water of N discs (no YADE). Units: SI per unit thickness (engines.model.pore_water).
+
+    r (N,) radii [m] (the true ones: pores use them even where a contact law enlarges them by
+    eps_m/2); walls (N,) wall codes of engines.model.pores; xz (N, 2) initial centres [m].
+    ``F`` (N, 2) [N] holds the pressure forces of the last water step.
+    """
+
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
+                 compiled=True, log=print):
+        self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
+        self.r = np.ascontiguousarray(r, float)
+        self.walls = np.asarray(walls, np.int64)
+        self.dt, self.rebuild_interval, self.water_interval = float(dt), int(rebuild_interval), int(water_interval)
+        if self.rebuild_interval < 1 or self.water_interval < 1:
+            raise ValueError(f"rebuild_interval and water_interval must be >= 1, got "
+                             f"{rebuild_interval}, {water_interval}")
+        self.compiled, self.log = compiled, log
+        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
+        self.F = np.zeros((len(self.r), 2))
+        self.n_rebuilds = 0
+        self.substeps_max = self.substeps_total = 0
+        self.last_limit = np.inf  # Darcy limit of the last water step [s]
+        net = self._build(xz)
+        self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
+        self._buffers()
+
+    def _build(self, xz):
+        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, compiled=self.compiled)
+
+    def _buffers(self):
+        """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
+        net, n = self.water.net, len(self.r)
+        n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
+        surface, drained, bottom = self.water._boundary_masks()
+        ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
+                "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
+                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
+        floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
+                  "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
+                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m_a_min": [self.eps_m, net.a_min],
+                  "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
+                  "lam": np.zeros(2)}  # the rest: outputs and scratch of the kernels, by length
+        for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
+                            ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
+            floats.update((name, np.zeros(size)) for name in names.split())
+        self._ints, self._i_at = kernels.pack([np.asarray(ints[k], np.int64) for k in kernels.WATER_INTS])
+        self._floats, self._f_at = kernels.pack([np.asarray(floats[k], float) for k in kernels.WATER_FLOATS])
+        self._q_prev = np.zeros(n_t)  # eq 46 running throat flows, while PoreWater.q_prev is None
+        self._views()
+
+    def _views(self):
+        """Views of the float buffer read after each water step; kernel_args built again."""
+        self._lam, self._balance = self._part("lam"), self._part("balance")
+        self._args_key = None
+
+    def __getstate__(self):  # a pickle copies views: leave them out, make them again on loading
+        state = dict(self.__dict__)
+        for name in ("_lam", "_balance", "_args", "_args_key"):
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._views()
+
+    def _part(self, name):
+        """A view of the part ``name`` of the float buffer of kernels.water_step."""
+        k = kernels.WATER_FLOATS.index(name)
+        return self._floats[self._f_at[k]:self._f_at[k + 1]]
+
+    # -- per step ---------------------------------------------------------------------------------
+    def step(self, k, xz):
+        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when k > 0 and k % rebuild_interval
+        == 0, advance when k % water_interval == 0. Returns True when ``F`` was recomputed."""
+        if k > 0 and k % self.rebuild_interval == 0:
+            self.rebuild(xz)
+        if k % self.water_interval != 0:
+            return False
+        self.advance(self.water_interval * self.dt, xz)
+        return True
+
+    def rebuild(self, xz):
+        """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
+        old, new = self.water.net, self._build(xz)
+        self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, compiled=self.compiled)
+        self.n_rebuilds += 1
+        self._buffers()
+
+    def _void_area(self, net, xz):
+        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29): pg.measure, or kernels.measure (compiled)."""
+        if not self.compiled:
+            return pg.measure(net, xz, self.r).void_area
+        n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
+        void = np.empty(n_p)
+        kernels.measure(xz, self.r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
+                        net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
+                        np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
+                        np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
+        return void
+
+    def advance(self, h, xz):
+        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
+        if not self.compiled:
+            m = pg.measure(self.water.net, xz, self.r)
+            self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
+            A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
+            self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
+            return
+        args = self.kernel_args(h)
+        self.finish_kernel_step(h, kernels.water_step(xz, *args), args)
+
+    def kernel_args(self, h):
+        """The arguments of kernels.water_step after xz, for a water step of h [s] (compiled); the
+        same tuple while h, the water's arrays and the eq 46 state stay (the tuple holds the arrays,
+        so their ids are not reused while it is kept)."""
+        w, s = self.water, self.settings
+        key = (h, id(w.W), id(w.A_prev), id(w.q_prev))
+        if self._args_key != key:
+            q_prev = self._q_prev if w.q_prev is None else w.q_prev
+            self._args = (h, w.W, w.A_prev, q_prev, s.smoothing, s.substep, w.q_prev is not None, self.F,
+                          self._ints, self._i_at, self._floats, self._f_at)
+            self._args_key = key
+        return self._args
+
+    def finish_kernel_step(self, h, n_sub, args):
+        """Book a water_step(xz, *args) that returned n_sub: the Darcy limit, sub-steps, balance;
+        raise DarcyStabilityError if it refused or a pore fell dry."""
+        w = self.water
+        self.after_kernel_steps(args)
+        lam = self._lam
+        if n_sub != 1:
+            n = self._substeps(h)  # raises above the limit without settings.substep
+            if n_sub < 0:
+                raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of {h / n:.3e} s")
+            self.last_limit = 2.0 / lam[1] if lam[1] > 0 else np.inf  # at the last sub-step, as PoreWater reports it
+        inflow, surface, side = self._balance.tolist()
+        b = w.balance
+        b.inflow += inflow
+        b.surface_outflow += surface
+        b.side_outflow += side
+
+    def after_kernel_steps(self, args):
+        """After water steps run by kernels with ``args``: the eq 46 state they hold and the Darcy
+        limit of the last one."""
+        if self.settings.smoothing:
+            self.water.q_prev = args[3]
+        lam = self._lam
+        self.last_limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
+
+    def _substeps(self, h):
+        """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
+        if h <= self.last_limit:
+            return 1
+        if not self.settings.substep:
+            raise DarcyStabilityError(
+                f"water step dt = {h:.3e} s exceeds the explicit Darcy limit {self.last_limit:.3e} s "
+                f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or water_interval, "
+                f"or set [water] substep = true")
+        n = int(math.ceil(h / self.last_limit))
+        if n >= 2 * max(self.substeps_max, 1):
+            self.log(f"water: step {h:.3e} s > Darcy limit {self.last_limit:.3e} s: {n} sub-steps per water step "
+                     f"(each costs one flow and one update kernel pass, about a quarter of a water step)")
+        self.substeps_max = max(self.substeps_max, n)
+        self.substeps_total += n
+        return n
+
+    # -- observations ------------------------------------------------------------------------------
+    def measures(self, xz):
+        return pg.measure(self.water.net, xz, self.r)
+
+    def pressures(self, xz):
+        """U (Np,) [N/m] at centres xz (eq 32)."""
+        return self.water.pressure(self.measures(xz).void_area)

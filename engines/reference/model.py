@@ -1,0 +1,1047 @@
+"""A slow, literal NumPy reference of the seed-000 model (Tarumi & Hakuno), for cross-checks.
+
+Independent of the fast modules: it imports nothing from engines/ but the recording contract
+(engines/reference/trajectory.py). Its settings are read straight from the scene's tables (a plain dict,
+``scene.as_dict()``), its contact law is written from eq 1-13, 18-27 and SPEC §2.1 with the
+paper's variable names, one record per *ordered* pair (i, j) seen from element i (eq 2: alpha_ij),
+so Newton's third law is not built in but checked; pores are found by the paper's walk around
+the link graph and eq 33 is integrated arc by arc. Where the paper is silent or ambiguous the
+reading taken here is listed in docs/READINGS.md. The one place where the YADE path has used
+another reading, the wall kinematics, is an option (``readings``), so that the cross-check can
+compare everything else to round-off and measure the effect of the disagreement.
+
+Units are SI per unit thickness (SPEC §1): positions [m], forces [N], U and E_w [N/m], areas [m^2].
+Every floating-point state array has the dtype chosen by the caller (float32, float64, longdouble);
+only the pore *topology* (candidate links, faces) is decided in float64.
+
+Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/pore_dem.py):
+  a. du = x_t - x_{t-dt}, dpsi = psi_t - psi_{t-dt} (zero at k = 0).
+  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``).
+  c. velocity adjustment of particles that became free, eq 18-24 (``adjust_free_particles``),
+     on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
+     velocity replaces v before step e.
+  d. water (water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
+     k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
+     advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
+     x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
+     with the area actually used (eq 45) and held until the next water step.
+  e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
+     v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17; eq 44 optional).
+     Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
+     are integrated the same way in x only, under the contact forces of the particles, the pore
+     pressures and the ties of their column (``column_ties``, ``tie_forces``; velocities du/dt of a).
+  f. moving walls follow the input acceleration (§6.1: velocity and displacement by the
+     constant-(average-)acceleration method, ``WallMotion``): x_w += v_w dt + a_bar dt^2/2,
+     v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2.
+  g. after the step, when (k + 1) % record_every == 0, a sample at t = (k + 1) dt: positions,
+     block-mean U (eq 32 with the current W and the areas at the recorded positions), total water
+     and the relative water-balance error.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import ConvexHull, Delaunay, QhullError
+
+from engines.reference.trajectory import Trajectory
+
+G0 = 9.80665                 # standard gravity for records given in g [m/s^2]
+DEGENERATE_FRACTION = 1e-4   # a face with void area <= this x mean(pi r^2) at build is closed (no pore)
+PARTICLE, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3   # disc group codes of a packing
+
+# The reading of this reference where the YADE path has used another (docs/READINGS.md D1):
+# the wall kinematics, "average_acceleration" (the paper's) or "symplectic_euler" (WallMotion).
+WALL_STEPS = ("average_acceleration", "symplectic_euler")
+PAPER_READINGS = {"wall_step": "average_acceleration"}
+
+
+# ------------------------------------------------------------------------------------------------
+# Settings: read from the scene's tables (a plain dict of dicts)
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Settings:
+    """Every constant the reference uses, flat, with the paper's names (SI, per unit thickness)."""
+
+    spring: str
+    kn: float
+    eta_n: float
+    ks: float
+    eta_s: float
+    mu: float
+    e: float                # restitution of eq 19
+    f_max: float
+    eps_m: float
+    adjust: bool            # eq 18-24 on/off
+    rho: float
+    rho_w: float
+    g: float
+    wet: bool
+    E_w: float
+    k1: float
+    k2: float
+    k3: float
+    q_w: float
+    drained: bool
+    l_m: float
+    smoothing: bool
+    substep: bool
+    loading: dict
+    dt: float
+    dt_safety: float
+    rebuild_interval: int
+    water_interval: int
+    eq44: bool
+    block_z: list
+    side_walls: bool        # side-wall columns on springs (Fig. 27), else fixed
+    ks_wall: float          # k'_s of the ties [N/m]
+    eta_s_wall: float       # eta'_s of the ties [N s/m]
+
+
+def read_settings(tables):
+    """Settings from a scene's tables ({table: {field: value}}, e.g. ``scene.as_dict()``)."""
+    c, w, m, n = tables["contact"], tables["water"], tables["material"], tables["numerics"]
+    return Settings(
+        spring=c["spring"], kn=c["kn"], eta_n=c["eta_n"], ks=c["ks"], eta_s=c["eta_s"], mu=c["mu"],
+        e=c["restitution"], f_max=c["f_max"], eps_m=c["eps_m"], adjust=c["separation_adjustment"],
+        rho=m["rho"], rho_w=m["rho_w"], g=m["g"], wet=w["enabled"], E_w=w["E_w"], k1=w["k1"], k2=w["k2"],
+        k3=w["k3"], q_w=w["q_w"], drained=w["sides"] == "drained", l_m=w["l_m"], smoothing=w["smoothing"],
+        substep=w["substep"], loading=dict(tables["loading"]), dt=n["dt"], dt_safety=n["dt_safety"],
+        rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"], eq44=n["damping_eq44"],
+        block_z=[list(b) for b in tables["output"]["block_z"]],
+        side_walls=tables["loading"]["side_walls"] == "springs", ks_wall=c["ks_wall"], eta_s_wall=c["eta_s_wall"])
+
+
+# ------------------------------------------------------------------------------------------------
+# Contact law (eq 1-13, 25-27): one record per ordered pair (i, j), seen from element i
+# ------------------------------------------------------------------------------------------------
+class PairRecords:
+    """The quantities of eq 1-13 for every ordered pair (i, j), i a particle and j any other disc,
+    or i a side-wall disc on springs (``sliding``) and j a particle (the walls push each other only
+    through the ties of Fig. 27; fixed and driven walls take no force).
+
+    Record p is pair (I[p], J[p]); its force acts on element I[p] only, so the force on i is the sum
+    over the records of i (the Sigma of eq 13) and Newton's third law holds only because record
+    (j, i) computes the mirror value. Per record: in_contact (eq 1a, 26), e_n and e_s [N] (eq 5a,
+    9a after eq 6, 10, 11, 27), the displacement eps [m] of the elastic spring (c) (eq 25), and
+    Vn_ij [m/s], the approach velocity at collision (eq 20-21).
+    """
+
+    def __init__(self, s, r, mobile, dtype, sliding=None):
+        n = len(r)
+        mobile = np.asarray(mobile, bool)
+        sliding = np.zeros(n, bool) if sliding is None else np.asarray(sliding, bool)
+        self.mobile = mobile
+        self.I, self.J = np.nonzero((mobile[:, None] & ~np.eye(n, dtype=bool)) | (sliding[:, None] & mobile[None, :]))
+        self.s, self.dtype, self.n = s, dtype, n
+        self.r_i, self.r_j = np.asarray(r, dtype)[self.I], np.asarray(r, dtype)[self.J]
+        self.kn, self.eta_n, self.ks, self.eta_s, self.mu, self.f_max, self.eps_m = (
+            dtype(v) for v in (s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m))
+        self.first = np.flatnonzero(np.r_[True, self.I[1:] != self.I[:-1]]) if len(self.I) else self.I
+        m = len(self.I)
+        self.in_contact = np.zeros(m, bool)
+        self.e_n, self.e_s, self.eps, self.Vn_ij = (np.zeros(m, dtype) for _ in range(4))
+
+    def forces(self, x, du, dpsi, dt):
+        """Forces (N, 2) [N], moments Fm (N,) [N m, counter-clockwise] on the elements (eq 13), and
+        the records of particles i that were in contact at t - dt and are not at t: {i: [(j, n_ij, Vn_ij)]},
+        n_ij = (cos alpha_ij, sin alpha_ij) the unit normal from i to j."""
+        I, J, z = self.I, self.J, self.dtype(0)
+        R_ij = np.sqrt((x[I, 0] - x[J, 0]) ** 2 + (x[I, 1] - x[J, 1]) ** 2)   # eq 1b
+        sin_a = -(x[I, 1] - x[J, 1]) / R_ij                                   # eq 2a
+        cos_a = -(x[I, 0] - x[J, 0]) / R_ij                                   # eq 2b
+        touching = self.r_i + self.r_j + self.eps_m >= R_ij                   # eq 1a, 26
+        collision = touching & ~self.in_contact
+        du_rel, dw_rel = du[I, 0] - du[J, 0], du[I, 1] - du[J, 1]
+        du_n = du_rel * cos_a + dw_rel * sin_a                                # eq 3a (approach > 0)
+        du_s = -du_rel * sin_a + dw_rel * cos_a + (self.r_i * dpsi[I] + self.r_j * dpsi[J])  # eq 3b
+
+        overlap = self.r_i + self.r_j + self.eps_m - R_ij      # eq 25-26: the displacement at first touch
+        spring = self.s.spring
+        if spring == "c":     # nonlinear elastic: f = min(kn eps, f_max) on one path (SPEC §2.1)
+            eps = np.where(collision, overlap, self.eps + du_n)
+            e_n = np.minimum(self.kn * eps, self.f_max)
+        else:                 # eq 4a, 5a incrementally, from kn eps at collision (eq 25)
+            eps = self.eps
+            e_n = np.where(collision, self.kn * overlap, self.e_n + self.kn * du_n)
+            if spring == "d":
+                e_n = np.minimum(e_n, self.f_max)                             # eq 27
+        d_n = self.eta_n * du_n / dt                                          # eq 4b, 5b
+        e_s = np.where(collision, z, self.e_s) + self.ks * du_s               # eq 8a, 9a
+        d_s = self.eta_s * du_s / dt                                          # eq 8b, 9b
+        tension = (e_n < 0) | ~touching
+        e_n, d_n = np.where(tension, z, e_n), np.where(tension, z, d_n)       # eq 6
+        e_s, d_s = np.where(tension, z, e_s), np.where(tension, z, d_s)       # eq 10
+        sliding = np.abs(e_s) > self.mu * e_n
+        e_s = np.where(sliding, self.mu * e_n * np.sign(e_s), e_s)            # eq 11a
+        d_s = np.where(sliding, z, d_s)                                       # eq 11b
+        f_n, f_s = e_n + d_n, e_s + d_s                                       # eq 7, 12
+
+        F = np.zeros((self.n, 2), self.dtype)
+        Fm = np.zeros(self.n, self.dtype)
+        if len(I):                          # the records of element i are contiguous: sum each run
+            owner = I[self.first]
+            F[owner, 0] = np.add.reduceat(-f_n * cos_a + f_s * sin_a, self.first)   # eq 13a
+            F[owner, 1] = np.add.reduceat(-f_n * sin_a - f_s * cos_a, self.first)   # eq 13b
+            Fm[owner] = -self.r_i[self.first] * np.add.reduceat(f_s, self.first)   # eq 13c
+        left = {}
+        for p in np.flatnonzero(self.in_contact & ~touching & self.mobile[I]):
+            left.setdefault(int(I[p]), []).append((int(J[p]), np.array([cos_a[p], sin_a[p]]), self.Vn_ij[p]))
+
+        V = du / dt                                                           # eq 17
+        Vn_i = V[I, 0] * cos_a + V[I, 1] * sin_a                              # eq 20a
+        Vn_j = -V[J, 0] * cos_a - V[J, 1] * sin_a                             # eq 20b
+        self.Vn_ij = np.where(collision, Vn_i + Vn_j, np.where(touching, self.Vn_ij, z))   # eq 21
+        self.in_contact = touching
+        self.e_n, self.e_s = np.where(touching, e_n, z), np.where(touching, e_s, z)
+        self.eps = np.where(touching, eps, z)
+        self.f_n = np.where(touching, f_n, z)
+        return F, Fm, left
+
+    def contacts_of(self):
+        """Number of elements each element touches now (fixed and driven walls: 0, they carry no
+        records; a side-wall disc on springs: the particles it touches)."""
+        return np.bincount(self.I[self.in_contact], minlength=self.n)
+
+
+# ------------------------------------------------------------------------------------------------
+# Velocity adjustment at separation (§2.2(1), eq 18-24, Fig. 3)
+# ------------------------------------------------------------------------------------------------
+def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
+    """New velocities {i: V''_i (2,)} of the particles that became free (eq 18-24).
+
+    ``left``: {i: [(j, n_ij, Vn_ij)]} the elements particle i touched at t - dt and not at t;
+    ``n_contacts`` (N,) elements each particle touches at t; ``V`` (N, 2) velocities (the primed
+    values at separation); ``e`` the restitution. Vn'_i = V'_i . n_ij, Vn'_j = -V'_j . n_ij (eq 20).
+    A separation is adjusted only when it is faster than eq 19 allows: -(Vn'_i + Vn'_j) > e Vn_ij > 0
+    (the problem eq 18 names). A particle i is free when it touches nothing at t. Patterns (Fig. 3):
+      (d) i and j both free and each left only the other: eq 24a with the pair's normal momentum at
+          separation kept (eq 24b), eq 23 for both;
+      (a) i left one element j that is not free (a wall, or j still touches others): Rk_i of eq 22
+          and eq 23; (b) i left several such elements: the smallest Rk_i, along that pair's normal;
+      (c) a partner j is free too but left others as well: j is settled first against the elements
+          that are not free, then i against the new velocity of j.
+    ``counts``: optional dict pattern -> number of particles adjusted, updated in place.
+    """
+    free = {i for i in left if n_contacts[i] == 0}
+    Vnew = {i: np.array(V[i]) for i in left}
+    for i, lst in left.items():
+        for j, _, _ in lst:
+            Vnew.setdefault(j, np.array(V[j]))
+    settled, out = set(), {}
+
+    def gate(Vn_i, Vn_j, Vn_ij):
+        return -(Vn_i + Vn_j) > e * Vn_ij > 0                                  # eq 18-19
+
+    for i in sorted(free):                                                     # (d)
+        if len(left[i]) != 1 or i in settled:
+            continue
+        j, n, Vn_ij = left[i][0]
+        if j not in free or len(left[j]) != 1:
+            continue
+        settled |= {i, j}
+        Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
+        if not gate(Vn_i, Vn_j, Vn_ij):
+            continue
+        target = -e * Vn_ij                                                    # eq 19: Vn''_ij
+        momentum = mass[i] * Vn_i - mass[j] * Vn_j                             # eq 24b, left side
+        X = (momentum + mass[j] * target) / (mass[i] + mass[j])                # Rk_i Vn'_i
+        Y = target - X                                                         # eq 24a: Rk_j Vn'_j
+        Vnew[i] = Vnew[i] - (Vn_i - X) * n                                     # eq 23
+        Vnew[j] = Vnew[j] + (Vn_j - Y) * n
+        out[i], out[j] = Vnew[i], Vnew[j]
+        if counts is not None:
+            counts["d"] = counts.get("d", 0) + 2
+
+    pending = set(free) - settled                                              # (a), (b), (c)
+    while pending:
+        ready = [i for i in sorted(pending) if any(j not in pending for j, _, _ in left[i])]
+        if not ready:
+            break                                 # a free cluster with no settled element: left as is
+        new = {}
+        for i in ready:
+            best = None
+            for j, n, Vn_ij in left[i]:
+                if j in pending:
+                    continue
+                Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
+                if Vn_i == 0 or not gate(Vn_i, Vn_j, Vn_ij):
+                    continue
+                Rk_i = (-e * Vn_ij - Vn_j) / Vn_i                              # eq 22
+                if best is None or Rk_i < best[0]:
+                    best = (Rk_i, Vn_i, n)
+            if best is not None:
+                Rk_i, Vn_i, n = best
+                new[i] = Vnew[i] - (1 - Rk_i) * Vn_i * n                       # eq 23
+                if counts is not None:
+                    pattern = "c" if any(j in free for j, _, _ in left[i]) else ("a" if len(left[i]) == 1 else "b")
+                    counts[pattern] = counts.get(pattern, 0) + 1
+        Vnew.update(new)
+        out.update(new)
+        pending -= set(ready)
+    return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Pores (§3.1, eq 28-31)
+# ------------------------------------------------------------------------------------------------
+@dataclass
+class Pores:
+    """Topology of the pores between two rebuilds.
+
+    A pore is a bounded face of the planar graph of links (edges of the regular triangulation
+    passing eq 28, plus the eq 28 pairs it hides: ``build_pores``), found by the paper's walk (at
+    each disc, turn to the next link clockwise), so its boundary runs counter-clockwise with the
+    pore on the left. Per pore (Np pores):
+      half-edges he_pore, he_a, he_b: boundary links a -> b;
+      corners corner_pore, corner_disc, corner_prev, corner_next: disc d reached from prev, left to next;
+      rattlers rattler_pore, rattler_disc: unlinked discs inside (their whole area is not void);
+      vertex_sets (frozenset of discs), surface / bottom / side (bool arrays), neighbours (sets).
+    Links (L, 2) i < j; throats (T, 2) pairs of distinct pores sharing link throat_link (T,).
+    a_min: faces with void area <= a_min at build are closed (not pores); pores whose area falls
+    to <= a_min later keep their water but exchange none.
+    """
+
+    n_pores: int = 0
+    he_pore: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    he_a: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    he_b: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    corner_pore: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    corner_disc: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    corner_prev: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    corner_next: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    rattler_pore: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    rattler_disc: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    links: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
+    throats: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
+    throat_link: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    surface: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    bottom: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    side: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    vertex_sets: list = field(default_factory=list)
+    neighbours: list = field(default_factory=list)
+    a_min: float = 0.0
+
+
+def _direction(x, a, b):
+    """Angle of the direction a -> b in [0, 2 pi) (eq 30-31; arctan2 is their quadrant-resolved
+    inverse, accurate near the axes where eq 31's arcsin/arccos are not)."""
+    return np.mod(np.arctan2(x[b, 1] - x[a, 1], x[b, 0] - x[a, 0]), 2 * np.pi)
+
+
+def corner_angles(x, disc, prev, nxt):
+    """Interior angle [rad] at disc d of the boundary prev -> d -> next (eq 29):
+    theta = theta_(d->prev) - theta_(d->next), + 2 pi if negative. At the end of a dangling link
+    (prev = next) the pore wraps the whole disc: theta = 2 pi."""
+    two_pi = 2 * np.arctan2(x.dtype.type(0), x.dtype.type(-1))
+    theta = _direction(x, disc, prev) - _direction(x, disc, nxt)       # eq 29a
+    theta = np.where(theta < 0, theta + two_pi, theta)                   # eq 29b
+    return np.where(prev == nxt, two_pi, theta)
+
+
+def regular_triangles(x, r):
+    """Counter-clockwise triangles [[a, b, c], ...] of the regular (power) triangulation of the
+    discs: the lower convex hull of the centres lifted to (x, z, x^2 + z^2 - r^2) (READINGS D4).
+
+    Coordinates are taken relative to the mean centre and divided by the largest extent (the same
+    hull, better conditioned). A hull facet is lower when its unit outward normal has a lift
+    component below -1e-12 (the facets standing on collinear centres have 0). A disc whose lifted
+    point lies above the lower hull (an empty power cell) is in no triangle. If the lifted points
+    span no volume (three discs, or four cocircular equal ones) every triangulation of the centres
+    is regular: Delaunay's. Collinear centres: no triangles.
+    """
+    c = x - x.mean(axis=0)
+    size = float(np.max(np.abs(c)))
+    if not size > 0:
+        return []
+    c, rr = c / size, r / size
+    lifted = np.column_stack([c, c[:, 0] ** 2 + c[:, 1] ** 2 - rr**2])
+    try:
+        hull = ConvexHull(lifted)
+        simplices = hull.simplices[hull.equations[:, 2] < -1e-12].tolist()
+    except QhullError:
+        try:
+            simplices = Delaunay(x).simplices.tolist()
+        except QhullError:
+            return []
+    tris = []
+    for a, b, d in simplices:
+        area2 = (x[b, 0] - x[a, 0]) * (x[d, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[d, 0] - x[a, 0])
+        tris.append([a, b, d] if area2 > 0 else [a, d, b])
+    return tris
+
+
+def _turn(p, q, s):
+    """Twice the signed area of the triangle p, q, s: > 0 when s lies left of p -> q."""
+    return (q[0] - p[0]) * (s[1] - p[1]) - (q[1] - p[1]) * (s[0] - p[0])
+
+
+def _crosses(p, q, a, b):
+    """Segments p-q and a-b cross at a point inside both (no shared end, not collinear)."""
+    return (_turn(p, q, a) * _turn(p, q, b) < 0) and (_turn(a, b, p) * _turn(a, b, q) < 0)
+
+
+def insert_hidden_links(x, r, tris, reach, is_link):
+    """Add to the triangles' links every eq 28 pair (r_i + r_j + reach >= R_ij) of triangle
+    vertices that is not an edge and crosses no link, by flipping the edges it crosses
+    (READINGS D4). Pairs are taken from the closest gap R - r_i - r_j up, ties by index; a pair
+    whose segment runs through another centre is left out. Only non-link edges are flipped, so
+    no link is lost. Returns (triangles, pairs inserted). Brute force over the edges (a
+    reference, not a fast path)."""
+    pts = [tuple(p) for p in x.tolist()]
+    verts = np.array(sorted({v for t in tris for v in t}), int)
+    tri_of = {}                                   # directed edge (a, b) -> the third corner c of ccw (a, b, c)
+    for a, b, c in tris:
+        tri_of[(a, b)], tri_of[(b, c)], tri_of[(c, a)] = c, a, b
+    xv, rv = x[verts], r[verts]
+    gap = np.sqrt(((xv[:, None, :] - xv[None, :, :]) ** 2).sum(axis=2)) - rv[:, None] - rv[None, :]
+    iu, ju = np.nonzero(np.triu(gap <= reach, 1))
+    pairs = sorted((gap[a, b], verts[a], verts[b]) for a, b in zip(iu.tolist(), ju.tolist())
+                   if (verts[a], verts[b]) not in tri_of and (verts[b], verts[a]) not in tri_of)
+    inserted = 0
+    for _, k, l in pairs:
+        if (k, l) in tri_of:
+            continue                              # became an edge by an earlier insertion
+        P, Q = pts[k], pts[l]
+        if any(v not in (k, l) and _turn(P, Q, pts[v]) == 0 and
+               min(P[0], Q[0]) <= pts[v][0] <= max(P[0], Q[0]) and min(P[1], Q[1]) <= pts[v][1] <= max(P[1], Q[1])
+               for v in verts.tolist()):
+            continue                              # through another centre
+        crossed = [(a, b) for (a, b) in tri_of if a < b and _crosses(P, Q, pts[a], pts[b])]
+        if any(is_link(a, b) for a, b in crossed):
+            continue
+        queue = list(crossed)
+        while queue:                              # Lawson's flips towards k - l (Sloan 1993)
+            a, b = queue.pop(0)
+            c, d = tri_of[(a, b)], tri_of[(b, a)]     # (a, b, c) left of a -> b, (b, a, d) right
+            if not (_turn(pts[c], pts[d], pts[a]) * _turn(pts[c], pts[d], pts[b]) < 0
+                    and _turn(pts[a], pts[b], pts[c]) * _turn(pts[a], pts[b], pts[d]) < 0):
+                queue.append((a, b))              # quadrilateral a, d, b, c not convex: later
+                continue
+            for e in ((a, b), (b, c), (c, a), (b, a), (a, d), (d, b)):
+                del tri_of[e]
+            tri_of[(c, d)], tri_of[(d, b)], tri_of[(b, c)] = b, c, d      # triangle (c, d, b)
+            tri_of[(d, c)], tri_of[(c, a)], tri_of[(a, d)] = a, d, c      # triangle (d, c, a)
+            if {c, d} != {k, l} and _crosses(P, Q, pts[c], pts[d]):
+                queue.append((min(c, d), max(c, d)))
+        inserted += 1
+    out = [[a, b, c] for (a, b), c in tri_of.items() if a < b and a < c]
+    return out, inserted
+
+
+def build_pores(x, r, group, eps_m, l_m):
+    """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], group codes.
+
+    Candidate links: the edges of the regular triangulation, then the eq 28 pairs it hides
+    (``insert_hidden_links``; READINGS D4). The topology is decided in float64. Fewer than three
+    discs or collinear centres: no pores.
+    """
+    x = np.asarray(x, np.float64)
+    r = np.asarray(r, np.float64)
+    n = len(r)
+    a_min = DEGENERATE_FRACTION * float(np.mean(np.pi * r**2)) if n else 0.0
+    if n < 3:
+        return Pores(a_min=a_min)
+
+    def is_link(a, b):                            # eq 28
+        return r[a] + r[b] + eps_m + l_m >= np.hypot(*(x[b] - x[a]))
+
+    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link)
+    if not tris:
+        return Pores(a_min=a_min)
+    edge_tri = {}                                 # directed edge -> triangle on its left
+    for k, (a, b, c) in enumerate(tris):
+        for e in ((a, b), (b, c), (c, a)):
+            edge_tri[e] = k
+    links = sorted({(min(e), max(e)) for e in edge_tri if is_link(*e)})
+    link_set = set(links)
+
+    # Faces: triangles joined across non-link edges; OUT (= len(tris)) is outside the hull.
+    out = len(tris)
+    parent = list(range(out + 1))
+
+    def find(k):
+        while parent[k] != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    for (a, b), k in edge_tri.items():
+        if (min(a, b), max(a, b)) not in link_set:
+            parent[find(k)] = find(edge_tri.get((b, a), out))
+    outer = find(out)
+
+    def face_left(a, b):
+        return find(edge_tri[(a, b)]) if (a, b) in edge_tri else outer
+
+    # The paper's walk: from a -> b, go on to the neighbour of b next clockwise from a.
+    around = {d: [] for d in range(n)}
+    for a, b in links:
+        around[a].append(b)
+        around[b].append(a)
+    for d, nb in around.items():
+        nb.sort(key=lambda b: np.arctan2(x[b, 1] - x[d, 1], x[b, 0] - x[d, 0]))
+
+    def next_half_edge(a, b):
+        nb = around[b]
+        return b, nb[nb.index(a) - 1]
+
+    cycles_of_face = {}
+    seen = set()
+    for a, b in links:
+        for h0 in ((a, b), (b, a)):
+            if h0 in seen:
+                continue
+            cycle, h = [], h0
+            while h not in seen:
+                seen.add(h)
+                cycle.append(h)
+                h = next_half_edge(*h)
+            faces = {face_left(*he) for he in cycle}
+            if len(faces) != 1:
+                raise RuntimeError(f"walk from {h0} crosses faces {faces}: links are not planar")
+            cycles_of_face.setdefault(faces.pop(), []).append(cycle)
+    rattlers_of_face = {}     # unlinked discs: in the face of a triangle they are a corner of, or
+    for d in range(n):        # (empty power cell) of the first triangle that contains their centre
+        if not around[d]:
+            k = next((k for k, t in enumerate(tris) if d in t), None)
+            if k is None:
+                k = next((k for k, (a, b, c) in enumerate(tris) if min(
+                    _turn(x[a], x[b], x[d]), _turn(x[b], x[c], x[d]), _turn(x[c], x[a], x[d])) >= 0), None)
+            if k is not None:
+                rattlers_of_face.setdefault(find(k), []).append(d)
+
+    # Void area at build (eq 29) to close degenerate faces; then number the pores.
+    def void_area(face):
+        cycles = cycles_of_face[face]
+        he = np.array([h for c in cycles for h in c])
+        poly = 0.5 * np.sum(x[he[:, 0], 0] * x[he[:, 1], 1] - x[he[:, 1], 0] * x[he[:, 0], 1])
+        cd, cp, cn = _corners(cycles)
+        sectors = 0.5 * np.sum(corner_angles(x, cd, cp, cn) * r[cd] ** 2)
+        rat = rattlers_of_face.get(face, [])
+        return poly - sectors - np.pi * np.sum(r[rat] ** 2)
+
+    bounded = sorted((f for f in cycles_of_face if f != outer), key=lambda f: min(min(c) for c in cycles_of_face[f]))
+    open_faces = [f for f in bounded if void_area(f) > a_min]
+    pore_of = {f: p for p, f in enumerate(open_faces)}
+    n_p = len(open_faces)
+
+    he_pore, he_a, he_b, c_pore, c_disc, c_prev, c_next, r_pore, r_disc = ([] for _ in range(9))
+    vertex_sets = []
+    for p, f in enumerate(open_faces):
+        cycles = cycles_of_face[f]
+        for c in cycles:
+            for a, b in c:
+                he_pore.append(p), he_a.append(a), he_b.append(b)
+        cd, cp, cn = _corners(cycles)
+        c_pore += [p] * len(cd)
+        c_disc += cd.tolist()
+        c_prev += cp.tolist()
+        c_next += cn.tolist()
+        rat = rattlers_of_face.get(f, [])
+        r_pore += [p] * len(rat)
+        r_disc += rat
+        vertex_sets.append(frozenset(int(a) for c in cycles for a, _ in c) | frozenset(rat))
+
+    link_arr = np.array(links, int).reshape(-1, 2)
+    sides = [(pore_of.get(face_left(a, b), -1), pore_of.get(face_left(b, a), -1)) for a, b in links]
+    throats, throat_link = [], []
+    surface = np.zeros(n_p, bool)
+    wall = np.asarray(group) != PARTICLE
+    for l, ((a, b), (pl, pr)) in enumerate(zip(links, sides)):
+        if pl >= 0 and pr >= 0 and pl != pr:
+            throats.append((pl, pr))
+            throat_link.append(l)
+        if not (wall[a] and wall[b]):             # a wall-wall link is a wall element, not surface
+            fl, fr = face_left(a, b), face_left(b, a)
+            if fl == outer and pr >= 0:
+                surface[pr] = True
+            if fr == outer and pl >= 0:
+                surface[pl] = True
+    neighbours = [set() for _ in range(n_p)]
+    for p, q in throats:
+        neighbours[p].add(q)
+        neighbours[q].add(p)
+    g = np.asarray(group)
+    arr = lambda v: np.array(v, int)
+    return Pores(
+        n_pores=n_p, he_pore=arr(he_pore), he_a=arr(he_a), he_b=arr(he_b),
+        corner_pore=arr(c_pore), corner_disc=arr(c_disc), corner_prev=arr(c_prev), corner_next=arr(c_next),
+        rattler_pore=arr(r_pore), rattler_disc=arr(r_disc), links=link_arr,
+        throats=arr(throats).reshape(-1, 2), throat_link=arr(throat_link), surface=surface,
+        bottom=np.array([any(g[v] == BOTTOM for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        side=np.array([any(g[v] in (LEFT, RIGHT) for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        vertex_sets=vertex_sets, neighbours=neighbours, a_min=a_min,
+    )
+
+
+def _corners(cycles):
+    """(disc, prev, next) of every corner of the boundary cycles: half-edge (prev -> d) then (d -> next)."""
+    d, p, q = [], [], []
+    for c in cycles:
+        for k, (a, b) in enumerate(c):
+            d.append(b), p.append(a), q.append(c[(k + 1) % len(c)][1])
+    return np.array(d, int), np.array(p, int), np.array(q, int)
+
+
+@dataclass
+class PoreGeometry:
+    """Pores measured at one set of positions: polygon area, void area A (eq 29) [m^2] per pore,
+    interior angle per corner [rad], area-weighted polygon centroid (Np, 2) [m], and per link its
+    contact state (eq 43b: r_k + r_l + eps_m >= R)."""
+
+    polygon_area: np.ndarray
+    void_area: np.ndarray
+    corner_angle: np.ndarray
+    centroid: np.ndarray
+    link_contact: np.ndarray
+
+
+def measure(pores, x, r, eps_m):
+    """Areas (eq 29), corner angles and link states of ``pores`` at positions x (in x's dtype)."""
+    dtype = x.dtype.type
+    n_p = pores.n_pores
+    # shoelace relative to one vertex of each pore: the same area, without the cancellation of
+    # absolute coordinates (condition number ~ (|x| / pore size)^2)
+    anchor = np.zeros((n_p, 2), x.dtype)
+    anchor[pores.he_pore[::-1]] = x[pores.he_a[::-1]]
+    o = anchor[pores.he_pore]
+    pa, pb = x[pores.he_a] - o, x[pores.he_b] - o
+    cross = pa[:, 0] * pb[:, 1] - pb[:, 0] * pa[:, 1]
+    poly = np.zeros(n_p, dtype)
+    np.add.at(poly, pores.he_pore, cross / 2)                            # shoelace
+    cx, cz = np.zeros(n_p, dtype), np.zeros(n_p, dtype)
+    np.add.at(cx, pores.he_pore, (pa[:, 0] + pb[:, 0]) * cross)
+    np.add.at(cz, pores.he_pore, (pa[:, 1] + pb[:, 1]) * cross)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        centroid = anchor + np.column_stack([cx, cz]) / (6 * poly[:, None])
+    theta = corner_angles(x, pores.corner_disc, pores.corner_prev, pores.corner_next)
+    sectors = np.zeros(n_p, dtype)
+    np.add.at(sectors, pores.corner_pore, theta * r[pores.corner_disc] ** 2 / 2)   # eq 29
+    pi = 2 * np.arctan2(dtype(1), dtype(0))
+    np.add.at(sectors, pores.rattler_pore, pi * r[pores.rattler_disc] ** 2)
+    k, l = pores.links[:, 0], pores.links[:, 1]
+    R = np.sqrt((x[l, 0] - x[k, 0]) ** 2 + (x[l, 1] - x[k, 1]) ** 2)
+    contact = r[k] + r[l] + dtype(eps_m) >= R                            # eq 43b
+    return PoreGeometry(poly, poly - sectors, theta, centroid, contact)
+
+
+def pressure_forces(pores, x, r, U, theta):
+    """Force (N, 2) [N] of the pore pressures U (Np,) [N/m] on the discs (eq 33).
+
+    Pore by pore, on the arc of each corner disc d inside it, from alpha_1 = direction d -> next
+    counter-clockwise to alpha_2 = alpha_1 + theta (the interior angle, eq 29):
+      F_x = int -U r cos(a) da = -U r (sin a2 - sin a1),  F_z = int -U r sin(a) da = U r (cos a2 - cos a1).
+    Rattlers are wrapped by one pressure: no net force. No torque (the pressure acts through the centre).
+    """
+    d = pores.corner_disc
+    a1 = _direction(x, d, pores.corner_next)
+    a2 = a1 + theta
+    u_r = U[pores.corner_pore] * r[d]
+    F = np.zeros(x.shape, x.dtype)
+    np.add.at(F[:, 0], d, -u_r * (np.sin(a2) - np.sin(a1)))              # eq 33a
+    np.add.at(F[:, 1], d, u_r * (np.cos(a2) - np.cos(a1)))               # eq 33b
+    return F
+
+
+def porosity(x, r, group, eps_m, l_m):
+    """Void over polygon area of the pores of a network built at x (eq 28-29), nan without pores."""
+    pores = build_pores(x, r, group, eps_m, l_m)
+    geo = measure(pores, np.asarray(x, np.float64), np.asarray(r, np.float64), eps_m)
+    total = float(np.sum(geo.polygon_area))
+    return float(np.sum(geo.void_area)) / total if total > 0 else np.nan
+
+
+# ------------------------------------------------------------------------------------------------
+# Pore water (§3.2-3.4, eq 32-46)
+# ------------------------------------------------------------------------------------------------
+def pore_pressure(W, A, E_w):
+    """U = E_w (W - A) / W [N/m] (eq 32)."""
+    return E_w * (W - A) / W
+
+
+class Water:
+    """Water areas W (Np,) [m^2] of the pores and their cumulative budget [m^2]."""
+
+    def __init__(self, pores, A, s, dtype):
+        self.pores, self.s, self.dtype = pores, s, dtype
+        self.E_w, self.k1, self.k2, self.k3, self.q_w = (dtype(v) for v in (s.E_w, s.k1, s.k2, s.k3, s.q_w))
+        self.W = A.copy()                                   # after packing: W = A, U = 0
+        self.initial = np.sum(self.W)                       # the budget [m^2], in the run's dtype too
+        self.inflow = self.surface_out = self.side_out = self.remesh_change = dtype(0)
+        self.A_used = A.copy()                              # eq 45: the area used at the last water step
+        self.q_used = None                                  # eq 46: the throat flows used at the last step
+
+    def total(self):
+        return float(np.sum(self.W))
+
+    def balance_error(self):
+        """|sum W - (initial + inflow - outflows + re-meshing change)| / initial water."""
+        expected = self.initial + self.inflow - self.surface_out - self.side_out + self.remesh_change
+        return float(abs(np.sum(self.W) - expected) / max(self.initial, 1e-300))
+
+    def flows(self, A, contact):
+        """Throat flows q (T,) from pore 0 to pore 1 of each throat, surface and side outflow, inflow
+        (Np,) [m^2/s], and the stability bound of the explicit step [s] (eq 38-43)."""
+        pores, W, E_w, zero = self.pores, self.W, self.E_w, self.dtype(0)
+        U = pore_pressure(W, A, E_w)                        # eq 32
+        open_ = A > pores.a_min                             # a pinched pore exchanges nothing
+        p, q = pores.throats[:, 0], pores.throats[:, 1]
+        both = open_[p] & open_[q]
+        k = np.where(contact[pores.throat_link], self.k2, self.k1)          # eq 43
+        A_pq = W[p] * W[q] / np.where(both, A[p] + A[q], 1)                 # eq 40 (W_i W_j, not W' W_j)
+        i_pq = (U[p] - U[q]) / E_w                                           # eq 39
+        q_t = np.where(both, k * A_pq * i_pq, zero)                          # eq 41
+        drained = pores.side if self.s.drained else np.zeros_like(pores.side)
+        q_surface = np.where(open_ & pores.surface, self.k1 * W * U / E_w, zero)   # outside at U = 0
+        q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)            # §6.1: outside 0, k3
+        q_in = np.where(pores.bottom, self.q_w, zero)                        # §5.1
+        # explicit stability (Gershgorin): dt <= 2 / max (2 sum g + g_b) / c, c = W^2 / (E_w A)
+        g = np.where(both, k * A_pq / E_w, zero)
+        g_sum = np.zeros(pores.n_pores, self.dtype)
+        np.add.at(g_sum, p, g)
+        np.add.at(g_sum, q, g)
+        g_b = np.where(open_ & pores.surface, self.k1 * W / E_w, zero) + np.where(open_ & drained, self.k3 * W / E_w, zero)
+        rate = np.where(open_, (2 * g_sum + g_b) * E_w * A / W**2, zero)
+        limit = 2 / float(np.max(rate)) if pores.n_pores and np.max(rate) > 0 else np.inf
+        return q_t, q_surface, q_side, q_in, limit
+
+    def used_area(self, A):
+        """The area of eq 45, [A]_t = ([A]_{t-dt} + [A']_t) / 2 with smoothing, else A' itself."""
+        if self.s.smoothing:
+            self.A_used = (self.A_used + A) / 2
+            return self.A_used
+        return A
+
+    def advance(self, dt, A, contact):
+        """Advance W by dt [s] at the area actually used A (eq 45) and link states (eq 42, 46)."""
+        flows = self.flows(A, contact)
+        n_sub = 1
+        if dt > flows[4]:
+            if not self.s.substep:
+                raise ValueError(f"water step {dt:.3e} s exceeds the explicit Darcy limit {flows[4]:.3e} s")
+            n_sub = int(np.ceil(dt / flows[4]))
+        h = self.dtype(dt / n_sub)
+        for sub in range(n_sub):
+            q_t, q_surface, q_side, q_in, _ = flows if sub == 0 else self.flows(A, contact)
+            if self.s.smoothing:                            # eq 46: [q]_t = ([q]_{t-dt} + [q']_t) / 2
+                q_t = q_t if self.q_used is None else (self.q_used + q_t) / 2
+                self.q_used = q_t
+            out = q_surface + q_side - q_in
+            np.add.at(out, self.pores.throats[:, 0], q_t)
+            np.add.at(out, self.pores.throats[:, 1], -q_t)
+            W = self.W - out * h                            # eq 42 (outflow positive)
+            if np.any(W <= 0):
+                raise ValueError(f"water area of pore {int(np.argmax(W <= 0))} fell to <= 0 in a step of {h:.3e} s")
+            self.W = W
+            self.inflow += np.sum(q_in) * h
+            self.surface_out += np.sum(q_surface) * h
+            self.side_out += np.sum(q_side) * h
+
+    def remesh(self, new_pores, A_new, A_old):
+        """Move the water onto rebuilt pores keeping U continuous (§3.4(2)); W from eq 32.
+        Returns the rule of each new pore."""
+        U_old = pore_pressure(self.W, A_old, self.E_w)
+        U_new, rules = inherit_pressures(self.pores, U_old, A_old > self.pores.a_min, new_pores)
+        W_new = A_new * self.E_w / (self.E_w - np.asarray(U_new, self.dtype))   # eq 32 solved for W
+        self.remesh_change += np.sum(W_new) - np.sum(self.W)
+        self.pores, self.W, self.A_used, self.q_used = new_pores, W_new, A_new.copy(), None
+        return rules
+
+
+def inherit_pressures(old, U_old, old_valid, new):
+    """(U, rule) of each new pore by the rules of §3.4(2), in the project's reading:
+    (a) the U of the old pore with the same vertex set; else (b) the mean U of the old pores whose
+    vertex set contains or is contained in the new one (split / merge); else (c) the mean U of the
+    neighbouring new pores already assigned ("まわりのすべての図形": pores only, the outside is
+    not one; READINGS D2), in rounds until nothing changes; else (d) U = 0. Old pores pinched to
+    A <= a_min pass nothing on."""
+    valid = [p for p in range(old.n_pores) if old_valid[p]]
+    by_set = {old.vertex_sets[p]: p for p in valid}
+    U, rule = [None] * new.n_pores, [""] * new.n_pores
+    for p, vs in enumerate(new.vertex_sets):
+        if vs in by_set:                                                    # (a)
+            U[p], rule[p] = float(U_old[by_set[vs]]), "a"
+            continue
+        near = [q for q in valid if old.vertex_sets[q] <= vs or vs <= old.vertex_sets[q]]
+        if near:                                                            # (b)
+            U[p], rule[p] = float(np.mean([float(U_old[q]) for q in near])), "b"
+    while True:                                                             # (c)
+        assign = {}
+        for p in range(new.n_pores):
+            known = [U[q] for q in new.neighbours[p] if U[q] is not None]
+            if U[p] is None and known:
+                assign[p] = sum(known) / len(known)
+        if not assign:
+            break
+        for p, u in assign.items():
+            U[p], rule[p] = u, "c"
+    for p in range(new.n_pores):                                            # (d)
+        if U[p] is None:
+            U[p], rule[p] = 0.0, "d"
+    return U, rule
+
+
+# ------------------------------------------------------------------------------------------------
+# Input motion of the moving walls (§6.1)
+# ------------------------------------------------------------------------------------------------
+def input_acceleration(loading):
+    """a(t) [m/s^2] of the moving walls from the [loading] table, or None for no loading.
+
+    cosine: amplitude cos(2 pi frequency t). record: a two-column file (time [s], acceleration in
+    record_units: g, gal or m/s2) rescaled by time_scale and amplitude_scale, linear between
+    samples (a digital record samples a continuous motion; READINGS D1), 0 before the first and
+    after the last sample.
+    """
+    kind = loading["type"]
+    if kind == "none":
+        return None
+    if kind == "cosine":
+        A, f = loading["amplitude"], loading["frequency"]
+        return lambda t: A * np.cos(2 * np.pi * f * t)
+    data = np.loadtxt(loading["record"], comments="#", ndmin=2)
+    t_rec = data[:, 0] * loading["time_scale"]
+    unit = {"g": G0, "gal": 0.01, "m/s2": 1.0}[loading.get("record_units", "g")]
+    a_rec = data[:, 1] * unit * loading["amplitude_scale"]
+    return lambda t: float(np.interp(t, t_rec, a_rec, left=0.0, right=0.0))
+
+
+class WallMotion:
+    """Velocity v [m/s] of the walls that follow the input a(t), advanced one step at a time.
+
+    wall_step = "average_acceleration" (§6.1 "速度、変位を等加速度法で求める", read as the constant
+    average acceleration method, Newmark beta = 1/4, gamma = 1/2; READINGS D1): over step k the
+    acceleration is the mean of its ends, a_bar = (a(t_k) + a(t_k+1)) / 2, and
+        u_k+1 = u_k + v_k dt + a_bar dt^2 / 2,   v_k+1 = v_k + a_bar dt.
+    wall_step = "symplectic_euler" (the YADE path before it took this reading): v_k+1 = v_k + a(t_k) dt,
+    u_k+1 = u_k + v_k+1 dt.
+    """
+
+    def __init__(self, accel, dt, wall_step, dtype=np.float64):
+        if wall_step not in WALL_STEPS:
+            raise ValueError(f"wall_step must be one of {WALL_STEPS}, got {wall_step!r}")
+        self.accel, self.dt, self.wall_step, self.dtype = accel, dtype(dt), wall_step, dtype
+        self.v = dtype(0)
+
+    def step(self, k):
+        """The displacement du [m] of step k (t_k = k dt -> t_k+1); advances v."""
+        dt = self.dt
+        a0 = self.dtype(self.accel(k * float(dt)))
+        if self.wall_step == "symplectic_euler":
+            self.v = self.v + a0 * dt
+            return self.v * dt
+        a_bar = (a0 + self.dtype(self.accel((k + 1) * float(dt)))) / 2
+        du = self.v * dt + a_bar * dt * dt / 2
+        self.v = self.v + a_bar * dt
+        return du
+
+
+def wall_displacements(loading, dt, n_steps, wall_step):
+    """Displacements u(t_1) .. u(t_n) [m] (n_steps,) of the driven walls from rest (None without
+    loading): what the cross-check compares the YADE path's walls with to tell its reading."""
+    accel = input_acceleration(loading)
+    if accel is None:
+        return None
+    motion = WallMotion(accel, dt, wall_step)
+    return np.cumsum([motion.step(k) for k in range(n_steps)])
+
+
+# ------------------------------------------------------------------------------------------------
+# Side walls on springs (§6.1, Fig. 27)
+# ------------------------------------------------------------------------------------------------
+def column_ties(x, group):
+    """The ties of Fig. 27 as (lower, upper) (M,) disc indices: in each side-wall column (LEFT,
+    RIGHT) every disc to the one above it, and the lowest to the corner disc of the bottom wall
+    (the bottom-wall disc nearest to it). Raises ValueError for a column without a bottom wall."""
+    x, group = np.asarray(x, float), np.asarray(group)
+    bottom = np.flatnonzero(group == BOTTOM)
+    lower, upper = [], []
+    for side in (LEFT, RIGHT):
+        column = np.flatnonzero(group == side)
+        if not len(column):
+            continue
+        if not len(bottom):
+            raise ValueError("side walls on springs need a bottom wall to tie the columns to")
+        column = column[np.argsort(x[column, 1], kind="stable")]           # bottom to top
+        d2 = (x[bottom, 0] - x[column[0], 0]) ** 2 + (x[bottom, 1] - x[column[0], 1]) ** 2
+        chain = [int(bottom[np.argmin(d2)])] + column.tolist()
+        lower += chain[:-1]
+        upper += chain[1:]
+    return np.array(lower, int), np.array(upper, int)
+
+
+def tie_forces(x, V, lower, upper, rest, ks, eta):
+    """x-forces (N,) [N] of the ties (lower, upper) on every disc: a tie is a tangential spring k'_s
+    and dashpot eta'_s, and tangential to a vertical tie is x, so on the upper disc
+        f_u = -k'_s [(x_u - x_l) - rest] - eta'_s (V_u - V_l),   on the lower disc -f_u,
+    x (N, 2) positions [m], V (N, 2) velocities [m/s], rest (M,) x_u - x_l when the ties were made [m]."""
+    F = np.zeros(len(x), x.dtype)
+    for l, u, x0 in zip(lower, upper, rest):
+        f = -ks * ((x[u, 0] - x[l, 0]) - x0) - eta * (V[u, 0] - V[l, 0])
+        F[u] += f
+        F[l] -= f
+    return F
+
+
+# ------------------------------------------------------------------------------------------------
+# The model
+# ------------------------------------------------------------------------------------------------
+def block_bounds(xz, r, group, block_z):
+    """Absolute [z0, z1) of the output blocks given as fractions of the bed height: from the top of
+    the bottom-wall discs (or the lowest particle bottom without them) to the highest particle top."""
+    xz, r, group = np.asarray(xz, float), np.asarray(r, float), np.asarray(group)
+    bottom = group == BOTTOM
+    z_bed = np.max(xz[bottom, 1] + r[bottom]) if bottom.any() else np.min(xz[:, 1] - r)
+    mob = group == PARTICLE
+    h = np.max(xz[mob, 1] + r[mob]) - z_bed
+    return [(z_bed + a * h, z_bed + b * h) for a, b in block_z]
+
+
+class ReferenceModel:
+    """State of one run of the reference; ``step`` advances it by one dt (see the module docstring).
+
+    ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
+    any object with xz (N, 2), r (N,), group (N,) and density_factor (N,); ``readings``: overrides of
+    PAPER_READINGS (e.g. {"wall_step": "symplectic_euler"}). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
+    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]; ``sliding`` (N,) the side-wall
+    discs on springs, ``ties`` (lower, upper) and ``tie_rest`` (column_ties). ``contact`` (PairRecords),
+    ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
+    """
+
+    def __init__(self, tables, packing, dtype=np.float64, readings=None):
+        tables = tables if isinstance(tables, dict) else tables.as_dict()
+        s = self.s = read_settings(tables)
+        self.readings = {**PAPER_READINGS, **(readings or {})}
+        dt_ = self.dtype = np.dtype(dtype).type
+        self.group = np.asarray(packing.group)
+        self.mobile = self.group == PARTICLE
+        self.r = np.asarray(packing.r, dt_)
+        self.x = np.asarray(packing.xz, dt_).copy()
+        self.x_prev = self.x.copy()
+        self.v = np.zeros_like(self.x)
+        self.psi = np.zeros_like(self.r)
+        self.psi_prev = self.psi.copy()
+        self.omega = np.zeros_like(self.r)
+        self.dt = dt_(s.dt)
+        self.k = 0
+        pi = 2 * np.arctan2(dt_(1), dt_(0))
+        self.mass = dt_(s.rho) * np.asarray(packing.density_factor, dt_) * pi * self.r**2   # eq 15a per unit thickness
+        self.inertia = self.mass * self.r**2 / 2                                              # eq 15b
+        if self.mobile.any():
+            limit = s.dt_safety * 2 * np.sqrt(float(self.mass[self.mobile].min()) / s.kn)
+            if s.dt > limit:
+                raise ValueError(f"[numerics] dt = {s.dt:.3e} s exceeds dt_safety x 2 sqrt(m_min/kn) = {limit:.3e} s (eq 52)")
+        self.weight = np.zeros_like(self.x)
+        self.weight[:, 1] = -self.mass * dt_(s.g)
+        if s.wet:
+            self.weight[:, 1] += dt_(s.rho_w) * pi * self.r**2 * dt_(s.g)                    # eq 34b buoyancy
+        self.sliding = np.isin(self.group, (LEFT, RIGHT)) & s.side_walls
+        self.ties = column_ties(packing.xz, self.group) if s.side_walls else (np.zeros(0, int),) * 2
+        self.tie_rest = self.x[self.ties[1], 0] - self.x[self.ties[0], 0]
+        if self.sliding.any() and s.ks_wall > 0:   # <= 2 ties a disc: w^2 <= 4 k'_s / m, stable for w dt < 2
+            limit = np.sqrt(float(self.mass[self.sliding].min()) / s.ks_wall)
+            if s.dt > limit:
+                raise ValueError(f"[numerics] dt = {s.dt:.3e} s exceeds sqrt(m_min/k's) = {limit:.3e} s of the "
+                                 f"side-wall ties ([contact] ks_wall)")
+        # the degrees of freedom integrated in e: x and z of the particles, x of the sliding walls
+        self.free = np.column_stack([self.mobile | self.sliding, self.mobile])
+        self.contact = PairRecords(s, self.r, self.mobile, dt_, self.sliding)
+        accel = input_acceleration(s.loading)
+        self.walls = None if accel is None else WallMotion(accel, s.dt, self.readings["wall_step"], dt_)
+        moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
+        self.moving = np.isin(self.group, moving) & (accel is not None)
+        self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
+        self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0),
+                       "history": []}   # history: (step, rule counts) of every rebuild
+        self.pores = self.water = None
+        self.F_pressure = np.zeros_like(self.x)
+        if s.wet:
+            self.pores = self._build()
+            self.water = Water(self.pores, self._measure().void_area, s, dt_)
+
+    def _build(self):
+        return build_pores(self.x, self.r, self.group, self.s.eps_m, self.s.l_m)
+
+    def _measure(self, pores=None):
+        return measure(self.pores if pores is None else pores, self.x, self.r, self.s.eps_m)
+
+    def rebuild(self):
+        """New pores at the current positions, pressures inherited by §3.4(2)."""
+        new = self._build()
+        rules = self.water.remesh(new, self._measure(new).void_area, self._measure().void_area)
+        this = {r: rules.count(r) for r in "abcd"}
+        for r, c in this.items():
+            self.counts["remesh"][r] += c
+        self.counts["history"].append((self.k, this))
+        self.counts["rebuilds"] += 1
+        self.pores = new
+
+    def step(self):
+        """One DEM step k at t = k dt (a-f of the module docstring)."""
+        s, dt, k = self.s, self.dt, self.k
+        du = self.x - self.x_prev                                           # a
+        dpsi = self.psi - self.psi_prev
+        F, M, left = self.contact.forces(self.x, du, dpsi, dt)              # b
+        if s.adjust and left:                                               # c
+            fixes = adjust_free_particles(left, self.contact.contacts_of(), du / dt, self.mass,
+                                          self.dtype(s.e), self.counts["separation"])
+            for d, vel in fixes.items():
+                self.v[d] = vel
+        if self.water is not None:                                          # d
+            if k > 0 and k % s.rebuild_interval == 0:
+                self.rebuild()
+            if k % s.water_interval == 0:
+                geo = self._measure()
+                A = self.water.used_area(geo.void_area)                     # eq 45
+                self.water.advance(s.water_interval * s.dt, A, geo.link_contact)
+                U = pore_pressure(self.water.W, A, self.water.E_w)
+                self.F_pressure = pressure_forces(self.pores, self.x, self.r, U, geo.corner_angle)
+        F = F + self.F_pressure + self.weight                               # e
+        if self.sliding.any():                                              # Fig. 27
+            F[:, 0] += tie_forces(self.x, du / dt, *self.ties, self.tie_rest, self.dtype(s.ks_wall),
+                                  self.dtype(s.eta_s_wall))
+        m, free = self.mobile, self.free
+        self.v[free] += F[free] / np.broadcast_to(self.mass[:, None], F.shape)[free] * dt   # eq 14, 16
+        self.omega[m] += M[m] / self.inertia[m] * dt
+        step_x, step_psi = self.v * dt, self.omega[m] * dt                  # eq 17
+        if s.eq44:
+            step_x, step_psi = (du + step_x) / 2, (dpsi[m] + step_psi) / 2  # eq 44
+        self.x_prev, self.psi_prev = self.x.copy(), self.psi.copy()
+        self.x[free] += step_x[free]
+        self.psi[m] += step_psi
+        if self.walls is not None:                                          # f
+            self.x[self.moving, 0] += self.walls.step(k)
+        self.k += 1
+
+    def block_pressures(self):
+        """Mean U [N/m] of the pores whose polygon centroid z lies in each block [z0, z1) (nan if none),
+        U from eq 32 with the current W and the areas at the current positions."""
+        if self.water is None:
+            return np.full(len(self.bounds), np.nan)
+        geo = self._measure()
+        U = pore_pressure(self.water.W, geo.void_area, self.water.E_w)
+        cz = geo.centroid[:, 1]
+        out = []
+        for z0, z1 in self.bounds:
+            sel = (cz >= z0) & (cz < z1)
+            out.append(float(np.mean(U[sel])) if sel.any() else np.nan)
+        return np.array(out)
+
+    def record(self, traj):
+        """Append the current state to a Trajectory (t = k dt after k steps)."""
+        w = self.water
+        traj.append(self.k * self.s.dt, self.x, self.block_pressures(),
+                    w.total() if w else np.nan, w.balance_error() if w else np.nan)
+
+
+def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64, readings=None):
+    """Run the scene ``tables`` (or a Scene) from ``packing`` for n_steps and record a Trajectory
+    after every ``record_every`` steps (at t = (k + 1) dt); the contract shared with
+    engines.yade.coupling. ``traj.info["counts"]`` holds the re-meshing and separation counts."""
+    model = ReferenceModel(tables, packing, dtype, readings)
+    traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name,
+                            "readings": dict(model.readings)})
+    for k in range(n_steps):
+        model.step()
+        if (k + 1) % record_every == 0:
+            model.record(traj)
+    traj.info["counts"] = model.counts
+    return traj

@@ -1,0 +1,188 @@
+"""The command line shared by the scene scripts (yade_scripts/quicksand.py, liquefaction.py), and
+its yade-batch form.
+
+A script adds its own choice of scene (e.g. --case, --scene) and then::
+
+    add_run_arguments(ap)                         # --out --duration --dt --set --vtk --resume
+    args = ap.parse_args(job_argv(ap, argv))      # argv, or the yade-batch job's table line
+    run_script(ap, args, load_scene)              # preflight, run or resume, exit status
+
+Under yade-batch (the YADE_BATCH variable names table:line) the job's line is read with
+``yade.utils.readParamsFromTable``; each column becomes arguments: a column named like an option
+(``duration``, ``dt``, ``case``, ``vtk``: true/false) gives that option, a column ``TABLE.FIELD``
+(e.g. ``water.k1``) gives ``--set TABLE.FIELD=VALUE``. Values are Python expressions, as
+readParamsFromTable reads them (quote strings: 'my.toml'). Without an ``out`` column each job
+writes to out/batch/<the job's description>, the name yade-batch gives its log.
+"""
+import argparse
+import os
+import re
+import sys
+import tomllib
+
+from engines.run.preflight import InputError, check_output_dir, number, output_dir, preflight
+
+BATCH_OUT = os.path.join("out", "batch")
+
+
+# -- arguments ------------------------------------------------------------------------------------
+def scene_setting(text):
+    """argparse type of ``--set TABLE.FIELD=VALUE``: (table, field, value); VALUE is read as TOML
+    (numbers, true/false, [lists], "strings") or else taken as a string."""
+    from engines.run.scene import SCHEMA
+    m = re.fullmatch(r"(\w+)\.(\w+)=(.*)", text.strip())
+    if not m:
+        raise argparse.ArgumentTypeError(f"expected TABLE.FIELD=VALUE, got {text!r}")
+    table, field, value = m.groups()
+    if field not in SCHEMA.get(table, {}):
+        raise argparse.ArgumentTypeError(f"{table}.{field} is not a scene field (see yade_scripts/scenes/README.md)")
+    try:
+        value = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        pass  # a bare string
+    return table, field, value
+
+
+def resume_dir(path):
+    """argparse type of --resume: a run directory holding a checkpoint."""
+    from engines.yade.checkpoint import NAME, CheckpointError, read_info
+    try:
+        read_info(os.path.join(path, NAME))
+    except CheckpointError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return path
+
+
+def add_run_arguments(ap):
+    """The options every scene script has (see the module docstring)."""
+    ap.add_argument("--out", type=output_dir, help=f"output directory (required; under yade-batch "
+                                                   f"default {BATCH_OUT}/<job description>)")
+    ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
+                    help="simulated time [s] (default: the scene's; with --resume: a later end)")
+    ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
+    ap.add_argument("--set", type=scene_setting, action="append", default=[], metavar="TABLE.FIELD=VALUE",
+                    help="change a scene field, e.g. --set water.k1=20 (repeatable)")
+    ap.add_argument("--vtk", action="store_true", help="write a ParaView series to OUT/vtk/ ([output] vtk = true)")
+    ap.add_argument("--resume", type=resume_dir, metavar="DIR",
+                    help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place")
+
+
+def overrides_of(args):
+    """The command line's changes to the scene, {table: {field: value}} (recorded in summary.json)."""
+    over = {}
+    for table, field, value in args.set:
+        over.setdefault(table, {})[field] = value
+    for name in ("dt", "duration"):
+        if getattr(args, name) is not None:
+            over.setdefault("numerics", {})[name] = getattr(args, name)
+    if args.vtk:
+        over.setdefault("output", {})["vtk"] = True
+    return over or None
+
+
+# -- yade-batch -----------------------------------------------------------------------------------
+def batch_job():
+    """'table:line' of this yade-batch job, or None (yade-batch of a lone script sets YADE_BATCH empty)."""
+    return os.environ.get("YADE_BATCH") or None
+
+
+def _as_argument(value):
+    """A table value (a Python object) as the text the options read (TOML for --set)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return repr(value)
+
+
+def job_argv(ap, argv):
+    """``argv``, or under yade-batch the job's table line as arguments (module docstring) before argv."""
+    if batch_job() is None:
+        return argv
+    import pickle
+
+    from yade import O, utils
+    # readParamsFromTable adds to the variables an earlier call saved in O.tags: start empty
+    O.tags["pickledPythonVariablesDictionarytable"] = pickle.dumps({}, 0).decode("ascii")
+    utils.readParamsFromTable(unknownOk=True)
+    from yade.params import table
+    values = {k: getattr(table, k) for k in table.__all__}
+    options = ap._option_string_actions
+    args = []
+    for name, value in values.items():
+        opt = "--" + name.replace("_", "-")
+        if "." in name:
+            args += ["--set", f"{name}={_as_argument(value)}"]
+        elif opt in options and options[opt].nargs == 0:
+            args += [opt] if value else []
+        elif opt in options:
+            args += [opt, value if isinstance(value, str) else _as_argument(value)]
+        else:
+            ap.error(f"yade-batch table {batch_job()}: column {name!r} is neither an option of this script "
+                     f"nor a scene field TABLE.FIELD")
+    if "out" not in values and "resume" not in values:
+        args += ["--out", os.path.join(BATCH_OUT, O.tags["description"].replace(os.sep, "_"))]
+    return args + list(argv)
+
+
+# -- running --------------------------------------------------------------------------------------
+def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None):
+    """Check, then run or resume, printing one line at the end; exits non-zero on refused input
+    (one line, nothing written) and with 128 + the signal's number after an interrupt.
+
+    ``load_scene(overrides)`` -> Scene; ``scene_given``: the script's own scene options were used
+    (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
+    ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
+    if args.resume:
+        given = [f"--{k}" for k in ("out", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
+        if given:
+            ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
+    elif not args.out:
+        ap.error("--out is required (or --resume DIR)")
+    try:  # bad scenes, packings, limits: one clear line, nothing written
+        if args.resume:
+            check_resume(args.resume, args.duration)
+        else:
+            sc = load_scene(overrides_of(args))
+            if check is not None:
+                check(sc)
+            from engines.yade.deposition import scene_packing
+            packing = scene_packing(sc)
+            for note in preflight(sc, packing, args.out):
+                print(note)
+    except ValueError as e:
+        sys.exit(f"error: {e}")
+    from engines.run import runner
+    if args.resume:
+        summary = runner.resume_run(args.resume, args.duration)
+    else:
+        summary = runner.run_scene(sc, packing, args.out)
+    out = args.resume or args.out
+    if summary["status"] == "interrupted":
+        stop = summary.get("interrupt", {})
+        print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "
+              f"(t = {summary['t_end']:.6g} s): history, checkpoint and summary are in {out}; continue with\n"
+              f"    yade -n -x {sys.argv[0]} --resume {out}", flush=True)
+        import signal
+        sys.stdout.flush()
+        sys.stderr.flush()
+        # everything is written and closed: skip the interpreter's and YADE's teardown (about 1 s
+        # on a busy 2-core machine), so that the process ends within a fraction of a second
+        os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
+    if figures is not None:
+        for path in figures(out):
+            print("figure:", path)
+    print(runner.done_line(summary))
+
+
+def check_resume(run_dir, duration):
+    """A resume that can go on: writable, not complete unless a later --duration is given."""
+    from engines.yade.checkpoint import NAME, read_info
+    check_output_dir(run_dir, "--resume")
+    info = read_info(os.path.join(run_dir, NAME))
+    k, dt = info["step"], info["dt"]
+    if duration is not None and round(duration / dt) <= k:
+        raise InputError(f"--duration {duration:g} s: the run in {run_dir} is already at t = {k * dt:g} s")
+    if duration is None and k >= info["n_steps"]:
+        raise InputError(f"--resume: the run in {run_dir} is complete (t = {k * dt:g} s); give a later --duration "
+                         "to continue it")

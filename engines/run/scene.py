@@ -1,0 +1,345 @@
+"""Scene files: a TOML document describing one run of the seed-000 model, validated into settings.
+
+A scene is data, not code. The paper's cases are presets in ``yade_scripts/scenes/*.toml``; a
+preset may ``extends = "other.toml"`` and override any field. Every field, its unit and its
+default is listed in SCHEMA below; ``/usr/bin/python3 -m engines.run.scene`` prints it as the table
+in yade_scripts/scenes/README.md. Unknown tables or fields, wrong types and out-of-range values
+raise SceneError naming the field.
+"""
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+
+from engines import ROOT
+from engines.model.contact import ContactSettings
+from engines.model.pore_water import WaterSettings
+
+SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
+
+
+class SceneError(ValueError):
+    """A scene file is invalid; the message names the field."""
+
+
+# table -> field -> (type, default, check, unit/meaning). check: None or (min, max) inclusive
+# bounds, or a tuple of allowed strings.
+REQUIRED = object()
+POS = (0.0, math.inf)
+POS_OR_AUTO = (0.0, math.inf, "auto")  # > 0, or the string "auto" (numerics.dt: engines.model.time_step)
+SCHEMA = {
+    "scene": {
+        "name": (str, REQUIRED, None, "run name"),
+        "description": (str, "", None, "free text"),
+    },
+    "packing": {
+        "source": (str, "deposit", ("deposit", "file"), "deposit: drop discs into a wall-disc box; file: CSV x,z,r,group"),
+        "file": (str, "", None, "CSV packing for source = file (relative to the scene file)"),
+        "seed": (int, 1, (0, math.inf), "seed of the numpy Generator for sizes and placement"),
+        "n_particles": (int, 45, (1, 100000), "particles to deposit"),
+        "n_bottom": (int, 15, (2, 100000), "bottom wall discs (corners included)"),
+        "n_side": (int, 9, (1, 100000), "discs of each side wall column, corner shared with the bottom"),
+        "wall_radius": (float, 0.45e-3, POS, "wall disc radius [m]"),
+        "mean_diameter": (float, 0.9e-3, POS, "mean of the log-normal diameters [m] (eq 53-54)"),
+        "std_diameter": (float, 0.25e-3, POS, "standard deviation of the diameters [m]"),
+        "d_min": (float, 0.4e-3, POS, "truncation of the diameters [m]"),
+        "d_max": (float, 2.0e-3, POS, "truncation of the diameters [m]"),
+        "settle_time": (float, 0.1, POS, "deposition time under gravity [s]"),
+        "settle_dt": (float, 5e-6, POS, "time step of the deposition [s]"),
+        "cut_extra": (float, 0.4, (0.0, 10.0), "deposit this fraction more particles, keep the lowest n_particles (a flat cut)"),
+        "dense_top_depth": (float, 0.45e-3, (0.0, math.inf), "particles whose top lies within this depth of the top of their column are denser [m]"),
+        "dense_top_factor": (float, 5.0, POS, "density factor of the top particles (5 quick sand, 10 seismic)"),
+        # seismic box (issue 11)
+        "dense_top_count": (int, 0, (0, 100000), "if > 0: the dense top particles are the n highest centres instead of the dense_top_depth layer (seismic: 54, the paper's discs 139-192)"),
+        "wall_density_factor": (float, 1.0, POS, "density factor of the wall discs (seismic: 10; the side walls move)"),
+        "settle_ks": (float, 0.0, (0.0, math.inf), "tangential stiffness during deposition [N/m] (§4.2: 0; §6: 3.5e4)"),
+        "guard_walls": (bool, False, None, "deposition only: side walls raised above the highest particle (removed afterwards) so that no particle bounces out of the box"),
+        "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
+    },
+    "material": {
+        "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),
+        "rho_w": (float, 1000.0, (0.0, math.inf), "water density [kg/m^3]"),
+        "g": (float, 9.81, (0.0, math.inf), "gravity [m/s^2], along -z"),
+    },
+    "contact": {
+        "spring": (str, "c", ("a", "b", "c", "d"), "normal spring of Fig. 5: a/b linear, c nonlinear elastic, d hysteretic"),
+        "kn": (float, 1.4e6, POS, "normal stiffness [N/m]"),
+        "eta_n": (float, 5.2, (0.0, math.inf), "normal dashpot [N s/m]"),
+        "ks": (float, 3.5e5, (0.0, math.inf), "tangential stiffness [N/m]"),
+        "eta_s": (float, 1.3, (0.0, math.inf), "tangential dashpot [N s/m]"),
+        "mu": (float, 1.0, (0.0, math.inf), "friction coefficient"),
+        "restitution": (float, 0.001, (0.0, 1.0), "e of the velocity adjustment at separation (eq 19)"),
+        "f_max": (float, 2.5, POS, "cap of the elastic normal force for springs c, d [N] (eq 27)"),
+        "eps_m": (float, 0.0, (0.0, math.inf), "force range beyond touching [m] (eq 26)"),
+        "separation_adjustment": (bool, True, None, "apply eq 18-24 when a particle becomes free"),
+        "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, see README)"),
+        # side-wall springs of the seismic box (issue 11, Fig. 27; used when loading.side_walls = springs)
+        "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
+        "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
+    },
+    "water": {
+        "enabled": (bool, True, None, "false: a dry scene, no water code runs"),
+        "E_w": (float, 240.0, POS, "water modulus per unit thickness [N/m] (eq 32)"),
+        "k1": (float, 200.0, (0.0, math.inf), "permeability across a gap link [1/s] (eq 43a)"),
+        "k2": (float, 2.0, (0.0, math.inf), "permeability across a contact link [1/s] (eq 43b)"),
+        "k3": (float, 0.0, (0.0, math.inf), "permeability of drained side walls [1/s]"),
+        "q_w": (float, 0.0, (0.0, math.inf), "inflow into every bottom pore [m^2/s] (§5.1)"),
+        "sides": (str, "undrained", ("undrained", "drained"), "side-wall drainage"),
+        "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
+        "smoothing": (bool, False, None, "eq 45-46"),
+        "substep": (bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the engine prints the count and its cost); false: refuse such a step (preflight at the start, the engine mid-run)"),
+        # issue 12
+        "max_substeps": (int, 100, (1, math.inf), "with substep: refuse up front a water step that needs more sub-steps than this at the start"),
+        # issue 11
+        "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.model.pore_water.conserving_water)"),
+    },
+    "loading": {
+        "type": (str, "none", ("none", "cosine", "record"), "horizontal acceleration of the moving walls"),
+        "moves": (str, "bottom", ("bottom", "box"), "which walls follow the input"),
+        "amplitude": (float, 15.0, (0.0, math.inf), "cosine amplitude [m/s^2] (1500 gal = 15)"),
+        "frequency": (float, 50.0, POS, "cosine frequency [Hz]"),
+        "record": (str, "", None, "two-column file time [s], acceleration [g]"),
+        "time_scale": (float, 1.0, POS, "record time is multiplied by this"),
+        "amplitude_scale": (float, 1.0, (0.0, math.inf), "record acceleration is multiplied by this"),
+        # issue 11
+        "record_units": (str, "g", ("g", "gal", "m/s2"), "unit of the record's acceleration column"),
+        "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
+    },
+    "numerics": {
+        "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.model.time_step)"),
+        "duration": (float, 0.06, POS, "simulated time [s]"),
+        "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2))"),
+        "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
+        "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
+        "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
+        # issue 12: the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
+        "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.36 the study's fast setting (docs/TRADEOFFS.md)"),
+    },
+    "output": {
+        "history_interval": (int, 100, (1, math.inf), "steps between history rows"),
+        "snapshot_times": (list, [0.02, 0.04, 0.06], None, "times of the snapshot figures [s]"),
+        "block_z": (list, [[0.0, 0.34], [0.66, 10.0]], None, "pressure blocks as [z0, z1] fractions of the initial bed height above the bottom wall (block1 bottom, block2 surface)"),
+        "progress_seconds": (float, 10.0, POS, "wall seconds between progress lines"),
+        # issue 11
+        "porosity_window": (list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.model.observe)"),
+        # issue 13: ParaView, checkpoints, headline results
+        "vtk": (bool, False, None, "write a ParaView time series to DIR/vtk/ during the run (postproc.vtk: discs, contact forces, pores)"),
+        "vtk_interval": (int, 0, (0, math.inf), "steps between VTK frames; 0: at the snapshot_times"),
+        "checkpoint_seconds": (float, 600.0, POS, "wall seconds between checkpoints during a run (one is also written at the start, at the end and on an interrupt)"),
+        "heave_rise": (float, 0.45e-3, POS, "rise of the bed top (highest particle top) above its initial height that marks the heave time in summary.json [m]"),
+    },
+}
+
+
+@dataclass
+class Scene:
+    """A validated scene: ``tables`` holds every field (defaults filled in), by table;
+    ``overrides`` the {table: {field: value}} applied on top of the file (recorded by runs)."""
+
+    tables: dict
+    path: str = ""
+    overrides: dict = field(default_factory=dict)
+
+    def __getattr__(self, table):
+        try:
+            return _Table(self.__dict__["tables"][table])
+        except KeyError:
+            raise AttributeError(table) from None
+
+    def contact_settings(self):
+        c = self.tables["contact"]
+        return ContactSettings(**{k: c[k] for k in ("spring", "kn", "eta_n", "ks", "eta_s", "mu", "restitution",
+                                                    "f_max", "eps_m", "separation_adjustment")})
+
+    def water_settings(self):
+        w = self.tables["water"]
+        if not w["enabled"]:
+            return None
+        return WaterSettings(**{k: w[k] for k in ("E_w", "k1", "k2", "k3", "q_w", "sides", "smoothing", "substep",
+                                                  "transfer")})
+
+    def as_dict(self):
+        return {t: dict(v) for t, v in self.tables.items()}
+
+    def with_overrides(self, overrides):
+        """A new validated scene with {table: {field: value}} replaced."""
+        sc = validate(_merge(self.as_dict(), overrides), self.path)
+        sc.overrides = _merge(self.overrides, overrides)
+        return sc
+
+
+class _Table(dict):
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def _check(table, name, value, spec):
+    typ, _, check, _ = spec
+    where = f"[{table}] {name}"
+    if check is POS_OR_AUTO:
+        if value == "auto":
+            return value
+        if isinstance(value, str):
+            raise SceneError(f"{where}: expected a number > 0 or \"auto\", got {value!r}")
+        check = POS
+    if typ is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if typ is float and not isinstance(value, float) or typ is int and (not isinstance(value, int) or isinstance(value, bool)) \
+            or typ in (str, bool, list) and not isinstance(value, typ):
+        raise SceneError(f"{where}: expected {typ.__name__}, got {value!r}")
+    if typ is float and not math.isfinite(value):
+        raise SceneError(f"{where}: must be finite, got {value}")
+    if isinstance(check, tuple) and check and isinstance(check[0], str):
+        if value not in check:
+            raise SceneError(f"{where}: must be one of {', '.join(check)}, got {value!r}")
+    elif check is not None:
+        lo, hi = check
+        if not lo <= value <= hi or (check is POS and value == 0):
+            bound = "> 0" if check is POS else f"in [{lo}, {hi}]"
+            raise SceneError(f"{where}: must be {bound}, got {value}")
+    return value
+
+
+def validate(raw, path=""):
+    """Fill defaults and check every field of a parsed scene document; returns a Scene."""
+    unknown = set(raw) - set(SCHEMA) - {"extends"}
+    if unknown:
+        raise SceneError(f"unknown table(s) {sorted(unknown)}; known: {sorted(SCHEMA)}")
+    tables = {}
+    for table, fields in SCHEMA.items():
+        given = raw.get(table, {})
+        if not isinstance(given, dict):
+            raise SceneError(f"[{table}] must be a table")
+        extra = set(given) - set(fields)
+        if extra:
+            raise SceneError(f"[{table}] unknown field(s) {sorted(extra)}; known: {sorted(fields)}")
+        values = {}
+        for name, spec in fields.items():
+            if name in given:
+                values[name] = _check(table, name, given[name], spec)
+            elif spec[1] is REQUIRED:
+                raise SceneError(f"[{table}] {name}: required field is missing")
+            else:
+                values[name] = spec[1]
+        tables[table] = values
+    _cross_checks(tables, path)
+    return Scene(tables, path)
+
+
+def _cross_checks(t, path):
+    p = t["packing"]
+    c = t["contact"]
+    if c["law"] == "yade" and c["spring"] not in ("a", "b"):
+        raise SceneError(f"[contact] spring = {c['spring']!r}: law = 'yade' has springs a and b only "
+                         f"(no YADE law has the f_max plateau of c and d); use law = 'paper'")
+    if t["numerics"]["dt_auto_factor"] <= 0:
+        raise SceneError(f"[numerics] dt_auto_factor: must be in (0, 1], got {t['numerics']['dt_auto_factor']}")
+    if p["d_min"] >= p["d_max"]:
+        raise SceneError(f"[packing] d_min = {p['d_min']} must be < d_max = {p['d_max']}")
+    if p["source"] == "file" and not p["file"]:
+        raise SceneError("[packing] file: required when source = 'file'")
+    if t["loading"]["type"] == "record" and not t["loading"]["record"]:
+        raise SceneError("[loading] record: required when type = 'record'")
+    for k, blk in enumerate(t["output"]["block_z"]):
+        if not (isinstance(blk, list) and len(blk) == 2 and blk[0] < blk[1]):
+            raise SceneError(f"[output] block_z[{k}]: expected [z0, z1] with z0 < z1, got {blk!r}")
+    win = t["output"]["porosity_window"]
+    if not (len(win) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in win)
+            and 0 <= win[0] < win[1]):
+        raise SceneError(f"[output] porosity_window: expected [z0, z1] with 0 <= z0 < z1, got {win!r}")
+    if t["loading"]["side_walls"] == "springs" and c["law"] == "yade":
+        raise SceneError("[loading] side_walls = 'springs': the side-wall ties run in the paper's law engine; "
+                         "use [contact] law = 'paper'")
+    if t["loading"]["side_walls"] == "springs" and t["loading"]["moves"] != "bottom":
+        raise SceneError("[loading] side_walls = 'springs' needs moves = 'bottom' (the box moving as one has no springs)")
+    if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):
+        raise SceneError(f"[output] snapshot_times: expected times >= 0, got {t['output']['snapshot_times']!r}")
+    _resolve_paths(t, os.path.dirname(path) if path else SCENE_DIR)
+
+
+PATH_FIELDS = (("packing", "file"), ("loading", "record"))  # relative to the file that names them
+
+
+def _resolve_paths(tables, base):
+    """Make the relative PATH_FIELDS of ``tables`` absolute against the folder ``base`` (in place)."""
+    for table, name in PATH_FIELDS:
+        sub = tables.get(table)
+        value = sub.get(name) if isinstance(sub, dict) else None
+        if isinstance(value, str) and value and not os.path.isabs(value):
+            tables[table][name] = os.path.normpath(os.path.join(base, value))
+
+
+def _merge(base, over):
+    out = {k: dict(v) if isinstance(v, dict) else v for k, v in base.items()}
+    for k, v in over.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k].update(v)
+        else:
+            out[k] = v
+    return out
+
+
+def read_raw(path, _chain=None):
+    """Parse a scene file, following ``extends`` chains; returns the merged TOML dict.
+
+    Relative paths (``extends``, PATH_FIELDS) are resolved against the folder of the file that
+    names them, so a scene anywhere may extend a preset and inherit its packing file."""
+    try:
+        with open(path, "rb") as f:
+            raw = tomllib.load(f)
+    except FileNotFoundError:
+        raise SceneError(f"scene file not found: {path}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise SceneError(f"{path}: not valid TOML: {e}") from None
+    path = os.path.abspath(path)
+    _chain = (path,) if _chain is None else _chain
+    _resolve_paths(raw, os.path.dirname(path))
+    parent = raw.pop("extends", None)
+    if parent is not None:
+        if not isinstance(parent, str) or not parent:
+            raise SceneError(f"{path}: extends: expected a scene file name, got {parent!r}")
+        parent = os.path.normpath(os.path.join(os.path.dirname(path), parent))
+        if parent in _chain:
+            raise SceneError(f"{path}: extends: a loop back to {parent}")
+        raw = _merge(read_raw(parent, _chain + (parent,)), raw)
+    return raw
+
+
+def load(path, overrides=None):
+    """Read and validate a scene file; ``overrides`` {table: {field: value}} are applied last."""
+    raw = read_raw(path)
+    if overrides:
+        raw = _merge(raw, overrides)
+    sc = validate(raw, path)
+    sc.overrides = _merge({}, overrides or {})
+    return sc
+
+
+def preset(name, overrides=None):
+    """Load ``yade_scripts/scenes/<name>.toml``."""
+    return load(os.path.join(SCENE_DIR, name + ".toml"), overrides)
+
+
+def schema_markdown():
+    """The schema as a Markdown table (yade_scripts/scenes/README.md)."""
+    lines = ["| table | field | type | default | range or choices | meaning |", "|---|---|---|---|---|---|"]
+    for table, fields in SCHEMA.items():
+        for name, (typ, default, check, doc) in fields.items():
+            shown = "required" if default is REQUIRED else repr(default)
+            if check is None:
+                rng = ""
+            elif isinstance(check[0], str):
+                rng = ", ".join(check)
+            elif check is POS_OR_AUTO:
+                rng = "> 0 or 'auto'"
+            else:
+                rng = "> 0" if check is POS else f"[{check[0]}, {check[1]}]"
+            lines.append(f"| {table} | {name} | {typ.__name__} | {shown} | {rng} | {doc} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(schema_markdown())

@@ -1,0 +1,222 @@
+"""One sweep runner for the studies: command-line jobs, each in its own directory, run on the
+local cores or on a Dask distributed cluster, resumable.
+
+    from engines.run.sweep import Job, run_sweep
+    jobs = [Job("phi10-seed1", ["yade", "-n", "-x", "yade_scripts/biaxial.py", "--phi-e", "10",
+                                "--out", "{out}"])]
+    records = run_sweep(jobs, "out/study", workers=2, scheduler=None, resume=True)
+
+A job is a name and a command line; ``{out}`` in an argument becomes the job's directory
+``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR). Each job writes
+there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
+"failed"), return code, wall and CPU seconds, command, host, and the tail of stderr. ``run_sweep``
+returns the records of all jobs in the order given, prints one line per finished job and a
+summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job whose job.json says
+"ok" for the same command is not run again; failed, interrupted or changed jobs are.
+
+Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
+is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the same jobs run
+on its workers, which need this project importable (PYTHONPATH) and ROOT on a shared file
+system. YADE's own parameter tables (yade-batch's format) become jobs with ``jobs_from_table``:
+one job per table line, run as yade-batch runs it (YADE_BATCH=table:line, read by the script
+with ``yade.utils.readParamsFromTable``).
+
+The command line is yade_scripts/sweep.py.
+"""
+import json
+import os
+import re
+import socket
+import subprocess
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+STDERR_TAIL = 2000  # characters of stderr kept in job.json
+NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run: ``name`` (its directory under the root; letters, digits and ._=,+-), ``argv``
+    (the command line, "{out}" replaced by the directory), ``env`` (extra environment) and
+    ``timeout`` (seconds, None = none)."""
+
+    name: str
+    argv: tuple
+    env: dict = field(default_factory=dict)
+    timeout: float = None
+
+    def __post_init__(self):
+        if not NAME.match(self.name or ""):
+            raise ValueError(f"job name {self.name!r}: use letters, digits and . _ = , + - only")
+        object.__setattr__(self, "argv", tuple(str(a) for a in self.argv))
+        if not self.argv:
+            raise ValueError(f"job {self.name}: empty command")
+
+    def command(self, out_dir):
+        return [a.replace("{out}", out_dir) for a in self.argv]
+
+
+def _write_json(path, data):
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(tmp, path)
+
+
+def read_record(root, name):
+    """The job.json of a job, or None."""
+    try:
+        with open(os.path.join(root, name, "job.json")) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def _run_timed(cmd, stdout, stderr, env, timeout):
+    """Run ``cmd`` to its end: (return code, CPU seconds it used (user + system, with the children
+    it waited for), whether it was killed at ``timeout`` seconds)."""
+    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env)
+    killed = threading.Event()
+
+    def kill():
+        killed.set()
+        proc.kill()
+
+    timer = threading.Timer(timeout, kill) if timeout else None
+    if timer:
+        timer.start()
+    try:
+        _, status, usage = os.wait4(proc.pid, 0)
+    finally:
+        if timer:
+            timer.cancel()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, usage.ru_utime + usage.ru_stime, killed.is_set()
+
+
+def run_job(job, root):
+    """Run one job in its directory (blocking); write and return its record. Runs wherever it is
+    called: in a local thread or on a Dask worker."""
+    out = os.path.abspath(os.path.join(root, job.name))
+    os.makedirs(out, exist_ok=True)
+    cmd = job.command(out)
+    rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "host": socket.gethostname(),
+           "started": time.time()}
+    _write_json(os.path.join(out, "job.json"), rec)
+    env = {**os.environ, **job.env, "SWEEP_JOB_DIR": out}
+    t0 = time.time()
+    err_path = os.path.join(out, "stderr.log")
+    cpu_s, note = 0.0, ""
+    try:
+        with open(os.path.join(out, "stdout.log"), "w") as so, open(err_path, "w") as se:
+            rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout)
+        if timed_out:
+            rc, note = -9, f"timeout after {job.timeout} s"
+    except OSError as e:
+        rc, note = 127, f"could not start: {e}"
+    with open(err_path, errors="replace") as f:
+        tail = f.read()[-STDERR_TAIL:]
+    rec.update(status="ok" if rc == 0 else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
+               finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
+    _write_json(os.path.join(out, "job.json"), rec)
+    return rec
+
+
+def is_done(job, root):
+    rec = read_record(root, job.name)
+    out = os.path.abspath(os.path.join(root, job.name))
+    return rec is not None and rec.get("status") == "ok" and rec.get("command") == job.command(out) \
+        and rec.get("env", {}) == dict(job.env)
+
+
+def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
+    """Run ``jobs`` (a list of Job) under ``root``; returns their records in the given order.
+
+    workers: local processes at a time (ignored with a scheduler). scheduler: None (local), a
+    Dask scheduler address or a distributed.Client. resume: skip jobs already "ok" with the same
+    command. ``log``: a print-like function for progress (None = quiet).
+    """
+    names = [j.name for j in jobs]
+    if len(set(names)) != len(names):
+        raise ValueError("job names must be unique: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    os.makedirs(root, exist_ok=True)
+    log = log or (lambda *a: None)
+    t0 = time.time()
+    kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
+    todo = [j for j in jobs if j.name not in kept]
+    log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
+        f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
+    done = {}
+
+    def finished(job, fut):
+        try:
+            rec = fut.result()
+        except Exception as e:  # the runner itself failed (a lost Dask worker, a full disk): keep the job
+            rec = {"name": job.name, "status": "failed", "returncode": None, "wall_s": 0.0,
+                   "command": job.command(os.path.abspath(os.path.join(root, job.name))), "env": dict(job.env),
+                   "stderr_tail": f"runner error: {type(e).__name__}: {e}"}
+        done[job.name] = rec
+        log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
+
+    if scheduler is None:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = {pool.submit(run_job, j, root): j for j in todo}
+            for fut in as_completed(futures):
+                finished(futures[fut], fut)
+    elif todo:
+        from distributed import Client
+        from distributed import as_completed as dask_completed
+
+        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        try:
+            root_abs = os.path.abspath(root)
+            futures = {client.submit(run_job, j, root_abs, key=f"sweep-{j.name}-{time.time_ns()}", pure=False): j
+                       for j in todo}
+            for fut in dask_completed(list(futures)):
+                finished(futures[fut], fut)
+        finally:
+            if client is not scheduler:
+                client.close()
+    records = []
+    for j in jobs:
+        rec = dict(kept[j.name], kept=True) if j.name in kept else done[j.name]
+        records.append(rec)
+    failed = [r["name"] for r in records if r["status"] != "ok"]
+    summary = {"root": os.path.abspath(root), "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
+               "wall_s": time.time() - t0, "jobs": records}
+    _write_json(os.path.join(root, "sweep.json"), summary)
+    log(format_summary(records))
+    return records
+
+
+def format_summary(records):
+    """A table of the jobs: name, status, return code, wall seconds."""
+    width = max([len(r["name"]) for r in records] + [4])
+    lines = [f"{'job':<{width}}  status  rc    wall_s"]
+    for r in records:
+        status = "ok*" if r.get("kept") else r["status"]
+        lines.append(f"{r['name']:<{width}}  {status:<6}  {str(r.get('returncode', '')):<4}  {r.get('wall_s', 0):8.1f}")
+    failed = [r for r in records if r["status"] != "ok"]
+    lines.append(f"{len(records) - len(failed)} ok ({sum(1 for r in records if r.get('kept'))} kept from before, *), "
+                 f"{len(failed)} failed" + ("".join(f"\n  {r['name']}: {r.get('stderr_tail', '').splitlines()[-1:]}"
+                                                    for r in failed)))
+    return "\n".join(lines)
+
+
+def jobs_from_table(table, script, yade=("yade", "-n")):
+    """Jobs from a yade-batch parameter table: one per line, named by its description (the
+    ``description`` column, or YADE's synthesised name=value list), run as ``yade -x script``
+    with YADE_BATCH=table:line, so the script reads its line by readParamsFromTable."""
+    from yade.utils import TableParamReader  # YADE's own reader of the format
+
+    table = os.path.abspath(table)
+    jobs = []
+    for line, params in sorted(TableParamReader(table).paramDict().items()):
+        name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params["description"])
+        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
+    return jobs

@@ -1,0 +1,271 @@
+"""Wall-less periodic packing of seed 003 (Murakami et al. §2(1), eq 1; SPEC §4).
+
+Discs are placed at random in a rectangle, then the rectangle and every centre are scaled by
+L′/L each step (eq 1) until the mean stresses σx and σz equal σ3 within 1 %. No walls: a disc
+across an edge meets the discs near the opposite edge through its periodic image. The packed
+block tiles the plane, so larger ground models are copies of it side by side (``tile``).
+
+In YADE this is the periodic cell (``O.periodic``): the cell's velocity gradient ``velGrad``
+with ``homoDeform`` scales the cell and carries every centre with the same affine field, which
+is eq 1 in rate form, x′ = x (1 + ε̇ Δt); the collider finds the image contacts. Where it differs
+from the paper: (1) the affine motion enters through the velocities, so the contact dashpots see
+it as a relative velocity (in the paper it is an imposed displacement increment; at the rates
+used the two are the same to first order in ε̇ Δt); (2) σx, σz are the Love averages over all
+contacts of the cell instead of the forces across one section line (equal in static
+equilibrium; ``section_stress`` gives the paper's measure and the tests compare the two);
+(3) the paper does not say how L′/L is chosen: each direction is servoed on its own stress
+error with a rate (σ3 − σ)/(K τ), K the assembly's modulus estimated from its number of
+contacts (a PeriTriaxController written for 2D): fast while the discs are apart, slow once they
+carry load; it stops when both stresses are within the tolerance and the assembly is at rest.
+The shear stress σxz is not controlled (in the paper neither); it is recorded in the block's info.
+"""
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from packing.packing import Packing
+
+TABLE1_RADII = (1.4e-3, 2.8e-3, 3.2e-3)  # m
+TABLE1_RATIO = (6.48, 2.30, 1.0)         # number ratio N1 : N2 : N3
+
+
+def table1_radii(n, radii=TABLE1_RADII, ratio=TABLE1_RATIO):
+    """n radii [m] in Table 1's number ratio (largest-remainder rounding), sorted large first."""
+    if n < len(radii):
+        raise ValueError(f"n_discs must be >= {len(radii)}, got {n}")
+    share = n * np.asarray(ratio, float) / np.sum(ratio)
+    counts = np.floor(share).astype(int)
+    counts[np.argsort(share - counts)[::-1][: n - counts.sum()]] += 1
+    return np.repeat(np.asarray(radii, float), counts)[::-1].copy()
+
+
+def random_placement(r, cell, rng, max_tries=100000):
+    """Centres (n, 2) [m] of discs r placed at random, without overlap, in the periodic cell
+    (Lx, Lz), largest first (random sequential addition)."""
+    r, cell = np.asarray(r, float), np.asarray(cell, float)
+    xz = np.zeros((len(r), 2))
+    done = []
+    for i in np.argsort(-r, kind="stable"):
+        for _ in range(max_tries):
+            xz[i] = rng.random(2) * cell
+            d = xz[done] - xz[i]
+            d -= np.round(d / cell) * cell
+            if np.all(np.hypot(d[:, 0], d[:, 1]) > r[done] + r[i]):
+                done.append(i)
+                break
+        else:
+            raise ValueError(f"random placement: no room for disc {i} after {max_tries} tries "
+                             "(lower the initial solid fraction)")
+    return xz
+
+
+def love_stress(force, branch, area):
+    """Mean stress (2, 2) [Pa], compression positive: (1/A) Σ f ⊗ l over contacts, f the force on
+    the second disc [N/m], l the branch vector from the first to the second centre [m]."""
+    return np.einsum("ci,cj->ij", np.asarray(force, float), np.asarray(branch, float)) / area
+
+
+def section_stress(xz1, branch, force, axis, at, cell):
+    """The paper's σx (axis 0) or σz (axis 1) (§2(1)): the components along ``axis`` of the
+    contact forces acting across the line ``axis`` = ``at``, summed and divided by the line's
+    length [Pa], compression positive. Periodic cell (Lx, Lz): a branch from a centre in the
+    cell crosses the line or one of its images. xz1: first centres (n, 2), branch: (n, 2) to
+    the second centre, force: (n, 2) on the second disc."""
+    a = np.asarray(xz1, float)[:, axis]
+    b = a + np.asarray(branch, float)[:, axis]
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    period, length = cell[axis], cell[1 - axis]
+    crosses = np.zeros(len(a), bool)
+    for k in (-1, 0, 1):
+        crosses |= (lo < at + k * period) & (hi >= at + k * period)
+    f = np.asarray(force, float)[:, axis] * np.sign(b - a)
+    return float(np.sum(f[crosses]) / length)
+
+
+@dataclass
+class PeriodicBlock:
+    """A packed periodic block.
+
+    Attributes:
+        xz: centres (n, 2) [m], wrapped into the cell [0, Lx) × [0, Lz).
+        r: radii (n,) [m].
+        cell: (Lx, Lz) [m].
+        sigma: (σx, σz) reached [Pa], compression positive.
+        info: how it was made (target, contact constants, steps, seed, ...).
+    """
+
+    xz: np.ndarray
+    r: np.ndarray
+    cell: tuple
+    sigma: tuple
+    info: dict
+
+    @property
+    def solid_fraction(self):
+        return float(np.sum(np.pi * self.r ** 2) / (self.cell[0] * self.cell[1]))
+
+    def save(self, path):
+        """CSV of x, z, r beside a JSON of cell, sigma and info (``path`` without extension)."""
+        os.makedirs(os.path.dirname(os.path.abspath(path)) or ".", exist_ok=True)
+        np.savetxt(path + ".csv", np.column_stack([self.xz, self.r]), delimiter=",", header="x_m,z_m,r_m",
+                   comments="", fmt="%.15e")
+        with open(path + ".json", "w") as f:
+            json.dump({"cell_m": list(self.cell), "sigma_pa": list(self.sigma), "info": self.info}, f, indent=1)
+
+    @classmethod
+    def load(cls, path):
+        d = np.loadtxt(path + ".csv", delimiter=",", skiprows=1, ndmin=2)
+        with open(path + ".json") as f:
+            meta = json.load(f)
+        return cls(d[:, :2], d[:, 2], tuple(meta["cell_m"]), tuple(meta["sigma_pa"]), meta["info"])
+
+
+def tile(block, nx, nz, origin=(0.0, 0.0)):
+    """Ground model of nx × nz copies of a periodic block side by side (§2(1): the block as a
+    unit). Discs crossing an inner seam overlap their neighbours in the next copy exactly as
+    they overlapped the images in the cell, so the seams are invisible. Returns a Packing (all
+    group 0, density factor 1) for a pore-water scene; its outer edges are the block's ragged
+    periodic edges (a scene adds its own walls)."""
+    if not (isinstance(nx, int) and isinstance(nz, int) and nx >= 1 and nz >= 1):
+        raise ValueError(f"tile: nx and nz must be integers >= 1, got {nx}, {nz}")
+    lx, lz = block.cell
+    i, j = np.meshgrid(np.arange(nx), np.arange(nz), indexing="ij")
+    shifts = np.column_stack([i.ravel() * lx, j.ravel() * lz])
+    xz = (block.xz[None, :, :] + shifts[:, None, :]).reshape(-1, 2) + np.asarray(origin, float)
+    r = np.tile(block.r, len(shifts))
+    return Packing(xz, r, np.zeros(len(r), np.int64), np.ones(len(r)))
+
+
+# ---- YADE: the packing itself ---------------------------------------------------------------
+
+@dataclass(frozen=True)
+class PackingSettings:
+    """How the cell is shrunk (all rates are true strain rates, shrinking > 0).
+
+    Attributes:
+        tolerance: relative stress tolerance (the paper: 1 %).
+        initial_fraction: solid fraction of the random placement [-].
+        aspect: Lz / Lx of the cell [-].
+        dt: time step [s] (the paper: 0.5e-4).
+        servo_time: time constant τ of the stress servo [s]: ε̇ = (σ3 − σ)/(K τ) in each
+            direction, K the assembly's modulus estimated from its contacts (``affine_modulus``).
+        max_rate: cap of |ε̇| [1/s] (the rate while the discs are still apart).
+        unbalanced: the assembly is at rest when YADE's unbalanced force ratio is below this.
+        check_every: steps between servo updates.
+        max_time: simulated time limit [s]; reaching it is an error.
+    """
+
+    tolerance: float = 0.01
+    initial_fraction: float = 0.5
+    aspect: float = 1.0
+    dt: float = 5e-5
+    servo_time: float = 0.01
+    max_rate: float = 1.0
+    unbalanced: float = 0.01
+    check_every: int = 10
+    max_time: float = 10.0
+
+    def __post_init__(self):
+        if not 0 < self.tolerance < 1:
+            raise ValueError(f"tolerance must be in (0, 1), got {self.tolerance}")
+        if not 0 < self.initial_fraction < 0.7:
+            raise ValueError(f"initial_fraction must be in (0, 0.7), got {self.initial_fraction}")
+        if not self.aspect > 0:
+            raise ValueError(f"aspect must be > 0, got {self.aspect}")
+
+
+def cell_for(r, fraction, aspect):
+    """(Lx, Lz) [m] of a cell holding discs r at a solid fraction, Lz = aspect Lx."""
+    lx = math.sqrt(float(np.sum(np.pi * np.asarray(r) ** 2)) / fraction / aspect)
+    return lx, aspect * lx
+
+
+def affine_modulus(coordination, r, k_contact, area):
+    """Modulus dσxx/dεxx [Pa] of an isotropic assembly strained affinely: (1/A) Σ k l² n_x⁴ over
+    its Z N / 2 contacts, with ⟨n_x⁴⟩ = 3/8, l = 2 r̄ and k the typical contact stiffness [N/m²].
+    An upper bound of the true modulus; small while the discs are apart, so the servo shrinks
+    fast then and slows down as contacts form. Z floored at 0.1."""
+    n_contacts = max(coordination, 0.1) * len(r) / 2
+    return n_contacts * k_contact * (2 * float(np.mean(r))) ** 2 * 3 / 8 / area
+
+
+def yade_cell_stress(depth, shear=False):
+    """(σxx, σzz) [Pa] of the periodic cell, compression positive (and σxz if ``shear``): YADE's
+    Love stress (over the 3D cell volume) times the cell's y depth (our forces are per unit
+    thickness)."""
+    from yade import utils
+    s = utils.getStress()
+    normal = (-float(s[0, 0]) * depth, -float(s[2, 2]) * depth)
+    return (*normal, -0.5 * float(s[0, 2] + s[2, 0]) * depth) if shear else normal
+
+
+def pack_periodic(r, contact, sigma3, settings, rng, log=None):
+    """Pack discs r (radii [m]) in a periodic cell with YADE (resets the YADE scene) to each
+    confining stress of ``sigma3`` [Pa] in turn, lowest first: one random placement, shrunk to
+    the first target, then servoed on to the next (the same initial arrangement for all, as the
+    paper's §3(3)c asks). Returns the PeriodicBlocks in the order of ``sigma3``.
+
+    ``contact``: engines.seeds.biaxial.cem_contact.CemContact; ``settings``: PackingSettings; ``rng``: numpy
+    Generator for the placement. Raises RuntimeError if a target is not reached within
+    ``settings.max_time`` (simulated seconds per target).
+    """
+    from yade import O, utils
+    from yade.minieigenHP import Matrix3
+
+    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, pair_constants, py_runner, yade_engines
+
+    s = settings
+    r = np.asarray(r, float)
+    targets = [float(v) for v in np.atleast_1d(sigma3)]
+    if not all(math.isfinite(v) and v > 0 for v in targets):
+        raise ValueError(f"sigma3 must be > 0 Pa, got {targets}")
+    check_dt(s.dt, r, contact)
+    cell = cell_for(r, s.initial_fraction, s.aspect)
+    xz = random_placement(r, cell, rng)
+    depth = 10 * float(r.max())  # cell y size: no disc meets its own y-image (collider: bounds < depth / 2)
+    O.reset()
+    O.periodic = True
+    O.cell.setBox(cell[0], depth, cell[1])
+    add_discs(xz, r, contact, y=depth / 2)
+    k_median = float(pair_constants(np.median(r), np.median(r), contact)[0])
+    state = {"sigma": (0.0, 0.0), "target": None, "done": False}
+
+    def servo():
+        target = state["target"]
+        sx, sz = state["sigma"] = yade_cell_stress(depth)
+        h = O.cell.hSize
+        modulus = affine_modulus(utils.avgNumInteractions(), r, k_median, float(h[0, 0] * h[2, 2]))
+        # eq 1 in rate form, each direction on its own stress error
+        rates = [float(np.clip((target - sig) / (modulus * s.servo_time), -s.max_rate, s.max_rate))
+                 for sig in (sx, sz)]
+        if max(abs(sx - target), abs(sz - target)) < s.tolerance * target and utils.unbalancedForce() < s.unbalanced:
+            state["done"] = True
+            rates = (0.0, 0.0)
+            O.pause()
+        O.cell.velGrad = Matrix3(-rates[0], 0, 0, 0, 0, 0, 0, 0, -rates[1])
+
+    O.engines = yade_engines([py_runner(servo, s.check_every)])
+    O.dt = s.dt
+    blocks = {}
+    for target in sorted(set(targets)):
+        state.update(target=target, done=False)
+        start = O.iter
+        O.run(int(s.max_time / s.dt), True)
+        sx, sz = state["sigma"]
+        if not state["done"]:
+            raise RuntimeError(f"periodic packing did not reach sigma3 = {target:g} Pa within {s.max_time} s "
+                               f"(sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa, unbalanced force ratio "
+                               f"{utils.unbalancedForce():.3g}, dt = {s.dt:g} s)")
+        h = O.cell.hSize
+        lx, lz = float(h[0, 0]), float(h[2, 2])
+        pos = np.mod([[b.state.pos[0], b.state.pos[2]] for b in O.bodies], [lx, lz])
+        info = {"sigma3_pa": target, "sigma_xz_pa": yade_cell_stress(depth, shear=True)[2], "steps": O.iter - start,
+                "time_s": O.time, "contact": asdict(contact), "settings": asdict(s), "depth_m": depth}
+        blocks[target] = PeriodicBlock(pos, r.copy(), (lx, lz), (sx, sz), info)
+        if log:
+            log(f"packed {len(r)} discs to sigma3 = {target:g} Pa: sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa "
+                f"after {O.iter - start} steps, solid fraction {blocks[target].solid_fraction:.4f}")
+    return [blocks[t] for t in targets]

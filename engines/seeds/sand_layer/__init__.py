@@ -1,0 +1,3 @@
+"""Seed 004: the Monte-Carlo model sand layer of Matsuo, Komada & Takahashi (layer: elements filled
+with grains drawn from the size distribution) and its stress transmission and settlement (mechanics).
+"""

@@ -1,0 +1,191 @@
+"""Error metrics of the speed/accuracy study, on statistics of runs, not on positions.
+
+DEM runs are chaotic: two time steps, or a 1e-9 m nudge of the start, give trajectories that part
+after a few milliseconds. A setting is therefore run from ``n`` perturbed starts (``perturbed``)
+and compared with the reference run from the same starts through ensemble means. The nudge must be
+large enough that the starts have parted before the window's events: a cloud of starts that is
+still one trajectory has a small spread (so a small floor) and a mean that any change of the step
+moves; check that the means do not depend on the size (yade_scripts/tradeoffs.py, the knob
+"perturbation"; docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
+
+* ``pressure_error``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
+  <.> the mean over starts of the block-mean pore pressure histories (N/m, per block and time);
+* ``pressure_rms_below_surface``: the same without the last (surface) block, a diagnostic: the
+  surface block's pressure swings most between starts and carries most of the error;
+* ``change_error``: |<x>_run - <x>_ref| / |<x>_ref| for a scalar change x per start: the
+  porosity change over the window, the settlement (drop of the particles' mean height);
+* the chaos floor of each metric (``pressure_floor``, ``change_floor``): the value the metric
+  takes between two independent ensembles of n starts at the reference settings, estimated from
+  the spread between the reference's own starts (a difference of two means of n has standard
+  deviation sqrt(2/n) times that of one start). An error at the floor is chaos, not error.
+* the noise-corrected (systematic) error of a run (``systematic``): a measured metric m of two
+  ensembles of na and nb starts has E[m^2] = bias^2 + floor^2, floor^2 = (sa^2/na + sb^2/nb) / ref^2
+  (sa, sb the spreads of one start of run and reference, per sample for the pressures); the
+  estimate of the bias is sqrt(max(0, m^2 - floor^2)), its uncertainty the standard deviation of
+  the same estimate over bootstrap resamples of both sets of starts.
+
+``pareto_front`` marks the settings that no other setting beats on both cost and error.
+Plain NumPy; no YADE.
+"""
+import dataclasses
+
+import numpy as np
+
+
+def perturbed(packing, seed, size=1e-9):
+    """A copy of ``packing`` whose particles (not the walls) are moved by ``size`` [m] times a
+    standard normal in x and z, drawn from numpy's Generator(seed); seed 0 is the packing itself."""
+    if seed == 0:
+        return packing
+    rng = np.random.default_rng(seed)
+    xz = packing.xz.copy()
+    mob = packing.mobile
+    xz[mob] += size * rng.standard_normal((int(mob.sum()), 2))
+    return dataclasses.replace(packing, xz=xz)
+
+
+def _on_grid(t, values, t_ref):
+    """values (starts, times, ...) sampled at t, linearly interpolated onto t_ref."""
+    values = np.asarray(values, float)
+    if len(t) == len(t_ref) and np.allclose(t, t_ref, rtol=0, atol=1e-12):
+        return values
+    flat = values.reshape(values.shape[0], values.shape[1], -1)
+    out = np.empty((flat.shape[0], len(t_ref), flat.shape[2]))
+    for s in range(flat.shape[0]):
+        for b in range(flat.shape[2]):
+            out[s, :, b] = np.interp(t_ref, t, flat[s, :, b], left=np.nan, right=np.nan)
+    return out.reshape((flat.shape[0], len(t_ref)) + values.shape[2:])
+
+
+def _rms(x):
+    x = np.asarray(x, float)
+    return float(np.sqrt(np.nanmean(x * x)))
+
+
+def pressure_error(t, U, t_ref, U_ref):
+    """RMS(<U> - <U_ref>) / RMS(<U_ref>) of block pressure histories U (starts, times, blocks)
+    sampled at t, against U_ref (starts, times_ref, blocks) at t_ref (the run is interpolated onto
+    t_ref; nan samples, blocks without pores, are left out)."""
+    return _pressure_error(_on_grid(t, U, t_ref), np.asarray(U_ref, float))
+
+
+def _pressure_error(A, R):
+    """``pressure_error`` of ensembles already on the same times."""
+    mean_ref = np.nanmean(R, axis=0)
+    return _rms(np.nanmean(A, axis=0) - mean_ref) / _rms(mean_ref)
+
+
+def pressure_floor(U_ref):
+    """Chaos floor of ``pressure_error``: sqrt(2/n) RMS(std over the n starts) / RMS(<U_ref>)."""
+    U_ref = np.asarray(U_ref, float)
+    n = U_ref.shape[0]
+    spread = np.nanstd(U_ref, axis=0, ddof=1)
+    return float(np.sqrt(2.0 / n) * _rms(spread) / _rms(np.nanmean(U_ref, axis=0)))
+
+
+def pressure_noise(t, U, t_ref, U_ref):
+    """floor of ``pressure_error`` between these two ensembles: sqrt(mean over samples of
+    (var_run/n_run + var_ref/n_ref)) / RMS(<U_ref>), the variances over starts (ddof 1)."""
+    A, R = _on_grid(t, U, t_ref), np.asarray(U_ref, float)
+    return _pressure_noise(A, R)
+
+
+def _pressure_noise(A, R):
+    var = np.nanvar(A, axis=0, ddof=1) / np.sum(np.isfinite(A), axis=0) + \
+        np.nanvar(R, axis=0, ddof=1) / np.sum(np.isfinite(R), axis=0)
+    return float(np.sqrt(np.nanmean(var)) / _rms(np.nanmean(R, axis=0)))
+
+
+def change_noise(x, x_ref):
+    """floor of ``change_error`` between these two ensembles: sqrt(var/n + var_ref/n_ref) / |<x_ref>|."""
+    x, x_ref = np.asarray(x, float), np.asarray(x_ref, float)
+    return float(np.sqrt(np.var(x, ddof=1) / len(x) + np.var(x_ref, ddof=1) / len(x_ref)) / abs(np.mean(x_ref)))
+
+
+def change_error(x, x_ref):
+    """|<x> - <x_ref>| / |<x_ref>| of a scalar change per start (x: (starts,))."""
+    return float(abs(np.mean(x) - np.mean(x_ref)) / abs(np.mean(x_ref)))
+
+
+def change_floor(x_ref):
+    """Chaos floor of ``change_error``: sqrt(2/n) std(x_ref) / |<x_ref>|."""
+    x_ref = np.asarray(x_ref, float)
+    return float(np.sqrt(2.0 / len(x_ref)) * np.std(x_ref, ddof=1) / abs(np.mean(x_ref)))
+
+
+def errors(run, ref):
+    """{metric: error} of a run's histories against the reference's (dicts as written by
+    yade_scripts/tradeoffs.py: t (times,), U (starts, times, blocks), porosity (starts, times),
+    height (starts, times) the particles' mean centre height [m])."""
+    return {k: m for k, (m, _) in _metric_pairs(run, ref).items()}
+
+
+def floors(ref):
+    """{metric: chaos floor} of the reference (see ``errors``)."""
+    U = np.asarray(ref["U"], float)
+    return {"pressure_rms": pressure_floor(U), "porosity_change": change_floor(porosity_change(ref)),
+            "settlement": change_floor(settlement(ref)), "pressure_rms_below_surface": pressure_floor(U[:, :, :-1])}
+
+
+def corrected(measured, floor):
+    """The systematic part of a measured metric: sqrt(max(0, measured^2 - floor^2))."""
+    return float(np.sqrt(max(0.0, measured * measured - floor * floor)))
+
+
+def _metric_pairs(run, ref):
+    """{metric: (measured, floor)} of a run against the reference (the same arrays as ``errors``)."""
+    A, R = _on_grid(run["t"], run["U"], ref["t"]), np.asarray(ref["U"], float)
+    out = {}
+    for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
+        out[key] = (_pressure_error(a, r), _pressure_noise(a, r))
+    for key, f in (("porosity_change", porosity_change), ("settlement", settlement)):
+        x, x_ref = f(run), f(ref)
+        out[key] = (change_error(x, x_ref), change_noise(x, x_ref))
+    return out
+
+
+def _subset(run, idx):
+    return {"t": run["t"], **{k: np.asarray(run[k], float)[idx] for k in ("U", "porosity", "height")}}
+
+
+def systematic(run, ref, n_boot=400, seed=0):
+    """{metric: {"measured", "floor", "systematic", "sigma"}}: the metric, its floor between these
+    two ensembles (``pressure_noise``, ``change_noise``), the noise-corrected estimate
+    ``corrected(measured, floor)`` and the standard deviation of that estimate over ``n_boot``
+    bootstrap resamples of the starts of run and reference (module docstring)."""
+    out = {k: {"measured": m, "floor": f, "systematic": corrected(m, f)} for k, (m, f) in _metric_pairs(run, ref).items()}
+    rng = np.random.default_rng(seed)
+    na, nb = len(run["U"]), len(ref["U"])
+    boot = {k: [] for k in out}
+    for _ in range(n_boot):
+        pairs = _metric_pairs(_subset(run, rng.integers(0, na, na)), _subset(ref, rng.integers(0, nb, nb)))
+        for k, (m, f) in pairs.items():
+            boot[k].append(corrected(m, f))
+    for k in out:
+        out[k]["sigma"] = float(np.nanstd(boot[k], ddof=1))
+    return out
+
+
+def porosity_change(run):
+    """Porosity at the end minus at the start, per start."""
+    p = np.asarray(run["porosity"], float)
+    return p[:, -1] - p[:, 0]
+
+
+def settlement(run):
+    """Drop of the particles' mean centre height over the window [m] per start (> 0: settled)."""
+    h = np.asarray(run["height"], float)
+    return h[:, 0] - h[:, -1]
+
+
+def pareto_front(cost, error):
+    """Indices of the points no other point beats on both (cost, error): each has the lowest
+    error among the points at its cost or below. Sorted by cost."""
+    cost, error = np.asarray(cost, float), np.asarray(error, float)
+    order = np.lexsort((error, cost))
+    front, best = [], np.inf
+    for i in order:
+        if np.isfinite(error[i]) and error[i] < best:
+            front.append(int(i))
+            best = error[i]
+    return front

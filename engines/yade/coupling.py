@@ -1,0 +1,351 @@
+"""YADE glue for scenes: discs as spheres in the x-z plane, the scene's contact law, the water engine.
+
+[contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
+O.step() ``run`` drives the PaperLawEngine (engines.model.paper_law; it calls PoreDEM.step: the paper's
+law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
+no PyRunner (its dispatch costs ~50 us a call). No collider: the law keeps its own Verlet list.
+Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
+scenes with ``YadeCoupling.run``, not O.run.
+
+[contact] law = "yade" (springs a, b only): YADE's InsertionSortCollider and InteractionLoop with
+ViscElMat / Law2_ScGeom_ViscElPhys_Basic, the wall motion, NewtonIntegrator; discs spin about y
+in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.yade.water_engine; pressure forces and buoyancy
+held as permanent forces) is called before O.step() every water_interval steps (WaterEngine.drive),
+the work its PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all
+(O.run, ``run_blocking``).
+The mapping to eq 1-13 and what differs: see ``yade_law_material``.
+
+Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
+of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
+without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk) and
+returns early when it is true (engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into
+a checkpoint (engines.yade.checkpoint): keep closures out of its state.
+"""
+import copy
+import math
+import time
+
+import numpy as np
+from yade import O, utils
+from yade.wrapper import (
+    Bo1_Sphere_Aabb,
+    ForceResetter,
+    FrictMat,
+    Ig2_Sphere_Sphere_ScGeom,
+    InsertionSortCollider,
+    InteractionLoop,
+    Ip2_ViscElMat_ViscElMat_ViscElPhys,
+    Law2_ScGeom_ViscElPhys_Basic,
+    NewtonIntegrator,
+    TranslationEngine,
+    ViscElMat,
+)
+
+from engines.model import ground_motion, pore_dem
+from engines.model import pores as pg
+from engines.model.pore_dem import PoreDEM, disc_masses
+from engines.reference.trajectory import Trajectory
+from engines.yade import yade_io
+from engines.yade.paper_law_engine import PaperLawEngine
+from engines.yade.water_engine import WaterEngine
+
+PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
+CHUNK_SECONDS = 0.2    # wall time of one blocking O.run (a stop's latency)
+POLL_SECONDS = 1e-3    # run_blocking's poll of YADE's thread
+X_ONLY = "yzXYZ"       # blockedDOFs of the side-wall discs on springs: they move in x only
+
+
+def run_blocking(n):
+    """O.run(n, True) without its wait's 40 ms poll (measured: a call returns 0-40 ms after YADE
+    stops): poll O.running every POLL_SECONDS. An engine that fails stops YADE early, as with
+    O.run (our callbacks keep their errors for yade_io.raise_pending)."""
+    O.run(int(n))
+    while O.running:
+        time.sleep(POLL_SECONDS)
+    O.wait()
+
+
+def yade_law_material(scene):
+    """ViscElMat whose pair constants are the paper's springs (a)/(b): YADE combines two materials
+    in series (k = k1 k2 / (k1 + k2)), so each material gets twice the pair value.
+
+    Law2_ScGeom_ViscElPhys_Basic against eq 1-13: the same linear spring kn and dashpot eta_n in
+    normal, incremental ks with dashpot eta_s and the Coulomb cap mu e_n in shear. It differs in
+    (1) tension: YADE clamps the total normal force kn u_n + eta_n v_n at zero, eq 6 keeps the
+    dashpot's tension while e_n >= 0 (head-on collision: restitution 0.798 against 0.789 for eq 4-6,
+    0.790 analytic), and YADE's Coulomb cap uses that total force, eq 11 uses e_n; (2) the rolling term:
+    YADE's shear increment takes the relative velocity at the contact point with lever arms
+    r - u_n/2 of the enlarged radii, eq 3b uses r_i dpsi_i + r_j dpsi_j; (3) no velocity
+    adjustment at separation (eq 18-24); (4) eps_m (spring b) acts through radii enlarged by
+    eps_m/2, so YADE's overlap is r_i + r_j + eps_m - R as in eq 26, while the pores use the true
+    radii; (5) YADE rotates the shear force with the contact and integrates spin itself.
+    """
+    c = scene.contact
+    return ViscElMat(kn=2 * c.kn, ks=2 * c.ks, cn=2 * c.eta_n, cs=2 * c.eta_s, frictionAngle=math.atan(c.mu),
+                     density=scene.material.rho, label="discs")
+
+
+def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=None):
+    """Reset YADE and create one sphere per disc (radius r + radius_add) with per-unit-thickness
+    mass and inertia; returns the body ids (same order as packing). ``x_only`` (N,) bool: wall
+    discs that are dynamic in x only (the side walls on springs, Fig. 27)."""
+    O.reset()
+    mat = O.materials.append(material)
+    mass, inertia = disc_masses(scene, packing)
+    x_only = np.zeros(len(packing.r), bool) if x_only is None else x_only
+    bodies = []
+    for (x, z), r, mob, xo, m, I in zip(packing.xz, packing.r, packing.mobile, x_only, mass, inertia):
+        b = utils.sphere((float(x), 0.0, float(z)), float(r + radius_add), fixed=not (mob or xo), material=mat,
+                         color=(0.6, 0.6, 0.6))
+        b.state.mass = float(m)
+        b.state.inertia = (float(I),) * 3
+        if mob:
+            b.state.blockedDOFs = "yXZ" if spin else "yXYZ"
+        elif xo:
+            b.state.blockedDOFs = X_ONLY
+        bodies.append(b)
+    ids = O.bodies.append(bodies)
+    O.dt = scene.numerics.dt
+    return np.asarray(ids, np.int64)
+
+
+class YadeCoupling:
+    """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
+    between chunks of steps (see ``run``)."""
+
+    def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
+        self.scene, self.packing = scene, packing
+        self.law = scene.contact.law
+        self.mass, self.inertia = disc_masses(scene, packing)
+        pore_dem.check_time_step(scene, self.mass[packing.mobile])
+        g = scene.material.g
+        wet = scene.water.enabled
+        self.core = self.water_engine = None
+        if self.law == "paper":
+            self.core = PoreDEM(scene, packing, compiled)
+            ties = self.core.ties
+            x_only = ties.moving if ties is not None else None
+            self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
+            self.engine = PaperLawEngine(self.ids, core=self.core)
+            for i in self.ids[x_only].tolist() if x_only is not None else ():
+                O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
+            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
+                dyn = self.engine._dynamic
+                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[dyn] ** 2 * g * packing.mobile[dyn]
+            loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
+        else:
+            if scene.numerics.damping_eq44:
+                raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
+            self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)
+            loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
+                    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
+                                    [Law2_ScGeom_ViscElPhys_Basic()])]
+            if wet:  # called before O.step on its steps (see _advance), not as a PyRunner
+                num = scene.numerics
+                walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
+                self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
+                                                scene.contact.eps_m, packing.r, num.rebuild_interval,
+                                                num.water_interval, True, scene.material.rho_w, g, compiled)
+        self.io = yade_io.Bodies(self.ids)
+        self.per_step = self.law == "paper" or self.water_engine is not None
+        walls = self._wall_motion()
+        O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
+        self.block_bounds = packing.block_bounds(scene.output.block_z)
+        self.window = pore_dem.porosity_window(scene, packing)
+        self.hooks = []
+        self.run_every, self.stops, self._hooked_at = None, set(), None
+        self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
+
+    def _wall_motion(self):
+        """A TranslationEngine moving the walls that follow the input ([loading] moves) at the
+        velocity of the base motion for each step (engines.model.ground_motion.BaseMotion, the one input
+        path): set by the paper's law's step (PoreDEM), or with law = 'yade' before each O.step."""
+        moving = pore_dem.moving_walls(self.scene, self.packing)
+        self.wall_engine = self.base = None
+        if not moving.any():
+            return []
+        self.wall_engine = TranslationEngine(ids=self.ids[moving].tolist(), translationAxis=(1, 0, 0), velocity=0.0)
+        if self.law == "paper":
+            self.base = self.core.base
+            self.engine.hooks.append(WallVelocity(self.wall_engine, self.core))
+        else:
+            self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene), self.scene.numerics.dt)
+            self.per_step = True  # Python sets the velocity before each O.step
+        return [self.wall_engine]
+
+    # -- running ------------------------------------------------------------------------------------
+    def _advance(self, n, stop):
+        errors = yade_io.ERRORS
+        if self.law == "paper":
+            self.engine.drive(n, stop)
+        elif not self.per_step and n > PER_STEP_CHUNK:
+            done = 0
+            while done < n and not stop():  # blocking chunks: YADE is idle whenever Python looks
+                m = min(int(n) - done, self._chunk)
+                t0 = time.perf_counter()
+                run_blocking(m)
+                done += m
+                if m == self._chunk:
+                    self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), PER_STEP_CHUNK), 1e6))
+        elif self.base is None and self.water_engine is not None:  # law = 'yade', wet: water before O.step on its steps
+            self.water_engine.drive(n, None if stop is _never else stop)
+        else:  # law = 'yade': the base velocity of each step, the water engine on its steps
+            water, base = self.water_engine, self.base
+            for _ in range(int(n)):
+                if water is not None and water.due(O.iter):
+                    water()
+                if base is not None:
+                    self.wall_engine.velocity = base.step()
+                O.step()
+                if errors or stop():
+                    break
+        yade_io.raise_pending()
+
+    def run(self, n_steps, stop=None):
+        """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
+        asked after every step) turned true first. The hooks are called as hook(self) whenever
+        O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
+        once per step index, before the step. An error inside an engine stops YADE and is
+        re-raised here."""
+        stop = stop or _never
+        end = O.iter + int(n_steps)
+        while True:
+            k = O.iter
+            due = (self.run_every and k % self.run_every == 0) or k in self.stops
+            if due and k != self._hooked_at:
+                self._hooked_at = k
+                for hook in self.hooks:
+                    hook(self)
+            if k >= end:
+                return True
+            if stop():
+                return False
+            nxt = min([end] + [s for s in self.stops if s > k])
+            if self.run_every:
+                nxt = min(nxt, (k // self.run_every + 1) * self.run_every)
+            self._advance(min(nxt - k, PER_STEP_CHUNK) if self.per_step else nxt - k, stop)
+
+    def restore_forces(self):
+        """After a checkpoint's O.load: YADE's permanent forces, which O.save does not keep."""
+        if self.water_engine is not None:
+            self.water_engine.write_forces()
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
+
+    # -- observations ------------------------------------------------------------------------------
+    @property
+    def step_index(self):
+        return O.iter
+
+    @property
+    def water(self):
+        """The PoreWater state, or None for a dry scene."""
+        if self.core is not None:
+            return self.core.water
+        return self.water_engine.model.water if self.water_engine else None
+
+    @property
+    def water_model(self):
+        return self.core.water_model if self.core is not None else (self.water_engine.model if self.water_engine else None)
+
+    def positions(self):
+        """Disc centres (N, 2) [m], read in bulk."""
+        return self.io.positions()
+
+    def velocities(self):
+        return self.io.velocities()
+
+    def block_pressures(self, xz):
+        return pore_dem.block_pressures(self.water, xz, self.packing.r, self.block_bounds)
+
+    def porosity(self, xz):
+        """Void fraction of the fixed porosity window moved with the base (engines.model.observe)."""
+        return pore_dem.window_porosity(self.packing, self.window, xz, self.base.disp if self.base else 0.0)
+
+    def base_motion(self):
+        """(acceleration [m/s^2], velocity [m/s], displacement [m]) of the driven base at O.iter dt."""
+        b = self.base
+        return (b.acc, b.vel, b.disp) if b is not None else (0.0, 0.0, 0.0)
+
+    def side_wall_shift(self, xz):
+        """Mean x displacement [m] of the left and the right side-wall column relative to the base
+        (the discs on springs; nan when the side walls are fixed)."""
+        ties = self.core.ties if self.core is not None else None
+        if ties is None:
+            return np.nan, np.nan
+        d = xz[:, 0] - self.packing.xz[:, 0] - self.base_motion()[2]
+        return tuple(float(np.mean(d[ties.columns[c][1:]])) if c in ties.columns else np.nan for c in ("left", "right"))
+
+    def kinetic_energy(self):
+        """Translational + rotational kinetic energy of the particles [J per m]."""
+        omega = self.core.omega if self.core is not None else self.io.spins()
+        return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
+
+    def contact_pairs(self, xz):
+        """(pairs (K, 2) disc indices, normal force (K,), elastic shear force (K,) [N]) of the pairs
+        touching at centres xz (the current ones). The shear force is signed along t of eq 3b
+        (counter-clockwise about i), without its dashpot part, as YADE's phys.shearForce. The
+        paper's law is evaluated on a copy, its state is left as it is."""
+        if self.core is not None:
+            law = copy.deepcopy(self.core.law)
+            law.step(xz)
+            return law.contact.contact_pairs()
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        pairs, fn, fs = [], [], []
+        for inter in O.interactions:
+            if inter.isReal and inter.id1 in index and inter.id2 in index:
+                i, j = index[inter.id1], index[inter.id2]
+                pairs.append((i, j))
+                fn.append(inter.phys.normalForce.norm())
+                d = xz[j] - xz[i]
+                t = np.array([-d[1], d[0]]) / np.hypot(*d)  # (-sin a, cos a)
+                s = inter.phys.shearForce  # YADE's force on id2; eq 13 puts -f_s t on i, so +f_s t on j
+                fs.append(s[0] * t[0] + s[2] * t[1])
+        return np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
+
+    def bottom_normal_force(self, xz):
+        """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
+        pairs, fn, _ = self.contact_pairs(xz)
+        if len(fn) == 0:
+            return 0.0
+        zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])
+        z0, z1 = self.block_bounds[0]
+        sel = (zmid >= z0) & (zmid < z1)
+        return float(fn[sel].mean()) if sel.any() else 0.0
+
+
+def simulate(scene, packing, n_steps, record_every, hooks=()):
+    """Run a scene in YADE and record a Trajectory after every ``record_every`` steps
+    (at t = (k + 1) dt); the recording contract is shared with engines.reference.model.
+    ``hooks``: called as hook(coupling) after each recorded chunk (the cross-check counts rules)."""
+    cp = YadeCoupling(scene, packing)
+    traj = Trajectory(info={"implementation": "yade", "law": scene.contact.law, "io": yade_io.BACKEND})
+    steps_left = n_steps
+    while steps_left > 0:
+        chunk = min(record_every, steps_left)
+        cp.run(chunk)
+        steps_left -= chunk
+        for hook in hooks:
+            hook(cp)
+        xz = cp.positions()
+        w = cp.water
+        traj.append(O.iter * scene.numerics.dt, xz, cp.block_pressures(xz),
+                    w.total_water() if w else np.nan, w.balance_error() if w else np.nan)
+    return traj
+
+
+def _never():
+    return False
+
+
+class WallVelocity:
+    """PaperLawEngine hook: the wall engine's velocity follows the core's wall velocity (a class,
+    not a closure, so that the coupling pickles)."""
+
+    def __init__(self, wall_engine, core):
+        self.wall_engine, self.core = wall_engine, core
+
+    def __call__(self):
+        self.wall_engine.velocity = self.core.wall_velocity

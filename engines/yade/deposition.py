@@ -1,0 +1,183 @@
+"""Deposition under gravity into a box of fixed wall discs (seed 000 §4.2), run in YADE.
+
+The box: a bottom row of ``n_bottom`` touching wall discs and two side columns of ``n_side``
+discs sharing the corners (the quick-sand box: 15 + 8 + 8 = 31). Particles with log-normal
+diameters start on a loose grid above the bottom and settle with the paper's packing law
+(linear spring a, ks = 0, no water) plus YADE's numerical damping to come to rest sooner.
+Afterwards the top layer (see ``mark_dense_top``) gets the density factor of the paper's heavy
+top discs, and the walls their own density factor.
+
+No particle may end outside the box: ``check_inside_box`` refuses a packing with one. With
+``guard_walls`` the side columns are raised during deposition above the highest particle (the
+extra wall discs are removed afterwards), so that particles dropped from the loose grid cannot
+bounce out over the side walls (the seismic box with its soft kn = 1.4e5 N/m did, for every seed
+tried, without them).
+"""
+import os
+
+import numpy as np
+
+from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
+from packing.packing import Packing
+from packing.psd import sample_diameters
+
+SETTLE_DAMPING = 0.3  # NewtonIntegrator damping during deposition only
+
+
+def wall_box(n_bottom, n_side, radius):
+    """Wall disc centres (M, 2) [m] and groups of the box; corners belong to the bottom row."""
+    step = 2 * radius
+    bottom = np.column_stack([np.arange(n_bottom) * step, np.zeros(n_bottom)])
+    zs = np.arange(1, n_side) * step
+    left = np.column_stack([np.zeros(n_side - 1), zs])
+    right = np.column_stack([np.full(n_side - 1, (n_bottom - 1) * step), zs])
+    groups = np.concatenate([np.full(n_bottom, WALL_BOTTOM), np.full(n_side - 1, WALL_LEFT),
+                             np.full(n_side - 1, WALL_RIGHT)])
+    return np.vstack([bottom, left, right]), groups
+
+
+def guard_columns(n_bottom, n_side, radius, top):
+    """Extra side-wall discs (M, 2) [m] and groups stacked on the two columns of ``wall_box`` up
+    to height ``top`` [m]: the taller walls of the deposition."""
+    step = 2 * radius
+    zs = np.arange(n_side, max(n_side, int(np.ceil(top / step)) + 1)) * step
+    x_right = (n_bottom - 1) * step
+    xz = np.vstack([np.column_stack([np.zeros(len(zs)), zs]), np.column_stack([np.full(len(zs), x_right), zs])])
+    return xz, np.concatenate([np.full(len(zs), WALL_LEFT), np.full(len(zs), WALL_RIGHT)])
+
+
+def outside_box(packing):
+    """Indices of the particles whose centre is not inside the box: not strictly between the
+    centres of the left and right wall columns, or not above the bottom wall centres."""
+    g, x, z = packing.group, packing.xz[:, 0], packing.xz[:, 1]
+    m = np.flatnonzero(packing.mobile)
+    out = np.zeros(len(m), bool)
+    if (g == WALL_LEFT).any():
+        out |= x[m] <= x[g == WALL_LEFT].max()
+    if (g == WALL_RIGHT).any():
+        out |= x[m] >= x[g == WALL_RIGHT].min()
+    if (g == WALL_BOTTOM).any():
+        out |= z[m] <= z[g == WALL_BOTTOM].max()
+    return m[out]
+
+
+def check_inside_box(packing, what="packing"):
+    """Raise ValueError naming the particles outside the box (see ``outside_box``)."""
+    out = outside_box(packing)
+    if len(out):
+        where = ", ".join(f"{i} at ({packing.xz[i, 0] * 1e3:.2f}, {packing.xz[i, 1] * 1e3:.2f}) mm" for i in out[:5])
+        raise ValueError(f"{what}: {len(out)} particle(s) outside the box: {where}"
+                         f"{' ...' if len(out) > 5 else ''} (raise the side walls: [packing] guard_walls = true)")
+
+
+def loose_grid(diameters, x_left, x_right, z_bottom, rng):
+    """Centres of the particles on a grid between x_left and x_right above z_bottom [m]."""
+    pitch = 1.05 * diameters.max()
+    per_row = max(1, int((x_right - x_left) // pitch))
+    k = np.arange(len(diameters))
+    x = x_left + pitch * (0.5 + k % per_row)
+    z = z_bottom + pitch * (0.5 + k // per_row)
+    jitter = 0.02 * pitch * (rng.random(len(k)) - 0.5)
+    return np.column_stack([x + jitter, z])
+
+
+def settle(scene, packing, duration=None):
+    """Let ``packing`` settle in YADE under the packing law; returns the settled Packing."""
+    from engines.yade.coupling import YadeCoupling  # YADE only here
+
+    p = scene.packing
+    dep = scene.with_overrides({
+        "contact": {"spring": "a", "ks": p.settle_ks, "eta_s": 0.0, "separation_adjustment": False},
+        "water": {"enabled": False}, "loading": {"type": "none"},
+        "numerics": {"dt": p.settle_dt, "damping_eq44": False}})
+    cp = YadeCoupling(dep, packing, newton_damping=SETTLE_DAMPING)
+    cp.run(int(round((duration or p.settle_time) / p.settle_dt)))
+    return Packing(cp.positions(), packing.r, packing.group, packing.density_factor)
+
+
+def mark_dense_top(packing, depth, factor, count=0, wall_factor=1.0):
+    """Density factor ``factor`` for the top layer: particles whose top lies within ``depth`` of
+    the highest particle top in their own column (particles overlapping them horizontally), or,
+    with ``count`` > 0, the ``count`` particles with the highest centres (the paper numbers its
+    seismic discs from the bottom up; discs 139-192 of 192 are the 54 highest). Wall discs get
+    ``wall_factor``."""
+    m = np.flatnonzero(packing.mobile)
+    f = np.where(packing.mobile, 1.0, wall_factor)
+    if count > 0:
+        f[m[np.argsort(packing.xz[m, 1])[len(m) - count:]]] = factor
+    else:
+        x, top, r = packing.xz[m, 0], packing.xz[m, 1] + packing.r[m], packing.r[m]
+        column = np.abs(x[:, None] - x[None, :]) < r[:, None] + r[None, :]
+        local_top = np.max(np.where(column, top[None, :], -np.inf), axis=1)
+        f[m[top >= local_top - depth]] = factor
+    return Packing(packing.xz, packing.r, packing.group, f)
+
+
+def _mark(scene, packing):
+    p = scene.packing
+    return mark_dense_top(packing, p.dense_top_depth, p.dense_top_factor, p.dense_top_count, p.wall_density_factor)
+
+
+def deposit(scene):
+    """Generate the scene's packing (eq 53-54, box, deposition, dense top). Needs YADE.
+
+    ``cut_extra`` x n_particles more particles are deposited and the ``n_particles`` lowest kept,
+    then re-settled: a scene cut out of a deposit, with a flat surface as in the paper (§4.2).
+    The dense top is marked afterwards; with ``settle_loaded`` > 0 the packing settles once more
+    with its masses, so that a run starts at rest (else the bed compacts under the added weight).
+    Raises ValueError if a particle ends outside the box (``check_inside_box``).
+    """
+    p = scene.packing
+    rng = np.random.default_rng(p.seed)
+    n_dep = int(round(p.n_particles * (1 + p.cut_extra)))
+    d = sample_diameters(n_dep, p.mean_diameter, p.std_diameter, p.d_min, p.d_max, rng)
+    walls, groups = wall_box(p.n_bottom, p.n_side, p.wall_radius)
+    inner_left, inner_right = p.wall_radius, (p.n_bottom - 1) * 2 * p.wall_radius - p.wall_radius
+    xz = loose_grid(d, inner_left, inner_right, p.wall_radius, rng)
+    if p.guard_walls:
+        extra, extra_groups = guard_columns(p.n_bottom, p.n_side, p.wall_radius, (xz[:, 1] + d / 2).max() + d.max())
+        walls, groups = np.vstack([walls, extra]), np.concatenate([groups, extra_groups])
+    n_w = len(walls)
+    loose = Packing(np.vstack([xz, walls]), np.concatenate([d / 2, np.full(n_w, p.wall_radius)]),
+                    np.concatenate([np.full(n_dep, WALL_NONE), groups]), np.ones(n_dep + n_w))
+    settled = settle(scene, loose)
+    check_inside_box(settled, f"deposit of seed {p.seed}")
+    n_box = p.n_bottom + 2 * (p.n_side - 1)  # the guard discs come after the box's walls
+    keep = np.argsort(settled.xz[:n_dep, 1])[:p.n_particles]
+    keep = np.concatenate([np.sort(keep), np.arange(n_dep, n_dep + (n_w if p.cut_extra > 0 else n_box))])
+    cut = Packing(settled.xz[keep], settled.r[keep], settled.group[keep], settled.density_factor[keep])
+    if p.cut_extra > 0:
+        cut = settle(scene, cut, duration=0.5 * p.settle_time)
+        check_inside_box(cut, f"deposit of seed {p.seed} after the cut")
+        cut = Packing(cut.xz[:p.n_particles + n_box], cut.r[:p.n_particles + n_box],
+                      cut.group[:p.n_particles + n_box], cut.density_factor[:p.n_particles + n_box])
+    cut = _mark(scene, cut)
+    if p.settle_loaded > 0:  # the dense top was settled at density 1: let the bed take its weight
+        cut = settle(scene, cut, duration=p.settle_loaded)
+        check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
+    return cut
+
+
+def cut_and_resettle(scene, deposit_packing, x0, width):
+    """A sub-scene: the particles of a deposit with centre x in [x0, x0 + width), moved into a
+    new box of the scene's wall discs (sized to the window) and settled again (§4.2)."""
+    p = scene.packing
+    keep = deposit_packing.mobile & (deposit_packing.xz[:, 0] >= x0) & (deposit_packing.xz[:, 0] < x0 + width)
+    if not keep.any():
+        raise ValueError(f"cut: no particle with x in [{x0}, {x0 + width})")
+    n_bottom = int(np.ceil(width / (2 * p.wall_radius))) + 2
+    walls, groups = wall_box(n_bottom, p.n_side, p.wall_radius)
+    xz = deposit_packing.xz[keep] - [x0 - 2 * p.wall_radius, deposit_packing.bed_bottom - p.wall_radius]
+    r = deposit_packing.r[keep]
+    cut = Packing(np.vstack([xz, walls]), np.concatenate([r, np.full(len(walls), p.wall_radius)]),
+                  np.concatenate([np.full(len(r), WALL_NONE), groups]), np.ones(len(r) + len(walls)))
+    return _mark(scene, settle(scene, cut))
+
+
+def scene_packing(scene):
+    """The packing a scene runs on: its CSV file (source = file) or a fresh deposit."""
+    if scene.packing.source == "file":
+        if not os.path.exists(scene.packing.file):
+            raise ValueError(f"[packing] file: not found: {scene.packing.file} (make packings regenerates it)")
+        return Packing.load(scene.packing.file)
+    return deposit(scene)

@@ -1,0 +1,180 @@
+"""The pore water as a YADE engine: pores between discs, Darcy exchange, pressure forces (seed 000 §3).
+
+``WaterEngine`` is the public YADE object: a YADE script with its own spheres (kept in the x-z
+plane), its own collider and contact law adds the water in a few lines::
+
+    from engines.yade.water_engine import WaterEngine
+    from engines.model.pore_water import WaterSettings
+    water = WaterEngine(disc_ids, walls={"bottom": bottom_ids, "left": left_ids, "right": right_ids},
+                        settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4)
+    O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]   # before NewtonIntegrator
+
+Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
+rebuilds the pores when ``rebuild_interval`` steps have passed, measures the void areas (eq 29),
+advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
+(eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
+itself is engines.model.water_model.WaterModel's (no YADE there).
+
+With ``settings.substep`` a water step above the Darcy limit is split into sub-steps; the engine
+prints the count when it first sub-steps and whenever the count doubles, and keeps
+``substeps_max``/``substeps_total``.
+"""
+import time
+
+import numpy as np
+
+from engines.compiled import kernels
+from engines.model import pores as pg
+from engines.model.water_model import WaterModel
+
+CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
+
+WALL_CODES = {"bottom": pg.WALL_BOTTOM, "left": pg.WALL_LEFT, "right": pg.WALL_RIGHT}
+
+
+class WaterEngine:
+    """The pore water of a YADE scene as a PyRunner (see the module docstring for the usage).
+
+    disc_ids: the spheres that bound the pores (particles and wall discs), kept in the x-z plane.
+    walls: {"bottom"|"left"|"right": ids} among disc_ids (inflow enters bottom pores; drained
+    sides drain through left/right). radii: the true disc radii [m] (default: read from the
+    bodies; give them when the contact law enlarges the spheres by eps_m/2). eps_m: contact range
+    of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
+    dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
+    """
+
+    def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
+                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True):
+        from yade import O  # YADE only here and below
+
+        from engines.yade import yade_io
+
+        self.io = yade_io.Bodies(disc_ids)
+        ids = self.io.ids
+        if radii is None:
+            radii = [O.bodies[i].shape.radius for i in ids.tolist()]
+        code = np.zeros(len(ids), np.int64)
+        pos = {i: k for k, i in enumerate(ids.tolist())}
+        for name, group in (walls or {}).items():
+            if name not in WALL_CODES:
+                raise ValueError(f"walls: unknown group {name!r}; known: {sorted(WALL_CODES)}")
+            missing = [i for i in group if i not in pos]
+            if missing:
+                raise ValueError(f"walls[{name!r}]: ids {missing[:5]} are not among disc_ids")
+            code[[pos[i] for i in group]] = WALL_CODES[name]
+        if not O.dt > 0:
+            raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
+        self.model = WaterModel(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
+                                rebuild_interval, water_interval, compiled)
+        dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
+        self.forced = yade_io.Bodies(ids[dynamic])
+        self._dynamic = np.flatnonzero(dynamic)
+        self.F_const = np.zeros((len(self._dynamic), 2))
+        if buoyancy:
+            self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
+        self.forced.set_permanent_forces(self.F_const)
+        self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
+        self._run_kernel = yade_io.run_kernel
+        self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
+        self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
+
+    def due(self, k):
+        """True when step k is a water step (every water_interval steps from the engine's creation)."""
+        return (k - self.k0) % self.model.water_interval == 0
+
+    def runner(self, label="water"):
+        """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. YADE's
+        PyRunner costs about 50 us a call (measured at 240 bodies; ``drive`` does not pay it)."""
+        from engines.yade import yade_io
+        return yade_io.py_runner(self.__call__, self.model.water_interval, label)
+
+    def drive(self, n, stop=None):
+        """Instead of the runner and O.run(n): n O.step() calls, this engine's work before each of
+        them that is a water step (the same work: nothing moves the bodies between NewtonIntegrator
+        and the next step's PyRunner). ``stop()`` true, or an error kept by an engine callback
+        (yade_io.ERRORS), ends early. Without ``stop`` and without a PyRunner among O.engines, with
+        the bulk bridge, the steps between two rebuilds run in compiled calls of about CHUNK_SECONDS
+        (``_drive_compiled``): the same run without Python per step."""
+        from yade import O
+        from yade.wrapper import PyRunner
+
+        from engines.yade import yade_io
+        n, done = int(n), 0
+        fast = (stop is None and self.model.compiled and yade_io.BACKEND == "yadebulk"
+                and not any(isinstance(e, PyRunner) for e in O.engines))
+        due, errors = self.due, yade_io.ERRORS
+        while done < n:
+            m = min(n - done, self._steps_before_rebuild(O.iter), self._chunk) if fast else 0
+            if m > 0:
+                t0 = time.perf_counter()
+                done += self._drive_compiled(m)
+                if m == self._chunk:
+                    self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), 10), 1e6))
+                continue
+            if due(O.iter):
+                self()
+            O.step()
+            done += 1
+            if errors or (stop is not None and stop()):
+                break
+
+    def _steps_before_rebuild(self, k):
+        """Steps from step k to the first water step whose call rebuilds the pores."""
+        wi = self.model.water_interval
+        t = max(k, self.k_built + self.model.rebuild_interval)
+        return t + (self.k0 - t) % wi - k
+
+    def _drive_compiled(self, n):
+        """Up to n steps by kernels.water_drive_bulk_io, no rebuild among them; returns the steps
+        done (fewer after a water step that needed sub-steps: its bookkeeping and its step follow
+        here; an error is raised)."""
+        from yade import O
+
+        from engines.yade import yade_io
+        m = self.model
+        h = m.water_interval * O.dt
+        args = m.kernel_args(h)
+        b = m.water.balance
+        totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
+        k = O.iter
+        done, n_water, n_sub, rc = yade_io.drive_water(n, k, self.k0, m.water_interval, totals, self.io, self._xz,
+                                                       self.forced, self._F_out, self._dynamic, self.F_const, args)
+        b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+        if n_water:
+            last = k + done - (1 if n_sub == 1 else 0)  # the last water step
+            self.k = last - (last - self.k0) % m.water_interval
+            m.after_kernel_steps(args)
+        yade_io.check(rc)
+        if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
+            m.finish_kernel_step(h, n_sub, args)
+            O.step()
+            done += 1
+        return done
+
+    def __call__(self):
+        """One water step: rebuild at the first call at least rebuild_interval steps after the last
+        build, advance by water_interval x O.dt, write the forces."""
+        from yade import O
+        m = self.model
+        self.k = O.iter
+        h = m.water_interval * O.dt
+        if m.compiled and self.k - self.k_built < m.rebuild_interval:  # read, water, write: one compiled call
+            args = m.kernel_args(h)
+            _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
+                                        self._dynamic, self.F_const, *args)
+            m.finish_kernel_step(h, n_sub, args)
+            return
+        xz = self.io.positions()
+        if self.k - self.k_built >= m.rebuild_interval:
+            m.rebuild(xz)
+            self.k_built = self.k
+        m.advance(h, xz)
+        self.write_forces()
+
+    def write_forces(self):
+        """The permanent forces: the last water step's pressure forces plus buoyancy."""
+        self.forced.set_permanent_forces(self.model.F, self._dynamic, self.F_const)
+
+    def pressures(self):
+        """U (Np,) [N/m] of the pores at the current positions."""
+        return self.model.pressures(self.io.positions())

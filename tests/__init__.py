@@ -1,0 +1,1 @@
+"""The tests: one folder per layer of the tree (conftest.py marks each test with it)."""

@@ -1,0 +1,219 @@
+"""Compiled kernels (engines.compiled.kernels) against the readable NumPy functions, to 1e-12 relative.
+
+Relative is taken against the largest magnitude of the compared quantity (a disc's net force can
+cancel to ~0 from large contact forces; its round-off is relative to those).
+"""
+import numpy as np
+import pytest
+
+from engines.compiled import kernels
+from engines.model import pores as pg
+from engines.model.contact import ContactLaw, ContactSettings
+from engines.model.paper_law import PaperLaw
+from engines.model.pore_water import PoreWater, WaterSettings
+from engines.model.side_walls import SideWallTies
+from engines.model.water_model import WaterModel
+from engines.yade.deposition import wall_box
+from packing.layouts import hex_lattice, random_discs
+
+RTOL = 1e-12
+
+
+def assert_close(a, b, what):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert a.shape == b.shape, what
+    scale = max(np.max(np.abs(b), initial=0.0), 1e-300)
+    err = np.max(np.abs(a - b), initial=0.0) / scale
+    assert err <= RTOL, f"{what}: relative difference {err:.2e}"
+
+
+def _column(seed=3, n=300, gap=-0.02):
+    """Random discs squeezed together (overlaps, gaps) with a bottom row, left and right columns."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_discs(n, rng)
+    xz = xz * (1 + gap)  # gap < 0: many overlapping pairs
+    walls = np.zeros(len(r), np.int64)
+    walls[xz[:, 1] < xz[:, 1].min() + 0.5] = pg.WALL_BOTTOM
+    walls[(xz[:, 0] < xz[:, 0].min() + 0.5) & (walls == 0)] = pg.WALL_LEFT
+    walls[(xz[:, 0] > xz[:, 0].max() - 0.5) & (walls == 0)] = pg.WALL_RIGHT
+    return xz, r, walls, rng
+
+
+@pytest.mark.parametrize("spring", ["a", "b", "c", "d"])
+def test_contact_law_compiled_equals_numpy(spring):
+    """Many steps of random motion (loading, unloading, sliding, separations) on both paths."""
+    xz, r, walls, rng = _column()
+    xz = xz * 1.0  # units of r ~ 1: scale the law to it
+    s = ContactSettings(spring=spring, kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0,
+                        eps_m=0.01 if spring == "b" else 0.0)
+    mobile = walls == 0
+    laws = [ContactLaw(s, r, mobile, compiled=c) for c in (False, True)]
+    x_prev = xz.copy()
+    n_sep = 0
+    for step in range(60):
+        move = 0.01 * rng.standard_normal(xz.shape) * mobile[:, None]
+        x = x_prev + move
+        du = x - x_prev
+        dpsi = 0.01 * rng.standard_normal(len(r))
+        out = [law.forces(x, du, dpsi, 1e-3) for law in laws]
+        (F0, M0, sep0), (F1, M1, sep1) = out
+        assert_close(F1, F0, f"F at step {step}")
+        assert_close(M1, M0, f"M at step {step}")
+        assert_close(laws[1].state, laws[0].state, f"state at step {step}")
+        assert [(e.i, e.j) for e in sep1] == [(e.i, e.j) for e in sep0]
+        for e0, e1 in zip(sep0, sep1):
+            assert_close(e1.normal, e0.normal, "separation normal")
+            assert e1.vn_collision == e0.vn_collision
+        n_sep += len(sep0)
+        x_prev = x
+    assert laws[0].touching.sum() > 50 and n_sep > 10  # the test went through contacts and separations
+    if spring in ("c", "d"):
+        assert np.any(laws[0].state[:, kernels.E_N] == s.f_max)  # and the cap
+
+
+def test_paper_law_step_compiled_equals_numpy():
+    """PaperLaw.step (kernels.law_step: du, pair list, forces, spin in one call) against the NumPy
+    path over moving discs: forces, spins, increments and the velocity fixes of eq 18-24, through
+    rebuilds of the pair list."""
+    xz, r, walls, rng = _column(seed=5)
+    mobile = walls == 0
+    mass = np.pi * r**2
+    s = ContactSettings(spring="d", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0, eps_m=0.01)
+    laws = [PaperLaw(s, r, mobile, mass, 0.5 * mass * r**2, 1e-3, compiled=c) for c in (False, True)]
+    x = xz.copy()
+    n_fixes = 0
+    for step in range(40):
+        x = x + 0.02 * rng.standard_normal(x.shape) * mobile[:, None]
+        (F0, fix0), (F1, fix1) = (law.step(x.copy()) for law in laws)
+        assert_close(F1, F0, f"F at step {step}")
+        assert_close(laws[1].omega, laws[0].omega, f"omega at step {step}")
+        assert_close(laws[1].du, laws[0].du, f"du at step {step}")
+        assert sorted(fix1) == sorted(fix0)
+        for d in fix0:
+            assert_close(fix1[d], fix0[d], f"velocity fix of disc {d}")
+        n_fixes += len(fix0)
+    assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
+
+
+def _kernel_measure(net, xz, r):
+    n_p, n_l = net.n_pores, len(net.links)
+    out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
+           np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
+    kernels.measure(xz, r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
+                    net.corner_theta0, net.corner_r2, net.rattler_area, net.eps_m, *out)
+    return out
+
+
+@pytest.mark.parametrize("layout", ["random", "hex", "moved"])
+def test_measure_compiled_equals_numpy(layout):
+    if layout == "hex":
+        xz = hex_lattice(8, 7, 2.05)
+        r = np.ones(len(xz))
+        net = pg.build_pores(xz, r, l_m=0.1)
+    else:
+        xz, r, walls, rng = _column()
+        net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.3, walls=walls)
+    if layout == "moved":  # corners turn after the build (eq 29 relative to the build angles)
+        xz = xz + 0.12 * rng.standard_normal(xz.shape)
+    m = pg.measure(net, xz, r)
+    poly, sect, void, length, contact, theta, vec, turns, _ = _kernel_measure(net, xz, r)
+    if layout == "moved":  # links that turned both less and more than the series' range
+        assert (np.abs(turns) < 0.5 * kernels.SMALL_TURN).sum() > 50 and (np.abs(turns) > 0.15).sum() > 5
+    for a, b, what in ((poly, m.polygon_area, "polygon"), (sect, m.sector_area, "sectors"), (void, m.void_area, "void"),
+                       (length, m.link_length, "length"), (theta, m.corner_angle, "angles"), (vec, m.link_vector, "vectors")):
+        assert_close(a, b, what)
+    np.testing.assert_array_equal(contact, m.link_contact)
+    assert net.n_pores > 40
+
+
+def test_turn_is_atan2():
+    """kernels.turn (a series for small turns, else atan2) against np.arctan2 to 2 ulp, at every quadrant,
+    the series' edge and zero."""
+    rng = np.random.default_rng(5)
+    angles = np.concatenate([rng.uniform(-np.pi, np.pi, 2000), rng.uniform(-0.11, 0.11, 2000),
+                             [0.0, np.arctan(kernels.SMALL_TURN), -np.arctan(kernels.SMALL_TURN), np.pi, -np.pi / 2]])
+    scale = 10.0 ** rng.uniform(-6, 3, len(angles))
+    for a, k in zip(angles, scale):
+        s, c = k * np.sin(a), k * np.cos(a)
+        assert abs(kernels.turn(s, c) - np.arctan2(s, c)) <= 4.5e-16 * abs(np.arctan2(s, c)), (a, k)  # 2 ulp
+    assert kernels.turn(0.0, 1.0) == 0.0
+
+
+def test_pressure_forces_compiled_equals_numpy():
+    xz, r, walls, rng = _column()
+    net = pg.build_pores(xz, r, l_m=0.3, walls=walls)
+    m = pg.measure(net, xz, r)
+    U = 100 * rng.standard_normal(net.n_pores)
+    F, scratch = np.zeros((len(r), 2)), np.zeros((len(r), 2))
+    kernels.pressure_forces(net.links, net.link_pores, r, U, m.link_length, m.link_vector, F, scratch)
+    assert_close(F, pg.pressure_forces(net, r, U, m), "eq 33 forces")
+    kernels.pressure_forces(net.links, net.link_pores, r, np.full(net.n_pores, 7.0), m.link_length, m.link_vector, F, scratch)
+    assert np.abs(F[walls == 0]).max() > 0  # surface discs feel the outside at U = 0
+
+
+SETTINGS = {
+    "undrained": WaterSettings(E_w=240.0, k1=200.0, k2=2.0),
+    "inflow_drained": WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=100.0, q_w=0.05, sides="drained"),
+    "smoothing": WaterSettings(E_w=240.0, k1=200.0, k2=20.0, q_w=0.05, smoothing=True),
+    "substep": WaterSettings(E_w=240.0, k1=2e5, k2=2e3, q_w=0.05, substep=True),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SETTINGS))
+def test_water_model_compiled_equals_numpy(case):
+    """WaterModel's kernels (measure, flows, update, eq 33) against PoreWater.advance, measure and
+    pressure_forces over moving discs, rebuilds included; one pore pinched for a while."""
+    xz, r, walls, rng = _column(n=250, gap=0.0)
+    s = SETTINGS[case]
+    models = [WaterModel(s, r, walls, xz, 0.0, 0.3, 1e-4, rebuild_interval=7, compiled=c, log=lambda m: None)
+              for c in (False, True)]
+    pinched = int(np.flatnonzero(~models[0].water.net.pore_surface)[0])
+    x = xz.copy()
+    for k in range(20):
+        x = x + 0.003 * rng.standard_normal(x.shape) * (walls == 0)[:, None]
+        xk = x.copy()
+        if 3 <= k < 6:  # squeeze one pore shut: its corner discs move to its centroid
+            net = models[0].water.net
+            v = net.vertices_of(pinched) if k < models[0].rebuild_interval else []
+            xk[v] = xk[v].mean(axis=0) + 0.2 * (xk[v] - xk[v].mean(axis=0))
+            assert models[0].measures(xk).void_area[pinched] <= models[0].water.net.a_min
+        for m in models:
+            m.step(k, xk)
+        W0, W1 = models[0].water.W, models[1].water.W
+        assert_close(W1, W0, f"W at step {k}")
+        assert_close(models[1].F, models[0].F, f"F at step {k}")
+        assert_close(models[1].last_limit, models[0].last_limit, f"Darcy limit at step {k}")
+        b0, b1 = models[0].water.balance, models[1].water.balance
+        for name in ("inflow", "surface_outflow", "side_outflow"):
+            assert abs(getattr(b1, name) - getattr(b0, name)) <= RTOL * max(abs(getattr(b0, name)), 1e-300) + 1e-30
+    assert models[1].water.balance_error() < 1e-12
+    assert models[0].n_rebuilds == models[1].n_rebuilds == 2
+    if case == "substep":
+        assert models[1].substeps_max > 1
+    if case == "inflow_drained":
+        assert models[1].water.balance.side_outflow > 0 and models[1].water.balance.inflow > 0
+
+
+def test_tie_forces_compiled_equals_numpy():
+    """kernels.tie_forces against SideWallTies.forces: the seismic box's columns moved and moving
+    at random (a tie's stretch, its dashpot, a disc with two ties, the corners' reactions)."""
+    xz, group = wall_box(25, 12, 0.55e-3)
+    ties = SideWallTies(xz, group, 1.5e5, 0.6)
+    rng = np.random.default_rng(7)
+    dt = 1e-6
+    pairs, rest, prm, T = ties.kernel_args()
+    for _ in range(5):
+        x = xz + 1e-5 * rng.standard_normal(xz.shape)
+        du = 1e-7 * rng.standard_normal(xz.shape)
+        kernels.tie_forces(x, du, dt, pairs, rest, prm, T)
+        F = ties.forces(x[:, 0], du[:, 0] / dt)
+        assert_close(T[0], F, "tie forces")
+        assert np.count_nonzero(F) == np.count_nonzero(ties.moving) + 2  # the columns and their corners
+
+
+def test_refuses_a_water_step_above_the_darcy_limit():
+    from engines.model.pore_water import DarcyStabilityError
+    xz, r, walls, _ = _column(n=120, gap=0.0)
+    m = WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3), r, walls, xz, 0.0, 0.3, 1e-3)
+    with pytest.raises(DarcyStabilityError, match="substep"):
+        m.step(0, xz)

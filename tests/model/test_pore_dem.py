@@ -1,0 +1,399 @@
+"""One model step without YADE (engines/model/pore_dem.py): masses, input motion, the order of a step
+(rebuilds, water steps, held pressure forces, eq 45 in the forces), observations. No YADE.
+Runs both the compiled kernels and the readable NumPy path where the water is involved."""
+import numpy as np
+import pytest
+
+from engines.model import pore_dem
+from engines.model import pores as pg
+from engines.model.pore_dem import PoreDEM, disc_masses, moving_walls
+from packing.layouts import hex_lattice
+from packing.packing import Packing
+from tests.scene_helpers import make_scene as scene
+
+R = 0.45e-3
+
+
+def wet_box(seed=2, jitter=0.0):
+    """Particles on a hexagonal lattice (centres moved by up to ``jitter`` R) with random radii
+    0.85-0.95 R in a box of wall discs, open at the top."""
+    rng = np.random.default_rng(seed)
+    xz = hex_lattice(7, 6, 2 * R)
+    col, row = np.arange(len(xz)) % 7, np.arange(len(xz)) // 7
+    group = np.where(row == 0, pg.WALL_BOTTOM, np.where(col == 0, pg.WALL_LEFT, np.where(col == 6, pg.WALL_RIGHT, 0)))
+    r = np.where(group == 0, R * (0.85 + 0.1 * rng.random(len(xz))), R)
+    xz[group == 0] += jitter * R * rng.uniform(-1, 1, (int(np.sum(group == 0)), 2))
+    return Packing(xz, r, group, np.where(row == 5, 5.0, 1.0))
+
+
+def test_masses_per_unit_thickness():
+    """SPEC §1 (eq 15a's r^3 is a typo): m = rho f pi r^2, I = m r^2 / 2."""
+    pk = Packing(np.array([[0.0, 0.0], [1e-3, 0.0]]), [0.4e-3, 0.5e-3], [0, 1], [5.0, 1.0])
+    m, inertia = disc_masses(scene(material={"rho": 2000.0}), pk)
+    np.testing.assert_allclose(m, 2000.0 * np.array([5.0, 1.0]) * np.pi * np.array([0.4e-3, 0.5e-3]) ** 2, rtol=1e-15)
+    np.testing.assert_allclose(inertia, m * np.array([0.4e-3, 0.5e-3]) ** 2 / 2, rtol=1e-15)
+
+
+def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
+    """The driven walls, moved by x += wall_velocity dt each step, follow the exact displacement of
+    a = A cos(w t) from rest, u = A/w^2 (1 - cos w t), to the second-order error of the
+    constant-average-acceleration method (a first-order integration would be off by ~1/n)."""
+    s = scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0, "moves": "box"},
+              numerics={"dt": 1e-6})
+    pk = wet_box()
+    core = PoreDEM(s, pk)
+    np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
+    u, w = 0.0, 2 * np.pi * 50.0
+    for k in range(1, 31):
+        core.step(pk.xz)
+        u += core.wall_velocity * 1e-6
+        assert u == pytest.approx(15.0 / w**2 * (1 - np.cos(w * k * 1e-6)), rel=1e-6)
+    np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
+    assert moving_walls(scene(), pk).shape == (len(pk.r),) and not moving_walls(scene(), pk).any()
+    still = PoreDEM(scene(), pk)
+    still.step(pk.xz)
+    assert still.base is None and still.wall_velocity == 0.0
+
+
+def test_bad_numerics_are_refused():
+    pk = wet_box()
+    with pytest.raises(ValueError, match=r"\[numerics\] dt"):
+        PoreDEM(scene(numerics={"dt": 1e-3}), pk)
+    with pytest.raises(ValueError, match="damping_eq44"):
+        PoreDEM(scene(numerics={"damping_eq44": True}), pk)
+
+
+def wet_scene(rebuild_interval=4, **water):
+    return scene(water={"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, **water},
+                 numerics={"dt": 1e-6, "rebuild_interval": rebuild_interval, "water_interval": 3})
+
+
+def moving_positions(pk, k):
+    """A smooth made-up motion of the particles (walls fixed), the same for every run."""
+    xz = pk.xz.copy()
+    mob = pk.mobile
+    phase = np.arange(len(xz))[mob]
+    xz[mob, 0] += 2e-3 * R * k * np.sin(phase)
+    xz[mob, 1] += 2e-3 * R * k * np.cos(1.3 * phase)
+    return xz
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_step_order_rebuilds_water_steps_and_held_forces(compiled):
+    """Rebuilds at k > 0, k % rebuild_interval == 0; water advanced only at k % water_interval == 0
+    and by water_interval dt; the pressure forces of eq 33 recomputed then and held in between."""
+    pk = wet_box()
+    core = PoreDEM(wet_scene(q_w=1e-4), pk, compiled)
+    dry = PoreDEM(scene(numerics={"dt": 1e-6}), pk, compiled)
+    W_seen, F_seen = [], []
+    for k in range(10):
+        xz = moving_positions(pk, k)
+        F, _ = core.step(xz)
+        W_seen.append(core.water.total_water())
+        F_seen.append(core.water_model.F.copy())
+        np.testing.assert_allclose(F, dry.step(xz)[0] + core.water_model.F, rtol=1e-13, atol=1e-18)  # law + water
+        assert core.water_model.n_rebuilds == k // 4
+    water_steps = [k for k in range(10) if k % 3 == 0]
+    for k in range(1, 10):
+        if k in water_steps or k % 4 != 0:    # (a rebuild may recompute W by eq 32: either way)
+            assert (W_seen[k] != W_seen[k - 1]) == (k in water_steps), k
+        assert np.array_equal(F_seen[k], F_seen[k - 1]) == (k not in water_steps), k
+    n_bottom = int(np.sum(core.water.net.pore_touches["bottom"]))
+    assert core.water.balance.inflow == pytest.approx(len(water_steps) * 3 * 1e-6 * 1e-4 * n_bottom, rel=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_pressure_forces_use_the_area_of_eq45(compiled):
+    """With smoothing the forces of eq 33 come from U of eq 32 at the area actually used
+    ([A]_t = ([A]_{t-dt} + A'_t)/2), the same U that drives the flows."""
+    pk = wet_box()
+    s = wet_scene(rebuild_interval=1000, smoothing=True)
+    core = PoreDEM(s, pk, compiled)
+    A_used = pg.measure(core.water.net, pk.xz, core.r).void_area
+    for k in range(3):
+        xz = moving_positions(pk, 3 * k)
+        core.step(xz)
+        m = pg.measure(core.water.net, xz, core.r)
+        A_used = (A_used + m.void_area) / 2
+        expected = pg.pressure_forces(core.water.net, core.r, core.water.pressure(A_used), m)
+        # to 1e-12 of the largest force: a disc's force is a sum of pressure differences (cancellation)
+        np.testing.assert_allclose(core.water_model.F, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+        core.step(xz)
+        core.step(xz)   # two steps without a water step: the force is held
+    raw = pg.pressure_forces(core.water.net, core.r, core.water.pressure(m.void_area), m)
+    assert np.abs(raw - core.water_model.F).max() > 1e-6 * np.abs(raw).max()   # smoothing made a difference
+
+
+def test_dry_scene_has_no_water_and_nan_pressures():
+    pk = wet_box()
+    s = scene()
+    core = PoreDEM(s, pk)
+    assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
+    assert pore_dem.water_model(s, pk) is None
+    bounds = pk.block_bounds(s.output.block_z)
+    dry_blocks = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert dry_blocks.shape == (len(bounds),) and np.all(np.isnan(dry_blocks))
+    F, fixes = core.step(pk.xz)
+    assert np.all(np.isfinite(F)) and fixes == {}
+
+
+def test_block_pressures_are_means_of_the_pores_in_each_block():
+    pk = wet_box()
+    s = wet_scene()
+    core = PoreDEM(s, pk)
+    rng = np.random.default_rng(0)
+    core.water.W = core.water.W * (1 + 0.1 * rng.random(core.water.net.n_pores))
+    net, m, U = pore_dem.pore_state(core.water, pk.xz, pk.r)
+    np.testing.assert_allclose(m.void_area, pg.measure(net, pk.xz, pk.r).void_area, rtol=1e-15)
+    np.testing.assert_allclose(U, s.water.E_w * (1 - m.void_area / core.water.W), rtol=1e-12)   # eq 32
+    cz = pg.pore_centroids(net, pk.xz)[:, 1]
+    bounds = pk.block_bounds(s.output.block_z)
+    got = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    assert len(got) == len(bounds)
+    for (z0, z1), g in zip(bounds, got):
+        sel = (cz >= z0) & (cz < z1)
+        assert sel.any() and g == pytest.approx(U[sel].mean(), rel=1e-14)
+
+
+def test_window_porosity_moves_with_the_base():
+    """Void fraction of the window of a box packing around its particles only (walls excluded):
+    one particle of radius r wholly inside gives 1 - pi r^2 / |window|; the window shifted with
+    the base until the particle's centre is on its edge sees half the disc."""
+    xz = np.array([[0.0, 0.0], [4 * R, 0.0], [2 * R, -2 * R], [2 * R, 0.0]])
+    pk = Packing(xz, np.full(4, R), [pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM, 0], np.ones(4))
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 1.0]}), pk)
+    assert (window.x0, window.x1) == pytest.approx((R, 3 * R), rel=1e-12)
+    area = (window.x1 - window.x0) * (window.z1 - window.z0)
+    big = type(window)(-5 * R, 5 * R, -R, R)
+    assert pore_dem.window_porosity(pk, big, xz) == pytest.approx(1 - np.pi * R**2 / (20 * R**2), rel=1e-12)
+    assert pore_dem.window_porosity(pk, big, xz, base_disp=-3 * R) == pytest.approx(1 - np.pi * R**2 / 2 / (20 * R**2), rel=1e-12)
+    assert 0 < area and np.isnan(pore_dem.window_porosity(pk, None, xz))
+    for keep in ([2, 3], [0, 2, 3], [1, 2, 3]):        # no side column, only the left, only the right
+        part = Packing(xz[keep], np.full(len(keep), R), np.array(pk.group)[keep], np.ones(len(keep)))
+        assert pore_dem.porosity_window(scene(), part) is None
+
+
+def test_kinetic_energy_with_spin_of_the_mobile_discs():
+    """1/2 m v^2 + 1/2 I omega^2 summed over the particles only (walls excluded)."""
+    mass, inertia = np.array([1.0, 2.0, 3.0]), np.array([0.1, 0.2, 0.3])
+    mobile = np.array([False, True, True])
+    vel = np.array([[9.0, 9.0], [3.0, 4.0], [0.0, -2.0]])
+    omega = np.array([5.0, 7.0, -1.0])
+    expected = 0.5 * (2.0 * 25.0 + 3.0 * 4.0) + 0.5 * (0.2 * 49.0 + 0.3 * 1.0)
+    assert pore_dem.kinetic_energy(mass, inertia, mobile, vel, omega) == pytest.approx(expected, rel=1e-15)
+
+
+def test_a_disc_pressed_into_a_wall_feels_the_spring():
+    """A free disc overlapping a bottom wall disc by 1e-7 m: the step's force is kn x overlap
+    upwards (spring a, no dashpot at rest), the pair is listed with that normal force."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    F, _ = core.step(pk.xz)
+    assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
+    pairs, fn, es = core.contact.contact_pairs()
+    assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
+    assert es == pytest.approx([0.0], abs=1e-15)                 # no tangential motion: no shear spring
+    moved = pk.xz.copy()
+    moved[1, 1] += 3e-9
+    core.step(moved)
+    np.testing.assert_allclose(core.du, [[0.0, 0.0], [0.0, 3e-9]], atol=1e-20)   # eq 17: du of the step
+
+
+def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
+    """Eq 18-23 through the step: a disc that hit a wall disc at 0.1 m/s and leaves it at 0.1 m/s
+    comes back with -Vn''/Vn = e."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    xz = pk.xz.copy()
+    core.step(xz.copy())
+    xz[1, 1] = 2 * R - 5e-9                 # approach at 0.1 m/s: contact
+    _, fixes = core.step(xz.copy())
+    assert fixes == {}
+    xz[1, 1] = 2 * R + 5e-9                 # leave at 0.1 m/s: free again
+    _, fixes = core.step(xz.copy())
+    assert set(fixes) == {1}
+    np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6)
+    # the caller's velocities, when given, are the ones adjusted (YADE's state.vel instead of du/dt)
+    twin = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        twin.step(np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes = twin.step(xz.copy(), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+@pytest.mark.parametrize("variant", ["inflow_smoothing", "shaken_drained_d"])
+def test_steps_match_the_reference_without_yade(variant):
+    """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
+    x += v dt, walls at the input velocity, adjusted velocities set before) follows the independent
+    reference disc by disc: contact law, spin,
+    separation adjustment, pore rebuilds, water steps every water_interval, smoothing, drained
+    sides, inflow and input."""
+    from engines.reference import model as ref
+    water = {"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, "l_m": 1.3e-4}
+    if variant == "inflow_smoothing":
+        tables = dict(water={**water, "q_w": 2e-3, "smoothing": True}, contact={"spring": "c", "separation_adjustment": True})
+        loading = {}
+    else:
+        tables = dict(water={**water, "sides": "drained", "k3": 500.0},
+                      contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
+        loading = {"type": "cosine", "amplitude": 30.0, "frequency": 200.0, "moves": "box"}
+    s = scene(material={"g": 1000.0}, loading=loading, numerics={"dt": 1e-6, "rebuild_interval": 25, "water_interval": 2},
+              **tables)
+    pk = wet_box(seed=5, jitter=0.05)
+    core = PoreDEM(s, pk)
+    moving = moving_walls(s, pk)
+    model = ref.ReferenceModel(s.as_dict(), pk)   # the paper's readings, walls included (READINGS D1)
+    m, _ = disc_masses(s, pk)
+    mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
+    up = s.material.rho_w * np.pi * pk.r**2 * g
+    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
+    moved = 0.0
+    for _ in range(400):
+        F, fixes = core.step(x.copy())
+        for d, vel in fixes.items():
+            v[d] = vel
+        v[mob, 0] += F[mob, 0] / m[mob] * dt
+        v[mob, 1] += ((F[mob, 1] + up[mob]) / m[mob] - g) * dt
+        v[moving] = [core.wall_velocity, 0.0]
+        step = mob | moving
+        x[step] += v[step] * dt
+        model.step()
+        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
+        np.testing.assert_allclose(core.omega[mob], model.omega[mob], rtol=1e-9, atol=1e-9 * np.abs(model.omega).max())
+        moved = max(moved, np.abs(x - pk.xz).max())
+    np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
+    assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
+    assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
+
+
+def test_rebuild_every_step_when_asked():
+    pk = wet_box()
+    core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}), pk)
+    for k in range(4):
+        core.step(moving_positions(pk, k))
+    assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_side_wall_ties_add_their_forces_to_the_step(compiled):
+    """[loading] side_walls = "springs" (Fig. 27): a middle disc of the left column moved by dx in
+    one step feels -2 k's dx - 2 eta's dx/dt more than with fixed walls (its two ties, the tie
+    velocity du/dt of the step), its two neighbours +k's dx + eta's dx/dt each; nothing in z."""
+    ks, eta, dx, dt = 1e3, 0.5, 1e-8, 1e-7
+    tables = dict(contact={"ks_wall": ks, "eta_s_wall": eta}, numerics={"dt": dt})
+    pk = wet_box()
+    ties = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0, "side_walls": "springs"}, **tables), pk, compiled)
+    fixed = PoreDEM(scene(loading={"type": "cosine", "amplitude": 0.0}, **tables), pk, compiled)
+    left = np.flatnonzero(pk.group == pg.WALL_LEFT)
+    left = left[np.argsort(pk.xz[left, 1])]
+    d, below, above = left[2], left[1], left[3]
+    for k in range(2):
+        xz = pk.xz.copy()
+        xz[d, 0] += k * dx
+        diff = ties.step(xz)[0] - fixed.step(xz)[0]
+        tie = k * (ks * dx + eta * dx / dt)
+        expected = np.zeros_like(diff)
+        expected[[d, below, above], 0] = [-2 * tie, tie, tie]
+        np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
+    assert (ties.kernel_step_args() is None) == (not compiled)  # the ties run in the one-call step too
+    assert (fixed.kernel_step_args() is None) == (not compiled)
+
+
+def test_side_wall_ties_refuse_a_step_above_their_limit():
+    """dt must stay below sqrt(m_min / k's) of the moving wall discs (engines.model.side_walls)."""
+    pk = wet_box()
+    m_wall = disc_masses(scene(), pk)[0][pk.group == pg.WALL_LEFT].min()
+    dt = 1e-7
+    for ks, ok in ((0.98 * m_wall / dt**2, True), (1.02 * m_wall / dt**2, False)):
+        s = scene(loading={"type": "cosine", "side_walls": "springs"}, contact={"ks_wall": ks}, numerics={"dt": dt})
+        if ok:
+            PoreDEM(s, pk)
+        else:
+            with pytest.raises(ValueError, match="side-wall ties"):
+                PoreDEM(s, pk)
+
+
+def fused_step(core, xz, vel=None):
+    """One step of ``core`` as PaperLawEngine.drive does it: kernels.dem_step between
+    kernel_step_args and finish_kernel_step (the pair list rebuilt when the kernel finds it
+    stale), or the general ``step`` where kernel_step_args says None. Returns (F, fixes, fused)."""
+    from engines.compiled import kernels
+    args = core.kernel_step_args()
+    if args is None:
+        return (*core.step(xz, vel), False)
+    F = np.zeros_like(xz)
+    rows, held = np.arange(len(xz)), np.zeros_like(xz)
+    while True:
+        due, law_args, water_args, tie_args = args
+        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args, *tie_args)
+        if n_lost != kernels.LIST_STALE:
+            return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
+        core.law.contact._update_list(xz)
+        args = core.kernel_step_args()
+
+
+@pytest.mark.parametrize("wet", [None, "plain", "smoothing_substeps"])
+def test_one_compiled_call_per_step_equals_the_general_step(wet):
+    """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
+    does between YADE's position read and force write) gives the forces, water and rebuilds of
+    PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``. Also
+    with smoothing (eq 45-46) and water steps above the Darcy limit taken in sub-steps."""
+    if wet is None:
+        s = scene(numerics={"dt": 1e-6})
+    elif wet == "plain":
+        s = wet_scene(q_w=1e-4)
+    else:
+        s = wet_scene(q_w=1e-4, k1=2e6, smoothing=True, substep=True)
+    pk = wet_box(jitter=0.05)
+    general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
+    n_fused = 0
+    for k in range(10):
+        xz = moving_positions(pk, k)
+        F, fixes = general.step(xz.copy())
+        F2, fixes2, one_call = fused_step(fused, xz.copy())
+        n_fused += one_call
+        assert one_call == (k > 0 and not (wet and k % 4 == 0))
+        np.testing.assert_allclose(F2, F, rtol=1e-12, atol=1e-12 * np.abs(F).max())
+        assert fused.k == general.k == k + 1
+        if wet:
+            assert fused.water.total_water() == pytest.approx(general.water.total_water(), rel=1e-13)
+            assert fused.water_model.n_rebuilds == general.water_model.n_rebuilds
+    if wet:
+        assert general.water.balance.inflow > 0
+        assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
+        assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
+    every = PoreDEM(wet_scene(rebuild_interval=1), pk)
+    every.step(pk.xz)
+    assert every.kernel_step_args() is None                      # k = 1: a rebuild is due
+
+
+def test_one_compiled_call_adjusts_the_caller_velocities():
+    """The separation adjustment of eq 18-23 in the one-call step: the disc leaving the wall gets
+    -Vn''/Vn = e from the caller's velocities, as in the general step."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9):
+        fused_step(core, np.array([[0.0, 0.0], [0.0, z]]))
+    _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
+    assert one_call and set(fixes) == {1}
+    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+
+
+def test_an_isolated_pair_separating_keeps_its_momentum():
+    """Eq 24 through the step: two free discs of different masses (m = rho pi r^2) that collided
+    and fly apart too fast are slowed to -Vn''/Vn = e, their total momentum unchanged."""
+    s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
+    r = np.array([R, 0.7 * R])
+    pk = Packing(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), r, [0, 0], [1.0, 1.0])
+    core = PoreDEM(s, pk)
+    m, _ = disc_masses(s, pk)
+    for gap in (5e-9, -5e-9):                              # approach at 0.1 m/s: contact
+        core.step(np.array([[0.0, 0.0], [r.sum() + gap, 0.0]]))
+    vel = np.array([[-0.3, 0.0], [0.5, 0.0]])
+    _, fixes = core.step(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), vel=vel)
+    assert set(fixes) == {0, 1}
+    assert m[0] * fixes[0][0] + m[1] * fixes[1][0] == pytest.approx(m @ vel[:, 0], rel=1e-9)
+    assert fixes[1][0] - fixes[0][0] == pytest.approx(s.contact.restitution * 0.1, rel=1e-6)

@@ -1,0 +1,1 @@
+"""Tests of packing/ (marked packing)."""

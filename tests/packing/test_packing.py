@@ -1,0 +1,74 @@
+"""Particle sizes (eq 53-54) and packing files."""
+import numpy as np
+import pytest
+from scipy import stats
+
+from packing.packing import Packing
+from packing.psd import diameter_distribution, lognormal_parameters, sample_diameters
+
+
+def test_eq54_parameters_give_the_mean_and_std():
+    dist = diameter_distribution(0.9e-3, 0.25e-3)
+    assert dist.mean() == pytest.approx(0.9e-3, rel=1e-12) and dist.std() == pytest.approx(0.25e-3, rel=1e-12)
+    lam, zeta = lognormal_parameters(0.9e-3, 0.25e-3)
+    assert zeta**2 == pytest.approx(np.log(1 + (0.25 / 0.9) ** 2))
+
+
+def test_truncated_samples_match_the_truncated_distribution():
+    rng = np.random.default_rng(0)
+    d = sample_diameters(5000, 0.9e-3, 0.25e-3, 0.4e-3, 2e-3, rng)
+    assert d.min() >= 0.4e-3 and d.max() <= 2e-3
+    dist = diameter_distribution(0.9e-3, 0.25e-3)
+    lo, hi = dist.cdf(0.4e-3), dist.cdf(2e-3)
+    p = stats.kstest(d, lambda x: (dist.cdf(x) - lo) / (hi - lo)).pvalue
+    assert p > 0.01
+    assert np.array_equal(d, sample_diameters(5000, 0.9e-3, 0.25e-3, 0.4e-3, 2e-3, np.random.default_rng(0)))
+
+
+def test_packing_roundtrip_and_validation(tmp_path):
+    pk = Packing(np.array([[0.0, 1e-3], [1e-3, 0.0]]), [0.4e-3, 0.5e-3], [0, 1], [5.0, 1.0])
+    pk.save(str(tmp_path / "p.csv"))
+    back = Packing.load(str(tmp_path / "p.csv"))
+    np.testing.assert_allclose(back.xz, pk.xz, rtol=1e-12)
+    assert list(back.group) == [0, 1] and list(back.density_factor) == [5.0, 1.0]
+    with pytest.raises(ValueError, match="group"):
+        Packing(pk.xz, pk.r, [0, 7], [1.0, 1.0])
+    with pytest.raises(ValueError, match="r must be > 0"):
+        Packing(pk.xz, [0.0, 1e-3], [0, 1], [1.0, 1.0])
+
+
+def _box_packing(particles):
+    from engines.yade.deposition import wall_box
+    walls, groups = wall_box(25, 12, 0.55e-3)
+    p = np.asarray(particles, float)
+    return Packing(np.vstack([p, walls]), np.full(len(p) + len(walls), 0.45e-3),
+                   np.concatenate([np.zeros(len(p), int), groups]), np.ones(len(p) + len(walls)))
+
+
+def test_a_packing_with_a_particle_outside_the_box_is_refused():
+    from engines.yade.deposition import check_inside_box, outside_box
+    inside = [[5e-3, 2e-3], [20e-3, 12e-3]]  # the second is above the side walls, between them: inside
+    check_inside_box(_box_packing(inside))
+    for bad in ([-1e-3, 0.5e-3], [27e-3, 0.2e-3], [10e-3, -1e-3]):  # left of, right of, under the box
+        pk = _box_packing(inside + [bad])
+        assert outside_box(pk).tolist() == [2]
+        with pytest.raises(ValueError, match="1 particle.*outside the box"):
+            check_inside_box(pk, "test deposit")
+
+
+def test_guard_columns_reach_above_the_given_height():
+    from engines.yade.deposition import guard_columns, wall_box
+    walls, _ = wall_box(25, 12, 0.55e-3)
+    extra, groups = guard_columns(25, 12, 0.55e-3, 30e-3)
+    assert extra[:, 1].min() > walls[:, 1].max() and extra[:, 1].max() >= 30e-3
+    assert set(extra[:, 0]) == {0.0, walls[:, 0].max()} and len(groups) == len(extra)
+
+
+def test_dense_top_by_count_and_wall_factor():
+    from engines.yade.deposition import mark_dense_top
+    rng = np.random.default_rng(0)
+    pk = _box_packing(np.column_stack([1e-3 + 20e-3 * rng.random(30), 1e-3 + 10e-3 * rng.random(30)]))
+    out = mark_dense_top(pk, 0.45e-3, 10.0, count=8, wall_factor=10.0)
+    dense = np.flatnonzero(out.density_factor[:30] == 10.0)
+    assert len(dense) == 8 and pk.xz[dense, 1].min() > np.delete(pk.xz[:30, 1], dense).max()
+    assert np.all(out.density_factor[30:] == 10.0)

@@ -1,0 +1,93 @@
+"""Figures that do not mislead: U on a scale centred on 0 shared by all panels (one colour bar),
+each panel titled with its own maxima, equal axis limits, a key; gaps in block pressures shown."""
+import json
+import os
+
+import numpy as np
+import pytest
+from matplotlib.collections import PolyCollection
+from matplotlib.quiver import QuiverKey
+
+from engines.model import pores as pg
+from engines.run import scene as scenes
+from engines.yade.deposition import scene_packing
+from postproc import plots
+
+
+@pytest.fixture(scope="module")
+def snaps():
+    """Three snapshots of the preset's packing with made-up motions, forces and pressures."""
+    pk = scene_packing(scenes.preset("quicksand_case1"))
+    net = pg.build_pores(pk.xz, pk.r, l_m=1.3e-4, walls=pk.group)
+    rng = np.random.default_rng(0)
+    out = []
+    for k, (u_lo, u_hi, v) in enumerate([(0.0, 5.0, 0.0), (-60.0, 100.0, 0.05), (-20.0, 220.0, 0.3)]):
+        vel = np.where(pk.mobile[:, None], rng.normal(size=(len(pk.r), 2)), 0.0)
+        vel *= v / max(np.hypot(*vel.T).max(), 1e-300)
+        xz = pk.xz + [0.0, 1e-3 * k] * pk.mobile[:, None]
+        U = np.linspace(u_lo, u_hi, net.n_pores)
+        out.append(dict(t=np.float64(0.02 * k), xz=xz, r=pk.r, group=pk.group, density_factor=pk.density_factor,
+                        vel=vel, pairs=net.links[:10], f_n=np.linspace(0, 1 + k, 10), tri=net.tri,
+                        tri_pore=net.tri_pore, U=U))
+    return out
+
+
+def test_snapshot_panels_share_a_centred_scale_and_limits_and_title_their_own_maxima(snaps):
+    fig = plots.snapshot_figure(snaps, "test", blocks=[[0.0, 1e-3], [2e-3, 5e-3]])
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("t = ")]
+    assert len(panels) == 3
+    for ax, s in zip(panels, snaps):
+        pores = [c for c in ax.collections if isinstance(c, PolyCollection) and c.get_array() is not None]
+        norm = pores[0].norm
+        assert (norm.vmin, norm.vmax) == (-220.0, 220.0)  # +-max|U| over all panels: U = 0 is the centre
+        v = np.hypot(*s["vel"][s["group"] == 0].T).max()
+        assert f"max |v| = {v:.3g} m/s" in ax.get_title() and f"max f_n = {s['f_n'].max():.3g} N" in ax.get_title()
+        assert f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m" in ax.get_title()
+        assert ax.get_xlim() == panels[0].get_xlim() and ax.get_ylim() == panels[0].get_ylim()
+    top = max((s["xz"][:, 1] + s["r"]).max() for s in snaps) * 1e3
+    assert panels[0].get_ylim()[1] > top  # the highest disc of any panel is inside every panel
+    bars = [ax for ax in fig.axes if "pore excess pressure" in ax.get_ylabel()]
+    assert len(bars) == 1
+    labels = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    for word in ("particle", "dense top particle (density x 5)", "wall disc", "normal force 3 N", "block 1"):
+        assert any(word in lab for lab in labels), (word, labels)
+    keys = [a for ax in fig.axes for a in ax.artists if isinstance(a, QuiverKey)]
+    assert len(keys) == 1 and keys[0].U == 0.1 and keys[0].text.get_text() == "particle velocity 0.1 m/s"
+
+
+def test_nan_runs():
+    t = np.arange(10.0)
+    y = np.array([0, 1, np.nan, np.nan, 4, 5, np.nan, 7, 8, np.nan])
+    assert plots.nan_runs(t, y) == [(1.0, 4.0), (5.0, 7.0), (8.0, 9.0)]
+    assert plots.nan_runs(t, np.zeros(10)) == []
+
+
+def test_block_pressure_gaps_are_drawn_and_explained():
+    t = np.linspace(0, 0.01, 101)
+    b1 = np.where((t > 0.003) & (t < 0.005), np.nan, 100 * t / 0.01)
+    hist = {"t": t, "U_block1": b1, "U_block2": 0.1 * np.nan_to_num(b1)}
+    fig = plots.block_pressure_figure(hist, 240.0, "test")
+    ax = fig.axes[0]
+    labels = [x.get_text() for x in ax.get_legend().get_texts()]
+    assert any("block 1 (bottom): no pore" in lab and "19 %" in lab for lab in labels), labels
+    assert not any("block 2 (surface): no pore" in lab for lab in labels)
+    hatched = [p for p in ax.patches if p.get_hatch()]
+    assert len(hatched) == 1 and any("no mean U" in x.get_text() for x in ax.texts)
+    fig = plots.block_pressure_figure({**hist, "U_block1": np.nan_to_num(b1)}, 240.0, "test")
+    assert not [p for p in fig.axes[0].patches if p.get_hatch()] and not fig.axes[0].texts
+
+
+def test_figures_of_a_run_from_its_files(snaps, tmp_path):
+    t = np.linspace(0, 0.04, 5)
+    with open(tmp_path / "history.csv", "w") as f:
+        f.write("t,U_block1,U_block2,porosity,kinetic_energy,water_balance_error,total_water,n_pores,"
+                "fn_bottom_mean,bed_top\n")
+        for k, tk in enumerate(t):
+            f.write(f"{tk},{10 * k if k != 2 else 'nan'},{k},0.2,0,0,1e-5,60,0.1,0.004\n")
+    for s in snaps:
+        np.savez(tmp_path / f"snapshot_{float(s['t']) * 1e3:06.2f}ms.npz", **s)
+    json.dump({"scene": "test", "parameters": {"water": {"enabled": True, "E_w": 240.0}},
+               "block_bounds_m": [[0.0, 1e-3], [2e-3, 1e-2]]}, open(tmp_path / "summary.json", "w"))
+    written = plots.figures_of_run(str(tmp_path))
+    assert [os.path.basename(p) for p in written] == ["pressure_blocks.png", "history_panels.png", "snapshots.png"]
+    assert all(os.path.getsize(p) > 10000 for p in written)

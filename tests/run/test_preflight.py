@@ -1,0 +1,192 @@
+"""Bad input is refused before anything is written: one line naming the field or argument and its
+limit, a non-zero exit, no output directory. The checks agree with the engine's own refusals."""
+import argparse
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from engines import ROOT
+from engines.model.contact import critical_time_step
+from engines.model.pore_dem import PoreDEM, disc_masses
+from engines.model.pore_water import DarcyStabilityError
+from engines.run import scene as scenes
+from engines.run.preflight import InputError, check_output_dir, number, preflight, start_darcy_limit
+from engines.yade.deposition import scene_packing
+
+PRESET = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
+ENV = dict(os.environ, PYTHONPATH=ROOT, MPLBACKEND="Agg")
+
+
+@pytest.fixture(scope="module")
+def packing():
+    return scene_packing(scenes.preset("quicksand_case1"))
+
+
+def user_scene(folder, body):
+    """A scene file in ``folder`` that extends case 1 by a relative path from another folder."""
+    path = folder / "mine.toml"
+    path.write_text(f'extends = "{os.path.relpath(PRESET, folder)}"\n' + body)
+    return str(path)
+
+
+def refused(cmd, out, field, code=None):
+    """Run ``cmd``; it must fail with exactly one error line naming ``field``, and write no ``out``."""
+    run = subprocess.run(cmd, cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=120)
+    errors = [line for line in run.stderr.splitlines() if "error" in line]
+    assert run.returncode != 0 and (code is None or run.returncode == code), (run.returncode, run.stderr)
+    assert "Traceback" not in run.stderr and len(errors) == 1, run.stderr
+    assert field in errors[0], errors[0]
+    assert not os.path.exists(out), f"{out} was created"
+    return errors[0]
+
+
+# -- quicksand.py: the checks run before YADE is imported, so Debian's python runs them quickly ----
+QUICKSAND = [sys.executable, "yade_scripts/quicksand.py"]
+
+
+@pytest.mark.parametrize("args,field", [
+    (["--dt", "1e-3"], "[numerics] dt"),               # eq 52 with the preset's masses and kn
+    (["--dt", "0"], "--dt"),
+    (["--duration", "-1"], "--duration"),
+    (["--dt", "1e-5", "--duration", "1e-6"], "[numerics] duration"),
+    (["--case", "2", "--scene", PRESET], "--scene"),
+    (["--case", "3"], "--case"),
+])
+def test_quicksand_refuses_bad_arguments(tmp_path, args, field):
+    out = tmp_path / "run"
+    msg = refused(QUICKSAND + args + ["--out", str(out)], out, field)
+    if field == "[numerics] dt":
+        assert "eq 52" in msg and "limit 3.26e-05 s" in msg  # 2 sqrt(m_min / kn) of the preset
+
+
+def test_quicksand_refuses_an_unwritable_output_path(tmp_path):
+    refused(QUICKSAND + ["--out", "/proc/x"], "/proc/x", "--out")
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    refused(QUICKSAND + ["--out", str(blocker / "run")], blocker / "run", "--out")
+
+
+@pytest.mark.parametrize("body,field", [
+    ("[water]\nk1 = 1e9\n", "Darcy limit"),                   # refused up front, not at step 1
+    ("[numerics]\ndamping_eq44 = true\n", "[numerics] damping_eq44"),
+    ('[loading]\ntype = "record"\nrecord = "no_such_record.txt"\n', "[loading] record"),
+    ('[packing]\nfile = "no_such_packing.csv"\n', "[packing] file"),
+])
+def test_quicksand_refuses_bad_user_scenes_from_another_folder(tmp_path, body, field):
+    out = tmp_path / "run"
+    msg = refused(QUICKSAND + ["--scene", user_scene(tmp_path, body), "--out", str(out)], out, field)
+    if "no_such" in body:  # resolved against the user's file, not the preset's folder
+        assert str(tmp_path / "no_such") in msg
+
+
+@pytest.mark.parametrize("args,field", [(["--dt", "0"], "--dt"), (["--dt", "1e-3"], "eq 52")])
+def test_quicksand_under_yade_exits_in_one_line(tmp_path, args, field):
+    out = tmp_path / "run"
+    refused(["yade", "-n", "-x", "yade_scripts/quicksand.py"] + args + ["--out", str(out)], out, field)
+
+
+# -- seed 002 and seed 004 scripts --------------------------------------------------------------
+@pytest.mark.parametrize("args,field", [
+    (["--alpha", "-1"], "--alpha"),
+    (["--alpha", "1", "--C", "nan"], "--C"),
+    (["--alpha", "1", "--load-max", "0"], "--load-max"),
+    (["--alpha", "1", "--dload", "1e-7"], "--dload"),     # 8e8 increments
+])
+def test_particle_potential_refuses_bad_arguments(tmp_path, args, field):
+    out = tmp_path / "run"
+    refused([sys.executable, "yade_scripts/particle_potential.py"] + args + ["--out", str(out)], out, field, 2)
+
+
+@pytest.mark.parametrize("args,field", [
+    (["--realisations", "0"], "--realisations"),
+    (["--seed", "-1"], "--seed"),
+    (["--load-width", "27"], "--load-width"),
+    (["--load-stress", "0"], "--load-stress"),
+])
+def test_sand_layer_refuses_bad_arguments(tmp_path, args, field):
+    out = tmp_path / "run"
+    refused([sys.executable, "yade_scripts/sand_layer.py"] + args + ["--out", str(out)], out, field, 2)
+
+
+@pytest.mark.parametrize("script,args", [("particle_potential.py", ["--alpha", "1"]), ("sand_layer.py", [])])
+def test_seed_scripts_refuse_an_unwritable_output_path(script, args):
+    refused([sys.executable, f"yade_scripts/{script}"] + args + ["--out", "/proc/x"], "/proc/x", "--out", 2)
+
+
+# -- the checks themselves, against the engine ---------------------------------------------------
+def test_the_presets_pass_and_nothing_is_created(packing, tmp_path):
+    for case in (1, 2):
+        sc = scenes.preset(f"quicksand_case{case}", {"numerics": {"duration": 0.02}})
+        notes = preflight(sc, scene_packing(sc), str(tmp_path / "a" / "b"))
+        assert notes and "0.04, 0.06" in notes[0]  # snapshots after the end are named
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_eq52_check_agrees_with_the_engine(packing):
+    sc = scenes.preset("quicksand_case1")
+    m, _ = disc_masses(sc, packing)
+    limit = critical_time_step(m[packing.mobile], sc.contact.kn)
+    for dt, ok in ((0.999 * limit, True), (1.001 * limit, False)):
+        s = sc.with_overrides({"numerics": {"dt": dt}, "water": {"substep": True}})
+        if ok:
+            preflight(s, packing, "out")
+            PoreDEM(s, packing)
+        else:
+            with pytest.raises(InputError, match=r"\[numerics\] dt .*eq 52"):
+                preflight(s, packing, "out")
+            with pytest.raises(ValueError, match="eq 52"):
+                PoreDEM(s, packing)
+
+
+def test_darcy_check_agrees_with_the_engine_at_step_0(packing):
+    """Just below the start limit the engine's first water step passes, just above it raises."""
+    sc = scenes.preset("quicksand_case1", {"water": {"k1": 1e5, "substep": False}})  # the strict mode
+    limit = start_darcy_limit(sc, packing)
+    assert 1e-6 < limit < 1e-5
+    for dt, ok in ((0.999 * limit, True), (1.001 * limit, False)):
+        s = sc.with_overrides({"numerics": {"dt": dt}})
+        core = PoreDEM(s, packing)
+        if ok:
+            preflight(s, packing, "out")
+            core.step(packing.xz.copy())
+        else:
+            with pytest.raises(InputError, match=r"\[numerics\] dt .*Darcy limit"):
+                preflight(s, packing, "out")
+            with pytest.raises(DarcyStabilityError):
+                core.step(packing.xz.copy())
+    s = sc.with_overrides({"numerics": {"dt": 2 * limit}, "water": {"substep": True}})
+    preflight(s, packing, "out")  # sub-stepping (the default): 2 sub-steps, nothing to refuse
+    assert scenes.preset("quicksand_case1").water.substep  # the default
+    s = sc.with_overrides({"numerics": {"dt": 0.9 * limit, "water_interval": 6},   # a water step of 5.4 limits
+                           "water": {"substep": True, "max_substeps": 5}})
+    with pytest.raises(InputError, match=r"needs 6 sub-steps .*Darcy limit .*max_substeps = 5"):
+        preflight(s, packing, "out")
+
+
+@pytest.mark.parametrize("kind,lo,hi,lo_open,text,ok", [
+    (float, 0, None, True, "1e-6", True), (float, 0, None, True, "0", False), (float, 0, None, True, "-1", False),
+    (float, 0, None, True, "nan", False), (float, 0, None, True, "inf", False), (float, 0, None, True, "x", False),
+    (int, 1, None, False, "1", True), (int, 1, None, False, "0", False), (int, 1, None, False, "2.5", False),
+    (int, 1, 26, False, "26", True), (int, 1, 26, False, "27", False), (float, 0, None, False, "0", True),
+])
+def test_number_arguments(kind, lo, hi, lo_open, text, ok):
+    convert = number(kind, lo, hi, lo_open)
+    if ok:
+        assert convert(text) == kind(text)
+    else:
+        with pytest.raises(argparse.ArgumentTypeError, match="must be|expected"):
+            convert(text)
+
+
+def test_output_dir_checks(tmp_path):
+    check_output_dir(str(tmp_path / "new" / "deeper"))
+    check_output_dir(str(tmp_path))
+    (tmp_path / "f").write_text("")
+    with pytest.raises(InputError, match="--out: .* is not a directory"):
+        check_output_dir(str(tmp_path / "f" / "x"))
+    with pytest.raises(InputError, match="--out"):
+        check_output_dir("")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f"]

@@ -1,0 +1,21 @@
+"""Provenance of a run: the commit, dirtiness, command line and overrides it records."""
+import subprocess
+
+from engines.run.provenance import ROOT, provenance
+
+
+def test_provenance_names_the_commit_the_command_and_the_overrides():
+    p = provenance(["yade", "-x", "yade_scripts/quicksand.py", "--duration", "0.02"],
+                   {"numerics": {"duration": 0.02}})
+    head = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    assert p["git_commit"] == head and len(head) == 40
+    dirty = subprocess.run(["git", "-C", ROOT, "diff", "HEAD", "--quiet"]).returncode != 0
+    assert p["git_dirty"] is dirty
+    assert p["command_line"][-2:] == ["--duration", "0.02"]
+    assert p["overrides"] == {"numerics": {"duration": 0.02}}
+    assert p["yade_version"] and p["yade_version"].startswith("20")  # Debian's yade, e.g. 2023.02a-2
+
+
+def test_outside_git_the_commit_is_none(tmp_path):
+    from engines.run import provenance as prov
+    assert prov.git_state(str(tmp_path)) == (None, None)

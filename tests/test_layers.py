@@ -1,0 +1,172 @@
+"""The layers of the tree (engines/__init__.py): who may import whom, YADE only where allowed,
+one way for scripts to find the project, no library module touching sys.path."""
+import ast
+import os
+import re
+import subprocess
+import sys
+
+from engines import ROOT
+
+# each package imports only those before it (engines.ROOT, the root package, is open to all)
+ORDER = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.yade", "engines.seeds",
+         "engines.studies", "postproc", "engines.run"]
+# the one edge against the order: these model classes run their compiled twins when asked
+# (compiled=True); compiled/ imports nothing of the project, so there is no cycle
+MODEL_CALLS_COMPILED = {"engines.model.contact", "engines.model.paper_law", "engines.model.pore_dem",
+                        "engines.model.pore_water", "engines.model.pores", "engines.model.water_model"}
+NO_YADE = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
+LIBRARY = ["engines", "packing", "postproc"]
+SCRIPTS = ["yade_scripts", "benchmarks"]
+BOOTSTRAP = ('sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__"'
+             ' else __file__))))')
+SYS_PATH_EDIT = re.compile(r"sys\.path\.(insert|append|extend|remove|pop)\(|sys\.path\s*(\[[^]]*\])?\s*\+?=(?!=)")
+PROJECT = ("engines", "packing", "postproc", "benchmarks", "yade_scripts")
+
+
+def modules(*tops):
+    """{dotted module name: path} of the .py files under the folders ``tops`` of the project."""
+    out = {}
+    for top in tops:
+        for d, _, files in os.walk(os.path.join(ROOT, top)):
+            for f in files:
+                if f.endswith(".py"):
+                    path = os.path.join(d, f)
+                    name = os.path.relpath(path, ROOT)[:-3].replace(os.sep, ".")
+                    out[name.removesuffix(".__init__")] = path
+    return out
+
+
+def imports(path):
+    """The modules a file imports anywhere in it (function-level imports too), as dotted names
+    (``from a import b`` gives a.b)."""
+    out = set()
+    for n in ast.walk(ast.parse(open(path, encoding="utf-8").read())):
+        if isinstance(n, ast.Import):
+            out.update(a.name for a in n.names)
+        elif isinstance(n, ast.ImportFrom) and n.level == 0 and n.module:
+            out.update(f"{n.module}.{a.name}" for a in n.names)
+    return out
+
+
+def package(dotted):
+    """The layer a dotted name belongs to: engines.<sub>, packing, postproc, yade, or None."""
+    parts = dotted.split(".")
+    if parts[0] == "engines":
+        return "engines" if len(parts) == 1 or parts[1] == "ROOT" else f"engines.{parts[1]}"
+    return parts[0] if parts[0] in ("packing", "postproc", "yade") else None
+
+
+def edges():
+    """{(importing package, imported package): [modules]} over the library."""
+    out = {}
+    for name, path in modules(*LIBRARY).items():
+        a = package(name)
+        for target in imports(path):
+            b = package(target)
+            if b and b != a:
+                out.setdefault((a, b), []).append(name)
+    return out
+
+
+def test_engines_root_holds_only_packages():
+    entries = [e for e in os.listdir(os.path.join(ROOT, "engines")) if e != "__pycache__"]
+    loose = [e for e in entries if e != "__init__.py" and not os.path.isfile(os.path.join(ROOT, "engines", e, "__init__.py"))]
+    assert loose == []
+    assert {e for e in entries if e != "__init__.py"} == {p.split(".")[1] for p in ORDER if p.startswith("engines.")}
+
+
+def test_each_package_imports_only_those_before_it():
+    wrong = []
+    for (a, b), mods in edges().items():
+        if b in ("engines", "yade") or ORDER.index(b) < ORDER.index(a):
+            continue
+        if (a, b) == ("engines.model", "engines.compiled"):
+            mods = set(mods) - MODEL_CALLS_COMPILED
+        if mods:
+            wrong.append(f"{a} -> {b}: {sorted(set(mods))}")
+    assert wrong == []
+
+
+def test_no_cycle_between_packages():
+    graph = {}
+    for a, b in edges():
+        graph.setdefault(a, set()).add(b)
+    state = {}
+
+    def visit(n, path):
+        if state.get(n) == 1:
+            raise AssertionError("cycle: " + " -> ".join(path + [n]))
+        if state.get(n) == 2:
+            return
+        state[n] = 1
+        for m in graph.get(n, ()):
+            visit(m, path + [n])
+        state[n] = 2
+    for n in graph:
+        visit(n, [])
+
+
+def test_the_reference_imports_nothing_of_the_fast_code():
+    assert [(a, b) for (a, b) in edges() if a == "engines.reference" and b != "engines"] == []
+
+
+def test_no_yade_import_in_the_yade_free_layers():
+    found = [(name, t) for name, path in modules(*LIBRARY).items() if package(name) in NO_YADE
+             for t in imports(path) if package(t) == "yade"]
+    assert found == []
+
+
+def test_model_compiled_reference_and_packing_import_with_yade_unavailable():
+    """Every module of the YADE-free layers imports in a Python where `import yade` fails."""
+    names = sorted(n for n in modules("engines", "packing")
+                   if package(n) in ("engines.model", "engines.compiled", "engines.reference", "packing"))
+    assert len(names) >= 15
+    code = ("import sys\n"
+            "class NoYade:\n"
+            "    def find_spec(self, name, path=None, target=None):\n"
+            "        if name.split('.')[0] == 'yade':\n"
+            "            raise ImportError('YADE is unavailable here')\n"
+            "sys.meta_path.insert(0, NoYade())\n"
+            f"sys.path = [p for p in sys.path if 'yade' not in p]\n"
+            f"sys.path.insert(0, {ROOT!r})\n"
+            "import importlib\n"
+            f"for name in {names!r}:\n"
+            "    importlib.import_module(name)\n"
+            "assert 'yade' not in sys.modules\n"
+            "print('imported', len(sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/")
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
+def test_library_modules_never_edit_sys_path():
+    edits = []
+    for name, path in modules(*LIBRARY).items():
+        for n in ast.walk(ast.parse(open(path, encoding="utf-8").read())):
+            if isinstance(n, ast.Attribute) and n.attr == "path" and isinstance(n.value, ast.Name) and n.value.id == "sys":
+                edits.append(name)
+    assert edits == []
+
+
+def test_scripts_find_the_project_one_way():
+    """A script (a file with a __main__ block) that imports the project puts the project's folder
+    on sys.path by BOOTSTRAP, once, before its first project import, and edits sys.path no other way
+    (but before_after.py, which also puts the tree it times first)."""
+    problems = []
+    for name, path in modules(*SCRIPTS).items():
+        text = open(path, encoding="utf-8").read()
+        lines = text.splitlines()
+        if "__main__" not in text:
+            continue
+        first_import = next((k for k, line in enumerate(lines)
+                             if line.startswith(("from ", "import ")) and line.split()[1].split(".")[0] in PROJECT), None)
+        edits = [k for k, line in enumerate(lines) if SYS_PATH_EDIT.search(line)]
+        boot = [k for k, line in enumerate(lines) if line == BOOTSTRAP]
+        if first_import is None:
+            continue
+        if len(boot) != 1 or boot[0] > first_import:
+            problems.append(f"{name}: bootstrap lines {boot}, first project import at {first_import}")
+        other = [lines[k].strip() for k in edits if k not in boot]
+        if other and not (name == "benchmarks.before_after" and other == ["sys.path.insert(0, tree)"]):
+            problems.append(f"{name}: {other}")
+    assert problems == []
