@@ -9,7 +9,7 @@ contract shared with the reference (engines/reference/model.py):
   a. du = x_t - x_{t-dt}, dpsi = omega dt (zero at k = 0)
   b. contact forces (engines.model.contact, eq 1-13)
   c. velocity adjustment of discs that became free (eq 18-24)
-  d. water: pores rebuilt when k > 0 and k % rebuild_interval == 0; water advanced when
+  d. water: pores rebuilt at k = n rebuild_interval (n >= 1; WaterModel.rebuild_due); water advanced when
      k % water_interval == 0 by water_interval dt at the areas of x_t; pressure forces (eq 33)
      recomputed then and held in between
   e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
@@ -209,7 +209,7 @@ class PoreDEM:
             return None
         if wm is None:
             return False, law.kernel_args(), kernels.dry_water_args(), self._tie_args
-        if self.k > 0 and self.k % wm.rebuild_interval == 0:
+        if wm.rebuild_due(self.k):
             return None
         return (self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt),
                 self._tie_args)

@@ -21,16 +21,33 @@ from engines.model import pores as pg
 from engines.model.pore_water import DarcyStabilityError, PoreWater
 
 
+def rebuild_due(k, k_built, k0, interval):
+    """Is a pore rebuild due at step k, the pores last built at step k_built (§3.4(2)): has a
+    multiple of ``interval`` steps counted from the start k0 been reached since? Asked at every
+    step (the paper's law) this rebuilds at exactly k0 + n interval; asked at water steps only
+    (the YADE law's engine) at the first water step at or after each of them."""
+    return (k - k0) // interval > (k_built - k0) // interval
+
+
+def steps_to_rebuild(k, k_built, k0, interval, call_interval):
+    """Steps from step k to the first step, among those k0 + j call_interval, at which
+    ``rebuild_due`` holds."""
+    due = k0 + ((k_built - k0) // interval + 1) * interval  # the next multiple after the last build
+    t = max(k, due)
+    return t + (k0 - t) % call_interval - k
+
+
 class WaterModel:
     """Pores and water of N discs (no YADE). Units: SI per unit thickness (engines.model.pore_water).
 
     r (N,) radii [m] (the true ones: pores use them even where a contact law enlarges them by
-    eps_m/2); walls (N,) wall codes of engines.model.pores; xz (N, 2) initial centres [m].
-    ``F`` (N, 2) [N] holds the pressure forces of the last water step.
+    eps_m/2); walls (N,) wall codes of engines.model.pores; xz (N, 2) initial centres [m], those
+    of DEM step k0. ``F`` (N, 2) [N] holds the pressure forces of the last water step; ``k_built``
+    is the step of the last pore build (``rebuild_due``).
     """
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 compiled=True, log=print):
+                 compiled=True, log=print, k0=0):
         self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
         self.r = np.ascontiguousarray(r, float)
         self.walls = np.asarray(walls, np.int64)
@@ -42,6 +59,7 @@ class WaterModel:
         self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
         self.F = np.zeros((len(self.r), 2))
         self.n_rebuilds = 0
+        self.k0 = self.k_built = int(k0)
         self.substeps_max = self.substeps_total = 0
         self.last_limit = np.inf  # Darcy limit of the last water step [s]
         net = self._build(xz)
@@ -93,21 +111,28 @@ class WaterModel:
         return self._floats[self._f_at[k]:self._f_at[k + 1]]
 
     # -- per step ---------------------------------------------------------------------------------
+    def rebuild_due(self, k):
+        """Is a pore rebuild due at step k (``rebuild_due``)?"""
+        return rebuild_due(k, self.k_built, self.k0, self.rebuild_interval)
+
     def step(self, k, xz):
-        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when k > 0 and k % rebuild_interval
-        == 0, advance when k % water_interval == 0. Returns True when ``F`` was recomputed."""
-        if k > 0 and k % self.rebuild_interval == 0:
-            self.rebuild(xz)
+        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when due (at k0 + n rebuild_interval),
+        advance when k % water_interval == 0. Returns True when ``F`` was recomputed."""
+        if self.rebuild_due(k):
+            self.rebuild(xz, k)
         if k % self.water_interval != 0:
             return False
         self.advance(self.water_interval * self.dt, xz)
         return True
 
-    def rebuild(self, xz):
-        """Rebuild the pores at xz and move the water onto them (§3.4(2))."""
+    def rebuild(self, xz, k=None):
+        """Rebuild the pores at xz, those of step k (None: the schedule is left as it was), and move
+        the water onto them (§3.4(2))."""
         old, new = self.water.net, self._build(xz)
         self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, compiled=self.compiled)
         self.n_rebuilds += 1
+        if k is not None:
+            self.k_built = int(k)
         self._buffers()
 
     def _void_area(self, net, xz):

@@ -10,7 +10,7 @@ plane), its own collider and contact law adds the water in a few lines::
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]   # before NewtonIntegrator
 
 Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
-rebuilds the pores when ``rebuild_interval`` steps have passed, measures the void areas (eq 29),
+rebuilds the pores when due (engines.model.water_model.rebuild_due), measures the void areas (eq 29),
 advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
 (eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
 itself is engines.model.water_model.WaterModel's (no YADE there).
@@ -25,7 +25,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.model import pores as pg
-from engines.model.water_model import WaterModel
+from engines.model.water_model import WaterModel, steps_to_rebuild
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
 
@@ -65,7 +65,7 @@ class WaterEngine:
         if not O.dt > 0:
             raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
         self.model = WaterModel(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
-                                rebuild_interval, water_interval, compiled)
+                                rebuild_interval, water_interval, compiled, k0=O.iter)
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
         self.forced = yade_io.Bodies(ids[dynamic])
         self._dynamic = np.flatnonzero(dynamic)
@@ -75,7 +75,7 @@ class WaterEngine:
         self.forced.set_permanent_forces(self.F_const)
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
         self._run_kernel = yade_io.run_kernel
-        self.k = self.k_built = self.k0 = O.iter  # DEM step of the last call, of the last build, of creation
+        self.k = self.k0 = O.iter  # DEM step of the last call, of creation
         self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
 
     def due(self, k):
@@ -120,9 +120,8 @@ class WaterEngine:
 
     def _steps_before_rebuild(self, k):
         """Steps from step k to the first water step whose call rebuilds the pores."""
-        wi = self.model.water_interval
-        t = max(k, self.k_built + self.model.rebuild_interval)
-        return t + (self.k0 - t) % wi - k
+        m = self.model
+        return steps_to_rebuild(k, m.k_built, m.k0, m.rebuild_interval, m.water_interval)
 
     def _drive_compiled(self, n):
         """Up to n steps by kernels.water_drive_bulk_io, no rebuild among them; returns the steps
@@ -152,22 +151,23 @@ class WaterEngine:
         return done
 
     def __call__(self):
-        """One water step: rebuild at the first call at least rebuild_interval steps after the last
-        build, advance by water_interval x O.dt, write the forces."""
+        """One water step: rebuild when due (the first call at or after each multiple of
+        rebuild_interval steps from the engine's creation), advance by water_interval x O.dt,
+        write the forces."""
         from yade import O
         m = self.model
         self.k = O.iter
         h = m.water_interval * O.dt
-        if m.compiled and self.k - self.k_built < m.rebuild_interval:  # read, water, write: one compiled call
+        rebuild = m.rebuild_due(self.k)
+        if m.compiled and not rebuild:  # read, water, write: one compiled call
             args = m.kernel_args(h)
             _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
                                         self._dynamic, self.F_const, *args)
             m.finish_kernel_step(h, n_sub, args)
             return
         xz = self.io.positions()
-        if self.k - self.k_built >= m.rebuild_interval:
-            m.rebuild(xz)
-            self.k_built = self.k
+        if rebuild:
+            m.rebuild(xz, self.k)
         m.advance(h, xz)
         self.write_forces()
 

@@ -115,7 +115,7 @@ def test_other_engines_resume_too(packing, tmp_path, monkeypatch, name, over, k,
 
 def test_a_crashed_run_resumes_from_its_checkpoint(packing, full_run, tmp_path, monkeypatch):
     out = str(tmp_path / "crash")
-    def crash(self, xz):  # noqa: ARG001
+    def crash(self, xz, k=None):  # noqa: ARG001
         raise RuntimeError("simulated crash")
     with monkeypatch.context() as m:
         m.setattr(WaterModel, "rebuild", crash)  # the first rebuild, half way through step 500

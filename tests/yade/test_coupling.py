@@ -66,7 +66,7 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
     assert summary["steps"] == 1000 and summary["n_pores"] > 0
     assert json.load(open(tmp_path / "ok" / "summary.json"))["parameters"]["water"]["k1"] == 200.0
     # a run that crashes half way (here: at its first pore rebuild): history so far and a checkpoint remain
-    def crash(self, xz):  # noqa: ARG001
+    def crash(self, xz, k=None):  # noqa: ARG001
         raise RuntimeError("simulated crash")
     monkeypatch.setattr(WaterModel, "rebuild", crash)
     # (3,000 steps: longer than SHORT_RUN, so through O.run as real runs go)

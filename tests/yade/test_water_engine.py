@@ -227,3 +227,31 @@ def test_seismic_one_call_step_with_side_wall_ties_equals_the_general_path():
     assert fused_steps > 150
     side = side_wall_ties(sc, packing).moving
     assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)
+
+
+def test_the_engine_rebuilds_on_the_schedule_of_the_paper_law():
+    """Water every 3 steps, pores every 10: the engine rebuilds at the first water step at or after
+    each multiple of 10 (12, 21, 30, 42, 51, 60; the schedule does not drift by the 2 steps a
+    rebuild comes late), run by the PyRunner, by drive in Python and by drive compiled."""
+    from yade import O
+
+    from engines.model.pore_water import WaterSettings
+    from engines.yade.water_engine import WaterEngine
+    from yade_scripts import example_engine as ex
+    expected = [min(k for k in range(0, 100, 3) if k >= 10 * n) for n in range(1, 7)]
+    assert expected == [12, 21, 30, 42, 51, 60]
+    for how in ("runner", "python", "compiled"):
+        bottom, left, right, grains = ex.build_column()
+        O.engines = ex.engines()
+        O.dt = 1e-6
+        water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
+                            settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
+                            rebuild_interval=10, water_interval=3)
+        built, rebuild = [], water.model.rebuild
+        water.model.rebuild = lambda xz, k=None: built.append(k) or rebuild(xz, k)
+        if how == "runner":
+            O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+            O.run(63, True)
+        else:
+            water.drive(63, (lambda: False) if how == "python" else None)
+        assert built == expected, how

@@ -1,0 +1,56 @@
+"""The one pore-rebuild schedule of both contact laws (engines.model.water_model.rebuild_due)."""
+import itertools
+
+import numpy as np
+
+from engines.model.pore_dem import water_model
+from engines.model.water_model import WaterModel, rebuild_due, steps_to_rebuild
+from engines.run import scene as scenes
+from packing.packing import Packing
+
+
+def rebuilds(k0, interval, call_interval, n):
+    """The steps at which a model started at k0 and asked every call_interval steps rebuilds."""
+    built, out = k0, []
+    for k in range(k0, k0 + n, call_interval):
+        if rebuild_due(k, built, k0, interval):
+            built = k
+            out.append(k)
+    return out
+
+
+def test_asked_every_step_the_pores_are_rebuilt_at_multiples_of_the_interval():
+    for k0, interval in itertools.product((0, 7, 1000), (1, 3, 10)):
+        assert rebuilds(k0, interval, 1, 50) == [k0 + j * interval for j in range(1, 50) if j * interval < 50]
+
+
+def test_asked_at_water_steps_the_rebuild_is_the_first_water_step_after_each_multiple():
+    assert rebuilds(0, 10, 3, 63) == [12, 21, 30, 42, 51, 60]       # no drift: 12, 24, 36, ... would
+    assert rebuilds(5, 10, 4, 45) == [17, 25, 37, 45]
+    for k0, interval, calls in itertools.product((0, 3), (2, 5, 10), (1, 2, 3, 7)):
+        got = rebuilds(k0, interval, calls, 200)
+        want = sorted({min(k for k in range(k0, k0 + 400, calls) if k >= k0 + j * interval)
+                       for j in range(1, 200 // interval + 1)})
+        assert got == [k for k in want if k < k0 + 200]
+
+
+def test_steps_to_rebuild_counts_to_the_step_at_which_rebuild_due_holds():
+    for k0, interval, calls, k_built in itertools.product((0, 4), (1, 3, 10), (1, 2, 3, 7), (0, 4, 12, 13)):
+        k_built = max(k_built, k0)
+        for k in range(max(k_built, k0), k_built + 30):
+            if (k - k0) % calls:
+                continue
+            n = steps_to_rebuild(k, k_built, k0, interval, calls)
+            first = next(j for j in range(k, k + 100, calls) if rebuild_due(j, k_built, k0, interval))
+            assert n == first - k, (k0, interval, calls, k_built, k)
+
+
+def test_the_model_records_the_step_of_its_last_build():
+    sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 4, "water_interval": 1}})
+    pk = Packing.load(sc.packing.file)
+    wm = water_model(sc, pk, compiled=False)
+    assert isinstance(wm, WaterModel) and wm.k_built == 0
+    for k in range(10):
+        wm.step(k, pk.xz)
+    assert (wm.n_rebuilds, wm.k_built) == (2, 8)
+    assert np.isfinite(wm.F).all()
