@@ -1,4 +1,4 @@
-"""Figures and the comparison study of the seismic liquefaction cases (seed 000 §6, issue 11).
+"""Figures and the comparison study of the seismic liquefaction cases (seed 000 §6).
 
 They read what the runs write (postproc/run_files.py). ``run_figures(run_dir)`` draws one run's
 block pressures the way Fig. 35 and 37 present them (``blocks.png``: the blocks on the initial

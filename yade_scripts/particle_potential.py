@@ -1,4 +1,4 @@
-"""Saito & Fujiwara §4: uniaxial tests on a particle-potential specimen (seed 002, issue 5).
+"""Saito & Fujiwara §4: uniaxial tests on a particle-potential specimen (seed 002).
 
     /usr/bin/python3 yade_scripts/particle_potential.py --out out/particle-potential [--alpha 1 2]
 

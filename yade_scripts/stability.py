@@ -1,4 +1,4 @@
-"""The stability map (issue 12 item 3): short runs at the extremes of dt/dt_crit, E_w, k1, k2,
+"""The stability map: short runs at the extremes of dt/dt_crit, E_w, k1, k2,
 eps_m and f_max; each is refused up front, bounded, or unbounded (engines.studies.stability).
 
     yade -n -j 1 -x yade_scripts/stability.py --out out/stability [--window 0.003]

@@ -1,4 +1,4 @@
-"""Speed against accuracy (issue 12): each numerical knob swept, error against a fine reference.
+"""Speed against accuracy: each numerical knob swept, error against a fine reference.
 
     make tradeoffs                                   # the study -> out/tradeoffs/ (resumable)
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs [--workers 1] [--scheduler ADDR]

@@ -57,7 +57,7 @@ class WaterSettings:
     q_w: float = 0.0      # inflow into each bottom pore [m^2/s]
     sides: str = "undrained"  # "undrained" or "drained"
     smoothing: bool = False   # eq 45-46
-    substep: bool = False     # sub-step instead of refusing a dt above the Darcy limit
+    substep: bool = True      # sub-step instead of refusing a dt above the Darcy limit
     transfer: str = "paper"   # re-meshing: "paper" (W from inherited U) or "conserving"
 
     def __post_init__(self):

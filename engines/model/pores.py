@@ -705,7 +705,7 @@ def pore_centroids(net, xz):
         return np.column_stack([cx / w, cz / w])
 
 
-# -- water-conserving transfer at re-meshing (issue 11) ------------------------------------------------
+# -- water-conserving transfer at re-meshing ------------------------------------------------
 def _clip_areas(subj, clip):
     """Areas (K,) of the intersections of triangles subj (K, 3, 2) and clip (K, 3, 2), both
     counter-clockwise: Sutherland-Hodgman clipping of subj by the three edges of clip, vectorised

@@ -1,4 +1,4 @@
-"""The automatic time step, ``[numerics] dt = "auto"`` (issue 12): the smallest of the stability
+"""The automatic time step, ``[numerics] dt = "auto"``: the smallest of the stability
 limits of the scene at its start, times ``[numerics] dt_auto_factor``. No YADE.
 
 Limits [s] (``limits``):

@@ -75,7 +75,7 @@ class Recorder:
 
     def _open(self, mode):
         self.file = open(os.path.join(self.out, "history.csv"), mode, newline="")
-        self.writer = csv.writer(self.file)
+        self.writer = csv.writer(self.file, lineterminator="\n")
         self.t_wall0 = self.t_last = time.time()
         self.k_wall0 = O.iter
 

@@ -49,7 +49,7 @@ SCHEMA = {
         "cut_extra": (float, 0.4, (0.0, 10.0), "deposit this fraction more particles, keep the lowest n_particles (a flat cut)"),
         "dense_top_depth": (float, 0.45e-3, (0.0, math.inf), "particles whose top lies within this depth of the top of their column are denser [m]"),
         "dense_top_factor": (float, 5.0, POS, "density factor of the top particles (5 quick sand, 10 seismic)"),
-        # seismic box (issue 11)
+        # seismic box
         "dense_top_count": (int, 0, (0, 100000), "if > 0: the dense top particles are the n highest centres instead of the dense_top_depth layer (seismic: 54, the paper's discs 139-192)"),
         "wall_density_factor": (float, 1.0, POS, "density factor of the wall discs (seismic: 10; the side walls move)"),
         "settle_ks": (float, 0.0, (0.0, math.inf), "tangential stiffness during deposition [N/m] (§4.2: 0; §6: 3.5e4)"),
@@ -73,7 +73,7 @@ SCHEMA = {
         "eps_m": (float, 0.0, (0.0, math.inf), "force range beyond touching [m] (eq 26)"),
         "separation_adjustment": (bool, True, None, "apply eq 18-24 when a particle becomes free"),
         "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, see README)"),
-        # side-wall springs of the seismic box (issue 11, Fig. 27; used when loading.side_walls = springs)
+        # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
         "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
         "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
     },
@@ -88,9 +88,7 @@ SCHEMA = {
         "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
         "smoothing": (bool, False, None, "eq 45-46"),
         "substep": (bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the engine prints the count and its cost); false: refuse such a step (preflight at the start, the engine mid-run)"),
-        # issue 12
         "max_substeps": (int, 100, (1, math.inf), "with substep: refuse up front a water step that needs more sub-steps than this at the start"),
-        # issue 11
         "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.model.pore_water.conserving_water)"),
     },
     "loading": {
@@ -101,7 +99,6 @@ SCHEMA = {
         "record": (str, "", None, "two-column file time [s], acceleration [g]"),
         "time_scale": (float, 1.0, POS, "record time is multiplied by this"),
         "amplitude_scale": (float, 1.0, (0.0, math.inf), "record acceleration is multiplied by this"),
-        # issue 11
         "record_units": (str, "g", ("g", "gal", "m/s2"), "unit of the record's acceleration column"),
         "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
     },
@@ -112,7 +109,7 @@ SCHEMA = {
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
         "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
-        # issue 12: the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
+        # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
         "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.36 the study's fast setting (docs/TRADEOFFS.md)"),
     },
     "output": {
@@ -120,9 +117,8 @@ SCHEMA = {
         "snapshot_times": (list, [0.02, 0.04, 0.06], None, "times of the snapshot figures [s]"),
         "block_z": (list, [[0.0, 0.34], [0.66, 10.0]], None, "pressure blocks as [z0, z1] fractions of the initial bed height above the bottom wall (block1 bottom, block2 surface)"),
         "progress_seconds": (float, 10.0, POS, "wall seconds between progress lines"),
-        # issue 11
         "porosity_window": (list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.model.observe)"),
-        # issue 13: ParaView, checkpoints, headline results
+        # ParaView, checkpoints, headline results
         "vtk": (bool, False, None, "write a ParaView time series to DIR/vtk/ during the run (postproc.vtk: discs, contact forces, pores)"),
         "vtk_interval": (int, 0, (0, math.inf), "steps between VTK frames; 0: at the snapshot_times"),
         "checkpoint_seconds": (float, 600.0, POS, "wall seconds between checkpoints during a run (one is also written at the start, at the end and on an interrupt)"),

@@ -89,3 +89,19 @@ def test_overrides_are_recorded():
     sc2 = sc.with_overrides({"water": {"k1": 20.0}})
     assert sc2.overrides == {"numerics": {"duration": 0.02}, "water": {"k1": 20.0}}
     assert scenes.preset("quicksand_case1").overrides == {}
+
+
+def test_settings_defaults_are_the_schemas():
+    """A field of the [water] or [contact] table and of its settings dataclass has one default, so a
+    YADE script that builds WaterSettings or ContactSettings itself gets what a scene file gets."""
+    import dataclasses
+
+    from engines.model.contact import ContactSettings
+    from engines.model.pore_water import WaterSettings
+    compared = 0
+    for table, cls in (("water", WaterSettings), ("contact", ContactSettings)):
+        for f in dataclasses.fields(cls):
+            if f.name in scenes.SCHEMA[table] and f.default is not dataclasses.MISSING:
+                assert scenes.SCHEMA[table][f.name][1] == f.default, (table, f.name)
+                compared += 1
+    assert compared >= 12

@@ -56,7 +56,9 @@ def assert_same_run(a, b, exact=True):
     ha, hb = read_history(os.path.join(a, "history.csv")), read_history(os.path.join(b, "history.csv"))
     assert len(ha["t"]) == len(hb["t"]) >= 1
     sa, sb = read_snapshot(os.path.join(a, END)), read_snapshot(os.path.join(b, END))
-    if exact:
+    if exact:  # byte for byte: one line ending (\n) before and after a resume
+        history = [open(os.path.join(d, "history.csv"), "rb").read() for d in (a, b)]
+        assert history[0] == history[1] and b"\r" not in history[0]
         for c in ha:
             assert np.array_equal(ha[c], hb[c], equal_nan=True), c
         for k in sa:
