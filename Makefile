@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
+.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -41,6 +41,11 @@ test: deps
 # layering of the tree): no YADE needed, about 15 s. Run `make deps` once first.
 test-fast:
 	$(PY) -m pytest -q tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
+
+# The reference in float32, float64 and longdouble on the quick-sand column (a measurement, README):
+# $(OUT)/precision/precision.json.
+precision: deps
+	$(YADE) -n -x yade_scripts/crosscheck.py --precision --out $(OUT)/precision
 
 # Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,770 mutants, one to several hours
 # on a shared machine): out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.

@@ -77,6 +77,31 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
     assert water.model.water.balance_error() < 1e-12
 
 
+
+def column_engine(settings, rebuild_interval, water_interval):
+    """example_engine's column in a fresh scene (dt = 1e-6 s) with a WaterEngine over all its discs."""
+    from yade import O
+
+    from engines.yade.water_engine import WaterEngine
+    from yade_scripts import example_engine as ex
+    bottom, left, right, grains = ex.build_column()
+    O.engines = ex.engines()
+    O.dt = 1e-6
+    return WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
+                       settings=settings, l_m=1.3e-4, rebuild_interval=rebuild_interval, water_interval=water_interval)
+
+
+def run_as(water, how, n):
+    """n steps with the engine as a PyRunner under O.run ("runner"), or by drive from Python
+    ("python": a stop function keeps it there) or compiled between rebuilds ("compiled")."""
+    from yade import O
+    if how == "runner":
+        O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+        O.run(n, True)
+    else:
+        water.drive(n, (lambda: False) if how == "python" else None)
+
+
 @pytest.mark.parametrize("water_interval, smoothing, k1, k3", [(10, False, 200.0, 100.0), (1, True, 5.8e5, 0.0)])
 def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1, k3):
     """WaterEngine.drive(n) (the engine before O.step on its steps), in Python and compiled between
@@ -87,27 +112,15 @@ def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1,
 
     from engines.model.pore_water import WaterSettings
     from engines.yade import yade_io
-    from engines.yade.water_engine import WaterEngine
-    from yade_scripts import example_engine as ex
     runs = []
     for how in ("runner", "python", "compiled"):
-        bottom, left, right, grains = ex.build_column()
-        O.engines = ex.engines()
-        O.dt = 1e-6
-        water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                            settings=WaterSettings(E_w=240.0, k1=k1, k2=2.0, k3=k3, q_w=5e-4, smoothing=smoothing, substep=True,
-                                                   sides="drained" if k3 else "undrained"),
-                            l_m=1.3e-4,
-                            rebuild_interval=500, water_interval=water_interval)
+        water = column_engine(WaterSettings(E_w=240.0, k1=k1, k2=2.0, k3=k3, q_w=5e-4, smoothing=smoothing, substep=True,
+                                            sides="drained" if k3 else "undrained"), 500, water_interval)
         chunks = []
         if how == "compiled":
             compiled = water._drive_compiled
             water._drive_compiled = lambda n: chunks.append(n) or compiled(n)
-        if how == "runner":
-            O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
-            O.run(1205, True)
-        else:
-            water.drive(1205, (lambda: False) if how == "python" else None)
+        run_as(water, how, 1205)
         b = water.model.water.balance
         runs.append((O.iter, water.k, water.model.n_rebuilds, water.model.substeps_total, water.io.positions(),
                      water.model.water.W.copy(), (b.inflow, b.surface_outflow, b.side_outflow), water.model.last_limit))
@@ -233,25 +246,13 @@ def test_the_engine_rebuilds_on_the_schedule_of_the_paper_law():
     """Water every 3 steps, pores every 10: the engine rebuilds at the first water step at or after
     each multiple of 10 (12, 21, 30, 42, 51, 60; the schedule does not drift by the 2 steps a
     rebuild comes late), run by the PyRunner, by drive in Python and by drive compiled."""
-    from yade import O
 
     from engines.model.pore_water import WaterSettings
-    from engines.yade.water_engine import WaterEngine
-    from yade_scripts import example_engine as ex
     expected = [min(k for k in range(0, 100, 3) if k >= 10 * n) for n in range(1, 7)]
     assert expected == [12, 21, 30, 42, 51, 60]
     for how in ("runner", "python", "compiled"):
-        bottom, left, right, grains = ex.build_column()
-        O.engines = ex.engines()
-        O.dt = 1e-6
-        water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                            settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
-                            rebuild_interval=10, water_interval=3)
+        water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 10, 3)
         built, rebuild = [], water.model.rebuild
         water.model.rebuild = lambda xz, k=None: built.append(k) or rebuild(xz, k)
-        if how == "runner":
-            O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
-            O.run(63, True)
-        else:
-            water.drive(63, (lambda: False) if how == "python" else None)
+        run_as(water, how, 63)
         assert built == expected, how
