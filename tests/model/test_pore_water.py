@@ -33,7 +33,7 @@ def test_two_pores_equalise_in_one_step_at_k_dt_1():
 def test_stability_limit_pair_is_two_over_k():
     xz, r, net = _two_pores()
     m = pg.measure(net, xz, r)
-    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5)
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, substep=False)
     w = PoreWater(net, m.void_area, s)
     # equal areas by symmetry, W = A: the pair's exact limit is 2/k
     np.testing.assert_allclose(w.darcy_limit(m.void_area, m.link_contact), 2.0 / s.k1, rtol=1e-12)
