@@ -75,12 +75,12 @@ class WaterEngine:
         self.forced.set_permanent_forces(self.F_const)
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
         self._run_kernel = yade_io.run_kernel
-        self.k = self.k0 = O.iter  # DEM step of the last call, of creation
+        self.k = O.iter  # DEM step of the last call (the model's k0 is that of creation)
         self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
 
     def due(self, k):
         """True when step k is a water step (every water_interval steps from the engine's creation)."""
-        return (k - self.k0) % self.model.water_interval == 0
+        return (k - self.model.k0) % self.model.water_interval == 0
 
     def runner(self, label="water"):
         """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. YADE's
@@ -136,12 +136,12 @@ class WaterEngine:
         b = m.water.balance
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
         k = O.iter
-        done, n_water, n_sub, rc = yade_io.drive_water(n, k, self.k0, m.water_interval, totals, self.io, self._xz,
+        done, n_water, n_sub, rc = yade_io.drive_water(n, k, m.k0, m.water_interval, totals, self.io, self._xz,
                                                        self.forced, self._F_out, self._dynamic, self.F_const, args)
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             last = k + done - (1 if n_sub == 1 else 0)  # the last water step
-            self.k = last - (last - self.k0) % m.water_interval
+            self.k = last - (last - m.k0) % m.water_interval
             m.after_kernel_steps(args)
         yade_io.check(rc)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
