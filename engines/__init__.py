@@ -23,7 +23,8 @@ One step k of the model (model/pore_dem.py, PoreDEM.step; the YADE law skips a-c
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
-Time-step limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/time_step.py.
+Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py; a scene's
+limits at its start and dt = "auto": model/time_step.py.
 Observables (window porosity, block means): model/observe.py.
 
 Where to add ...

@@ -4,9 +4,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT, check_discs
-
-GROUP_NAMES = {WALL_NONE: "particle", WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
+from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
+from engines.model.pores import check_discs
 
 
 @dataclass

@@ -15,9 +15,10 @@ from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch  # noqa: E402
 
+from engines.model.groups import GROUP_NAMES, WALL_NONE  # noqa: E402
 from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402,F401
 
-GROUP_COLOURS = {0: "0.85", 1: "0.35", 2: "0.35", 3: "0.35"}
+GROUP_COLOURS = {code: "0.85" if code == WALL_NONE else "0.35" for code in GROUP_NAMES}  # particles light
 U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess pressure
 FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
 FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max

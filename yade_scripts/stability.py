@@ -89,7 +89,7 @@ def run_point(sc, packing, window, out_dir):
 
 
 def main(argv):
-    from engines.model.contact import critical_time_step
+    from engines.model.limits import critical_time_step
     from engines.model.pore_dem import disc_masses
     from engines.run import scene as scenes
     from engines.run.preflight import output_dir

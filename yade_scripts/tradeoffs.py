@@ -61,7 +61,7 @@ CASES = {
                            "water_interval": [2, 5, 10], "rebuild_period": [2e-4, 5e-4, 2e-3, 5e-3],
                            "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
                            "precision": ["longdouble"],
-                           "defaults": [{"name": "fast", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.36,
+                           "defaults": [{"name": "fast", "numerics.dt": "auto",  # at the schema's dt_auto_factor
                                          "numerics.rebuild_interval": 50, "numerics.water_interval": 1},
                                         {"name": "accurate", "numerics.dt": 1e-6, "numerics.rebuild_interval": 1000,
                                          "numerics.water_interval": 1}],

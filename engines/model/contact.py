@@ -23,38 +23,23 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from engines.compiled import kernels
-from engines.model.pores import check_nonnegative
+from engines.model.fields import NONNEG, POS, Field, settings_class
 
 
-@dataclass
-class ContactSettings:
-    """Constants of the contact law; field names match the scene file's [contact] table."""
-
-    spring: str = "c"
-    kn: float = 1.4e6
-    eta_n: float = 5.2
-    ks: float = 3.5e5
-    eta_s: float = 1.3
-    mu: float = 1.0
-    restitution: float = 0.001
-    f_max: float = 2.5
-    eps_m: float = 0.0
-    separation_adjustment: bool = True
-
-    def __post_init__(self):
-        if self.spring not in ("a", "b", "c", "d"):
-            raise ValueError(f"spring must be one of a, b, c, d, got {self.spring!r}")
-        if not np.isfinite(self.kn) or self.kn <= 0:
-            raise ValueError(f"kn must be > 0, got {self.kn}")
-        for name in ("eta_n", "ks", "eta_s", "mu", "restitution", "eps_m"):
-            check_nonnegative(name, getattr(self, name))
-        if self.spring in ("c", "d") and not self.f_max > 0:
-            raise ValueError(f"f_max must be > 0 for spring {self.spring}, got {self.f_max}")
-
-
-def critical_time_step(mass, kn):
-    """Cundall's bound dt < 2 sqrt(m / kn) over the lightest disc [s] (eq 52)."""
-    return 2.0 * np.sqrt(np.min(mass) / kn)
+CONTACT_FIELDS = {  # the scene file's [contact] table holds these and the engine's own choices
+    "spring": Field(str, "c", ("a", "b", "c", "d"), "normal spring of Fig. 5: a/b linear, c nonlinear elastic, d hysteretic"),
+    "kn": Field(float, 1.4e6, POS, "normal stiffness [N/m]"),
+    "eta_n": Field(float, 5.2, NONNEG, "normal dashpot [N s/m]"),
+    "ks": Field(float, 3.5e5, NONNEG, "tangential stiffness [N/m]"),
+    "eta_s": Field(float, 1.3, NONNEG, "tangential dashpot [N s/m]"),
+    "mu": Field(float, 1.0, NONNEG, "friction coefficient"),
+    "restitution": Field(float, 0.001, (0.0, 1.0), "e of the velocity adjustment at separation (eq 19)"),
+    "f_max": Field(float, 2.5, POS, "cap of the elastic normal force for springs c, d [N] (eq 27)"),
+    "eps_m": Field(float, 0.0, NONNEG, "force range beyond touching [m] (eq 26)"),
+    "separation_adjustment": Field(bool, True, None, "apply eq 18-24 when a particle becomes free"),
+}
+ContactSettings = settings_class("ContactSettings", CONTACT_FIELDS, "contact", __name__,
+                                 "Constants of the contact law (CONTACT_FIELDS; the scene file's [contact] table).")
 
 
 @dataclass

@@ -27,9 +27,8 @@ constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent
 import numpy as np
 
 from engines.compiled import kernels
-from engines.model import ground_motion
+from engines.model import ground_motion, limits
 from engines.model import pores as pg
-from engines.model.contact import critical_time_step
 from engines.model.observe import block_means, box_window, porosity
 from engines.model.paper_law import PaperLaw
 from engines.model.side_walls import SideWallTies
@@ -42,15 +41,6 @@ def disc_masses(scene, packing):
     return m, 0.5 * m * packing.r**2
 
 
-def check_time_step(scene, mobile_mass):
-    """Refuse dt above dt_safety x 2 sqrt(m_min / kn) (eq 52)."""
-    dt = scene.numerics.dt
-    limit = scene.numerics.dt_safety * critical_time_step(mobile_mass, scene.contact.kn)
-    if dt > limit:
-        raise ValueError(f"[numerics] dt = {dt:.3e} s exceeds the stability limit {limit:.3e} s "
-                         f"(dt_safety x 2 sqrt(m_min/kn), eq 52)")
-
-
 def side_wall_ties(scene, packing):
     """The Fig. 27 ties of the side-wall columns (engines.model.side_walls.SideWallTies) when
     [loading] side_walls = "springs", else None."""
@@ -58,16 +48,6 @@ def side_wall_ties(scene, packing):
         return None
     c = scene.contact
     return SideWallTies(packing.xz, packing.group, c.ks_wall, c.eta_s_wall)
-
-
-def check_tie_time_step(scene, ties, mass):
-    """Refuse dt above sqrt(m_min / k'_s) of the side-wall ties (engines.model.side_walls)."""
-    if ties is None:
-        return
-    limit = ties.stable_time_step(mass)
-    if scene.numerics.dt > limit:
-        raise ValueError(f"[numerics] dt = {scene.numerics.dt:.3e} s exceeds the stability limit {limit:.3e} s of "
-                         f"the side-wall ties (sqrt(m_min / k's), k's = [contact] ks_wall = {ties.ks:.3g} N/m)")
 
 
 def moving_walls(scene, packing):
@@ -141,7 +121,8 @@ class PoreDEM:
         self.mobile = packing.mobile
         self.mass, self.inertia = disc_masses(scene, packing)
         self.dt = scene.numerics.dt
-        check_time_step(scene, self.mass[self.mobile])
+        num = scene.numerics
+        limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], scene.contact.kn)
         if scene.numerics.damping_eq44:
             raise ValueError("[numerics] damping_eq44: not available in the YADE path (NewtonIntegrator "
                              "moves x by v dt); the reference implements it")
@@ -151,8 +132,7 @@ class PoreDEM:
         self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
         self.ties = side_wall_ties(scene, packing)
-        if self.ties is not None:
-            check_tie_time_step(scene, self.ties, self.mass)
+        limits.check_ties(self.dt, self.ties, self.mass)
         self._tie_args = kernels.no_tie_args() if self.ties is None else self.ties.kernel_args()
         self.water_model = water_model(scene, packing, compiled)
 

@@ -29,7 +29,8 @@ difference is exchanged with the outside at U = 0 and recorded in ``remesh_chang
 Stability: the update is explicit. Linearising eq 32 (dU/dW = E_w A / W^2) gives
 dU/dt = -M U with M = C^-1 G, conductances g = k A_ij / E_w and capacities c = W^2 / (E_w A).
 Gershgorin bounds its eigenvalues by lambda = max_i (2 sum_j g_ij + g_boundary,i) / c_i, and
-forward Euler is stable for dt <= 2 / lambda. For two equal pores this is exact: dt <= 2 / k.
+forward Euler is stable for dt <= 2 / lambda (engines.model.limits). For two equal pores this is
+exact: dt <= 2 / k.
 """
 from dataclasses import dataclass
 
@@ -38,37 +39,29 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from engines.compiled import pores as kp
+from engines.model import limits
 from engines.model import pores as pg
-from engines.model.pores import check_nonnegative
+from engines.model.fields import NONNEG, POS, Field, settings_class
+from engines.model.limits import DarcyStabilityError
 
 
-class DarcyStabilityError(ValueError):
-    """The water time step exceeds the explicit Darcy limit."""
-
-
-@dataclass
-class WaterSettings:
-    """Constants of the pore water; field names match the scene file's [water] table."""
-
-    E_w: float            # water modulus per unit thickness [N/m]
-    k1: float             # permeability across a gap link [1/s] (eq 43a)
-    k2: float             # permeability across a contact link [1/s] (eq 43b)
-    k3: float = 0.0       # drained side-wall permeability [1/s]
-    q_w: float = 0.0      # inflow into each bottom pore [m^2/s]
-    sides: str = "undrained"  # "undrained" or "drained"
-    smoothing: bool = False   # eq 45-46
-    substep: bool = True      # sub-step instead of refusing a dt above the Darcy limit
-    transfer: str = "paper"   # re-meshing: "paper" (W from inherited U) or "conserving"
-
-    def __post_init__(self):
-        if not np.isfinite(self.E_w) or self.E_w <= 0:
-            raise ValueError(f"E_w must be > 0, got {self.E_w}")
-        for name in ("k1", "k2", "k3", "q_w"):
-            check_nonnegative(name, getattr(self, name))
-        if self.sides not in ("undrained", "drained"):
-            raise ValueError(f"sides must be 'undrained' or 'drained', got {self.sides!r}")
-        if self.transfer not in ("paper", "conserving"):
-            raise ValueError(f"transfer must be 'paper' or 'conserving', got {self.transfer!r}")
+WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's own choices
+    "E_w": Field(float, 240.0, POS, "water modulus per unit thickness [N/m] (eq 32)"),
+    "k1": Field(float, 200.0, NONNEG, "permeability across a gap link [1/s] (eq 43a)"),
+    "k2": Field(float, 2.0, NONNEG, "permeability across a contact link [1/s] (eq 43b)"),
+    "k3": Field(float, 0.0, NONNEG, "permeability of drained side walls [1/s]"),
+    "q_w": Field(float, 0.0, NONNEG, "inflow into every bottom pore [m^2/s] (§5.1)"),
+    "sides": Field(str, "undrained", ("undrained", "drained"), "side-wall drainage"),
+    "smoothing": Field(bool, False, None, "eq 45-46"),
+    "substep": Field(bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the "
+                     "engine prints the count and its cost); false: refuse such a step (preflight at the start, the "
+                     "engine mid-run)"),
+    "transfer": Field(str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
+                      "(§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap "
+                      "(engines.model.pore_water.conserving_water)"),
+}
+WaterSettings = settings_class("WaterSettings", WATER_FIELDS, "water", __name__,
+                               "Constants of the pore water (WATER_FIELDS; the scene file's [water] table).")
 
 
 @dataclass
@@ -112,6 +105,12 @@ class FlowState:
 def pressure(W, A, E_w):
     """Excess pore pressure U = E_w (W - A) / W [N/m] (eq 32)."""
     return E_w * (W - A) / W
+
+
+def buoyancy(r, rho_w, g):
+    """Upward force rho_w pi r^2 g [N per m thickness] on discs of radius r [m] in water (eq 34b:
+    the buoyant weight is the weight less this)."""
+    return rho_w * np.pi * np.asarray(r) ** 2 * g
 
 
 def water_from_pressure(U, A, E_w):
@@ -178,8 +177,7 @@ class PoreWater:
         n = self.net.n_pores
         i, j = self.net.throat_conns[:, 0], self.net.throat_conns[:, 1]
         g_sum = np.bincount(i, fl.g, minlength=n) + np.bincount(j, fl.g, minlength=n)
-        lam = np.max((2 * g_sum + fl.g_b) / fl.capacity, initial=0.0)
-        return np.inf if lam == 0 else 2.0 / lam
+        return limits.gershgorin_limit(np.max((2 * g_sum + fl.g_b) / fl.capacity, initial=0.0))
 
     def darcy_limit(self, A, link_contact):
         """Largest stable explicit water step [s] for the current state (Gershgorin bound)."""
@@ -188,7 +186,8 @@ class PoreWater:
     def advance(self, dt, A, link_contact):
         """Advance the water by dt [s] at void areas A (Np,) and link states (L,) (eq 42).
 
-        Raises DarcyStabilityError if dt exceeds the explicit limit, unless settings.substep.
+        A step above the explicit limit is sub-stepped with settings.substep, else refused
+        (engines.model.limits.substeps: DarcyStabilityError).
         Returns the FlowState used.
         """
         if not dt > 0:
@@ -198,14 +197,7 @@ class PoreWater:
             A = 0.5 * (self.A_prev + A)
             self.A_prev = A
         fl = self.flows(A, link_contact)
-        limit = self._limit(fl)
-        n_sub = 1
-        if dt > limit:
-            if not self.settings.substep:
-                raise DarcyStabilityError(
-                    f"water step dt = {dt:.3e} s exceeds the explicit Darcy limit {limit:.3e} s "
-                    f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or set substep")
-            n_sub = int(np.ceil(dt / limit))
+        n_sub = limits.substeps(dt, self._limit(fl), self.settings.substep, self.settings.E_w)
         h = dt / n_sub
         for sub in range(n_sub):
             fl = self._step(h, fl if sub == 0 else self.flows(A, link_contact))

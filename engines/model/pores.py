@@ -40,9 +40,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
 
 from engines.compiled import pores as kp
+from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
 
-WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT = 0, 1, 2, 3
-WALL_NAMES = {WALL_BOTTOM: "bottom", WALL_LEFT: "left", WALL_RIGHT: "right"}
 OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
 
 

@@ -14,7 +14,7 @@ the forces of a tie are equal and opposite, and the dashpots only dissipate:
 dE/dt = -eta'_s sum (v_u - v_l)^2.
 
 Stability (explicit update): each disc has at most two ties, so the column's highest frequency
-obeys w^2 <= 4 k'_s / m_min (Gershgorin), and symplectic Euler needs dt < 2 / w = sqrt(m_min / k'_s).
+obeys w^2 <= 4 k'_s / m_min (Gershgorin), and symplectic Euler needs dt < 2 / w = sqrt(m_min / k'_s) (engines.model.limits.tie_limit).
 """
 import numpy as np
 
@@ -78,9 +78,3 @@ class SideWallTies:
         """Power taken by the dashpots eta'_s sum (v_u - v_l)^2 [W per m] (>= 0)."""
         dv = vx[self.upper] - vx[self.lower]
         return self.eta * float(np.sum(dv * dv))
-
-    def stable_time_step(self, mass):
-        """sqrt(m_min / k'_s) over the moving wall discs [s] (module docstring); inf without springs."""
-        if self.ks == 0 or not self.moving.any():
-            return np.inf
-        return float(np.sqrt(np.min(np.asarray(mass)[self.moving]) / self.ks))

@@ -1,22 +1,11 @@
-"""The automatic time step, ``[numerics] dt = "auto"``: the smallest of the stability
-limits of the scene at its start, times ``[numerics] dt_auto_factor``. No YADE.
+"""The stability limits of a scene at its start, and the automatic time step ``[numerics] dt =
+"auto"``: the smallest of them times ``[numerics] dt_auto_factor``. No YADE.
 
-Limits [s] (``limits``):
-
-* contact (eq 52): 2 sqrt(m_min / kn) over the particles;
-* ties: sqrt(m_min / k'_s) of the side-wall springs (only with [loading] side_walls = "springs";
-  the engines' own bound, engines.model.side_walls);
-* water stiffness: a disc moved by dx changes the void of each pore it bounds by at most its width
-  2 r dx, so the pressure of that pore by E_w 2 r dx / A (eq 32 at W = A), which pushes the disc
-  over at most 2 r: the water adds a spring k_w = E_w sum_p (2 r)^2 / A_p (over the open pores p
-  the disc bounds; of order E_w r^2 / A per pore) and 2 sqrt(m / k_w) is the eq 52 bound of that
-  spring, taken over the particles;
-* darcy: 2 / lambda_max of the linearised exchange dU/dt = -C^-1 G U of the pores at the start
-  (engines.model.pore_water: conductances g, boundary g_b, capacities c = W^2 / (E_w A)), from
-  scipy.sparse.linalg.eigsh on the symmetric C^-1/2 G C^-1/2, divided by water_interval (the
-  water step is water_interval x dt). The engines check every water step against the Gershgorin
-  bound of the same matrix (0.74-0.8 of 2 / lambda_max on the seismic box), so with
-  [water] substep = false the chosen dt is also capped at that check ("darcy_check").
+``limits(scene, packing)`` gives every limit of engines.model.limits for the scene's discs and
+the pores the engines build at the start (W = A): contact (eq 52), ties (only with [loading]
+side_walls = "springs"), water stiffness, darcy (2 / lambda_max from eigsh, per DEM step: divided
+by water_interval, since the water step is water_interval x dt) and darcy_check (the engines'
+Gershgorin check of the water step, per DEM step).
 
 With [water] substep = true (the default) the Darcy limits do not bound dt: dt = dt_auto_factor x
 min(contact, ties, water stiffness), the water is sub-stepped where a water step exceeds the
@@ -30,66 +19,12 @@ tie limits do not change; the water-stiffness limit is not refreshed.
 """
 import math
 
-import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import eigsh
-
+from engines.model import limits as lim
 from engines.model import pores as pg
-from engines.model.contact import critical_time_step
+from engines.model.pore_dem import disc_masses, side_wall_ties
 from engines.model.pore_water import PoreWater
 
 AUTO = "auto"
-SUBSTEP_COST = 0.25  # one sub-step costs about a quarter of a water step (engines.yade.water_engine)
-
-
-def exchange_matrix(water, A, link_contact):
-    """(S, open) where S is the symmetric C^-1/2 G C^-1/2 [1/s] (sparse, over the open pores) of
-    the linearised exchange of PoreWater ``water`` at void areas A, and open (Np,) bool."""
-    fl = water.flows(A, link_contact)
-    open_ = np.isfinite(fl.capacity)
-    idx = np.cumsum(open_) - 1
-    n = int(open_.sum())
-    i, j = water.net.throat_conns[:, 0], water.net.throat_conns[:, 1]
-    keep = open_[i] & open_[j] & (fl.g > 0)
-    gi, gj, g = idx[i[keep]], idx[j[keep]], fl.g[keep]
-    diag = np.bincount(gi, g, minlength=n) + np.bincount(gj, g, minlength=n) + fl.g_b[open_]
-    G = sp.coo_matrix((np.concatenate([diag, -g, -g]), (np.concatenate([np.arange(n), gi, gj]),
-                                                          np.concatenate([np.arange(n), gj, gi]))), shape=(n, n)).tocsr()
-    s = 1.0 / np.sqrt(fl.capacity[open_])
-    return sp.diags(s) @ G @ sp.diags(s), open_
-
-
-def lambda_max(S):
-    """Largest eigenvalue of the symmetric positive semi-definite S (eigsh; dense when small)."""
-    n = S.shape[0]
-    if n == 0:
-        return 0.0
-    if n < 50:
-        return float(np.linalg.eigvalsh(S.toarray())[-1])
-    return float(eigsh(S, k=1, which="LA", return_eigenvectors=False, tol=1e-8)[0])
-
-
-def darcy_limit(water, A, link_contact):
-    """2 / lambda_max [s] of the linearised exchange (inf without exchange)."""
-    lam = lambda_max(exchange_matrix(water, A, link_contact)[0])
-    return 2.0 / lam if lam > 0 else math.inf
-
-
-def water_stiffness(net, A, r, E_w):
-    """k_w (N,) [N/m]: E_w sum over the open pores p that disc i bounds of (2 r_i)^2 / A_p."""
-    k = np.zeros(net.n_discs)
-    for p in np.flatnonzero(A > net.a_min):
-        v = net.vertices_of(p)
-        k[v] += E_w * (2 * r[v]) ** 2 / A[p]
-    return k
-
-
-def water_stiffness_limit(net, A, r, E_w, mass, mobile):
-    """min over the particles of 2 sqrt(m / k_w) [s] (inf where the water adds no stiffness)."""
-    k = water_stiffness(net, A, r, E_w)[mobile]
-    m = np.asarray(mass)[mobile]
-    has = k > 0
-    return float(np.min(2 * np.sqrt(m[has] / k[has]))) if has.any() else math.inf
 
 
 def start_pores(scene, packing):
@@ -100,23 +35,45 @@ def start_pores(scene, packing):
 
 
 def limits(scene, packing):
-    """{name: limit [s]} of the scene at the start (module docstring); darcy_check is the engines'
-    Gershgorin check of the water step, per DEM step (divided by water_interval)."""
-    from engines.model.pore_dem import disc_masses, side_wall_ties
-
+    """{name: limit [s]} of the scene at the start, per DEM step (module docstring)."""
     mass, _ = disc_masses(scene, packing)
     mob = packing.mobile
-    out = {"contact": critical_time_step(mass[mob], scene.contact.kn)}
+    out = {"contact": lim.critical_time_step(mass[mob], scene.contact.kn)}
     ties = side_wall_ties(scene, packing)
     if ties is not None:
-        out["ties"] = ties.stable_time_step(mass)
+        out["ties"] = lim.tie_limit(ties, mass)
     if scene.water.enabled:
         net, m, water = start_pores(scene, packing)
         M = scene.numerics.water_interval
-        out["water_stiffness"] = water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w, mass, mob)
-        out["darcy"] = darcy_limit(water, m.void_area, m.link_contact) / M
+        out["water_stiffness"] = lim.water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w, mass, mob)
+        out["darcy"] = lim.darcy_eigen_limit(water, m.void_area, m.link_contact) / M
         out["darcy_check"] = water.darcy_limit(m.void_area, m.link_contact) / M
     return out
+
+
+def check_start(scene, packing, lims=None):
+    """Refuse (ValueError, one line naming the field and the limit) a scene whose numeric dt is
+    above a limit at its start: eq 52 x dt_safety, the ties, the water stiffness, and a water step
+    water_interval x dt above the Darcy check without [water] substep, or needing more than
+    [water] max_substeps sub-steps with it. ``lims``: ``limits(scene, packing)`` if known."""
+    lims = limits(scene, packing) if lims is None else lims
+    num, w = scene.numerics, scene.water
+    mass, _ = disc_masses(scene, packing)
+    lim.check_contact(num.dt, num.dt_safety, mass[packing.mobile], scene.contact.kn)
+    lim.check_ties(num.dt, side_wall_ties(scene, packing), mass)
+    if not w.enabled:
+        return
+    lim.check_water_stiffness(num.dt, lims["water_stiffness"], w.E_w)
+    h, limit = num.water_interval * num.dt, num.water_interval * lims["darcy_check"]
+    where = f"[numerics] dt = {num.dt:.3g} s, water_interval = {num.water_interval}: at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s) the"
+    try:
+        n_sub = lim.substeps(h, limit, w.substep, w.E_w)
+    except lim.DarcyStabilityError as e:
+        raise ValueError(f"{where} {e}") from None
+    if n_sub > w.max_substeps:
+        raise ValueError(f"{where} water step {h:.3g} s needs {n_sub} sub-steps under the Darcy limit {limit:.3g} s, "
+                         f"more than [water] max_substeps = {w.max_substeps}; reduce dt or the permeabilities, "
+                         f"or raise max_substeps")
 
 
 def choose(lims, factor, substep=False):
@@ -127,8 +84,7 @@ def choose(lims, factor, substep=False):
     check = lims.get("darcy_check", math.inf)
     if not substep and check < dt:
         dt, name = check, "darcy_check"
-    n_sub = max(1, math.ceil(dt / check * (1 - 1e-12))) if substep and math.isfinite(check) else 1
-    return dt, name, n_sub
+    return dt, name, lim.substep_count(dt, check) if substep else 1
 
 
 def auto_time_step(scene, packing):
@@ -145,8 +101,8 @@ def describe(dt, lims, name, n_sub, factor):
             + ("" if name == "darcy_check" else f" x dt_auto_factor {factor:g}") + f" (limits at the start: {shown})")
     if n_sub > 1:
         text += (f"\nwater: {n_sub} sub-steps per water step at the start (substep = true, Gershgorin Darcy limit "
-                 f"{lims['darcy_check']:.3g} s per DEM step); each costs about {SUBSTEP_COST:.0%} of a water step, "
-                 f"so the water costs about {1 + SUBSTEP_COST * (n_sub - 1):.2g}x a water step without sub-steps")
+                 f"{lims['darcy_check']:.3g} s per DEM step); each costs about {lim.SUBSTEP_COST:.0%} of a water step, "
+                 f"so the water costs about {lim.substep_cost(n_sub):.2g}x a water step without sub-steps")
     return text
 
 

@@ -6,19 +6,19 @@ through the kernels of engines.compiled, otherwise through the readable NumPy fu
 paper's step order (engines.model.pore_dem) and the YADE water engine (engines.yade.water_engine)
 both step it.
 
-Stability: the explicit update is refused above its Darcy limit 2/lambda (engines.model.pore_water),
-checked at every water step: the bound is one more pass over throats and pores inside the flow
-kernel (measured at a few per cent of a water step), about what testing whether the areas changed
-enough to need a new check would cost, so the check is exact at every step instead. With
-``settings.substep`` a water step above the limit is split into n = ceil(dt_w / limit) sub-steps.
+Stability: every water step is checked against its Darcy limit (engines.model.limits): the bound
+is one more pass over throats and pores inside the flow kernel (measured at a few per cent of a
+water step), about what testing whether the areas changed enough to need a new check would cost,
+so the check is exact at every step instead. Above it the step is sub-stepped with
+``settings.substep`` and refused without.
 """
-import math
-
 import numpy as np
 
 from engines.compiled import kernels
+from engines.model import limits
 from engines.model import pores as pg
-from engines.model.pore_water import DarcyStabilityError, PoreWater
+from engines.model.limits import DarcyStabilityError
+from engines.model.pore_water import PoreWater
 
 
 def rebuild_due(k, k_built, k0, interval):
@@ -181,7 +181,7 @@ class WaterModel:
             n = self._substeps(h)  # raises above the limit without settings.substep
             if n_sub < 0:
                 raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of {h / n:.3e} s")
-            self.last_limit = 2.0 / lam[1] if lam[1] > 0 else np.inf  # at the last sub-step, as PoreWater reports it
+            self.last_limit = limits.gershgorin_limit(lam[1])  # at the last sub-step, as PoreWater reports it
         inflow, surface, side = self._balance.tolist()
         b = w.balance
         b.inflow += inflow
@@ -193,22 +193,18 @@ class WaterModel:
         limit of the last one."""
         if self.settings.smoothing:
             self.water.q_prev = args[3]
-        lam = self._lam
-        self.last_limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
+        self.last_limit = limits.gershgorin_limit(self._lam[0])
 
     def _substeps(self, h):
-        """1, or the sub-steps a water step of h [s] needs (settings.substep); else refuse."""
-        if h <= self.last_limit:
+        """The sub-steps a water step of h [s] needs (engines.model.limits.substeps: refused without
+        settings.substep); logged when sub-stepping starts and whenever the count doubles."""
+        n = limits.substeps(h, self.last_limit, self.settings.substep, self.settings.E_w)
+        if n == 1:
             return 1
-        if not self.settings.substep:
-            raise DarcyStabilityError(
-                f"water step dt = {h:.3e} s exceeds the explicit Darcy limit {self.last_limit:.3e} s "
-                f"(2/lambda_max of eq 38-43 at E_w = {self.settings.E_w}); reduce dt or water_interval, "
-                f"or set [water] substep = true")
-        n = int(math.ceil(h / self.last_limit))
         if n >= 2 * max(self.substeps_max, 1):
             self.log(f"water: step {h:.3e} s > Darcy limit {self.last_limit:.3e} s: {n} sub-steps per water step "
-                     f"(each costs one flow and one update kernel pass, about a quarter of a water step)")
+                     f"(each costs one flow and one update kernel pass, about {limits.SUBSTEP_COST:.0%} of a "
+                     f"water step)")
         self.substeps_max = max(self.substeps_max, n)
         self.substeps_total += n
         return n

@@ -177,12 +177,10 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
 
 def check_resume(run_dir, duration):
     """A resume that can go on: writable, not complete unless a later --duration is given."""
-    from engines.yade.checkpoint import NAME, read_info
+    from engines.yade.checkpoint import NAME, read_info, resume_end
     check_output_dir(run_dir, "--resume")
     info = read_info(os.path.join(run_dir, NAME))
-    k, dt = info["step"], info["dt"]
-    if duration is not None and round(duration / dt) <= k:
-        raise InputError(f"--duration {duration:g} s: the run in {run_dir} is already at t = {k * dt:g} s")
-    if duration is None and k >= info["n_steps"]:
-        raise InputError(f"--resume: the run in {run_dir} is complete (t = {k * dt:g} s); give a later --duration "
-                         "to continue it")
+    try:
+        resume_end(info["step"], info["n_steps"], info["dt"], duration)
+    except ValueError as e:
+        raise InputError(f"--resume {run_dir}: {e}") from None

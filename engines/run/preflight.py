@@ -1,8 +1,9 @@
 """Checks made before a run writes anything, and the scripts' argument parsing.
 
 ``preflight(scene, packing, out_dir)`` checks what can be known before the first step: the time
-step against eq 52, against the side-wall ties (Fig. 27) and against the explicit Darcy limit of
-the pores of the packing at the start, the duration, the loading record and the output directory.
+step against the stability limits at the start (engines.model.time_step.check_start: eq 52, the
+side-wall ties, the water stiffness, the Darcy limit and the sub-step count), the duration, the
+loading record and the output directory.
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -87,79 +88,13 @@ def output_dir(path):
 
 
 # -- the scene against its packing ----------------------------------------------------------------
-def check_time_step(scene, packing):
-    """dt <= dt_safety x 2 sqrt(m_min / kn) over the mobile discs (eq 52)."""
-    from engines.model.contact import critical_time_step
-    from engines.model.pore_dem import disc_masses
-
-    num = scene.numerics
-    mass, _ = disc_masses(scene, packing)
-    mobile = mass[packing.mobile]
-    if not len(mobile):
-        return
-    limit = num.dt_safety * critical_time_step(mobile, scene.contact.kn)
-    if num.dt > limit:
-        raise InputError(f"[numerics] dt = {num.dt:.3g} s exceeds the stability limit {limit:.3g} s of eq 52 "
-                         f"(dt_safety {num.dt_safety:g} x 2 sqrt(m_min / kn), m_min = {mobile.min():.3g} kg/m, "
-                         f"kn = {scene.contact.kn:.3g} N/m)")
-
-
-def check_tie_time_step(scene, packing):
-    """dt <= sqrt(m_min / k'_s) of the side-wall ties ([loading] side_walls = "springs")."""
-    from engines.model import pore_dem
-
+def check_limits(scene, packing):
+    """The numeric dt against every stability limit at the start (engines.model.time_step.check_start)."""
+    from engines.model.time_step import check_start
     try:
-        pore_dem.check_tie_time_step(scene, pore_dem.side_wall_ties(scene, packing), pore_dem.disc_masses(scene, packing)[0])
+        check_start(scene, packing)
     except ValueError as e:
         raise InputError(str(e)) from None
-
-
-def start_darcy_limit(scene, packing):
-    """The explicit Darcy limit [s] of the water at the start: the pores of the packing built
-    as the engine builds them, W = A (U = 0). None for a dry scene."""
-    if not scene.water.enabled:
-        return None
-    from engines.model.time_step import start_pores
-    _, m, water = start_pores(scene, packing)
-    return water.darcy_limit(m.void_area, m.link_contact)
-
-
-def check_darcy(scene, packing):
-    """The water step water_interval x dt against the explicit Darcy limit at the start: above it,
-    refused without [water] substep (the engine would refuse it at step 0), and with it refused when
-    it needs more than [water] max_substeps sub-steps."""
-    if not scene.water.enabled:
-        return
-    num, w = scene.numerics, scene.water
-    h = num.water_interval * num.dt
-    limit = start_darcy_limit(scene, packing)
-    where = f"the explicit Darcy limit {limit:.3g} s at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s, E_w = {w.E_w:g} N/m)"
-    if not w.substep and h > limit:
-        raise InputError(f"[numerics] dt = {num.dt:.3g} s: the water step water_interval x dt = {h:.3g} s exceeds "
-                         f"{where}; reduce dt or the permeabilities, or set [water] substep = true")
-    n_sub = math.ceil(h / limit * (1 - 1e-12))
-    if w.substep and n_sub > w.max_substeps:
-        raise InputError(f"[numerics] dt = {num.dt:.3g} s: the water step water_interval x dt = {h:.3g} s needs "
-                         f"{n_sub} sub-steps at {where}, more than [water] max_substeps = {w.max_substeps}; "
-                         f"reduce dt or the permeabilities, or raise max_substeps")
-
-
-def check_water_stiffness(scene, packing):
-    """dt <= 2 sqrt(m / k_w) of the stiffness the water adds to the particles at the start
-    (engines.model.time_step: k_w = E_w sum_p (2 r)^2 / A_p over the pores a disc bounds)."""
-    if not scene.water.enabled:
-        return
-    from engines.model import time_step
-    from engines.model.pore_dem import disc_masses
-
-    net, m, _ = time_step.start_pores(scene, packing)
-    limit = time_step.water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w,
-                                            disc_masses(scene, packing)[0], packing.mobile)
-    dt = scene.numerics.dt
-    if dt > limit:
-        raise InputError(f"[numerics] dt = {dt:.3g} s exceeds the water-stiffness limit {limit:.3g} s at the start "
-                         f"(2 sqrt(m / k_w), k_w = E_w sum (2 r)^2 / A over the pores a disc bounds, [water] E_w = "
-                         f"{scene.water.E_w:g} N/m); reduce dt or E_w, or set dt = \"auto\"")
 
 
 def check_duration(scene):
@@ -198,10 +133,7 @@ def preflight(scene, packing, out_dir):
     check_duration(scene)
     check_engine_options(scene)
     check_record(scene)
-    check_time_step(scene, packing)
-    check_tie_time_step(scene, packing)
-    check_water_stiffness(scene, packing)
-    check_darcy(scene, packing)
+    check_limits(scene, packing)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:
         return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "

@@ -229,19 +229,13 @@ class Run:
         """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end)."""
         self.out = out_dir
         self.cp.restore_forces()
-        dt = self.scene.numerics.dt
+        n = checkpoint.resume_end(O.iter, self.n_steps, self.scene.numerics.dt, duration)
         if duration is not None:
-            n = int(round(duration / dt))
-            if n <= O.iter:
-                raise ValueError(f"--duration {duration:g} s: the run is already at t = {O.iter * dt:g} s")
             self.scene = self.cp.scene = self.scene.with_overrides({"numerics": {"duration": duration}})
             self.n_steps = n
             self.rec.schedule(n)
             self._schedule()
             self.cp._hooked_at = None  # the hooks see this step again: the row at the old end is due now
-        elif O.iter >= self.n_steps:
-            raise ValueError(f"the run is complete ({O.iter} steps, t = {O.iter * dt:g} s); give a later --duration "
-                             "to continue it")
         self.rec.reopen(out_dir)
         self._last_checkpoint = time.time()
 

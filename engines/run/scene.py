@@ -12,8 +12,9 @@ import tomllib
 from dataclasses import dataclass, field
 
 from engines import ROOT
-from engines.model.contact import ContactSettings
-from engines.model.pore_water import WaterSettings
+from engines.model.contact import CONTACT_FIELDS, ContactSettings
+from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, Field, check, describe_check
+from engines.model.pore_water import WATER_FIELDS, WaterSettings
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
 
@@ -22,11 +23,9 @@ class SceneError(ValueError):
     """A scene file is invalid; the message names the field."""
 
 
-# table -> field -> (type, default, check, unit/meaning). check: None or (min, max) inclusive
-# bounds, or a tuple of allowed strings.
-REQUIRED = object()
-POS = (0.0, math.inf)
-POS_OR_AUTO = (0.0, math.inf, "auto")  # > 0, or the string "auto" (numerics.dt: engines.model.time_step)
+# table -> field -> (type, default, check, unit/meaning) (engines.model.fields.Field). check: None,
+# (min, max) inclusive bounds (POS: > 0), a tuple of allowed strings, or POS_OR_AUTO. The [contact]
+# and [water] fields of the model's settings are declared with them (CONTACT_FIELDS, WATER_FIELDS).
 SCHEMA = {
     "scene": {
         "name": (str, REQUIRED, None, "run name"),
@@ -62,16 +61,7 @@ SCHEMA = {
         "g": (float, 9.81, (0.0, math.inf), "gravity [m/s^2], along -z"),
     },
     "contact": {
-        "spring": (str, "c", ("a", "b", "c", "d"), "normal spring of Fig. 5: a/b linear, c nonlinear elastic, d hysteretic"),
-        "kn": (float, 1.4e6, POS, "normal stiffness [N/m]"),
-        "eta_n": (float, 5.2, (0.0, math.inf), "normal dashpot [N s/m]"),
-        "ks": (float, 3.5e5, (0.0, math.inf), "tangential stiffness [N/m]"),
-        "eta_s": (float, 1.3, (0.0, math.inf), "tangential dashpot [N s/m]"),
-        "mu": (float, 1.0, (0.0, math.inf), "friction coefficient"),
-        "restitution": (float, 0.001, (0.0, 1.0), "e of the velocity adjustment at separation (eq 19)"),
-        "f_max": (float, 2.5, POS, "cap of the elastic normal force for springs c, d [N] (eq 27)"),
-        "eps_m": (float, 0.0, (0.0, math.inf), "force range beyond touching [m] (eq 26)"),
-        "separation_adjustment": (bool, True, None, "apply eq 18-24 when a particle becomes free"),
+        **CONTACT_FIELDS,
         "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, see README)"),
         # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
         "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
@@ -79,17 +69,9 @@ SCHEMA = {
     },
     "water": {
         "enabled": (bool, True, None, "false: a dry scene, no water code runs"),
-        "E_w": (float, 240.0, POS, "water modulus per unit thickness [N/m] (eq 32)"),
-        "k1": (float, 200.0, (0.0, math.inf), "permeability across a gap link [1/s] (eq 43a)"),
-        "k2": (float, 2.0, (0.0, math.inf), "permeability across a contact link [1/s] (eq 43b)"),
-        "k3": (float, 0.0, (0.0, math.inf), "permeability of drained side walls [1/s]"),
-        "q_w": (float, 0.0, (0.0, math.inf), "inflow into every bottom pore [m^2/s] (§5.1)"),
-        "sides": (str, "undrained", ("undrained", "drained"), "side-wall drainage"),
+        **WATER_FIELDS,
         "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
-        "smoothing": (bool, False, None, "eq 45-46"),
-        "substep": (bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the engine prints the count and its cost); false: refuse such a step (preflight at the start, the engine mid-run)"),
         "max_substeps": (int, 100, (1, math.inf), "with substep: refuse up front a water step that needs more sub-steps than this at the start"),
-        "transfer": (str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U (§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap (engines.model.pore_water.conserving_water)"),
     },
     "loading": {
         "type": (str, "none", ("none", "cosine", "record"), "horizontal acceleration of the moving walls"),
@@ -110,7 +92,7 @@ SCHEMA = {
         "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
         # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
-        "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): 0.36 the study's fast setting (docs/TRADEOFFS.md)"),
+        "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),
     },
     "output": {
         "history_interval": (int, 100, (1, math.inf), "steps between history rows"),
@@ -144,15 +126,12 @@ class Scene:
 
     def contact_settings(self):
         c = self.tables["contact"]
-        return ContactSettings(**{k: c[k] for k in ("spring", "kn", "eta_n", "ks", "eta_s", "mu", "restitution",
-                                                    "f_max", "eps_m", "separation_adjustment")})
+        return ContactSettings(**{k: c[k] for k in CONTACT_FIELDS})
 
     def water_settings(self):
+        """The WaterSettings of [water], or None for a dry scene."""
         w = self.tables["water"]
-        if not w["enabled"]:
-            return None
-        return WaterSettings(**{k: w[k] for k in ("E_w", "k1", "k2", "k3", "q_w", "sides", "smoothing", "substep",
-                                                  "transfer")})
+        return WaterSettings(**{k: w[k] for k in WATER_FIELDS}) if w["enabled"] else None
 
     def as_dict(self):
         return {t: dict(v) for t, v in self.tables.items()}
@@ -172,33 +151,6 @@ class _Table(dict):
             raise AttributeError(name) from None
 
 
-def _check(table, name, value, spec):
-    typ, _, check, _ = spec
-    where = f"[{table}] {name}"
-    if check is POS_OR_AUTO:
-        if value == "auto":
-            return value
-        if isinstance(value, str):
-            raise SceneError(f"{where}: expected a number > 0 or \"auto\", got {value!r}")
-        check = POS
-    if typ is float and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    if typ is float and not isinstance(value, float) or typ is int and (not isinstance(value, int) or isinstance(value, bool)) \
-            or typ in (str, bool, list) and not isinstance(value, typ):
-        raise SceneError(f"{where}: expected {typ.__name__}, got {value!r}")
-    if typ is float and not math.isfinite(value):
-        raise SceneError(f"{where}: must be finite, got {value}")
-    if isinstance(check, tuple) and check and isinstance(check[0], str):
-        if value not in check:
-            raise SceneError(f"{where}: must be one of {', '.join(check)}, got {value!r}")
-    elif check is not None:
-        lo, hi = check
-        if not lo <= value <= hi or (check is POS and value == 0):
-            bound = "> 0" if check is POS else f"in [{lo}, {hi}]"
-            raise SceneError(f"{where}: must be {bound}, got {value}")
-    return value
-
-
 def validate(raw, path=""):
     """Fill defaults and check every field of a parsed scene document; returns a Scene."""
     unknown = set(raw) - set(SCHEMA) - {"extends"}
@@ -215,7 +167,7 @@ def validate(raw, path=""):
         values = {}
         for name, spec in fields.items():
             if name in given:
-                values[name] = _check(table, name, given[name], spec)
+                values[name] = check(f"[{table}] {name}", given[name], spec, SceneError)
             elif spec[1] is REQUIRED:
                 raise SceneError(f"[{table}] {name}: required field is missing")
             else:
@@ -323,17 +275,9 @@ def schema_markdown():
     """The schema as a Markdown table (yade_scripts/scenes/README.md)."""
     lines = ["| table | field | type | default | range or choices | meaning |", "|---|---|---|---|---|---|"]
     for table, fields in SCHEMA.items():
-        for name, (typ, default, check, doc) in fields.items():
+        for name, (typ, default, bounds, doc) in fields.items():
             shown = "required" if default is REQUIRED else repr(default)
-            if check is None:
-                rng = ""
-            elif isinstance(check[0], str):
-                rng = ", ".join(check)
-            elif check is POS_OR_AUTO:
-                rng = "> 0 or 'auto'"
-            else:
-                rng = "> 0" if check is POS else f"[{check[0]}, {check[1]}]"
-            lines.append(f"| {table} | {name} | {typ.__name__} | {shown} | {rng} | {doc} |")
+            lines.append(f"| {table} | {name} | {typ.__name__} | {shown} | {describe_check(bounds)} | {doc} |")
     return "\n".join(lines)
 
 

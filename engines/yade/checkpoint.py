@@ -101,6 +101,20 @@ def save(path, state, info=None):
         raise
 
 
+def resume_end(step, n_steps, dt, duration=None):
+    """The last step of a run resumed at ``step`` that was to end at ``n_steps``: n_steps, or that
+    of a later ``duration`` [s]. Raises ValueError (naming --duration or the complete run) when there
+    is nothing left to run."""
+    if duration is None:
+        if step >= n_steps:
+            raise ValueError(f"the run is complete (t = {step * dt:g} s); give a later --duration to continue it")
+        return n_steps
+    n = int(round(duration / dt))
+    if n <= step:
+        raise ValueError(f"--duration {duration:g} s: the run is already at t = {step * dt:g} s")
+    return n
+
+
 def read_info(path):
     """The step and ``info`` of a checkpoint, without YADE: {"step": k, **info}. Raises
     CheckpointError for a missing or unreadable file."""

@@ -41,9 +41,10 @@ from yade.wrapper import (
     ViscElMat,
 )
 
-from engines.model import ground_motion, pore_dem
+from engines.model import ground_motion, limits, pore_dem
 from engines.model import pores as pg
 from engines.model.pore_dem import PoreDEM, disc_masses
+from engines.model.pore_water import buoyancy
 from engines.reference.trajectory import Trajectory
 from engines.yade import yade_io
 from engines.yade.paper_law_engine import PaperLawEngine
@@ -117,7 +118,6 @@ class YadeCoupling:
         self.scene, self.packing = scene, packing
         self.law = scene.contact.law
         self.mass, self.inertia = disc_masses(scene, packing)
-        pore_dem.check_time_step(scene, self.mass[packing.mobile])
         g = scene.material.g
         wet = scene.water.enabled
         self.core = self.water_engine = None
@@ -131,11 +131,13 @@ class YadeCoupling:
                 O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
             if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
                 dyn = self.engine._dynamic
-                self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[dyn] ** 2 * g * packing.mobile[dyn]
+                self.engine.held[:, 1] = buoyancy(packing.r[dyn], scene.material.rho_w, g) * packing.mobile[dyn]
             loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
         else:
             if scene.numerics.damping_eq44:
                 raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
+            limits.check_contact(scene.numerics.dt, scene.numerics.dt_safety, self.mass[packing.mobile],
+                                 scene.contact.kn)
             self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)
             loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
                     InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],

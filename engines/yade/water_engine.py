@@ -24,12 +24,11 @@ import time
 import numpy as np
 
 from engines.compiled import kernels
+from engines.model import pore_water
 from engines.model import pores as pg
 from engines.model.water_model import WaterModel, steps_to_rebuild
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
-
-WALL_CODES = {"bottom": pg.WALL_BOTTOM, "left": pg.WALL_LEFT, "right": pg.WALL_RIGHT}
 
 
 class WaterEngine:
@@ -56,12 +55,12 @@ class WaterEngine:
         code = np.zeros(len(ids), np.int64)
         pos = {i: k for k, i in enumerate(ids.tolist())}
         for name, group in (walls or {}).items():
-            if name not in WALL_CODES:
-                raise ValueError(f"walls: unknown group {name!r}; known: {sorted(WALL_CODES)}")
+            if name not in pg.WALL_CODES:
+                raise ValueError(f"walls: unknown group {name!r}; known: {sorted(pg.WALL_CODES)}")
             missing = [i for i in group if i not in pos]
             if missing:
                 raise ValueError(f"walls[{name!r}]: ids {missing[:5]} are not among disc_ids")
-            code[[pos[i] for i in group]] = WALL_CODES[name]
+            code[[pos[i] for i in group]] = pg.WALL_CODES[name]
         if not O.dt > 0:
             raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
         self.model = WaterModel(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
@@ -71,7 +70,7 @@ class WaterEngine:
         self._dynamic = np.flatnonzero(dynamic)
         self.F_const = np.zeros((len(self._dynamic), 2))
         if buoyancy:
-            self.F_const[:, 1] = rho_w * np.pi * np.asarray(radii, float)[self._dynamic] ** 2 * gravity
+            self.F_const[:, 1] = pore_water.buoyancy(np.asarray(radii, float)[self._dynamic], rho_w, gravity)
         self.forced.set_permanent_forces(self.F_const)
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
         self._run_kernel = yade_io.run_kernel

@@ -10,7 +10,7 @@ from engines.compiled import kernels
 from engines.model import pores as pg
 from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.paper_law import PaperLaw
-from engines.model.pore_water import PoreWater, WaterSettings
+from engines.model.pore_water import WaterSettings
 from engines.model.side_walls import SideWallTies
 from engines.model.water_model import WaterModel
 from engines.yade.deposition import wall_box
@@ -212,7 +212,7 @@ def test_tie_forces_compiled_equals_numpy():
 
 
 def test_refuses_a_water_step_above_the_darcy_limit():
-    from engines.model.pore_water import DarcyStabilityError
+    from engines.model.limits import DarcyStabilityError
     xz, r, walls, _ = _column(n=120, gap=0.0)
     m = WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3, substep=False), r, walls, xz, 0.0, 0.3, 1e-3)
     with pytest.raises(DarcyStabilityError, match="substep"):

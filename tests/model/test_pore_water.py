@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from engines.model import pores as pg
-from engines.model.pore_water import DarcyStabilityError, PoreWater, WaterSettings, inherit_pressures, pressure
+from engines.model.limits import DarcyStabilityError
+from engines.model.pore_water import PoreWater, WaterSettings, inherit_pressures, pressure
 from packing.layouts import random_discs
 
 

@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from engines.model import pores as pg
+from engines.model.limits import tie_limit
 from engines.model.side_walls import SideWallTies
 from engines.yade.deposition import wall_box
 
@@ -72,7 +73,7 @@ def _free_column_run(eta, n_steps=4000):
     ties = SideWallTies(xz, group, KS, eta)
     m = np.full(len(xz), 10 * 2700 * np.pi * R_W**2)  # the paper's 10x denser walls
     mov = ties.moving
-    dt = 0.05 * ties.stable_time_step(m)
+    dt = 0.05 * tie_limit(ties, m)
     x = xz[:, 0].copy()
     x[mov] += 1e-5 * np.sin(np.linspace(0, np.pi, mov.sum()))
     v = np.zeros(len(x))

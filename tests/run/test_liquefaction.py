@@ -1,6 +1,7 @@
 """The seismic box in the engine (issue 11 item 6): the driven base, the side walls on springs, the
 drained side flux, the porosity window of the history, and the liquefaction script. Short runs."""
 import json
+import re
 import os
 import subprocess
 
@@ -194,13 +195,18 @@ def test_liquefaction_script_refuses_in_one_line(tmp_path, capsys, args, match):
 def test_tie_time_step_is_refused_before_the_run(tmp_path):
     """dt above sqrt(m_min / k's) of the side-wall ties: refused by preflight (one line naming
     ks_wall, nothing written) and by the engine at construction."""
-    from engines.model.pore_dem import PoreDEM
+    from engines.model.pore_dem import PoreDEM, disc_masses
     from engines.run.preflight import InputError, preflight
     sc = preset(1, contact={"ks_wall": 1e11})  # sqrt(0.0257 kg/m / 1e11 N/m) = 5.1e-7 s < dt = 1e-6 s
     pk = packing_of(sc)
     with pytest.raises(InputError, match=r"ks_wall = 1e\+11 N/m") as err:
         preflight(sc, pk, str(tmp_path / "out"))
-    assert "\n" not in str(err.value) and "5.065e-07 s" in str(err.value) and not (tmp_path / "out").exists()
+    mass = disc_masses(sc, pk)[0]
+    walls = np.isin(pk.group, (pg.WALL_LEFT, pg.WALL_RIGHT))
+    expected = np.sqrt(mass[walls].min() / 1e11)
+    said = float(re.search(r"stability limit (\S+) s", str(err.value)).group(1))
+    assert said == pytest.approx(expected, rel=5e-3)  # printed to 3 digits
+    assert "\n" not in str(err.value) and not (tmp_path / "out").exists()
     with pytest.raises(ValueError, match="side-wall ties"):
         PoreDEM(sc, pk)
     preflight(preset(1, contact={"ks_wall": 1e10}), pk, str(tmp_path / "out"))  # limit 1.6e-6 s: accepted

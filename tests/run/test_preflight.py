@@ -5,15 +5,14 @@ import os
 import subprocess
 import sys
 
-import numpy as np
 import pytest
 
 from engines import ROOT
-from engines.model.contact import critical_time_step
+from engines.model.limits import DarcyStabilityError, critical_time_step
 from engines.model.pore_dem import PoreDEM, disc_masses
-from engines.model.pore_water import DarcyStabilityError
+from engines.model.time_step import limits
 from engines.run import scene as scenes
-from engines.run.preflight import InputError, check_output_dir, number, preflight, start_darcy_limit
+from engines.run.preflight import InputError, check_output_dir, number, preflight
 from engines.yade.deposition import scene_packing
 
 PRESET = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
@@ -144,7 +143,7 @@ def test_eq52_check_agrees_with_the_engine(packing):
 def test_darcy_check_agrees_with_the_engine_at_step_0(packing):
     """Just below the start limit the engine's first water step passes, just above it raises."""
     sc = scenes.preset("quicksand_case1", {"water": {"k1": 1e5, "substep": False}})  # the strict mode
-    limit = start_darcy_limit(sc, packing)
+    limit = limits(sc, packing)["darcy_check"] * sc.numerics.water_interval
     assert 1e-6 < limit < 1e-5
     for dt, ok in ((0.999 * limit, True), (1.001 * limit, False)):
         s = sc.with_overrides({"numerics": {"dt": dt}})

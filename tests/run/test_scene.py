@@ -91,17 +91,23 @@ def test_overrides_are_recorded():
     assert scenes.preset("quicksand_case1").overrides == {}
 
 
-def test_settings_defaults_are_the_schemas():
-    """A field of the [water] or [contact] table and of its settings dataclass has one default, so a
-    YADE script that builds WaterSettings or ContactSettings itself gets what a scene file gets."""
-    import dataclasses
-
+def test_a_script_and_a_scene_file_get_the_same_settings_and_refusals():
+    """WaterSettings and ContactSettings built in a YADE script equal those of a scene file with the
+    same fields, and refuse a bad value with the scene file's message ("[water] k1: ...")."""
     from engines.model.contact import ContactSettings
     from engines.model.pore_water import WaterSettings
-    compared = 0
-    for table, cls in (("water", WaterSettings), ("contact", ContactSettings)):
-        for f in dataclasses.fields(cls):
-            if f.name in scenes.SCHEMA[table] and f.default is not dataclasses.MISSING:
-                assert scenes.SCHEMA[table][f.name][1] == f.default, (table, f.name)
-                compared += 1
-    assert compared >= 12
+    plain = scenes.validate({"scene": {"name": "x"}})
+    assert plain.water_settings() == WaterSettings() and plain.contact_settings() == ContactSettings()
+    for table, cls, name, bad in (("water", WaterSettings, "k1", -1.0), ("water", WaterSettings, "sides", "open"),
+                                  ("contact", ContactSettings, "restitution", 1.5), ("contact", ContactSettings, "kn", 0)):
+        with pytest.raises(scenes.SceneError) as from_file:
+            scenes.validate({"scene": {"name": "x"}, table: {name: bad}})
+        with pytest.raises(ValueError) as from_script:
+            cls(**{name: bad})
+        assert str(from_script.value) == str(from_file.value) and str(from_file.value).startswith(f"[{table}] {name}:")
+    assert WaterSettings(k1=np.float32(3.0)).k1 == 3.0 and type(WaterSettings(k1=3).k1) is float
+
+
+def test_the_scenes_readme_shows_the_schema():
+    with open(os.path.join(scenes.SCENE_DIR, "README.md")) as f:
+        assert scenes.schema_markdown() in f.read()

@@ -1,83 +1,24 @@
-"""Stability at the extremes and the automatic time step (issue 12 items 3-4): the limits of
-engines.model.time_step on analytic cases, dt = "auto" in the scene schema, the refusals up front
-(fast, no long runs) and the stability map's classification (no YADE)."""
+"""Stability at the extremes and the automatic time step: the limits of a scene at its start
+(engines.model.time_step), dt = "auto" in the scene schema, the refusals up front (fast, no long
+runs) and the stability map's classification."""
 import math
 
 import numpy as np
 import pytest
 
-from engines.model import pores as pg
 from engines.model import time_step as ts
-from engines.model.contact import critical_time_step
+from engines.model.limits import critical_time_step
 from engines.model.pore_dem import disc_masses
-from engines.model.pore_water import PoreWater, WaterSettings
 from engines.run import scene as scenes
 from engines.run.preflight import InputError, preflight
 from engines.studies import stability as st
 from engines.yade.deposition import scene_packing
-from packing.layouts import random_discs
 
 
 @pytest.fixture(scope="module")
 def qs():
     sc = scenes.preset("quicksand_case1")
     return sc, scene_packing(sc)
-
-
-def _two_pores():
-    """Rhombus of four wall discs: two equal triangular pores sharing a gap link."""
-    xz = np.array([[-1.2, 0.0], [1.2, 0.0], [0.0, 1.0], [0.0, -1.0]])
-    r = np.full(4, 0.5)
-    net = pg.build_pores(xz, r, l_m=1.5, walls=np.full(4, pg.WALL_LEFT))
-    return xz, r, net
-
-
-# -- the limits -----------------------------------------------------------------------------------
-def test_darcy_limit_of_two_equal_pores_is_two_over_k():
-    """Two equal pores at W = A: G = g [[1, -1], [-1, 1]], c equal, lambda_max = 2 g / c = k, so
-    2 / lambda_max = 2 / k exactly (the Gershgorin bound is exact here too)."""
-    xz, r, net = _two_pores()
-    m = pg.measure(net, xz, r)
-    w = PoreWater(net, m.void_area, WaterSettings(E_w=1000.0, k1=50.0, k2=0.5))
-    assert ts.darcy_limit(w, m.void_area, m.link_contact) == pytest.approx(2 / 50.0, rel=1e-12)
-    assert w.darcy_limit(m.void_area, m.link_contact) == pytest.approx(2 / 50.0, rel=1e-12)
-
-
-def test_darcy_limit_eigsh_matches_dense_and_bounds_gershgorin():
-    rng = np.random.default_rng(3)
-    xz, r = random_discs(300, rng)
-    walls = np.where(xz[:, 1] < xz[:, 1].min() + 1.0, pg.WALL_BOTTOM, 0)
-    net = pg.build_pores(xz, r, l_m=0.7 * r.mean(), walls=walls)
-    m = pg.measure(net, xz, r)
-    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0), W=m.void_area * (1 + 0.2 * rng.random(net.n_pores)))
-    S, open_ = ts.exchange_matrix(w, m.void_area, m.link_contact)
-    assert S.shape[0] >= 50  # the eigsh path
-    dense = np.linalg.eigvalsh(S.toarray())
-    assert dense[0] > -1e-9 * dense[-1]  # positive semi-definite
-    assert ts.lambda_max(S) == pytest.approx(dense[-1], rel=1e-7)
-    exact = ts.darcy_limit(w, m.void_area, m.link_contact)
-    gersh = w.darcy_limit(m.void_area, m.link_contact)
-    assert gersh <= exact * (1 + 1e-12) and gersh > 0.3 * exact
-    # forward Euler on the linearised exchange: just below 2 / lambda_max decays, just above grows
-    lam = dense[-1]
-    for h, grows in ((0.99 * 2 / lam, False), (1.01 * 2 / lam, True)):
-        assert (abs(1 - h * lam) > 1) == grows
-
-
-def test_water_stiffness_by_hand_on_two_pores():
-    xz, r, net = _two_pores()
-    A = pg.measure(net, xz, r).void_area
-    k = ts.water_stiffness(net, A, r, 240.0)
-    # discs 0 and 1 (the short diagonal's ends... the rhombus' far corners) bound one pore each or both
-    expected = np.zeros(4)
-    for p in range(net.n_pores):
-        expected[net.vertices_of(p)] += 240.0 * (2 * 0.5) ** 2 / A[p]
-    np.testing.assert_allclose(k, expected, rtol=1e-12)
-    assert sorted(np.round(k / (240.0 / A[0]), 12).tolist()) == [1.0, 1.0, 2.0, 2.0]  # equal pores: 1 or 2 each
-    mass = np.array([1.0, 2.0, 3.0, 4.0])
-    mobile = np.array([True, True, False, False])
-    lim = ts.water_stiffness_limit(net, A, r, 240.0, mass, mobile)
-    assert lim == pytest.approx(min(2 * np.sqrt(mass[mobile] / k[mobile])), rel=1e-12)
 
 
 def test_choose_takes_the_smallest_limit_times_the_factor_and_caps_at_the_engine_check():
@@ -149,17 +90,19 @@ def test_scene_schema_takes_auto_and_refuses_other_words():
 
 # -- refusals up front --------------------------------------------------------------------------
 @pytest.mark.parametrize("over,limit", [
-    ({"numerics": {"dt": 1.05 * 3.2565e-5}}, "eq 52"),
-    ({"water": {"k1": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),  # the strict mode
-    ({"water": {"k2": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),
-    ({"water": {"k1": 1e9}}, "sub-steps at the explicit Darcy limit"),                 # sub-stepping, beyond max_substeps
-    ({"water": {"E_w": 2.4e8}}, "water-stiffness limit"),
-    ({"water": {"E_w": 2.4e5}, "numerics": {"dt": 3.2e-5}}, "water-stiffness limit"),
+    (lambda lims, sc: {"numerics": {"dt": 1.05 * sc.numerics.dt_safety * lims["contact"]}}, "eq 52"),
+    (lambda lims, sc: {"water": {"k1": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),  # the strict mode
+    (lambda lims, sc: {"water": {"k2": 1e6, "substep": False}}, "exceeds the explicit Darcy limit"),
+    (lambda lims, sc: {"water": {"k1": 1e9}}, "sub-steps under the Darcy limit .*max_substeps"),  # beyond max_substeps
+    (lambda lims, sc: {"water": {"E_w": 2.4e8}}, "water-stiffness limit"),
+    (lambda lims, sc: {"water": {"E_w": 1000 * sc.water.E_w},
+                       "numerics": {"dt": 1.05 * lims["water_stiffness"] / math.sqrt(1000)}},
+     "water-stiffness limit"),  # the limit goes as 1 / sqrt(E_w)
 ])
 def test_extremes_are_refused_with_the_limit_named(qs, tmp_path, over, limit):
     sc, pk = qs
     with pytest.raises(InputError, match=limit):
-        preflight(sc.with_overrides(over), pk, str(tmp_path / "out"))
+        preflight(sc.with_overrides(over(ts.limits(sc, pk), sc)), pk, str(tmp_path / "out"))
     assert not (tmp_path / "out").exists()
 
 
@@ -198,13 +141,12 @@ def test_substepping_by_default_keeps_the_water_bounded_and_conserved(qs, tmp_pa
     import math
 
     from engines.model.pore_dem import PoreDEM
-    from engines.run.preflight import start_darcy_limit
 
     sc, pk = qs
     s = sc.with_overrides({"water": {"k1": 1e6}, "numerics": {"dt": 1e-6, "rebuild_interval": 10 ** 6}})
     assert s.water.substep
     preflight(s, pk, str(tmp_path / "out"))
-    n = math.ceil(1e-6 / start_darcy_limit(s, pk))
+    n = math.ceil(1e-6 / ts.limits(s, pk)["darcy_check"])
     assert 2 <= n <= s.water.max_substeps
     sub = PoreDEM(s, pk)
     fine = PoreDEM(s.with_overrides({"numerics": {"dt": 1e-6 / n}, "water": {"substep": False}}), pk)

@@ -1,0 +1,155 @@
+"""The stability limits of the seed-000 step [s], and the checks that refuse a step above them. No YADE.
+
+Every "is this step stable?" question is answered here: preflight (engines.run.preflight) asks
+them of a scene at its start, dt = "auto" (engines.model.time_step) takes the smallest, the
+engines ask the contact and tie limits at construction and the Darcy limit at every water step
+(the compiled water step runs ``substep_count`` and ``gershgorin_limit`` themselves, jitted).
+
+* contact (eq 52): 2 sqrt(m_min / kn) over the mobile particles; dt is refused above
+  [numerics] dt_safety times it;
+* ties: sqrt(m_min / k'_s) over the moving side-wall discs (Fig. 27 springs,
+  engines.model.side_walls);
+* water stiffness: a disc moved by dx changes the void of each pore it bounds by at most its
+  width 2 r dx, so the pressure of that pore by E_w 2 r dx / A (eq 32 at W = A), which pushes the
+  disc over at most 2 r: the water adds a spring k_w = E_w sum_p (2 r)^2 / A_p (over the open
+  pores p the disc bounds) and 2 sqrt(m / k_w) is the eq 52 bound of that spring;
+* Darcy: the explicit water update (eq 42) is stable for a water step h <= 2 / lambda_max of the
+  linearised exchange dU/dt = -C^-1 G U (engines.model.pore_water: conductances g, boundary g_b,
+  capacities c = W^2 / (E_w A)); ``darcy_eigen_limit`` computes it with eigsh. The engines check
+  every water step against the Gershgorin bound of the same matrix (``gershgorin_limit`` of the
+  lambda the flow pass returns), which is below it (0.74-0.8 of it on the seismic box);
+* sub-steps: a water step above the Gershgorin limit is split into ``substep_count`` equal
+  sub-steps when the water's settings allow it (``substeps``), each costing about SUBSTEP_COST of
+  a water step; otherwise it is refused.
+"""
+import math
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
+
+SUBSTEP_COST = 0.25  # one sub-step (a flow and an update pass) costs about a quarter of a water step
+
+
+class DarcyStabilityError(ValueError):
+    """A water step exceeds the explicit Darcy limit, or a pore's water would fall to zero."""
+
+
+def refuse_dt(dt, limit, what):
+    """Raise ValueError "[numerics] dt = ... exceeds <what> <limit>" when dt > limit."""
+    if dt > limit:
+        raise ValueError(f"[numerics] dt = {dt:.3g} s exceeds {what.format(limit=f'{limit:.3g} s')}")
+
+
+# -- contact (eq 52) --------------------------------------------------------------------------------
+def critical_time_step(mass, kn):
+    """Cundall's bound dt < 2 sqrt(m / kn) over the lightest disc [s] (eq 52)."""
+    return 2.0 * np.sqrt(np.min(mass) / kn)
+
+
+def check_contact(dt, dt_safety, mobile_mass, kn):
+    """Refuse dt above dt_safety x 2 sqrt(m_min / kn) over the mobile discs (eq 52)."""
+    if len(mobile_mass):
+        refuse_dt(dt, dt_safety * critical_time_step(mobile_mass, kn),
+                  f"the stability limit {{limit}} of eq 52 (dt_safety {dt_safety:g} x 2 sqrt(m_min / kn), "
+                  f"m_min = {np.min(mobile_mass):.3g} kg/m, kn = {kn:.3g} N/m)")
+
+
+# -- side-wall ties (Fig. 27) -----------------------------------------------------------------------
+def tie_limit(ties, mass):
+    """sqrt(m_min / k'_s) over the moving wall discs of SideWallTies ``ties`` [s]; inf without springs."""
+    if ties is None or ties.ks == 0 or not ties.moving.any():
+        return math.inf
+    return float(np.sqrt(np.min(np.asarray(mass)[ties.moving]) / ties.ks))
+
+
+def check_ties(dt, ties, mass):
+    """Refuse dt above ``tie_limit``."""
+    if ties is not None:
+        refuse_dt(dt, tie_limit(ties, mass), f"the stability limit {{limit}} of the side-wall ties "
+                                             f"(sqrt(m_min / k's), k's = [contact] ks_wall = {ties.ks:.3g} N/m)")
+
+
+# -- the stiffness the water adds -------------------------------------------------------------------
+def water_stiffness(net, A, r, E_w):
+    """k_w (N,) [N/m]: E_w sum over the open pores p that disc i bounds of (2 r_i)^2 / A_p."""
+    k = np.zeros(net.n_discs)
+    for p in np.flatnonzero(A > net.a_min):
+        v = net.vertices_of(p)
+        k[v] += E_w * (2 * r[v]) ** 2 / A[p]
+    return k
+
+
+def water_stiffness_limit(net, A, r, E_w, mass, mobile):
+    """min over the particles of 2 sqrt(m / k_w) [s] (inf where the water adds no stiffness)."""
+    k = water_stiffness(net, A, r, E_w)[mobile]
+    m = np.asarray(mass)[mobile]
+    has = k > 0
+    return float(np.min(2 * np.sqrt(m[has] / k[has]))) if has.any() else math.inf
+
+
+def check_water_stiffness(dt, limit, E_w):
+    """Refuse dt above the water-stiffness limit ``limit`` [s]."""
+    refuse_dt(dt, limit, f"the water-stiffness limit {{limit}} at the start (2 sqrt(m / k_w), k_w = E_w sum "
+                         f"(2 r)^2 / A over the pores a disc bounds, [water] E_w = {E_w:g} N/m); reduce dt or E_w, "
+                         f"or set dt = \"auto\"")
+
+
+# -- Darcy ------------------------------------------------------------------------------------------
+def exchange_matrix(water, A, link_contact):
+    """(S, open) where S is the symmetric C^-1/2 G C^-1/2 [1/s] (sparse, over the open pores) of
+    the linearised exchange of PoreWater ``water`` at void areas A, and open (Np,) bool."""
+    fl = water.flows(A, link_contact)
+    open_ = np.isfinite(fl.capacity)
+    idx = np.cumsum(open_) - 1
+    n = int(open_.sum())
+    i, j = water.net.throat_conns[:, 0], water.net.throat_conns[:, 1]
+    keep = open_[i] & open_[j] & (fl.g > 0)
+    gi, gj, g = idx[i[keep]], idx[j[keep]], fl.g[keep]
+    diag = np.bincount(gi, g, minlength=n) + np.bincount(gj, g, minlength=n) + fl.g_b[open_]
+    G = sp.coo_matrix((np.concatenate([diag, -g, -g]), (np.concatenate([np.arange(n), gi, gj]),
+                                                          np.concatenate([np.arange(n), gj, gi]))), shape=(n, n)).tocsr()
+    s = 1.0 / np.sqrt(fl.capacity[open_])
+    return sp.diags(s) @ G @ sp.diags(s), open_
+
+
+def lambda_max(S):
+    """Largest eigenvalue of the symmetric positive semi-definite S (eigsh; dense when small)."""
+    n = S.shape[0]
+    if n == 0:
+        return 0.0
+    if n < 50:
+        return float(np.linalg.eigvalsh(S.toarray())[-1])
+    return float(eigsh(S, k=1, which="LA", return_eigenvectors=False, tol=1e-8)[0])
+
+
+def darcy_eigen_limit(water, A, link_contact):
+    """2 / lambda_max [s] of the linearised exchange (inf without exchange)."""
+    lam = lambda_max(exchange_matrix(water, A, link_contact)[0])
+    return 2.0 / lam if lam > 0 else math.inf
+
+
+def gershgorin_limit(lam):
+    """2 / lambda [s] for the Gershgorin bound lambda [1/s] of the exchange (inf when 0)."""
+    return 2.0 / lam if lam > 0 else math.inf
+
+
+def substep_count(h, limit):
+    """Equal sub-steps a water step of h [s] needs under the Darcy limit [s]: 1 or ceil(h / limit)."""
+    return 1 if h <= limit else int(math.ceil(h / limit))
+
+
+def substeps(h, limit, substep, E_w):
+    """``substep_count(h, limit)``; a count above 1 without ``substep`` raises DarcyStabilityError."""
+    n = substep_count(h, limit)
+    if n > 1 and not substep:
+        raise DarcyStabilityError(
+            f"water step {h:.3e} s exceeds the explicit Darcy limit {limit:.3e} s (Gershgorin bound of eq 38-43 "
+            f"at E_w = {E_w:g} N/m); reduce dt, water_interval or the permeabilities, or let the water sub-step "
+            f"(WaterSettings substep=True; [water] substep = true in a scene file)")
+    return n
+
+
+def substep_cost(n):
+    """The cost of a water step of n sub-steps, in water steps without sub-steps."""
+    return 1 + SUBSTEP_COST * (n - 1)
