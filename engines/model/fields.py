@@ -78,3 +78,13 @@ def settings_class(name, fields, table, module, doc):
                                      namespace={"__post_init__": __post_init__, "FIELDS": fields, "__doc__": doc})
     cls.__module__ = module  # where pickle (checkpoints) finds it
     return cls
+
+
+POSITIVE = Field(float, REQUIRED, POS, "a number > 0")
+COUNT = Field(int, REQUIRED, (1, math.inf), "an integer >= 1")
+
+
+def check_each(obj, names, spec):
+    """``check`` the attributes ``names`` of ``obj`` against one Field ``spec`` (errors name the attribute)."""
+    for name in names:
+        check(name, getattr(obj, name), spec)

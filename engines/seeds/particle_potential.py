@@ -24,6 +24,8 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.spatial import cKDTree
 
+from engines.model.fields import COUNT, POSITIVE, check_each
+
 TONNE_FORCE = 9806.65  # N per tonne-force
 L_REF = 1.0  # m; eq 11 is written with l in metres, so u uses l / L_REF
 
@@ -57,11 +59,6 @@ def free_dofs(kinds):
     return np.array([_FREE_DOFS[Kind(k)] for k in kinds], dtype=bool).reshape(-1, 2)
 
 
-def _check_positive(name, value):
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-
-
 def _check_finite(name, array):
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite, got non-finite values in {np.asarray(array)!r}")
@@ -84,8 +81,7 @@ class Potential:
     DL: float
 
     def __post_init__(self):
-        for name in ("A_m", "alpha", "C", "DL"):
-            _check_positive(name, getattr(self, name))
+        check_each(self, ("A_m", "alpha", "C", "DL"), POSITIVE)
 
 
 def pair_energy(l, pot):
@@ -231,8 +227,8 @@ class SolverSettings:
     softening_ratio: float = 0.05
 
     def __post_init__(self):
-        for name in ("max_step", "gtol", "maxiter", "softening_ratio"):
-            _check_positive(name, getattr(self, name))
+        check_each(self, ("max_step", "gtol", "softening_ratio"), POSITIVE)
+        check_each(self, ("maxiter",), COUNT)
 
 
 @dataclass

@@ -47,6 +47,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from engines.model.fields import COUNT, check_each
+
 #: The paper's 100 levels of the cumulative number curve, R = 0.005 … 0.995.
 DISCRETE_LEVELS = (np.arange(100) + 0.5) / 100
 SAMPLING_METHODS = ("discrete", "continuous")
@@ -107,10 +109,7 @@ class SandLayerSettings:
     sampling: str = "discrete"
 
     def __post_init__(self):
-        for name in ("n_grains", "n_columns", "n_layers"):
-            value = getattr(self, name)
-            require(isinstance(value, (int, np.integer)) and value >= 1, name, value,
-                    "a positive integer")
+        check_each(self, ("n_grains", "n_columns", "n_layers"), COUNT)
         require(np.isfinite(self.element_volume) and self.element_volume > 0,
                 "element_volume", self.element_volume, "a positive volume in m³")
         require(0 <= self.e_min < self.e_max, "e_min, e_max", (self.e_min, self.e_max),
