@@ -2,9 +2,9 @@
 Dask cluster, each in its own directory, resumable.
 
 Command line:
-    /usr/bin/python3 yade_scripts/sweep.py --out DIR --table T.table --script S.py [--workers N]
+    yade -n -x yade_scripts/sweep.py --out DIR --table T.table --script S.py [--workers N]
                                            [--scheduler ADDR] [--no-resume]
-    /usr/bin/python3 yade_scripts/sweep.py --out DIR --jobs jobs.json ...   # [{"name", "argv", "env"}]
+    yade -n -x yade_scripts/sweep.py --out DIR --jobs jobs.json ...   # [{"name", "argv", "env"}]
 """
 import json
 import os

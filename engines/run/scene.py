@@ -62,7 +62,7 @@ SCHEMA = {
     },
     "contact": {
         **CONTACT_FIELDS,
-        "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, see README)"),
+        "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, docs/ENGINE.md)"),
         # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
         "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
         "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),

@@ -16,7 +16,7 @@ class PaperLawEngine:
 
     or without a PyRunner, driven from Python: ``law.drive(n)`` does the same work before each of n
     O.step() calls and holds the forces as permanent forces (with ``held`` added, e.g. buoyancy);
-    this saves the PyRunner's dispatch (~50 us a call).
+    this saves the PyRunner's dispatch at every step.
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit

@@ -3,11 +3,14 @@
 ``WaterEngine`` is the public YADE object: a YADE script with its own spheres (kept in the x-z
 plane), its own collider and contact law adds the water in a few lines::
 
-    from engines.yade.water_engine import WaterEngine
     from engines.model.pore_water import WaterSettings
+    from engines.yade import yade_io
+    from engines.yade.water_engine import WaterEngine
     water = WaterEngine(disc_ids, walls={"bottom": bottom_ids, "left": left_ids, "right": right_ids},
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]   # before NewtonIntegrator
+    O.run(3000, True)
+    yade_io.raise_pending()   # an error inside the engine pauses YADE; this raises it in the script
 
 Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
 rebuilds the pores when due (engines.model.water_model.rebuild_due), measures the void areas (eq 29),
@@ -83,7 +86,7 @@ class WaterEngine:
 
     def runner(self, label="water"):
         """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. YADE's
-        PyRunner costs about 50 us a call (measured at 240 bodies; ``drive`` does not pay it)."""
+        PyRunner adds its dispatch to every call (``drive`` does not pay it)."""
         from engines.yade import yade_io
         return yade_io.py_runner(self.__call__, self.model.water_interval, label)
 
