@@ -3,13 +3,7 @@
 Run:  yade -n -x yade_scripts/crosscheck.py --out DIR   -> DIR/crosscheck.json, exit 1 if a case fails.
 Importable headless: ``run_cases(yade_simulate, ref_simulate, ...)`` and ``precision_study`` take the
 ``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments (the YADE
-side also gets ``hooks=``, the reference side ``readings=``).
-
-Where the YADE path moves the walls by another reading than the reference's (READINGS D1: before
-branch liq, symplectic Euler instead of the constant-average-acceleration method), the reading
-is told from the recorded wall positions (``wall_reading``) and the reference runs with it, so that
-everything else is compared to round-off; the effect of the disagreement is measured by running the
-reference with its own reading too (``reading_disagreements`` in crosscheck.json; reported, not judged).
+side also gets ``hooks=``).
 
 Contact cases (short, deterministic; every tolerance is stated with its reason in the case's ``why``):
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
@@ -40,7 +34,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines import ROOT
-from engines.reference.model import BOTTOM, PAPER_READINGS, WALL_STEPS, porosity, simulate_reference, wall_displacements
+from engines.reference.model import porosity, simulate_reference
 from engines.reference.trajectory import Trajectory
 from engines.run import scene as sc
 from packing.packing import Packing
@@ -214,7 +208,6 @@ TRAJ_TOL = 1e-9        # positions / mean radius while the runs are comparable
 PRESSURE_TOL = 1e-9    # block pressures / max |U| of the reference over the comparable window
 WATER_TOL = 1e-12      # each run's own water budget, relative to its initial water
 PERTURBATION = 1e-12   # of a mean radius, added to every particle's start to time the divergence
-WALL_TOL = 1e-9        # wall displacement / its largest value: the YADE path follows a wall reading
 MIN_WINDOW = 3         # samples the comparable window must hold for the case to check anything
 STAT_FACTOR, STAT_FLOOR = 4.0, 0.02   # statistics after divergence: see compare_statistics
 FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pressures {PRESSURE_TOL:g} of "
@@ -406,31 +399,8 @@ def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
     return out, ok
 
 
-def wall_reading(traj, scene, pk):
-    """The wall kinematics (engines.reference.model WALL_STEPS) the run ``traj`` followed, told from its
-    bottom-wall positions: {"wall_step": name} of the reading they match to WALL_TOL of the largest
-    displacement, {} without loading. Raises ValueError (with each reading's error) when none
-    matches. The readings differ by ~a dt t / 2, 1e-4-1e-3 of the displacement in these cases."""
-    tables = scene.as_dict()
-    t, x, *_ = traj.arrays()
-    steps = np.rint(t / scene.numerics.dt).astype(int)
-    moved = x[:, pk.group == BOTTOM, 0] - pk.xz[pk.group == BOTTOM, 0]
-    errors = {}
-    for name in WALL_STEPS:
-        u = wall_displacements(tables["loading"], scene.numerics.dt, int(steps.max()), name)
-        if u is None:
-            return {}
-        expected = u[steps - 1][:, None]
-        errors[name] = float(np.max(np.abs(moved - expected)) / max(np.max(np.abs(expected)), TINY))
-        if errors[name] <= WALL_TOL:
-            return {"wall_step": name}
-    raise ValueError(f"the bottom wall follows none of the wall readings: relative errors {errors}")
-
-
-def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
-    """One FeatureCase: YADE, the reference (with the YADE path's wall reading, ``wall_reading``),
-    the reference perturbed, and (if ``measure_readings`` and the wall readings differ) the
-    reference with its own reading."""
+def run_feature_case(case, yade_simulate, ref_simulate):
+    """One FeatureCase: YADE, the reference and the reference perturbed."""
     out = {"name": case.name, "passed": False, "why": FEATURE_WHY}
     try:
         scene, pk = case.build()
@@ -439,13 +409,11 @@ def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
         t0 = time.time()
         ty = yade_simulate(scene, pk, case.n_steps, case.record_every, hooks=[hook])
         t1 = time.time()
-        readings = wall_reading(ty, scene, pk)
-        tr = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=readings)
+        tr = ref_simulate(scene, pk, case.n_steps, case.record_every)
         t2 = time.time()
         moved = pk.xz.copy()
         moved[pk.mobile] += PERTURBATION * mean_r
-        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
-                          readings=readings)
+        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every)
         t3 = time.time()
         rcounts = tr.info["counts"]
         ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
@@ -476,36 +444,12 @@ def run_feature_case(case, yade_simulate, ref_simulate, measure_readings=False):
                            "yade": {k: v for k, v in ycounts.items() if k != "history"}},
                    statistics=stat_cmp, checks=checks,
                    seconds={"yade": t1 - t0, "ref": t2 - t1, "ref_perturbed": t3 - t2, "statistics": t4 - t3})
-        out["yade_readings"] = readings
-        differ = {k: v for k, v in readings.items() if v != PAPER_READINGS[k]}
-        if measure_readings and differ:
-            out["reading_disagreements"] = reading_effect(case, scene, pk, tr, tp, ref_simulate, differ)
         out["passed"] = all(checks.values())
         if not out["passed"]:
             out["why"] = f"FAILED {', '.join(k for k, v in checks.items() if not v)}. ({FEATURE_WHY})"
     except Exception as e:  # a case that cannot run fails, with the reason
         out["why"] = f"{type(e).__name__}: {e}. ({FEATURE_WHY})"
     return out
-
-
-def reading_effect(case, scene, pk, tr, tp, ref_simulate, differ):
-    """The reference with its own readings instead of the YADE path's ``differ``: when it departs
-    from the reference with the YADE path's readings, and its statistics beside the spread."""
-    t0 = time.time()
-    ta = ref_simulate(scene, pk, case.n_steps, case.record_every, readings=PAPER_READINGS)
-    mean_r = float(np.mean(pk.r[pk.mobile]))
-    n_div, t_div = divergence(ta, tr, mean_r, scene.water.E_w)
-    n_chaos, t_chaos = divergence(tp, tr, mean_r, scene.water.E_w)
-    start = min(n_chaos, len(tr.t) - 1)
-    sa = statistics(ta, start, pk, scene)
-    sr, sp = (statistics(tj, start, pk, scene) for tj in (tr, tp))
-    return {"readings": {k: {"paper": PAPER_READINGS[k], "yade": v} for k, v in differ.items()},
-            "departs_at_s": _finite(t_div), "chaotic_divergence_at_s": _finite(t_chaos),
-            "max_position_diff_rel": float(np.max(np.abs(np.array(ta.xz) - np.array(tr.xz))) / mean_r),
-            "counts_paper_readings": {k: v for k, v in ta.info["counts"].items() if k != "history"},
-            "statistics_from_chaotic_divergence_on": compare_statistics(
-                sa, sr, sp, ("paper_readings", "fast_readings", "fast_readings_perturbed"))[0] if sa else {},
-            "seconds": time.time() - t0}
 
 
 # -- running ------------------------------------------------------------------------------------------
@@ -542,13 +486,10 @@ def summary(case_result):
     return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
-def run_cases(yade_simulate, ref_simulate=simulate_reference, cases=None, log=None, features=None,
-              measure_readings=False):
+def run_cases(yade_simulate, ref_simulate=simulate_reference, cases=None, log=None, features=None):
     """Run ``cases`` (default: the contact cases) and ``features`` (default: feature_cases()) in both
-    implementations: {"cases": [...], "feature_cases": [...], "passed": bool}. ``ref_simulate(...,
-    readings=)`` runs the reference (feature cases: with the YADE path's wall reading); with
-    ``measure_readings`` also with its own where they differ, to measure the disagreement.
-    ``log``: optional callable given a line per case."""
+    implementations: {"cases": [...], "feature_cases": [...], "passed": bool}. ``log``: optional
+    callable given a line per case."""
     cases = contact_cases() if cases is None else cases
     features = feature_cases() if features is None else features
     results, long = [], []
@@ -557,7 +498,7 @@ def run_cases(yade_simulate, ref_simulate=simulate_reference, cases=None, log=No
         if log:
             log(summary(results[-1]))
     for c in features:
-        long.append(run_feature_case(c, yade_simulate, ref_simulate, measure_readings))
+        long.append(run_feature_case(c, yade_simulate, ref_simulate))
         if log:
             log(feature_summary(long[-1]))
     return {"cases": results, "feature_cases": long,
@@ -573,9 +514,6 @@ def feature_summary(c):
             f"({c['window_samples']} samples compared, max dx/r {c['window'].get('max_position_diff_rel', float('nan')):.2g}), "
             f"rebuilds {rc['rebuilds']}, rules {rc['remesh']}, separations {rc['separation']}, "
             f"seconds {', '.join(f'{k} {v:.1f}' for k, v in c['seconds'].items())}")
-    if "reading_disagreements" in c:
-        d = c["reading_disagreements"]
-        line += f"\n     paper readings {list(d['readings'])}: depart at {d['departs_at_s']} s, max dx/r {d['max_position_diff_rel']:.2g}"
     return line if c["passed"] else f"{line}\n     {c['why']}"
 
 
@@ -641,8 +579,7 @@ def main(argv):
         if unknown:
             ap.error(f"unknown cases {sorted(unknown)}")
         cases, features = ([c for c in group if c.name in args.only] for group in (cases, features))
-    result = run_cases(simulate, cases=cases, features=features, log=lambda line: print(line, flush=True),
-                       measure_readings=True)
+    result = run_cases(simulate, cases=cases, features=features, log=lambda line: print(line, flush=True))
     result["seconds"] = time.time() - t0
     path = write_json(result, args.out)
     print(f"wrote {path}; {'all cases passed' if result['passed'] else 'SOME CASES FAILED'}")

@@ -142,9 +142,6 @@ class PoreDEM:
         self.mass, self.inertia = disc_masses(scene, packing)
         self.dt = scene.numerics.dt
         check_time_step(scene, self.mass[self.mobile])
-        if scene.numerics.damping_eq44:
-            raise ValueError("[numerics] damping_eq44: not available in the YADE path (NewtonIntegrator "
-                             "moves x by v dt); the reference implements it")
         self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
         self.k = 0
         accel = ground_motion.input_acceleration(scene)

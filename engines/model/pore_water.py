@@ -277,23 +277,15 @@ class PoreWater:
 RULES = "abcd"  # PoreWater.rule codes 1-4; 0: built with the network
 
 
-def inherit_pressures(old_net, U_old, old_valid, new_net):
-    """Pressures for the pores of ``new_net`` from those of ``old_net`` by rules (a)-(d) of §3.4(2).
-
-    Returns (U_new (Np_new,), counts dict rule -> number of pores).
-    """
-    U, rule = pressures_by_rule(old_net, U_old, old_valid, new_net)
-    return U, rule_counts(rule)
-
-
 def rule_counts(rule):
     """{"a": n, ..., "d": n} of rule codes 1-4."""
     return {name: int(np.sum(rule == k)) for k, name in enumerate(RULES, 1)}
 
 
 def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
-    """(U_new (Np_new,), rule code 1-4 of (a)-(d) (Np_new,) int8): see ``inherit_pressures``;
-    ``compiled``: rules (b) and (c) by engines.compiled.pores."""
+    """Pressures for the pores of ``new_net`` from those U_old of ``old_net`` (only where ``old_valid``)
+    by rules (a)-(d) of §3.4(2) (``PoreWater.remesh``): (U_new (Np_new,), rule code 1-4 of (a)-(d)
+    (Np_new,) int8). ``compiled``: rules (b) and (c) by engines.compiled.pores."""
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.zeros(n_new, np.int8)

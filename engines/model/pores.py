@@ -9,8 +9,7 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
   can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
   *every eq 28 pair that crosses no link is a link*; of two such pairs that cross each other,
-  the one with the smaller gap R - r_i - r_j is put in first. ``candidates="delaunay"`` gives the previous
-  candidate set (Delaunay edges of the centres, no insertion), kept for comparison.
+  the one with the smaller gap R - r_i - r_j is put in first.
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
   it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
@@ -37,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from engines.compiled import pores as kp
 
@@ -187,16 +186,6 @@ def _ccw(xz, tri):
     cw = _signed_area(xz[tri]) < 0
     tri[cw] = tri[cw][:, [0, 2, 1]]
     return tri
-
-
-def _delaunay(xz):
-    """Counter-clockwise Delaunay triangles of the centres, or None if there are none."""
-    if len(xz) < 3:
-        return None
-    try:
-        return _ccw(xz, Delaunay(xz).simplices)
-    except QhullError:
-        return None
 
 
 LOWER_FACET_TOL = 1e-12  # a hull facet is lower when its unit normal's lift component is below -this
@@ -399,15 +388,12 @@ def _locate(xz, tri, points):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, candidates="regular",
-                compiled=False):
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, compiled=False):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
-    An edge between two wall discs is a wall element, not a free surface.
-    ``candidates``: "regular" (the regular triangulation plus the eq 28 pairs it hides, see the
-    module docstring) or "delaunay" (Delaunay edges of the centres only; misses some eq 28 pairs
-    at a long l_m).
+    An edge between two wall discs is a wall element, not a free surface. The candidate links are
+    the regular triangulation plus the eq 28 pairs it hides (module docstring).
     ``compiled``: everything but qhull by the kernels of engines.compiled.pores instead of the
     readable NumPy functions (``_lifted_points``, ``_faces``, ``_links_and_corners``, ...): the
     same network (tests/compiled/test_pores.py).
@@ -425,14 +411,10 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     if bad.any():
         raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
-    if candidates not in ("regular", "delaunay"):
-        raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
-    tri = regular_triangulation(xz, r, compiled) if candidates == "regular" else _delaunay(xz)
+    tri = regular_triangulation(xz, r, compiled)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
-    n_inserted = 0
-    if candidates == "regular":
-        tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
+    tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
     if compiled:
         faces, links_and_corners = kp.faces, kp.links_and_corners
     else:

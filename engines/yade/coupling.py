@@ -134,8 +134,6 @@ class YadeCoupling:
                 self.engine.held[:, 1] = scene.material.rho_w * np.pi * packing.r[dyn] ** 2 * g * packing.mobile[dyn]
             loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
         else:
-            if scene.numerics.damping_eq44:
-                raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
             self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)
             loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
                     InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],

@@ -89,7 +89,7 @@ def settle(scene, packing, duration=None):
     dep = scene.with_overrides({
         "contact": {"spring": "a", "ks": p.settle_ks, "eta_s": 0.0, "separation_adjustment": False},
         "water": {"enabled": False}, "loading": {"type": "none"},
-        "numerics": {"dt": p.settle_dt, "damping_eq44": False}})
+        "numerics": {"dt": p.settle_dt}})
     cp = YadeCoupling(dep, packing, newton_damping=SETTLE_DAMPING)
     cp.run(int(round((duration or p.settle_time) / p.settle_dt)))
     return Packing(cp.positions(), packing.r, packing.group, packing.density_factor)

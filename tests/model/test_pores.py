@@ -354,11 +354,10 @@ def test_locate_points_in_triangles_edges_count_as_inside():
     np.testing.assert_array_equal(pg._locate(xz, tri, points), [0, 1, -1, 0, 0, 0, 1, -1, -1])
 
 
-@pytest.mark.parametrize("candidates", ["regular", "delaunay"])
-def test_three_touching_discs_make_one_pore(candidates):
+def test_three_touching_discs_make_one_pore():
     """The smallest packing with a pore: three equal touching discs, void sqrt(3) r^2 - pi r^2 / 2."""
     xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)]])
-    net = pg.build_pores(xz, np.ones(3), candidates=candidates)
+    net = pg.build_pores(xz, np.ones(3))
     assert net.n_pores == 1 and len(net.links) == 3
     np.testing.assert_allclose(pg.measure(net, xz, np.ones(3)).void_area, [np.sqrt(3) - np.pi / 2], rtol=1e-12)
 

@@ -71,7 +71,6 @@ def test_quicksand_refuses_an_unwritable_output_path(tmp_path):
 
 @pytest.mark.parametrize("body,field", [
     ("[water]\nk1 = 1e9\n", "Darcy limit"),                   # refused up front, not at step 1
-    ("[numerics]\ndamping_eq44 = true\n", "[numerics] damping_eq44"),
     ('[loading]\ntype = "record"\nrecord = "no_such_record.txt"\n', "[loading] record"),
     ('[packing]\nfile = "no_such_packing.csv"\n', "[packing] file"),
 ])

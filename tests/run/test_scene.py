@@ -105,3 +105,11 @@ def test_settings_defaults_are_the_schemas():
                 assert scenes.SCHEMA[table][f.name][1] == f.default, (table, f.name)
                 compared += 1
     assert compared >= 12
+
+
+def test_the_scene_readme_table_is_the_schema():
+    """yade_scripts/scenes/README.md shows the schema as engines.run.scene prints it (regenerate it with
+    `PYTHONPATH=. /usr/bin/python3 -m engines.run.scene` after a change of the schema)."""
+    with open(os.path.join(scenes.SCENE_DIR, "README.md"), encoding="utf-8") as f:
+        rows = [line.rstrip("\n") for line in f if line.startswith("|")]
+    assert rows == scenes.schema_markdown().splitlines()
