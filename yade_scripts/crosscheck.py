@@ -321,7 +321,7 @@ def features_of(scene):
 
 
 def yade_remesh_counter():
-    """A hook of yade_coupling.simulate (called after each recorded chunk, so at most one rebuild
+    """A hook of engines.yade.coupling.simulate (called after each recorded chunk, so at most one rebuild
     in between when record_every <= rebuild_interval) counting the fast code's re-meshing rules
     per rebuild; (hook, counts). Rebuild n happens at step n x rebuild_interval."""
     counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "history": [], "separation": None}

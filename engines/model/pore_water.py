@@ -289,7 +289,7 @@ def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.zeros(n_new, np.int8)
-    # (a) the same vertex set: equal signatures (pore_geometry._mix64)
+    # (a) the same vertex set: equal signatures (pores._mix64)
     valid = np.flatnonzero(old_valid)
     order = valid[np.argsort(old_net.pore_signature[valid], kind="stable")]
     sorted_sig = old_net.pore_signature[order]
@@ -351,7 +351,7 @@ SINKHORN_TOL, SINKHORN_MAX_ITER = 1e-13, 500
 def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     """Water of the new pores from the water of the old ones, conserved (module docstring).
 
-    O_pq: polygon overlap of old pore p and new pore q (pore_geometry.pore_overlaps). The void of
+    O_pq: polygon overlap of old pore p and new pore q (pores.pore_overlaps). The void of
     the overlap is not known exactly (the discs cut it), so V_pq = alpha_p O_pq beta_q is scaled
     (Sinkhorn iterations) until its rows sum to the old voids A_p and its columns to the new voids
     A_q (times the ratio of the two totals in each connected group of overlapping pores, which is 1

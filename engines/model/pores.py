@@ -15,8 +15,8 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
   are neglected, as in the paper. Each step, the polygon area is the shoelace sum and theta the
   interior angle (eq 29) over the pore's boundary links, walked as in the paper (turn clockwise at
-  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The triangles
-  give the same areas independently (``void_area_by_triangles``), which the tests check.
+  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The tests check
+  these areas against the pore's triangles.
 * The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
@@ -593,25 +593,6 @@ def _link_half_edges(xz, links, link_pores):
     return org, dst, left, nxt
 
 
-def pore_polygon(net, p):
-    """Ordered vertex discs of pore ``p``, one list per boundary cycle, counter-clockwise.
-
-    The walk is the paper's: from a link, at each disc turn to the next link clockwise. A pore
-    with an island of linked discs inside it has more than one cycle; the longest comes first.
-    """
-    todo = set(np.flatnonzero(net.he_left == p).tolist())
-    cycles = []
-    while todo:
-        h0 = todo.pop()
-        cycle, h = [int(net.he_org[h0])], int(net.he_next[h0])
-        while h != h0:
-            todo.discard(h)
-            cycle.append(int(net.he_org[h]))
-            h = int(net.he_next[h])
-        cycles.append(cycle)
-    return sorted(cycles, key=len, reverse=True)
-
-
 def measure(net, xz, r):
     """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43).
 
@@ -634,23 +615,6 @@ def measure(net, xz, r):
     sect = 0.5 * np.bincount(net.corner_pore, theta * net.corner_r2, minlength=n_p) + net.rattler_area
     contact = r[i] + r[j] + net.eps_m >= length  # eq 43b
     return PoreMeasures(poly, sect, poly - sect, length, contact, theta, np.column_stack([dx, dz]))
-
-
-def void_area_by_triangles(net, xz, r):
-    """Void area per pore from its triangles (slow independent reference of ``measure``)."""
-    area, sectors = _triangle_void(xz, r, net.tri)
-    return np.bincount(net.tri_pore, area - sectors, minlength=net.n_pores)
-
-
-def interior_angles(net, meas):
-    """Interior angle of each pore at each of its linked vertex discs [rad] (eq 29).
-
-    Returns {pore: {disc: angle}}; a disc met twice on the walk (a pinch) gets the sum.
-    """
-    out = {p: {} for p in range(net.n_pores)}
-    for p, v, t in zip(net.corner_pore.tolist(), net.corner_disc.tolist(), meas.corner_angle.tolist()):
-        out[p][v] = out[p].get(v, 0.0) + t
-    return out
 
 
 def pressure_forces(net, r, U, meas):
@@ -726,7 +690,7 @@ def pore_overlaps(old_net, new_net, xz, compiled=False):
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
     others are clipped against the nearby triangles of the other network (``_clip_areas``).
-    ``compiled``: by kernels_pores.pore_overlaps (the same pairs, the areas summed in another order).
+    ``compiled``: by engines.compiled.pores.pore_overlaps (the same pairs, the areas summed in another order).
     """
     if compiled:
         return kp.pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)

@@ -69,16 +69,6 @@ class SideWallTies:
         f = self.tie_forces(np.asarray(x, float), np.asarray(vx, float))
         return np.bincount(self.upper, f, minlength=self.n) - np.bincount(self.lower, f, minlength=self.n)
 
-    def energy(self, x):
-        """Elastic energy of the ties (k'_s / 2) sum stretch^2 [J per m]."""
-        s = (x[self.upper] - x[self.lower]) - self.rest
-        return 0.5 * self.ks * float(np.sum(s * s))
-
-    def dissipation_rate(self, vx):
-        """Power taken by the dashpots eta'_s sum (v_u - v_l)^2 [W per m] (>= 0)."""
-        dv = vx[self.upper] - vx[self.lower]
-        return self.eta * float(np.sum(dv * dv))
-
     def stable_time_step(self, mass):
         """sqrt(m_min / k'_s) over the moving wall discs [s] (module docstring); inf without springs."""
         if self.ks == 0 or not self.moving.any():

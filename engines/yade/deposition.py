@@ -158,22 +158,6 @@ def deposit(scene):
     return cut
 
 
-def cut_and_resettle(scene, deposit_packing, x0, width):
-    """A sub-scene: the particles of a deposit with centre x in [x0, x0 + width), moved into a
-    new box of the scene's wall discs (sized to the window) and settled again (§4.2)."""
-    p = scene.packing
-    keep = deposit_packing.mobile & (deposit_packing.xz[:, 0] >= x0) & (deposit_packing.xz[:, 0] < x0 + width)
-    if not keep.any():
-        raise ValueError(f"cut: no particle with x in [{x0}, {x0 + width})")
-    n_bottom = int(np.ceil(width / (2 * p.wall_radius))) + 2
-    walls, groups = wall_box(n_bottom, p.n_side, p.wall_radius)
-    xz = deposit_packing.xz[keep] - [x0 - 2 * p.wall_radius, deposit_packing.bed_bottom - p.wall_radius]
-    r = deposit_packing.r[keep]
-    cut = Packing(np.vstack([xz, walls]), np.concatenate([r, np.full(len(walls), p.wall_radius)]),
-                  np.concatenate([np.full(len(r), WALL_NONE), groups]), np.ones(len(r) + len(walls)))
-    return _mark(scene, settle(scene, cut))
-
-
 def scene_packing(scene):
     """The packing a scene runs on: its CSV file (source = file) or a fresh deposit."""
     if scene.packing.source == "file":

@@ -12,9 +12,10 @@ from scipy.sparse.csgraph import connected_components
 
 from engines.model import pores as pg
 from engines.run.scene import SCENE_DIR
-from packing.layouts import random_sequential
 from packing.packing import Packing
 from packing.psd import sample_diameters
+from tests.layouts import random_sequential
+from tests.oracles import void_area_by_triangles
 
 SEISMIC = (2e-4, 3.5e-4)    # eps_m, l_m of seed 000 §6 (Table 4)
 QUICKSAND = (0.0, 1.3e-4)   # eps_m, l_m of §5 (Table 1)
@@ -77,7 +78,7 @@ def test_every_eq28_pair_crossing_no_link_is_a_link(seed, eps_m, l_m):
     c, _ = connected_components(g, directed=False)
     assert net.n_pores + net.n_closed == len(net.links) - n + c
     m = pg.measure(net, xz, r)
-    np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(m.void_area, void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-15)
 
 
 def test_the_check_catches_pairs_the_triangulation_hides_at_the_seismic_range():

@@ -176,7 +176,7 @@ def test_smoothing_eq46_is_a_running_average_of_used_flows():
     assert w.balance_error() < 1e-14
 
 
-# -- analytic cases (issue 9) --------------------------------------------------------------------
+# -- analytic cases --------------------------------------------------------------------------------
 def test_drained_side_drains_exponentially_with_k3():
     """Two equal pores against a drained side wall (every vertex a side-wall disc: no free surface),
     both at the same excess W - A: no throat flow, and each loses q = k3 W U / E_w = k3 (W - A), so

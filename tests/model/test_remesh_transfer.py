@@ -1,12 +1,13 @@
-"""Water at re-meshing (issue 11, item 5): the paper's rule against the conserving transfer; and the
+"""Water at re-meshing: the paper's rule against the conserving transfer; and the
 drained side-wall flux against the analytic solution of eq 32 with the k3 outflow."""
 import numpy as np
 import pytest
 
 from engines.model import pores as pg
 from engines.model.pore_water import PoreWater, WaterSettings, pressure, water_from_pressure
-from packing.layouts import random_discs, random_sequential
+from packing.layouts import random_discs
 from packing.psd import sample_diameters
+from tests.layouts import random_sequential
 
 E_W = 2400.0
 

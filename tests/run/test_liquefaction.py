@@ -1,4 +1,4 @@
-"""The seismic box in the engine (issue 11 item 6): the driven base, the side walls on springs, the
+"""The seismic box in the engine: the driven base, the side walls on springs, the
 drained side flux, the porosity window of the history, and the liquefaction script. Short runs."""
 import json
 import os
@@ -20,6 +20,7 @@ from engines.yade.coupling import YadeCoupling
 from engines.yade.deposition import wall_box
 from packing.packing import Packing
 from postproc.run_files import read_history
+from tests.oracles import base_history
 
 R_W = 0.55e-3  # wall disc radius of the seismic box [m]
 
@@ -63,7 +64,7 @@ def test_driven_base_follows_the_integrated_input(case, law):
     n, every = 400, 50
     cp = YadeCoupling(sc, pk)
     xs = run_recording(cp, n, every)
-    t, a, v, u = gm.integrate(gm.input_acceleration(sc), sc.numerics.dt, n)
+    t, a, v, u = base_history(gm.input_acceleration(sc), sc.numerics.dt, n)
     bottom = pk.group == pg.WALL_BOTTOM
     moved = xs[:, bottom, 0] - pk.xz[bottom, 0]
     ulp = np.spacing(np.abs(pk.xz[:, 0]).max())  # round-off of a coordinate: x += v dt each step
@@ -84,7 +85,7 @@ def test_side_walls_on_springs_follow_their_ties():
     xs = run_recording(cp, n, 1)
     ties, dt = cp.core.ties, sc.numerics.dt
     m = disc_masses(sc, pk)[0]
-    _, _, _, u = gm.integrate(gm.input_acceleration(sc), dt, n)
+    _, _, _, u = base_history(gm.input_acceleration(sc), dt, n)
     x_prev, x, v = pk.xz[:, 0].copy(), pk.xz[:, 0].copy(), np.zeros(len(pk.r))
     side = ties.moving
     bottom = pk.group == pg.WALL_BOTTOM
@@ -156,7 +157,7 @@ def test_history_porosity_is_the_window_porosity_and_the_columns(tmp_path):
     csv = 1e-8  # history.csv holds 9 significant digits
     win = box_window(pk, sc.output.porosity_window)
     assert h["porosity"][0] == pytest.approx(porosity(pk.xz[pk.mobile], pk.r[pk.mobile], win), rel=csv)
-    t, a, v, u = gm.integrate(gm.input_acceleration(sc), sc.numerics.dt, 300)
+    t, a, v, u = base_history(gm.input_acceleration(sc), sc.numerics.dt, 300)
     np.testing.assert_allclose(h["base_disp"], u[::100][:len(h["t"])], rtol=csv, atol=0)
     np.testing.assert_allclose(h["base_acc"], a[::100][:len(h["t"])], rtol=csv)
     assert np.all(np.abs(h["side_left_dx"]) < 1e-6) and np.any(h["side_left_dx"] != 0)

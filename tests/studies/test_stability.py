@@ -1,4 +1,4 @@
-"""Stability at the extremes and the automatic time step (issue 12 items 3-4): the limits of
+"""Stability at the extremes and the automatic time step: the limits of
 engines.model.time_step on analytic cases, dt = "auto" in the scene schema, the refusals up front
 (fast, no long runs) and the stability map's classification (no YADE)."""
 import math
