@@ -4,7 +4,7 @@ on this machine.
     git worktree add /tmp/pore-dem-26fe280 26fe280
     yade -n -x benchmarks/before_after.py --old-tree /tmp/pore-dem-26fe280 --json out/bench-before-after.json
 
-Absolute times measured on another machine do not carry over. This script runs both trees on the same discs (the liquefaction_case1 packing; spring d, Table 4
+This script runs both trees on the same discs (the liquefaction_case1 packing; spring d, Table 4
 constants, eps_m = 2e-4 m, the 1500 gal 50 Hz cosine, water every step, dt = 1e-6 s; the old tree
 has fixed side walls, today's preset moves them on springs), each in its own `yade` process, in
 turns, ``repeats`` times, and writes the CPU microseconds per step (medians) and their ratio: the

@@ -5,7 +5,9 @@ Importable headless: ``run_cases(yade_simulate, ref_simulate, ...)`` and ``preci
 ``simulate(scene, packing, n_steps, record_every) -> Trajectory`` functions as arguments (the YADE
 side also gets ``hooks=``).
 
-Contact cases (short, deterministic; every tolerance is stated with its reason in the case's ``why``):
+Every metric is judged or says why not: a tolerance with its reason (the case's ``why``), or its reason
+in the case's ``not_judged`` (a case with a metric that has neither fails).
+Contact cases (short, deterministic):
   head_on_collision        two equal discs, linear spring-dashpot, g = 0: restitution vs analytic
   head_on_adjusted         the same with the separation adjustment: -Vn''/Vn = e (pattern d, eq 24)
   pressed_release_a..d     a disc pressed into a fixed wall disc and released, per spring of Fig. 5
@@ -25,7 +27,7 @@ import json
 import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -44,12 +46,14 @@ TINY = 1e-30
 ROUNDOFF_WHY = ("float64 against float64: the two paths differ only in the order of operations "
                 "(YADE's v += dt (F/m + g), bincount vs add.at, the telescoped vs per-arc eq 33), ~1e-16 "
                 "relative per operation")
+COST_WHY = "wall-clock seconds on this machine, which depend on its load: for the record, not a result"
 
 
 @dataclass
 class Case:
     """One cross-check: ``build()`` -> (scene, packing); ``analyze(traj_yade, traj_ref, scene, packing)``
-    -> metrics; every metric named in ``tolerances`` must be finite and <= its tolerance."""
+    -> metrics; every metric named in ``tolerances`` must be finite and <= its tolerance, every other
+    one needs its reason in ``not_judged`` (metric -> why it is not judged; seconds_* have COST_WHY)."""
 
     name: str
     build: object
@@ -58,6 +62,7 @@ class Case:
     tolerances: dict
     why: str
     analyze: object
+    not_judged: dict = field(default_factory=dict)
 
 
 # -- metrics ------------------------------------------------------------------------------------------
@@ -142,11 +147,13 @@ def collision_case(adjust):
                  restitution_diff=abs(e_y - e_r))
         return m
 
+    behind = "the value behind restitution_error_yade, restitution_error_ref and restitution_diff, which are judged"
     return Case(name, lambda: (scene, launcher_packing()), 2500, 50,
                 {"max_position_diff_rel": 1e-9, "restitution_diff": 1e-9,
                  "restitution_error_yade": tol_e, "restitution_error_ref": tol_e},
                 f"restitution: {why_e}. Between the paths 1e-9: a smooth two-body motion accumulates "
-                f"~n_steps x 1e-16 of {ROUNDOFF_WHY}", analyze)
+                f"~n_steps x 1e-16 of {ROUNDOFF_WHY}", analyze,
+                dict.fromkeys(("restitution_yade", "restitution_ref", "restitution_analytic"), behind))
 
 
 def pressed_case(spring):
@@ -190,13 +197,17 @@ def pressed_case(spring):
 
     tol = {"max_position_diff_rel": 1e-9, "exit_speed_error_yade": 1e-4, "exit_speed_error_ref": 1e-4,
            "force_path_error_yade": 1e-6, "force_path_error_ref": 1e-6}
+    speed = "the value behind exit_speed_error_yade and exit_speed_error_ref, which are judged"
+    reported = dict.fromkeys(("exit_speed_yade", "exit_speed_ref", "exit_speed_analytic"), speed)
     if spring == "d":
         tol.update(residual_overlap_error_yade=1.0, residual_overlap_error_ref=1.0)
+        reported.update({f"residual_overlap_{tag}": f"the value behind residual_overlap_error_{tag}, which is judged"
+                         for tag in ("yade", "ref")})
     return Case(f"pressed_release_{spring}", lambda: (scene, pk), 450, 1, tol,
                 "force path from second differences of positions, 1e-6 f_max (x round-off ~1e-21 m "
                 "against a dt^2 ~ 6e-11 m); exit speed 1e-4 relative (the force is ~0 when contact ends: "
                 "second order, (omega dt)^2 ~ 3e-5); residual overlap of d within one step of travel "
-                f"(metric in units of v dt); between the paths 1e-9: {ROUNDOFF_WHY}", analyze)
+                f"(metric in units of v dt); between the paths 1e-9: {ROUNDOFF_WHY}", analyze, reported)
 
 
 def contact_cases():
@@ -220,6 +231,18 @@ FEATURE_WHY = (f"trajectories (positions {TRAJ_TOL:g} of a mean radius, block pr
                f"and porosity agree within {STAT_FACTOR:g} x the spread between the two reference runs "
                f"(at least {STAT_FLOOR:g} of their scale); re-meshing rule counts agree rebuild by rebuild "
                f"before the divergence. Every rule the case is built for must fire. {ROUNDOFF_WHY}")
+FEATURE_NOT_JUDGED = {   # the entries of a feature case's result that no check reads, and why
+    "divergence_time_s": "when the perturbed reference departs from the reference: the scene's chaos, which ends "
+                         "the comparable window; judged through checks.window_samples (at least MIN_WINDOW samples "
+                         "before it)",
+    "perturbation_growth": "max |x_perturbed - x_ref| over the run over the perturbation: how strongly the scene "
+                           "amplifies a difference, a property of the scene, not of either implementation",
+    "counts": "totals over the whole run: after the divergence the two paths follow different trajectories, so "
+              "their rules are compared rebuild by rebuild before it (checks.rules_rebuild_by_rebuild_in_window); "
+              "the reference's totals are judged by checks.rebuilds and checks.rules_fired; the separation "
+              "patterns (eq 18-24) are counted by the reference only",
+    "seconds": COST_WHY,
+}
 
 
 @dataclass
@@ -380,7 +403,7 @@ def statistics(traj, start, pk, scene):
         return {"block_U": np.nanmean(U[start:], axis=0) if w.enabled else np.array([]), "porosity": float(np.nanmean(por))}
 
 
-def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
+def compare_statistics(sy, sr, sp):
     """|S_y - S_r| against the chaotic spread |S_p - S_r| of each statistic (y: the run judged,
     r: the reference, p: the reference perturbed): pass when within STAT_FACTOR x that spread or
     STAT_FLOOR x the statistic's scale."""
@@ -393,7 +416,7 @@ def compare_statistics(sy, sr, sp, names=("yade", "ref", "perturbed_ref")):
         allowed = np.maximum(STAT_FACTOR * np.abs(p - r), STAT_FLOOR * scale)
         diff = np.abs(y - r)
         good = bool(np.all(np.isnan(diff) == np.isnan(allowed)) and np.all((diff <= allowed) | np.isnan(diff)))
-        out[key] = {names[0]: y.tolist(), names[1]: r.tolist(), names[2]: p.tolist(),
+        out[key] = {"yade": y.tolist(), "ref": r.tolist(), "perturbed_ref": p.tolist(),
                     "diff": diff.tolist(), "allowed": allowed.tolist(), "passed": good}
         ok &= good
     return out, ok
@@ -443,7 +466,8 @@ def run_feature_case(case, yade_simulate, ref_simulate):
                    counts={"ref": {k: v for k, v in rcounts.items() if k != "history"},
                            "yade": {k: v for k, v in ycounts.items() if k != "history"}},
                    statistics=stat_cmp, checks=checks,
-                   seconds={"yade": t1 - t0, "ref": t2 - t1, "ref_perturbed": t3 - t2, "statistics": t4 - t3})
+                   seconds={"yade": t1 - t0, "ref": t2 - t1, "ref_perturbed": t3 - t2, "statistics": t4 - t3},
+                   not_judged=FEATURE_NOT_JUDGED)
         out["passed"] = all(checks.values())
         if not out["passed"]:
             out["why"] = f"FAILED {', '.join(k for k, v in checks.items() if not v)}. ({FEATURE_WHY})"
@@ -472,7 +496,11 @@ def run_case(case, yade_simulate, ref_simulate):
         out["why"] = f"{type(e).__name__}: {e}. ({case.why})"
         return out
     failed = [k for k, tol in case.tolerances.items() if not (np.isfinite(metrics.get(k, np.nan)) and metrics[k] <= tol)]
+    why_not = {**case.not_judged, "seconds_yade": COST_WHY, "seconds_ref": COST_WHY}
+    unexplained = [k for k in metrics if k not in case.tolerances and k not in why_not]
+    failed += [f"{k} (neither judged nor explained)" for k in unexplained]
     out["metrics"] = {k: _finite(float(v)) for k, v in metrics.items()}
+    out["not_judged"] = {k: why_not[k] for k in metrics if k in why_not and k not in case.tolerances}
     out["passed"] = not failed
     if failed:
         out["why"] = f"FAILED {', '.join(failed)}. ({case.why})"
@@ -581,6 +609,7 @@ def main(argv):
         cases, features = ([c for c in group if c.name in args.only] for group in (cases, features))
     result = run_cases(simulate, cases=cases, features=features, log=lambda line: print(line, flush=True))
     result["seconds"] = time.time() - t0
+    result["not_judged"] = {"seconds": COST_WHY}
     path = write_json(result, args.out)
     print(f"wrote {path}; {'all cases passed' if result['passed'] else 'SOME CASES FAILED'}")
     return 0 if result["passed"] else 1

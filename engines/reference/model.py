@@ -874,10 +874,10 @@ class ReferenceModel:
 
     ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
     any object with xz (N, 2), r (N,), group (N,) and density_factor (N,). Attributes in the run's
-    dtype: x, v (N, 2) [m, m/s],
-    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]; ``sliding`` (N,) the side-wall
-    discs on springs, ``ties`` (lower, upper) and ``tie_rest`` (column_ties). ``contact`` (PairRecords),
-    ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
+    dtype: x, v (N, 2) [m, m/s], psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m];
+    ``sliding`` (N,) the side-wall discs on springs, ``ties`` (lower, upper) and ``tie_rest``
+    (column_ties). ``contact`` (PairRecords), ``pores`` / ``water`` (None when dry); ``counts``:
+    re-meshing rules, separation patterns, rebuilds.
     """
 
     def __init__(self, tables, packing, dtype=np.float64):

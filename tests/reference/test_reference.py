@@ -310,14 +310,21 @@ def test_crosscheck_plumbing_with_the_reference_on_both_sides(tmp_path):
     assert result["passed"], [c["why"] for c in result["cases"] + result["feature_cases"] if not c["passed"]]
     for case in result["cases"]:
         assert case["metrics"]["max_position_diff_rel"] == 0.0
+        assert set(case["metrics"]) == set(case["tolerances"]) | set(case["not_judged"])   # each judged or explained
     feat = result["feature_cases"][0]
+    assert set(feat["not_judged"]) <= set(feat) - {"checks", "passed", "why"}
     assert feat["window"]["max_position_diff_rel"] == 0.0 and feat["counts"]["ref"]["rebuilds"] >= 20
-    assert feat["features"]["water"] and feat["features"]["input"].startswith("cosine 200.0")
+    assert feat["features"]["water"] and feat["features"]["rebuild_interval"] == 5
     path = cc.write_json(result, str(tmp_path))
     with open(path) as f:
         back = json.load(f)
     assert {c["name"] for c in back["cases"]} >= {"head_on_collision", "pressed_release_d"}
     assert back["feature_cases"][0]["name"] == "small_settling"
+
+    unexplained = cc.Case("unexplained", contact[0].build, 10, 5, {}, "a metric without a tolerance or a reason",
+                          lambda ty, tr, scene, pk: {"max_position_diff_rel": 0.0})
+    bad = cc.run_cases(stand_in, cases=[unexplained], features=[])
+    assert not bad["passed"] and "max_position_diff_rel (neither judged nor explained)" in bad["cases"][0]["why"]
 
     def moved(scene, pk, n, every, hooks=(), **kw):
         return stand_in(scene, Packing(pk.xz + 1e-9, pk.r, pk.group, pk.density_factor), n, every)
