@@ -70,7 +70,7 @@ bench: deps
 bench-seismic: deps
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
-# An older engine (OLD, by default commit 26fe280, which issue 10 was filed against; checked out
+# An older engine (OLD, by default commit 26fe280, one Python engine; checked out
 # under $(OUT)) and today's, on the seismic box, in turns on this machine: the speed-up (a few minutes).
 OLD ?= 26fe280
 OLD_TREE := $(OUT)/tree-$(OLD)
@@ -110,7 +110,7 @@ liquefaction: deps
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
 
-# Speed against accuracy (issue 12; docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
+# Speed against accuracy (docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
 # and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows
 # that are judged) against a dt = 5e-7 s reference, through the sweep runner (resumable: a re-run
 # skips the finished settings; about 60 CPU-minutes, one process at a time so that the costs are
@@ -119,7 +119,7 @@ liquefaction: deps
 tradeoffs: deps
 	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --out $(OUT)/tradeoffs $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
-# The stability map (issue 12): ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
+# The stability map: ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
 # (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.
 stability: deps
 	nice -n 10 $(YADE) -n -j 1 -x yade_scripts/stability.py --out $(OUT)/stability

@@ -1,10 +1,10 @@
-"""The engine as it was when issue 10 was filed against today's, on the seismic box, on this machine.
+"""An older engine (by default commit 26fe280, one Python engine) against today's, on the seismic box,
+on this machine.
 
-    git worktree add /tmp/pore-dem-26fe280 26fe280     # the tree issue 10 measured (one Python engine)
+    git worktree add /tmp/pore-dem-26fe280 26fe280
     yade -n -x benchmarks/before_after.py --old-tree /tmp/pore-dem-26fe280 --json out/bench-before-after.json
 
-Issue 10's figures (342 us a step, 61.6 s for the seismic case) come from another machine. This
-script runs both trees on the same discs (the liquefaction_case1 packing; spring d, Table 4
+This script runs both trees on the same discs (the liquefaction_case1 packing; spring d, Table 4
 constants, eps_m = 2e-4 m, the 1500 gal 50 Hz cosine, water every step, dt = 1e-6 s; the old tree
 has fixed side walls, today's preset moves them on springs), each in its own `yade` process, in
 turns, ``repeats`` times, and writes the CPU microseconds per step (medians) and their ratio: the

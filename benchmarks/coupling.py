@@ -1,4 +1,4 @@
-"""Cost of our engines against YADE alone, at about 240, 2,000 and 10,000 bodies (issue 10 item 5).
+"""Cost of our engines against YADE alone, at about 240, 2,000 and 10,000 bodies.
 
     yade -n -x benchmarks/coupling.py --json out/bench-coupling.json [--sizes 240 2000 10000] [--repeats 3]
 

@@ -1,4 +1,4 @@
-"""The seismic-size scene at the paper's settings, timed (issue 10 item 5; target <= 15 s wall).
+"""The seismic-size scene at the paper's settings, timed (target <= 15 s wall).
 
     yade -n -x benchmarks/seismic_case.py --json out/bench-seismic.json [--steps 180000]
 

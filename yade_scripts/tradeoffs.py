@@ -26,7 +26,6 @@ each per repeat, the median CPU ratio to the first (the paper's settings).
 errors (engines.studies.tradeoffs) against each case's reference and writes out/tradeoffs/tradeoffs.json,
 table.md and the error-against-cost figures (docs/TRADEOFFS.md explains them).
 """
-import argparse
 import json
 import os
 import sys

@@ -26,7 +26,7 @@ YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (t
 between its water steps: many DEM steps in one call.
 
 The pore measure takes each link's turn since the build with ``turn`` (a short series for the
-small turns between rebuilds, else atan2) where pore_geometry.measure calls arctan2: the same
+small turns between rebuilds, else atan2) where engines.model.pores.measure calls arctan2: the same
 angles to round-off, the measure 30 % cheaper.
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
@@ -182,11 +182,11 @@ def turn(s, c):
 @jit
 def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
             poly, sect, void, length, contact, theta, vec, rot, cross):
-    """Pore areas and link states at xz (eq 29, 43b); outputs as in pore_geometry.PoreMeasures.
+    """Pore areas and link states at xz (eq 29, 43b); outputs as in engines.model.pores.PoreMeasures.
 
     vec0 (L, 2): the link vectors at the build (PoreNetwork.link_vec0). rot, cross (L,) are
     scratch: rot is each link's turn since the build, so that a corner's change is the difference
-    of two turns, as in pore_geometry.measure. ``contact`` is a bool array.
+    of two turns, as in engines.model.pores.measure. ``contact`` is a bool array.
     """
     for l in range(len(links)):
         i, j = links[l, 0], links[l, 1]

@@ -5,18 +5,18 @@ Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, 
 reference path and is tested against it (tests/compiled/test_pores.py: integer arrays equal, floats
 to 1e-12 relative):
 
-  lifted_points      pore_geometry._lifted_points         the points of the regular triangulation's hull
-  lower_ccw          pore_geometry.regular_triangulation  the lower hull facets, counter-clockwise
-  missing_pairs      pore_geometry.insert_missing_links   the eq 28 pairs that are no edge
-  faces              pore_geometry._faces                 neighbours, eq 28 links, faces (a union-find
+  lifted_points      model.pores._lifted_points           the points of the regular triangulation's hull
+  lower_ccw          model.pores.regular_triangulation    the lower hull facets, counter-clockwise
+  missing_pairs      model.pores.insert_missing_links     the eq 28 pairs that are no edge
+  faces              model.pores._faces                   neighbours, eq 28 links, faces (a union-find
                                                           over triangles across non-link edges), eq 29
-  links_and_corners  pore_geometry._links_and_corners     links, throats, surface, vertex sets, the
+  links_and_corners  model.pores._links_and_corners       links, throats, surface, vertex sets, the
                                                           half-edge walk, corner angles (eq 29)
   near_vertex_sets   pore_water.pressures_by_rule         rule (b): old vertex sets that contain or are
                                                           contained in a new one
   spread_to_neighbours  pore_water.spread_to_neighbours   rule (c)
-  pore_overlaps      pore_geometry.pore_overlaps          overlap areas of old and new pores (clipping
-                                                          as pore_geometry._clip_areas)
+  pore_overlaps      model.pores.pore_overlaps            overlap areas of old and new pores (clipping
+                                                          as model.pores._clip_areas)
 
 Numbering follows the NumPy functions (pores in the order of their first triangle, links by (i, j),
 half-edges sorted by disc then angle), so the networks are the same array for array. Sorting is by
@@ -29,12 +29,12 @@ import numba as nb
 import numpy as np
 
 jit = nb.njit(cache=True, nogil=True)
-OUTER = -1  # pore_geometry.OUTER
+OUTER = -1  # engines.model.pores.OUTER
 
 
 @jit
 def lifted_points(xz, r, centre):
-    """pore_geometry._lifted_points compiled (the same arithmetic), centre = xz.mean(axis=0)."""
+    """engines.model.pores._lifted_points compiled (the same arithmetic), centre = xz.mean(axis=0)."""
     scale = max(xz[:, 0].max() - xz[:, 0].min(), xz[:, 1].max() - xz[:, 1].min())
     if not scale > 0:
         return None
@@ -181,7 +181,7 @@ def missing_pairs(xz, r, reach, tri):
 
 @jit
 def _mix64(v):
-    """pore_geometry._mix64 of one disc index (splitmix64; uint64 arithmetic wraps)."""
+    """engines.model.pores._mix64 of one disc index (splitmix64; uint64 arithmetic wraps)."""
     z = np.uint64(v) + np.uint64(0x9E3779B97F4A7C15)
     z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
     z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
@@ -198,7 +198,7 @@ def _find(parent, x):
 
 @jit
 def faces(xz, r, tri, reach, a_min):
-    """pore_geometry._faces compiled: (nb (3T,), is_link (3T,), tri_pore (T,), bounded (T,), n_pores,
+    """engines.model.pores._faces compiled: (nb (3T,), is_link (3T,), tri_pore (T,), bounded (T,), n_pores,
     n_closed, off_mesh)."""
     t_count, n = len(tri), len(r)
     m = 3 * t_count
@@ -256,7 +256,7 @@ def faces(xz, r, tri, reach, a_min):
 
 @jit
 def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pores, rat_disc, rat_pore):
-    """pore_geometry._links_and_corners compiled: the same arrays."""
+    """engines.model.pores._links_and_corners compiled: the same arrays."""
     n, t_count = len(r), len(tri)
     # links: one per undirected edge (its first half-edge), sorted by (i, j), i < j
     a, b = _half_edges(tri)
@@ -479,7 +479,7 @@ def spread_to_neighbours(U, rule, conns):
 @jit
 def _clip_area(P, Q, poly, cut):
     """Area of the intersection of the counter-clockwise triangles P (3, 2) and Q (3, 2): P clipped
-    by the three edges of Q (Sutherland-Hodgman, as pore_geometry._clip_areas); poly, cut (9, 2) scratch."""
+    by the three edges of Q (Sutherland-Hodgman, as engines.model.pores._clip_areas); poly, cut (9, 2) scratch."""
     m = 3
     poly[:3] = P
     for e in range(3):
@@ -529,7 +529,7 @@ def _bounding_circle(c):
 
 @jit
 def pore_overlaps(to, tp_old, tn, tp_new, xz, n_new):
-    """pore_geometry.pore_overlaps compiled: (p_old, q_new, area) of the triangles (to, tn) in pores
+    """engines.model.pores.pore_overlaps compiled: (p_old, q_new, area) of the triangles (to, tn) in pores
     (tp_old, tp_new) at xz, summed per pore pair, sorted by (p, q). A triangle of the same three discs
     in both overlaps only itself; the others are clipped against the triangles of the other network
     whose bounding circle (about the centroid) they cross."""

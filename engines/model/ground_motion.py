@@ -162,15 +162,3 @@ class BaseMotion:
         self.acc = a_next
         self.k += 1
         return du / dt
-
-
-def integrate(accel, dt, n_steps):
-    """Times t_n, accelerations, velocities [m/s] and displacements [m] (n_steps + 1 each) of the
-    base from rest, by ``BaseMotion``."""
-    bm = BaseMotion(accel, dt)
-    out = np.empty((n_steps + 1, 4))
-    out[0] = bm.t, bm.acc, bm.vel, bm.disp
-    for n in range(1, n_steps + 1):
-        bm.step()
-        out[n] = bm.t, bm.acc, bm.vel, bm.disp
-    return out.T

@@ -123,9 +123,6 @@ class PoreDEM:
         self.dt = scene.numerics.dt
         num = scene.numerics
         limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], scene.contact.kn)
-        if scene.numerics.damping_eq44:
-            raise ValueError("[numerics] damping_eq44: not available in the YADE path (NewtonIntegrator "
-                             "moves x by v dt); the reference implements it")
         self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
         self.k = 0
         accel = ground_motion.input_acceleration(scene)

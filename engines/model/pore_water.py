@@ -269,27 +269,19 @@ class PoreWater:
 RULES = "abcd"  # PoreWater.rule codes 1-4; 0: built with the network
 
 
-def inherit_pressures(old_net, U_old, old_valid, new_net):
-    """Pressures for the pores of ``new_net`` from those of ``old_net`` by rules (a)-(d) of §3.4(2).
-
-    Returns (U_new (Np_new,), counts dict rule -> number of pores).
-    """
-    U, rule = pressures_by_rule(old_net, U_old, old_valid, new_net)
-    return U, rule_counts(rule)
-
-
 def rule_counts(rule):
     """{"a": n, ..., "d": n} of rule codes 1-4."""
     return {name: int(np.sum(rule == k)) for k, name in enumerate(RULES, 1)}
 
 
 def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
-    """(U_new (Np_new,), rule code 1-4 of (a)-(d) (Np_new,) int8): see ``inherit_pressures``;
-    ``compiled``: rules (b) and (c) by engines.compiled.pores."""
+    """Pressures for the pores of ``new_net`` from those U_old of ``old_net`` (only where ``old_valid``)
+    by rules (a)-(d) of §3.4(2) (``PoreWater.remesh``): (U_new (Np_new,), rule code 1-4 of (a)-(d)
+    (Np_new,) int8). ``compiled``: rules (b) and (c) by engines.compiled.pores."""
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.zeros(n_new, np.int8)
-    # (a) the same vertex set: equal signatures (pore_geometry._mix64)
+    # (a) the same vertex set: equal signatures (pores._mix64)
     valid = np.flatnonzero(old_valid)
     order = valid[np.argsort(old_net.pore_signature[valid], kind="stable")]
     sorted_sig = old_net.pore_signature[order]
@@ -351,7 +343,7 @@ SINKHORN_TOL, SINKHORN_MAX_ITER = 1e-13, 500
 def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     """Water of the new pores from the water of the old ones, conserved (module docstring).
 
-    O_pq: polygon overlap of old pore p and new pore q (pore_geometry.pore_overlaps). The void of
+    O_pq: polygon overlap of old pore p and new pore q (pores.pore_overlaps). The void of
     the overlap is not known exactly (the discs cut it), so V_pq = alpha_p O_pq beta_q is scaled
     (Sinkhorn iterations) until its rows sum to the old voids A_p and its columns to the new voids
     A_q (times the ratio of the two totals in each connected group of overlapping pores, which is 1

@@ -9,15 +9,14 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
   can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
   *every eq 28 pair that crosses no link is a link*; of two such pairs that cross each other,
-  the one with the smaller gap R - r_i - r_j is put in first. ``candidates="delaunay"`` gives the previous
-  candidate set (Delaunay edges of the centres, no insertion), kept for comparison.
+  the one with the smaller gap R - r_i - r_j is put in first.
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
   it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
   are neglected, as in the paper. Each step, the polygon area is the shoelace sum and theta the
   interior angle (eq 29) over the pore's boundary links, walked as in the paper (turn clockwise at
-  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The triangles
-  give the same areas independently (``void_area_by_triangles``), which the tests check.
+  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The tests check
+  these areas against the pore's triangles.
 * The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
@@ -37,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from engines.compiled import pores as kp
 from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
@@ -186,16 +185,6 @@ def _ccw(xz, tri):
     cw = _signed_area(xz[tri]) < 0
     tri[cw] = tri[cw][:, [0, 2, 1]]
     return tri
-
-
-def _delaunay(xz):
-    """Counter-clockwise Delaunay triangles of the centres, or None if there are none."""
-    if len(xz) < 3:
-        return None
-    try:
-        return _ccw(xz, Delaunay(xz).simplices)
-    except QhullError:
-        return None
 
 
 LOWER_FACET_TOL = 1e-12  # a hull facet is lower when its unit normal's lift component is below -this
@@ -398,15 +387,12 @@ def _locate(xz, tri, points):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, candidates="regular",
-                compiled=False):
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, compiled=False):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
-    An edge between two wall discs is a wall element, not a free surface.
-    ``candidates``: "regular" (the regular triangulation plus the eq 28 pairs it hides, see the
-    module docstring) or "delaunay" (Delaunay edges of the centres only; misses some eq 28 pairs
-    at a long l_m).
+    An edge between two wall discs is a wall element, not a free surface. The candidate links are
+    the regular triangulation plus the eq 28 pairs it hides (module docstring).
     ``compiled``: everything but qhull by the kernels of engines.compiled.pores instead of the
     readable NumPy functions (``_lifted_points``, ``_faces``, ``_links_and_corners``, ...): the
     same network (tests/compiled/test_pores.py).
@@ -424,14 +410,10 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     if bad.any():
         raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
-    if candidates not in ("regular", "delaunay"):
-        raise ValueError(f"candidates must be 'regular' or 'delaunay', got {candidates!r}")
-    tri = regular_triangulation(xz, r, compiled) if candidates == "regular" else _delaunay(xz)
+    tri = regular_triangulation(xz, r, compiled)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
-    n_inserted = 0
-    if candidates == "regular":
-        tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
+    tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
     if compiled:
         faces, links_and_corners = kp.faces, kp.links_and_corners
     else:
@@ -610,25 +592,6 @@ def _link_half_edges(xz, links, link_pores):
     return org, dst, left, nxt
 
 
-def pore_polygon(net, p):
-    """Ordered vertex discs of pore ``p``, one list per boundary cycle, counter-clockwise.
-
-    The walk is the paper's: from a link, at each disc turn to the next link clockwise. A pore
-    with an island of linked discs inside it has more than one cycle; the longest comes first.
-    """
-    todo = set(np.flatnonzero(net.he_left == p).tolist())
-    cycles = []
-    while todo:
-        h0 = todo.pop()
-        cycle, h = [int(net.he_org[h0])], int(net.he_next[h0])
-        while h != h0:
-            todo.discard(h)
-            cycle.append(int(net.he_org[h]))
-            h = int(net.he_next[h])
-        cycles.append(cycle)
-    return sorted(cycles, key=len, reverse=True)
-
-
 def measure(net, xz, r):
     """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43).
 
@@ -651,23 +614,6 @@ def measure(net, xz, r):
     sect = 0.5 * np.bincount(net.corner_pore, theta * net.corner_r2, minlength=n_p) + net.rattler_area
     contact = r[i] + r[j] + net.eps_m >= length  # eq 43b
     return PoreMeasures(poly, sect, poly - sect, length, contact, theta, np.column_stack([dx, dz]))
-
-
-def void_area_by_triangles(net, xz, r):
-    """Void area per pore from its triangles (slow independent reference of ``measure``)."""
-    area, sectors = _triangle_void(xz, r, net.tri)
-    return np.bincount(net.tri_pore, area - sectors, minlength=net.n_pores)
-
-
-def interior_angles(net, meas):
-    """Interior angle of each pore at each of its linked vertex discs [rad] (eq 29).
-
-    Returns {pore: {disc: angle}}; a disc met twice on the walk (a pinch) gets the sum.
-    """
-    out = {p: {} for p in range(net.n_pores)}
-    for p, v, t in zip(net.corner_pore.tolist(), net.corner_disc.tolist(), meas.corner_angle.tolist()):
-        out[p][v] = out[p].get(v, 0.0) + t
-    return out
 
 
 def pressure_forces(net, r, U, meas):
@@ -743,7 +689,7 @@ def pore_overlaps(old_net, new_net, xz, compiled=False):
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
     others are clipped against the nearby triangles of the other network (``_clip_areas``).
-    ``compiled``: by kernels_pores.pore_overlaps (the same pairs, the areas summed in another order).
+    ``compiled``: by engines.compiled.pores.pore_overlaps (the same pairs, the areas summed in another order).
     """
     if compiled:
         return kp.pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)

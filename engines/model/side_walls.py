@@ -69,12 +69,3 @@ class SideWallTies:
         f = self.tie_forces(np.asarray(x, float), np.asarray(vx, float))
         return np.bincount(self.upper, f, minlength=self.n) - np.bincount(self.lower, f, minlength=self.n)
 
-    def energy(self, x):
-        """Elastic energy of the ties (k'_s / 2) sum stretch^2 [J per m]."""
-        s = (x[self.upper] - x[self.lower]) - self.rest
-        return 0.5 * self.ks * float(np.sum(s * s))
-
-    def dissipation_rate(self, vx):
-        """Power taken by the dashpots eta'_s sum (v_u - v_l)^2 [W per m] (>= 0)."""
-        dv = vx[self.upper] - vx[self.lower]
-        return self.eta * float(np.sum(dv * dv))

@@ -6,9 +6,7 @@ Independent of the fast modules: it imports nothing from engines/ but the record
 paper's variable names, one record per *ordered* pair (i, j) seen from element i (eq 2: alpha_ij),
 so Newton's third law is not built in but checked; pores are found by the paper's walk around
 the link graph and eq 33 is integrated arc by arc. Where the paper is silent or ambiguous the
-reading taken here is listed in docs/READINGS.md. The one place where the YADE path has used
-another reading, the wall kinematics, is an option (``readings``), so that the cross-check can
-compare everything else to round-off and measure the effect of the disagreement.
+reading taken here is listed in docs/READINGS.md.
 
 Units are SI per unit thickness (SPEC §1): positions [m], forces [N], U and E_w [N/m], areas [m^2].
 Every floating-point state array has the dtype chosen by the caller (float32, float64, longdouble);
@@ -26,7 +24,7 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/
      x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
      with the area actually used (eq 45) and held until the next water step.
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
-     v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17; eq 44 optional).
+     v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17).
      Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
      are integrated the same way in x only, under the contact forces of the particles, the pore
      pressures and the ties of their column (``column_ties``, ``tie_forces``; velocities du/dt of a).
@@ -47,11 +45,6 @@ from engines.reference.trajectory import Trajectory
 G0 = 9.80665                 # standard gravity for records given in g [m/s^2]
 DEGENERATE_FRACTION = 1e-4   # a face with void area <= this x mean(pi r^2) at build is closed (no pore)
 PARTICLE, BOTTOM, LEFT, RIGHT = 0, 1, 2, 3   # disc group codes of a packing
-
-# The reading of this reference where the YADE path has used another (docs/READINGS.md D1):
-# the wall kinematics, "average_acceleration" (the paper's) or "symplectic_euler" (WallMotion).
-WALL_STEPS = ("average_acceleration", "symplectic_euler")
-PAPER_READINGS = {"wall_step": "average_acceleration"}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -89,7 +82,6 @@ class Settings:
     dt_safety: float
     rebuild_interval: int
     water_interval: int
-    eq44: bool
     block_z: list
     side_walls: bool        # side-wall columns on springs (Fig. 27), else fixed
     ks_wall: float          # k'_s of the ties [N/m]
@@ -105,7 +97,7 @@ def read_settings(tables):
         rho=m["rho"], rho_w=m["rho_w"], g=m["g"], wet=w["enabled"], E_w=w["E_w"], k1=w["k1"], k2=w["k2"],
         k3=w["k3"], q_w=w["q_w"], drained=w["sides"] == "drained", l_m=w["l_m"], smoothing=w["smoothing"],
         substep=w["substep"], loading=dict(tables["loading"]), dt=n["dt"], dt_safety=n["dt_safety"],
-        rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"], eq44=n["damping_eq44"],
+        rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"],
         block_z=[list(b) for b in tables["output"]["block_z"]],
         side_walls=tables["loading"]["side_walls"] == "springs", ks_wall=c["ks_wall"], eta_s_wall=c["eta_s_wall"])
 
@@ -805,43 +797,25 @@ def input_acceleration(loading):
 
 
 class WallMotion:
-    """Velocity v [m/s] of the walls that follow the input a(t), advanced one step at a time.
-
-    wall_step = "average_acceleration" (§6.1 "速度、変位を等加速度法で求める", read as the constant
-    average acceleration method, Newmark beta = 1/4, gamma = 1/2; READINGS D1): over step k the
-    acceleration is the mean of its ends, a_bar = (a(t_k) + a(t_k+1)) / 2, and
+    """Velocity v [m/s] of the walls that follow the input a(t), advanced one step at a time by
+    §6.1's "速度、変位を等加速度法で求める", read as the constant average acceleration method (Newmark
+    beta = 1/4, gamma = 1/2; READINGS D1): over step k the acceleration is the mean of its ends,
+    a_bar = (a(t_k) + a(t_k+1)) / 2, and
         u_k+1 = u_k + v_k dt + a_bar dt^2 / 2,   v_k+1 = v_k + a_bar dt.
-    wall_step = "symplectic_euler" (the YADE path before it took this reading): v_k+1 = v_k + a(t_k) dt,
-    u_k+1 = u_k + v_k+1 dt.
     """
 
-    def __init__(self, accel, dt, wall_step, dtype=np.float64):
-        if wall_step not in WALL_STEPS:
-            raise ValueError(f"wall_step must be one of {WALL_STEPS}, got {wall_step!r}")
-        self.accel, self.dt, self.wall_step, self.dtype = accel, dtype(dt), wall_step, dtype
+    def __init__(self, accel, dt, dtype=np.float64):
+        self.accel, self.dt, self.dtype = accel, dtype(dt), dtype
         self.v = dtype(0)
 
     def step(self, k):
         """The displacement du [m] of step k (t_k = k dt -> t_k+1); advances v."""
         dt = self.dt
         a0 = self.dtype(self.accel(k * float(dt)))
-        if self.wall_step == "symplectic_euler":
-            self.v = self.v + a0 * dt
-            return self.v * dt
         a_bar = (a0 + self.dtype(self.accel((k + 1) * float(dt)))) / 2
         du = self.v * dt + a_bar * dt * dt / 2
         self.v = self.v + a_bar * dt
         return du
-
-
-def wall_displacements(loading, dt, n_steps, wall_step):
-    """Displacements u(t_1) .. u(t_n) [m] (n_steps,) of the driven walls from rest (None without
-    loading): what the cross-check compares the YADE path's walls with to tell its reading."""
-    accel = input_acceleration(loading)
-    if accel is None:
-        return None
-    motion = WallMotion(accel, dt, wall_step)
-    return np.cumsum([motion.step(k) for k in range(n_steps)])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -899,17 +873,16 @@ class ReferenceModel:
     """State of one run of the reference; ``step`` advances it by one dt (see the module docstring).
 
     ``tables``: the scene as {table: {field: value}} (or an object with ``as_dict()``); ``packing``:
-    any object with xz (N, 2), r (N,), group (N,) and density_factor (N,); ``readings``: overrides of
-    PAPER_READINGS (e.g. {"wall_step": "symplectic_euler"}). Attributes in the run's dtype: x, v (N, 2) [m, m/s],
-    psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m]; ``sliding`` (N,) the side-wall
-    discs on springs, ``ties`` (lower, upper) and ``tie_rest`` (column_ties). ``contact`` (PairRecords),
-    ``pores`` / ``water`` (None when dry); ``counts``: re-meshing rules, separation patterns, rebuilds.
+    any object with xz (N, 2), r (N,), group (N,) and density_factor (N,). Attributes in the run's
+    dtype: x, v (N, 2) [m, m/s], psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m];
+    ``sliding`` (N,) the side-wall discs on springs, ``ties`` (lower, upper) and ``tie_rest``
+    (column_ties). ``contact`` (PairRecords), ``pores`` / ``water`` (None when dry); ``counts``:
+    re-meshing rules, separation patterns, rebuilds.
     """
 
-    def __init__(self, tables, packing, dtype=np.float64, readings=None):
+    def __init__(self, tables, packing, dtype=np.float64):
         tables = tables if isinstance(tables, dict) else tables.as_dict()
         s = self.s = read_settings(tables)
-        self.readings = {**PAPER_READINGS, **(readings or {})}
         dt_ = self.dtype = np.dtype(dtype).type
         self.group = np.asarray(packing.group)
         self.mobile = self.group == PARTICLE
@@ -945,7 +918,7 @@ class ReferenceModel:
         self.free = np.column_stack([self.mobile | self.sliding, self.mobile])
         self.contact = PairRecords(s, self.r, self.mobile, dt_, self.sliding)
         accel = input_acceleration(s.loading)
-        self.walls = None if accel is None else WallMotion(accel, s.dt, self.readings["wall_step"], dt_)
+        self.walls = None if accel is None else WallMotion(accel, s.dt, dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
         self.moving = np.isin(self.group, moving) & (accel is not None)
         self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
@@ -1002,8 +975,6 @@ class ReferenceModel:
         self.v[free] += F[free] / np.broadcast_to(self.mass[:, None], F.shape)[free] * dt   # eq 14, 16
         self.omega[m] += M[m] / self.inertia[m] * dt
         step_x, step_psi = self.v * dt, self.omega[m] * dt                  # eq 17
-        if s.eq44:
-            step_x, step_psi = (du + step_x) / 2, (dpsi[m] + step_psi) / 2  # eq 44
         self.x_prev, self.psi_prev = self.x.copy(), self.psi.copy()
         self.x[free] += step_x[free]
         self.psi[m] += step_psi
@@ -1032,13 +1003,12 @@ class ReferenceModel:
                     w.total() if w else np.nan, w.balance_error() if w else np.nan)
 
 
-def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64, readings=None):
+def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64):
     """Run the scene ``tables`` (or a Scene) from ``packing`` for n_steps and record a Trajectory
     after every ``record_every`` steps (at t = (k + 1) dt); the contract shared with
     engines.yade.coupling. ``traj.info["counts"]`` holds the re-meshing and separation counts."""
-    model = ReferenceModel(tables, packing, dtype, readings)
-    traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name,
-                            "readings": dict(model.readings)})
+    model = ReferenceModel(tables, packing, dtype)
+    traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name})
     for k in range(n_steps):
         model.step()
         if (k + 1) % record_every == 0:

@@ -116,12 +116,6 @@ def check_record(scene):
         raise InputError(str(e)) from None
 
 
-def check_engine_options(scene):
-    """Options the YADE path refuses at construction (engines.model.pore_dem.PoreDEM)."""
-    if scene.numerics.damping_eq44:
-        raise InputError("[numerics] damping_eq44: not available in the YADE path (the reference implements it)")
-
-
 def preflight(scene, packing, out_dir):
     """Every check of a run that can be made before its first step; raises InputError.
 
@@ -131,7 +125,6 @@ def preflight(scene, packing, out_dir):
     scene = resolve_dt(scene, packing, log=None)
     check_output_dir(out_dir)
     check_duration(scene)
-    check_engine_options(scene)
     check_record(scene)
     check_limits(scene, packing)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]

@@ -89,7 +89,6 @@ SCHEMA = {
         "duration": (float, 0.06, POS, "simulated time [s]"),
         "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2))"),
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
-        "damping_eq44": (bool, False, None, "displacement averaging of eq 44"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
         # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
         "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),

@@ -8,7 +8,7 @@ still one trajectory has a small spread (so a small floor) and a mean that any c
 moves; check that the means do not depend on the size (yade_scripts/tradeoffs.py, the knob
 "perturbation"; docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
 
-* ``pressure_error``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
+* ``pressure_rms``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
   <.> the mean over starts of the block-mean pore pressure histories (N/m, per block and time);
 * ``pressure_rms_below_surface``: the same without the last (surface) block, a diagnostic: the
   surface block's pressure swings most between starts and carries most of the error;
@@ -62,35 +62,24 @@ def _rms(x):
     return float(np.sqrt(np.nanmean(x * x)))
 
 
-def pressure_error(t, U, t_ref, U_ref):
-    """RMS(<U> - <U_ref>) / RMS(<U_ref>) of block pressure histories U (starts, times, blocks)
-    sampled at t, against U_ref (starts, times_ref, blocks) at t_ref (the run is interpolated onto
-    t_ref; nan samples, blocks without pores, are left out)."""
-    return _pressure_error(_on_grid(t, U, t_ref), np.asarray(U_ref, float))
-
-
 def _pressure_error(A, R):
-    """``pressure_error`` of ensembles already on the same times."""
+    """RMS(<A> - <R>) / RMS(<R>) of block pressure histories A, R (starts, times, blocks) on the same
+    times (nan samples, blocks without pores, are left out)."""
     mean_ref = np.nanmean(R, axis=0)
     return _rms(np.nanmean(A, axis=0) - mean_ref) / _rms(mean_ref)
 
 
 def pressure_floor(U_ref):
-    """Chaos floor of ``pressure_error``: sqrt(2/n) RMS(std over the n starts) / RMS(<U_ref>)."""
+    """Chaos floor of ``pressure_rms``: sqrt(2/n) RMS(std over the n starts) / RMS(<U_ref>)."""
     U_ref = np.asarray(U_ref, float)
     n = U_ref.shape[0]
     spread = np.nanstd(U_ref, axis=0, ddof=1)
     return float(np.sqrt(2.0 / n) * _rms(spread) / _rms(np.nanmean(U_ref, axis=0)))
 
 
-def pressure_noise(t, U, t_ref, U_ref):
-    """floor of ``pressure_error`` between these two ensembles: sqrt(mean over samples of
-    (var_run/n_run + var_ref/n_ref)) / RMS(<U_ref>), the variances over starts (ddof 1)."""
-    A, R = _on_grid(t, U, t_ref), np.asarray(U_ref, float)
-    return _pressure_noise(A, R)
-
-
 def _pressure_noise(A, R):
+    """Floor of ``_pressure_error`` between these two ensembles: sqrt(mean over samples of
+    (var_A/n_A + var_R/n_R)) / RMS(<R>), the variances over starts (ddof 1)."""
     var = np.nanvar(A, axis=0, ddof=1) / np.sum(np.isfinite(A), axis=0) + \
         np.nanvar(R, axis=0, ddof=1) / np.sum(np.isfinite(R), axis=0)
     return float(np.sqrt(np.nanmean(var)) / _rms(np.nanmean(R, axis=0)))
@@ -113,15 +102,8 @@ def change_floor(x_ref):
     return float(np.sqrt(2.0 / len(x_ref)) * np.std(x_ref, ddof=1) / abs(np.mean(x_ref)))
 
 
-def errors(run, ref):
-    """{metric: error} of a run's histories against the reference's (dicts as written by
-    yade_scripts/tradeoffs.py: t (times,), U (starts, times, blocks), porosity (starts, times),
-    height (starts, times) the particles' mean centre height [m])."""
-    return {k: m for k, (m, _) in _metric_pairs(run, ref).items()}
-
-
 def floors(ref):
-    """{metric: chaos floor} of the reference (see ``errors``)."""
+    """{metric: chaos floor} of the reference (see ``_metric_pairs``)."""
     U = np.asarray(ref["U"], float)
     return {"pressure_rms": pressure_floor(U), "porosity_change": change_floor(porosity_change(ref)),
             "settlement": change_floor(settlement(ref)), "pressure_rms_below_surface": pressure_floor(U[:, :, :-1])}
@@ -133,7 +115,10 @@ def corrected(measured, floor):
 
 
 def _metric_pairs(run, ref):
-    """{metric: (measured, floor)} of a run against the reference (the same arrays as ``errors``)."""
+    """{metric: (measured, floor)} of a run's histories against the reference's (dicts as written by
+    yade_scripts/tradeoffs.py: t (times,), U (starts, times, blocks), porosity (starts, times),
+    height (starts, times) the particles' mean centre height [m]; the run's U is interpolated onto
+    the reference's times)."""
     A, R = _on_grid(run["t"], run["U"], ref["t"]), np.asarray(ref["U"], float)
     out = {}
     for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
@@ -150,7 +135,7 @@ def _subset(run, idx):
 
 def systematic(run, ref, n_boot=400, seed=0):
     """{metric: {"measured", "floor", "systematic", "sigma"}}: the metric, its floor between these
-    two ensembles (``pressure_noise``, ``change_noise``), the noise-corrected estimate
+    two ensembles (``_pressure_noise``, ``change_noise``), the noise-corrected estimate
     ``corrected(measured, floor)`` and the standard deviation of that estimate over ``n_boot``
     bootstrap resamples of the starts of run and reference (module docstring)."""
     out = {k: {"measured": m, "floor": f, "systematic": corrected(m, f)} for k, (m, f) in _metric_pairs(run, ref).items()}

@@ -134,8 +134,6 @@ class YadeCoupling:
                 self.engine.held[:, 1] = buoyancy(packing.r[dyn], scene.material.rho_w, g) * packing.mobile[dyn]
             loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
         else:
-            if scene.numerics.damping_eq44:
-                raise ValueError("[numerics] damping_eq44: not available with law = 'yade'")
             limits.check_contact(scene.numerics.dt, scene.numerics.dt_safety, self.mass[packing.mobile],
                                  scene.contact.kn)
             self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)

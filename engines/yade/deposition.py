@@ -89,7 +89,7 @@ def settle(scene, packing, duration=None):
     dep = scene.with_overrides({
         "contact": {"spring": "a", "ks": p.settle_ks, "eta_s": 0.0, "separation_adjustment": False},
         "water": {"enabled": False}, "loading": {"type": "none"},
-        "numerics": {"dt": p.settle_dt, "damping_eq44": False}})
+        "numerics": {"dt": p.settle_dt}})
     cp = YadeCoupling(dep, packing, newton_damping=SETTLE_DAMPING)
     cp.run(int(round((duration or p.settle_time) / p.settle_dt)))
     return Packing(cp.positions(), packing.r, packing.group, packing.density_factor)
@@ -156,22 +156,6 @@ def deposit(scene):
         cut = settle(scene, cut, duration=p.settle_loaded)
         check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
     return cut
-
-
-def cut_and_resettle(scene, deposit_packing, x0, width):
-    """A sub-scene: the particles of a deposit with centre x in [x0, x0 + width), moved into a
-    new box of the scene's wall discs (sized to the window) and settled again (§4.2)."""
-    p = scene.packing
-    keep = deposit_packing.mobile & (deposit_packing.xz[:, 0] >= x0) & (deposit_packing.xz[:, 0] < x0 + width)
-    if not keep.any():
-        raise ValueError(f"cut: no particle with x in [{x0}, {x0 + width})")
-    n_bottom = int(np.ceil(width / (2 * p.wall_radius))) + 2
-    walls, groups = wall_box(n_bottom, p.n_side, p.wall_radius)
-    xz = deposit_packing.xz[keep] - [x0 - 2 * p.wall_radius, deposit_packing.bed_bottom - p.wall_radius]
-    r = deposit_packing.r[keep]
-    cut = Packing(np.vstack([xz, walls]), np.concatenate([r, np.full(len(walls), p.wall_radius)]),
-                  np.concatenate([np.full(len(r), WALL_NONE), groups]), np.ones(len(r) + len(walls)))
-    return _mark(scene, settle(scene, cut))
 
 
 def scene_packing(scene):

@@ -3,8 +3,10 @@
 Discs are spheres kept in the x-z plane; arrays are (n, 2) [x, z] in the order of the ids given.
 The backend is chosen once, at import:
 
-* ``yadebulk``: the compiled bridge engines.yade.yadebulk (C++ against YADE's headers), when it is
-  importable and ``available()``; every call is one C loop over the ids.
+* ``yadebulk``: the compiled bridge engines.yade.yadebulk (C and a little C++ without YADE's
+  headers: it calls YADE's exported functions found in libyade.so, at data offsets probed and
+  verified at first use), when it is importable and ``available()``; every call is one C loop over
+  the ids.
 * ``python``: YADE's Python API in its cheapest forms, measured on 240 spheres: positions by two
   ``utils.coordsAndDisplacements`` calls (one list per axis for all bodies), forces by
   ``map(O.forces.addF, ids, rows)`` over rows of a float buffer (0.35 us a body; building

@@ -1,12 +1,12 @@
-"""Porosity of a fixed window: exact disc-rectangle areas (issue 11)."""
+"""Porosity of a fixed window: exact disc-rectangle areas."""
 import numpy as np
 import pytest
 from scipy.integrate import quad
 
 from engines.model.observe import Window, box_window, disc_rectangle_area, porosity, quadrant_area
 from engines.yade.deposition import wall_box
-from packing.layouts import square_lattice
 from packing.packing import Packing
+from tests.layouts import square_lattice
 
 R = 0.45e-3
 

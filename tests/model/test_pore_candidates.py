@@ -1,4 +1,4 @@
-"""Link candidates (SPEC §2.2, issue 11): the regular triangulation plus the eq 28 pairs it hides.
+"""Link candidates (SPEC §2.2): the regular triangulation plus the eq 28 pairs it hides.
 
 The checks here are brute force over all disc pairs, with their own segment-crossing test, so they
 do not share code with engines.model.pores.
@@ -12,9 +12,10 @@ from scipy.sparse.csgraph import connected_components
 
 from engines.model import pores as pg
 from engines.run.scene import SCENE_DIR
-from packing.layouts import random_sequential
 from packing.packing import Packing
 from packing.psd import sample_diameters
+from tests.layouts import random_sequential
+from tests.oracles import void_area_by_triangles
 
 SEISMIC = (2e-4, 3.5e-4)    # eps_m, l_m of seed 000 §6 (Table 4)
 QUICKSAND = (0.0, 1.3e-4)   # eps_m, l_m of §5 (Table 1)
@@ -77,24 +78,29 @@ def test_every_eq28_pair_crossing_no_link_is_a_link(seed, eps_m, l_m):
     c, _ = connected_components(g, directed=False)
     assert net.n_pores + net.n_closed == len(net.links) - n + c
     m = pg.measure(net, xz, r)
-    np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(m.void_area, void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-15)
 
 
-def test_the_check_catches_delaunay_misses_at_the_seismic_range():
-    """The brute-force check is not vacuous: Delaunay candidates miss pairs at the seismic l_m,
-    the regular triangulation alone hides fewer, and the insertion puts the rest in."""
+def test_the_check_catches_pairs_the_triangulation_hides_at_the_seismic_range():
+    """The brute-force check is not vacuous: the eq 28 pairs among the regular triangulation's edges
+    leave out pairs at the seismic l_m, and every pair the insertion puts in was one of them."""
     eps_m, l_m = SEISMIC
     xz, r = _packing(0)
-    delaunay = pg.build_pores(xz, r, eps_m=eps_m, l_m=l_m, candidates="delaunay")
-    regular = pg.build_pores(xz, r, eps_m=eps_m, l_m=l_m)
-    n_delaunay = len(missed_pairs(xz, r, eps_m + l_m, delaunay.links))
-    assert n_delaunay > regular.n_inserted > 0
-    assert len(regular.links) >= len(delaunay.links) + n_delaunay - regular.n_inserted
+    reach = eps_m + l_m
+    edges = np.array(sorted({tuple(sorted(e)) for t in pg.regular_triangulation(xz, r).tolist()
+                             for e in zip(t, t[1:] + t[:1])}))
+    eq28 = r[edges[:, 0]] + r[edges[:, 1]] + reach >= np.hypot(*(xz[edges[:, 1]] - xz[edges[:, 0]]).T)
+    hidden = set(missed_pairs(xz, r, reach, edges[eq28]))
+    net = pg.build_pores(xz, r, eps_m=eps_m, l_m=l_m)
+    inserted = set(map(tuple, np.sort(net.links, axis=1).tolist())) - set(map(tuple, edges.tolist()))
+    assert len(hidden) >= net.n_inserted == len(inserted) > 0
+    assert inserted <= hidden
 
 
 def _kite():
     """Four equal discs (r = 1) whose Delaunay diagonal 2-3 (gap 1.3) is longer than the other,
-    0-1 (gap 1.2): at reach 1.25 the pair 0-1 satisfies eq 28 and 2-3 does not."""
+    0-1 (gap 1.2): at reach 1.25 the pair 0-1 satisfies eq 28 and 2-3 does not. The kite's
+    diagonals are 3.2 and 3.3 long, its area 3.2 x 3.3 / 2."""
     xz = np.array([[-1.6, 0.0], [1.6, 0.0], [0.0, 1.2], [0.0, -2.1]])
     return xz, np.ones(4)
 
@@ -104,12 +110,11 @@ def test_kite_the_hidden_diagonal_is_inserted():
     assert pg.regular_triangulation(xz, r) is not None
     edges = {tuple(sorted(e)) for t in pg.regular_triangulation(xz, r).tolist() for e in zip(t, t[1:] + t[:1])}
     assert (2, 3) in edges and (0, 1) not in edges  # equal radii: regular = Delaunay, diagonal 2-3
-    old = pg.build_pores(xz, r, l_m=1.25, candidates="delaunay")
-    new = pg.build_pores(xz, r, l_m=1.25)
-    assert [0, 1] not in old.links.tolist() and old.n_pores == 1
-    assert [0, 1] in new.links.tolist() and new.n_inserted == 1 and new.n_pores == 2
-    m = pg.measure(new, xz, r)
-    np.testing.assert_allclose(m.void_area.sum(), pg.measure(old, xz, r).void_area.sum(), rtol=1e-12)
+    net = pg.build_pores(xz, r, l_m=1.25)
+    assert [0, 1] in net.links.tolist() and net.n_inserted == 1 and net.n_pores == 2
+    m = pg.measure(net, xz, r)
+    # the two triangles fill the kite; their corner sectors add up to the kite's angles, 2 pi
+    np.testing.assert_allclose(m.void_area.sum(), 3.2 * 3.3 / 2 - np.pi, rtol=1e-12)
 
 
 def test_disc_with_empty_power_cell_is_a_rattler():
@@ -138,22 +143,11 @@ def test_coincident_centres_and_cocircular_discs():
     np.testing.assert_allclose(pg.measure(net, square, np.ones(4)).void_area, [4.0 - np.pi], rtol=1e-12)
 
 
-def test_quicksand_preset_pores_unchanged():
-    """On the quick-sand packing at its own eps_m, l_m the Delaunay candidates missed nothing, and
-    the regular triangulation gives the same links and pores."""
+def test_quicksand_preset_every_eq28_pair_crossing_no_link_is_a_link():
+    """The same on the quick-sand packing with its wall discs, at its own eps_m, l_m."""
     pk = Packing.load(os.path.join(SCENE_DIR, "quicksand_packing.csv"))
     eps_m, l_m = QUICKSAND
-    old = pg.build_pores(pk.xz, pk.r, eps_m=eps_m, l_m=l_m, walls=pk.group, candidates="delaunay")
-    new = pg.build_pores(pk.xz, pk.r, eps_m=eps_m, l_m=l_m, walls=pk.group)
-    assert missed_pairs(pk.xz, pk.r, eps_m + l_m, old.links) == []
-    assert new.n_inserted == 0
-    np.testing.assert_array_equal(new.links, old.links)
-    np.testing.assert_array_equal(np.sort(new.pore_signature), np.sort(old.pore_signature))
-    for name in ("bottom", "left", "right"):
-        assert new.pore_touches[name].sum() == old.pore_touches[name].sum()
-    assert new.pore_surface.sum() == old.pore_surface.sum()
-
-
-def test_bad_candidates_name():
-    with pytest.raises(ValueError, match="candidates"):
-        pg.build_pores(np.zeros((3, 2)), np.ones(3), candidates="voronoi")
+    net = pg.build_pores(pk.xz, pk.r, eps_m=eps_m, l_m=l_m, walls=pk.group)
+    assert net.n_pores > 0
+    assert missed_pairs(pk.xz, pk.r, eps_m + l_m, net.links) == []
+    assert crossing_links(pk.xz, net.links) == 0

@@ -59,8 +59,6 @@ def test_bad_numerics_are_refused():
     pk = wet_box()
     with pytest.raises(ValueError, match=r"\[numerics\] dt"):
         PoreDEM(scene(numerics={"dt": 1e-3}), pk)
-    with pytest.raises(ValueError, match="damping_eq44"):
-        PoreDEM(scene(numerics={"damping_eq44": True}), pk)
 
 
 def wet_scene(rebuild_interval=4, **water):

@@ -4,7 +4,9 @@ import pytest
 
 from engines.model import pores as pg
 from engines.reference import model as ref
-from packing.layouts import hex_lattice, random_discs, square_lattice
+from packing.layouts import hex_lattice, random_discs
+from tests.layouts import square_lattice
+from tests.oracles import interior_angles, pore_polygon, void_area_by_triangles
 
 
 @pytest.mark.parametrize("gap", [0.0, 0.05])
@@ -27,7 +29,7 @@ def test_square_lattice_void_area_exact(gap):
     m = pg.measure(net, xz, rr)
     assert net.n_pores == 5 * 4
     np.testing.assert_allclose(m.void_area, a**2 - np.pi * r**2, rtol=1e-12)
-    assert all(len(c) == 1 and len(c[0]) == 4 for c in (pg.pore_polygon(net, p) for p in range(net.n_pores)))
+    assert all(len(c) == 1 and len(c[0]) == 4 for c in (pore_polygon(net, p) for p in range(net.n_pores)))
 
 
 def test_link_state_contact_versus_gap():
@@ -78,7 +80,7 @@ def test_areas_against_the_reference_walk():
         assert m.void_area[p] == pytest.approx(geo.void_area[q], rel=1e-9, abs=1e-13)
     # discs whose every surrounding face is a pore lie wholly inside the region: 2 pi of angles
     total = np.zeros(len(r))
-    for corners in pg.interior_angles(net, m).values():
+    for corners in interior_angles(net, m).values():
         for v, angle in corners.items():
             total[v] += angle
     inner = np.isclose(total, 2 * np.pi, rtol=1e-9)
@@ -131,7 +133,7 @@ def test_measure_matches_triangles_after_motion():
     for _ in range(5):
         xz = xz + 0.02 * r.mean() * rng.standard_normal(xz.shape)
         m = pg.measure(net, xz, r)
-        np.testing.assert_allclose(m.void_area, pg.void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
+        np.testing.assert_allclose(m.void_area, void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
 
 
 def test_eq33_single_arc():
@@ -271,13 +273,13 @@ def test_centroids_and_polygons_of_a_square_lattice():
     net = pg.build_pores(xz, r, l_m=0.1)
     cen = pg.pore_centroids(net, xz)
     for p in range(net.n_pores):
-        (cycle,) = pg.pore_polygon(net, p)
+        (cycle,) = pore_polygon(net, p)
         corners = xz[cycle]
         assert len(cycle) == 4 and set(cycle) == set(net.vertices_of(p).tolist())
         shoelace = 0.5 * np.sum(corners[:, 0] * np.roll(corners[:, 1], -1) - np.roll(corners[:, 0], -1) * corners[:, 1])
         assert shoelace == pytest.approx(a * a, rel=1e-12)
         np.testing.assert_allclose(cen[p], corners.mean(axis=0), rtol=0, atol=1e-12)
-    np.testing.assert_allclose(pg.void_area_by_triangles(net, xz, r), a * a - np.pi, rtol=1e-12)
+    np.testing.assert_allclose(void_area_by_triangles(net, xz, r), a * a - np.pi, rtol=1e-12)
 
 
 def test_link_state_counts_eps_m_as_contact():
@@ -317,10 +319,10 @@ def test_interior_angles_of_every_pore_walk_sum_to_k_minus_2_pi():
     xz, r = xz[keep], r[keep]
     net = pg.build_pores(xz, r, l_m=0.9 * r.mean())
     m = pg.measure(net, xz, r)
-    angles = pg.interior_angles(net, m)
+    angles = interior_angles(net, m)
     repeated = 0
     for p in range(net.n_pores):
-        cycles = pg.pore_polygon(net, p)
+        cycles = pore_polygon(net, p)
         if len(cycles) != 1:
             continue
         k = len(cycles[0])
@@ -337,7 +339,7 @@ def test_the_outer_boundary_of_a_pore_with_an_island_comes_first():
     r = np.concatenate([np.full(8, 2.2), [0.7, 0.7]])
     net = pg.build_pores(xz, r, l_m=0.3)
     assert net.n_pores == 1
-    cycles = pg.pore_polygon(net, 0)
+    cycles = pore_polygon(net, 0)
     assert [len(c) for c in cycles] == [8, 2] and set(cycles[1]) == {8, 9}
 
 
@@ -354,11 +356,10 @@ def test_locate_points_in_triangles_edges_count_as_inside():
     np.testing.assert_array_equal(pg._locate(xz, tri, points), [0, 1, -1, 0, 0, 0, 1, -1, -1])
 
 
-@pytest.mark.parametrize("candidates", ["regular", "delaunay"])
-def test_three_touching_discs_make_one_pore(candidates):
+def test_three_touching_discs_make_one_pore():
     """The smallest packing with a pore: three equal touching discs, void sqrt(3) r^2 - pi r^2 / 2."""
     xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)]])
-    net = pg.build_pores(xz, np.ones(3), candidates=candidates)
+    net = pg.build_pores(xz, np.ones(3))
     assert net.n_pores == 1 and len(net.links) == 3
     np.testing.assert_allclose(pg.measure(net, xz, np.ones(3)).void_area, [np.sqrt(3) - np.pi / 2], rtol=1e-12)
 

@@ -1,12 +1,13 @@
-"""Water at re-meshing (issue 11, item 5): the paper's rule against the conserving transfer; and the
+"""Water at re-meshing: the paper's rule against the conserving transfer; and the
 drained side-wall flux against the analytic solution of eq 32 with the k3 outflow."""
 import numpy as np
 import pytest
 
 from engines.model import pores as pg
 from engines.model.pore_water import PoreWater, WaterSettings, pressure, water_from_pressure
-from packing.layouts import random_discs, random_sequential
+from packing.layouts import random_discs
 from packing.psd import sample_diameters
+from tests.layouts import random_sequential
 
 E_W = 2400.0
 
@@ -216,8 +217,8 @@ def test_conserving_transfer_across_a_flipped_diagonal():
     proportions b of the new voids."""
     from engines.model.pore_water import conserving_water
     r = np.ones(4)
-    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
-    new = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [-0.4, 2.2]]), r, l_m=2.0, candidates="delaunay")
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0)
+    new = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [-0.4, 2.2]]), r, l_m=2.0)
     assert [1, 3] in old.links.tolist() and [0, 2] in new.links.tolist()
     xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])      # both triangulations valid here
     A, B, C, D = xz
@@ -300,8 +301,8 @@ def test_pore_overlaps_onto_a_single_new_pore():
     longer a link): pairs (0, 0) and (1, 0) with the areas of the two triangles."""
     r = np.ones(4)
     xz = np.array([[0.0, 0.0], [3.0, 0.0], [3.2, 2.1], [-0.2, 2.1]])
-    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0, candidates="delaunay")
-    new = pg.build_pores(xz, r, l_m=1.5, candidates="delaunay")
+    old = pg.build_pores(np.array([[0.0, 0.0], [3.0, 0.0], [3.4, 2.2], [0.0, 2.0]]), r, l_m=2.0)
+    new = pg.build_pores(xz, r, l_m=1.5)
     assert old.n_pores == 2 and new.n_pores == 1
     p, q, o = pg.pore_overlaps(old, new, xz)
     np.testing.assert_array_equal(p, [0, 1])
@@ -314,8 +315,8 @@ def test_pores_that_only_share_an_edge_do_not_overlap():
     BD only: no overlapping pair, so the new pore is unmatched in the conserving transfer."""
     from engines.model.pore_water import conserving_water
     xz = np.array([[0.0, 0.0], [2.0, 0.0], [2.4, 2.4], [0.0, 2.0]])
-    old = pg.build_pores(xz, np.array([0.6, 1.42, 0.5, 1.42]), candidates="delaunay")
-    new = pg.build_pores(xz, np.array([0.2, 1.42, 1.1, 1.42]), candidates="delaunay")
+    old = pg.build_pores(xz, np.array([0.6, 1.42, 0.5, 1.42]))
+    new = pg.build_pores(xz, np.array([0.2, 1.42, 1.1, 1.42]))
     assert sorted(old.vertices_of(0).tolist()) == [0, 1, 3] and sorted(new.vertices_of(0).tolist()) == [1, 2, 3]
     p, q, o = pg.pore_overlaps(old, new, xz)
     assert len(p) == len(q) == len(o) == 0

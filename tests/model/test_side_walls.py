@@ -6,6 +6,7 @@ from engines.model import pores as pg
 from engines.model.limits import tie_limit
 from engines.model.side_walls import SideWallTies
 from engines.yade.deposition import wall_box
+from tests.oracles import tie_dissipation_rate, tie_energy
 
 KS, ETA = 1.5e5, 0.6   # Table 4: k'_s [N/m], eta'_s [N s/m]
 R_W = 0.55e-3
@@ -80,13 +81,13 @@ def _free_column_run(eta, n_steps=4000):
     a = np.where(mov, ties.forces(x, v) / m, 0.0)
     E, work = [], [0.0]
     for _ in range(n_steps):
-        E.append(0.5 * np.sum(m[mov] * v[mov] ** 2) + ties.energy(x))
-        p0 = ties.dissipation_rate(v)
+        E.append(0.5 * np.sum(m[mov] * v[mov] ** 2) + tie_energy(ties, x))
+        p0 = tie_dissipation_rate(ties, v)
         v_half = v + 0.5 * dt * a
         x = x + dt * np.where(mov, v_half, 0.0)
         a = np.where(mov, ties.forces(x, v_half) / m, 0.0)
         v = np.where(mov, v_half + 0.5 * dt * a, 0.0)
-        work.append(work[-1] + 0.5 * dt * (p0 + ties.dissipation_rate(v)))
+        work.append(work[-1] + 0.5 * dt * (p0 + tie_dissipation_rate(ties, v)))
     return np.array(E), np.array(work[:-1])
 
 

@@ -1,6 +1,5 @@
 """ParaView output: the files load with VTK's readers and hold the numbers given; the .pvd lists
 every file with its time; pore outlines from triangles are the pores' polygons."""
-import os
 import xml.etree.ElementTree as ET
 
 import numpy as np

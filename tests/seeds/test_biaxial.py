@@ -5,16 +5,10 @@ import numpy as np
 import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
 
-from engines.seeds.biaxial.cem_contact import CemContact, add_discs, contact_arrays, pair_constants, yade_engines
-from engines.seeds.biaxial.periodic import (
-    PackingSettings,
-    love_stress,
-    pack_periodic,
-    section_stress,
-    table1_radii,
-    yade_cell_stress,
-)
-from engines.seeds.biaxial.specimen import BOTTOM, LEFT, RIGHT, TOP, BiaxialSettings, BiaxialSpecimen, mohr_coulomb_fit
+from engines.seeds.biaxial.cem_contact import CemContact, add_discs, pair_constants, yade_engines
+from engines.seeds.biaxial.periodic import PackingSettings, pack_periodic, table1_radii, yade_cell_stress
+from engines.seeds.biaxial.specimen import BOTTOM, TOP, BiaxialSettings, BiaxialSpecimen, mohr_coulomb_fit
+from tests.oracles import contact_arrays, love_stress, section_stress
 
 CONTACT = CemContact(kn=1e8, ks_ratio=0.25, phi_e_deg=15.0)
 

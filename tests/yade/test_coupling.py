@@ -11,7 +11,7 @@ from engines.model.water_model import WaterModel
 from engines.run import scene as scenes
 from engines.run.runner import run_scene
 from engines.yade.coupling import YadeCoupling, simulate
-from engines.yade.deposition import cut_and_resettle, deposit, scene_packing
+from engines.yade.deposition import deposit, scene_packing
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +80,7 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
     assert "failed" in summary["status"] and summary["checkpoint"]["step"] == 0  # the one written at the start
 
 
-def test_deposit_and_cut(packing):
+def test_deposit():
     sc = scenes.preset("quicksand_case1", {"packing": {"source": "deposit", "n_particles": 12, "n_bottom": 8,
                                                        "n_side": 6, "settle_time": 0.05, "seed": 7}})
     pk = deposit(sc)
@@ -90,7 +90,3 @@ def test_deposit_and_cut(packing):
     assert np.all(pk.xz[mob, 0] > walls[:, 0].min()) and np.all(pk.xz[mob, 0] < walls[:, 0].max())
     assert np.all(pk.xz[mob, 1] > 0) and np.all(pk.density_factor[~mob] == 1)
     assert np.any(pk.density_factor[mob] == 5.0)
-    sub = cut_and_resettle(sc, packing, x0=2e-3, width=5e-3)
-    n_cut = int((packing.mobile & (packing.xz[:, 0] >= 2e-3) & (packing.xz[:, 0] < 7e-3)).sum())
-    assert sub.mobile.sum() == n_cut
-    assert sub.xz[sub.mobile, 1].min() > 0

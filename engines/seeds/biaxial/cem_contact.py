@@ -82,22 +82,10 @@ def series(a, b):
     return a * b / (a + b)
 
 
-def contact_width(r1, r2, c):
-    """Contact width w [m] carrying the paper's per-area stiffness (module doc)."""
-    return c.width_factor * 2 * series(r1, r2)
-
-
 def pair_constants(r1, r2, c):
     """(k_n, k_s, c_n, c_s) of the contact between discs r1 and r2, as YADE will build it."""
     a, b = disc_constants(r1, c), disc_constants(r2, c)
     return tuple(series(x, y) for x, y in zip(a, b))
-
-
-def pair_damping_ratio(r1, r2, c):
-    """ζ_n = c_n / (2 √(m* k_n)) of the built contact: c.damping_ratio up to the series error."""
-    kn, _, cn, _ = pair_constants(r1, r2, c)
-    m_star = series(disc_mass(r1, c.rho), disc_mass(r2, c.rho))
-    return cn / (2 * np.sqrt(m_star * kn))
 
 
 def single_contact_dt_limit(r, c):
@@ -190,29 +178,3 @@ def py_runner(callback, iter_period):
     key = len(_CALLBACKS)
     _CALLBACKS[key] = callback
     return PyRunner(command=f"import engines.seeds.biaxial.cem_contact as _m; _m._CALLBACKS[{key}]()", iterPeriod=iter_period)
-
-
-def contact_arrays():
-    """Real contacts as arrays: ids (n, 2), contact force on the second body (n, 2) [N/m] in
-    (x, z), and the branch vector from the first to the second centre (n, 2) [m] including the
-    periodic shift. The force is YADE's stored normal + shear force (as utils.getStress uses):
-    the viscous part of the shear force of a sticking contact is not stored, which at rest is
-    nothing. One Python pass over the interactions (tests and end-of-stage readings)."""
-    from yade import O
-
-    ids, force, branch = [], [], []
-    periodic = O.periodic
-    h = O.cell.hSize if periodic else None
-    for i in O.interactions:
-        if not i.isReal:
-            continue
-        f = i.phys.normalForce + i.phys.shearForce
-        p1, p2 = O.bodies[i.id1].state.pos, O.bodies[i.id2].state.pos
-        d = p2 - p1
-        if periodic:
-            d = d + h * i.cellDist
-        ids.append((i.id1, i.id2))
-        force.append((f[0], f[2]))
-        branch.append((d[0], d[2]))
-    return (np.array(ids, np.int64).reshape(-1, 2), np.array(force, float).reshape(-1, 2),
-            np.array(branch, float).reshape(-1, 2))

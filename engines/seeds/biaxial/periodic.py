@@ -12,7 +12,7 @@ from the paper: (1) the affine motion enters through the velocities, so the cont
 it as a relative velocity (in the paper it is an imposed displacement increment; at the rates
 used the two are the same to first order in ε̇ Δt); (2) σx, σz are the Love averages over all
 contacts of the cell instead of the forces across one section line (equal in static
-equilibrium; ``section_stress`` gives the paper's measure and the tests compare the two);
+equilibrium; the tests compare the two);
 (3) the paper does not say how L′/L is chosen: each direction is servoed on its own stress
 error with a rate (σ3 − σ)/(K τ), K the assembly's modulus estimated from its number of
 contacts (a PeriTriaxController written for 2D): fast while the discs are apart, slow once they
@@ -60,29 +60,6 @@ def random_placement(r, cell, rng, max_tries=100000):
             raise ValueError(f"random placement: no room for disc {i} after {max_tries} tries "
                              "(lower the initial solid fraction)")
     return xz
-
-
-def love_stress(force, branch, area):
-    """Mean stress (2, 2) [Pa], compression positive: (1/A) Σ f ⊗ l over contacts, f the force on
-    the second disc [N/m], l the branch vector from the first to the second centre [m]."""
-    return np.einsum("ci,cj->ij", np.asarray(force, float), np.asarray(branch, float)) / area
-
-
-def section_stress(xz1, branch, force, axis, at, cell):
-    """The paper's σx (axis 0) or σz (axis 1) (§2(1)): the components along ``axis`` of the
-    contact forces acting across the line ``axis`` = ``at``, summed and divided by the line's
-    length [Pa], compression positive. Periodic cell (Lx, Lz): a branch from a centre in the
-    cell crosses the line or one of its images. xz1: first centres (n, 2), branch: (n, 2) to
-    the second centre, force: (n, 2) on the second disc."""
-    a = np.asarray(xz1, float)[:, axis]
-    b = a + np.asarray(branch, float)[:, axis]
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    period, length = cell[axis], cell[1 - axis]
-    crosses = np.zeros(len(a), bool)
-    for k in (-1, 0, 1):
-        crosses |= (lo < at + k * period) & (hi >= at + k * period)
-    f = np.asarray(force, float)[:, axis] * np.sign(b - a)
-    return float(np.sum(f[crosses]) / length)
 
 
 @dataclass
