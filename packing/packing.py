@@ -4,7 +4,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
+from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_NONE
 from engines.model.pores import check_discs
 
 

@@ -483,7 +483,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     Returns the arrays of PoreNetwork named in NETWORK_ARRAYS, in that order, then touches (4, Np):
     touches[code, p] is True when pore p has a disc of wall code ``code`` as a vertex.
     """
-    n, t_count = len(r), len(tri)
+    n = len(r)
     a = tri[:, [1, 2, 0]].ravel()
     b = tri[:, [2, 0, 1]].ravel()
 

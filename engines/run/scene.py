@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from engines import ROOT
 from engines.model.contact import CONTACT_FIELDS, ContactSettings
-from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, Field, check, describe_check
+from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, check, describe_check
 from engines.model.pore_water import WATER_FIELDS, WaterSettings
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")

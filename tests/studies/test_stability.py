@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from engines.model import time_step as ts
+from engines.model import limits as lim
 from engines.model.limits import critical_time_step
 from engines.model.pore_dem import disc_masses
 from engines.run import scene as scenes
@@ -32,7 +33,7 @@ def test_choose_takes_the_smallest_limit_times_the_factor_and_caps_at_the_engine
     assert (dt, name, n) == (1e-4, "contact", 3)
     text = ts.describe(dt, lims, name, n, 1.0)
     assert "contact" in text and re.search(r"\b(\d+) sub-steps", text).group(1) == str(int(np.ceil(1e-4 / 4e-5)))
-    assert float(re.search(r"([\d.]+)x a water step", text).group(1)) == pytest.approx(1 + ts.SUBSTEP_COST * (n - 1))
+    assert float(re.search(r"([\d.]+)x a water step", text).group(1)) == pytest.approx(1 + lim.SUBSTEP_COST * (n - 1))
 
 
 def test_auto_dt_on_the_presets_is_below_every_limit_and_equals_the_binding_one(qs):
