@@ -634,8 +634,9 @@ def pressure_forces(pores, x, r, U, theta):
     return F
 
 
-def porosity(x, r, group, eps_m, l_m):
-    """Void over polygon area of the pores of a network built at x (eq 28-29), nan without pores."""
+def mesh_void_fraction(x, r, group, eps_m, l_m):
+    """Void over polygon area of the pores of a network built at x (eq 28-29), nan without pores:
+    the void fraction of the pore mesh (not the window porosity that runs report)."""
     pores = build_pores(x, r, group, eps_m, l_m)
     geo = measure(pores, np.asarray(x, np.float64), np.asarray(r, np.float64), eps_m)
     total = float(np.sum(geo.polygon_area))

@@ -1,6 +1,8 @@
 """A run as a user starts it: scene files and their schema (scene), checks before anything is
 written (preflight), the scene scripts' command line (command_line), the runner and its outputs
-(runner), provenance, and the sweep runner for batches and Dask clusters (sweep).
+(runner), provenance, the sweep runner for batches and Dask clusters (sweep), and the cases of the
+cross-check of the YADE path against the reference (crosscheck; it runs scenes through both, so it
+lives here rather than beside the reference, which imports nothing of the fast code).
 
 May import: every layer before it (engines.model ... engines.studies, packing, postproc) and YADE.
 """

@@ -3,16 +3,12 @@
 Contact: head-on restitution of a linear spring-dashpot, the separation adjustment (eq 18-24),
 the four normal springs of Fig. 5 released from a pressed state. Pores and water: the void area of
 a hexagonal packing, eq 33 on a uniform pressure, eq 38 equalisation, water conservation in a
-closed network and the budget with boundary fluxes. Plumbing of yade_scripts/crosscheck.py.
+closed network and the budget with boundary fluxes.
 """
-import importlib.util
-import json
-import os
 
 import numpy as np
 import pytest
 
-from engines import ROOT
 from engines.reference import model as ref
 from engines.run import scene as sc
 from packing.layouts import hex_lattice
@@ -282,56 +278,6 @@ def test_state_stays_in_the_requested_dtype(dtype):
         m.step()
     for arr in (m.x, m.v, m.psi, m.omega, m.mass, m.water.W, m.F_pressure, m.contact.e_n, m.contact.e_s):
         assert arr.dtype == dtype
-
-
-# -- cross-check plumbing -----------------------------------------------------------------------------
-def load_crosscheck():
-    path = os.path.join(ROOT, "yade_scripts", "crosscheck.py")
-    spec = importlib.util.spec_from_file_location("crosscheck", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_crosscheck_plumbing_with_the_reference_on_both_sides(tmp_path):
-    """The cross-check's machinery with the reference standing in for YADE: every case passes with
-    identical trajectories, the JSON holds the features and counts, and a deliberately different
-    'other implementation' (start moved by 1e-9 m) fails."""
-    cc = load_crosscheck()
-
-    def stand_in(scene, pk, n, every, hooks=(), **kw):
-        return ref.simulate_reference(scene, pk, n, every, **kw)
-
-    shaken = {"loading": {"type": "cosine", "amplitude": 200.0, "frequency": 300.0, "moves": "bottom"},
-              "numerics": {"rebuild_interval": 5}}
-    small = cc.FeatureCase("small_settling", cc.settling_build(**shaken), 150, 5, rules="a")
-    contact = [c for c in cc.contact_cases() if c.name in ("head_on_collision", "pressed_release_d")]
-    result = cc.run_cases(stand_in, cases=contact, features=[small])
-    assert result["passed"], [c["why"] for c in result["cases"] + result["feature_cases"] if not c["passed"]]
-    for case in result["cases"]:
-        assert case["metrics"]["max_position_diff_rel"] == 0.0
-        assert set(case["metrics"]) == set(case["tolerances"]) | set(case["not_judged"])   # each judged or explained
-    feat = result["feature_cases"][0]
-    assert set(feat["not_judged"]) <= set(feat) - {"checks", "passed", "why"}
-    assert feat["window"]["max_position_diff_rel"] == 0.0 and feat["counts"]["ref"]["rebuilds"] >= 20
-    assert feat["features"]["water"] and feat["features"]["rebuild_interval"] == 5
-    path = cc.write_json(result, str(tmp_path))
-    with open(path) as f:
-        back = json.load(f)
-    assert {c["name"] for c in back["cases"]} >= {"head_on_collision", "pressed_release_d"}
-    assert back["feature_cases"][0]["name"] == "small_settling"
-
-    unexplained = cc.Case("unexplained", contact[0].build, 10, 5, {}, "a metric without a tolerance or a reason",
-                          lambda ty, tr, scene, pk: {"max_position_diff_rel": 0.0})
-    bad = cc.run_cases(stand_in, cases=[unexplained], features=[])
-    assert not bad["passed"] and "max_position_diff_rel (neither judged nor explained)" in bad["cases"][0]["why"]
-
-    def moved(scene, pk, n, every, hooks=(), **kw):
-        return stand_in(scene, Packing(pk.xz + 1e-9, pk.r, pk.group, pk.density_factor), n, every)
-    for case in (small, cc.FeatureCase("still", cc.settling_build(numerics={"rebuild_interval": 5}), 150, 10,
-                                       rules="a")):
-        bad = cc.run_cases(moved, cases=[], features=[case])
-        assert not bad["passed"] and not bad["feature_cases"][0]["checks"]["positions_in_window"]
 
 
 # -- the reference's own readings (docs/READINGS.md) and analytic checks -----------------------------

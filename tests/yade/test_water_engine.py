@@ -168,7 +168,7 @@ def test_yade_law_head_on_collision_matches_the_paper_law():
     2.5e-4) while the discs touch: YADE clamps the normal force at zero where eq 6 lets the dashpot
     pull (YADE: e = 0.798, eq 4-6: 0.789, analytic 0.790), so the restitutions agree to 2 % only. A wrong factor 2 in the kn/eta_n mapping
     moves e by > 5 % and the path by far more."""
-    from yade_scripts.crosscheck import R, contact_scene, launcher_packing, restitution
+    from engines.run.crosscheck import R, contact_scene, launcher_packing, restitution
     sc = contact_scene("head_on_yade", spring="a", separation_adjustment=False).with_overrides({"contact": {"law": "yade"}})
     pk = launcher_packing()
     ty = simulate(sc, pk, 2500, 10)
