@@ -1,4 +1,6 @@
 """Figures of seed 003's biaxial tests (Murakami et al. Fig. 4–21), from what the runs write."""
+import os
+
 import matplotlib
 import matplotlib.ticker
 
@@ -7,6 +9,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from engines.seeds.biaxial.specimen import mohr_coulomb_fit  # noqa: E402
+from engines.seeds.biaxial.study import KN, PAPER, SENS_PHI, SENS_SIGMA3, SMALL_DISCS  # noqa: E402
 
 PHI_COLOURS = {5.0: "C0", 10.0: "C1", 15.0: "C2"}
 
@@ -214,3 +217,37 @@ def plot_sigma3_kn_collapse(pairs, path):
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
     _save(fig, path)
+
+
+def study_figures(out, main, sens):
+    """The study's figures into ``out`` (yade_scripts/biaxial_study.py lists them), from
+    engines.seeds.biaxial.study's analyse_main (``main``) and analyse_sensitivity (``sens``)."""
+    if main["rows"]:
+        plot_phi_star(main["rows"], PAPER["phi_star_deg"], os.path.join(out, "fig12_phi_star.png"))
+        plot_e50_sigma3(main["points"], os.path.join(out, "fig15_e50_sigma3.png"))
+        plot_study_curves(main["per_phi_e"], os.path.join(out, "fig09_11_curves.png"))
+    if main["fits"]:
+        kn_points = [{"phi_e_deg": SENS_PHI, "sigma3_pa": SENS_SIGMA3, "kn": float(k), "e50_pa": e}
+                     for k, c in sens["kn_pa_per_m"].items() for e in c["e50_pa"] if float(k) != KN]
+        plot_eq4(main["points"], main["fits"], os.path.join(out, "fig19_eq4.png"), extra=kn_points)
+        plot_A_m(main["fits"], os.path.join(out, "fig20_21_A_m.png"))
+    pairs = {}  # Fig. 18: the kn runs at σ3 = 200 Pa against the main grid's φe = 10° at the same σ3/kn
+    for kn, s3 in ((2e8, 100.0), (0.5e8, 400.0)):
+        main_curves = [c[s3] for c in main["per_phi_e"].get(SENS_PHI, {}).get("curves", {}).values() if s3 in c]
+        kn_curves = sens["kn_pa_per_m"].get(kn, {}).get("curves", [])
+        if main_curves and kn_curves:
+            pairs[s3 / KN] = {f"kn = {KN:.0e}, σ3 = {s3:g} Pa, 1000 discs": main_curves,
+                              f"kn = {kn:.0e}, σ3 = {SENS_SIGMA3:g} Pa, {SMALL_DISCS} discs": kn_curves}
+    if pairs:
+        plot_sigma3_kn_collapse(pairs, os.path.join(out, "fig18_sigma3_over_kn.png"))
+    for key, fname, title, label in [
+            ("strain_rate_pct_min", "fig05_strain_rate.png", "axial strain rate, 1000 discs (Fig. 5)", "strain rate [%/min]"),
+            ("dt_s", "fig06_dt.png", f"time step, {SMALL_DISCS} discs (Fig. 6)", "Δt [s]"),
+            ("n_discs", "fig08_discs.png", "number of discs (Fig. 8)", "discs"),
+            ("kn_pa_per_m", "fig13_kn.png", f"kn, {SMALL_DISCS} discs (Fig. 13)", "kn [Pa/m]"),
+            ("ks_ratio", "fig14_ks.png", f"ks/kn, {SMALL_DISCS} discs (Fig. 14)", "ks/kn")]:
+        groups = {float(v): c["curves"] for v, c in sens[key].items() if c["curves"]}
+        failed = {float(v): len(c["failed"]) for v, c in sens[key].items() if c["failed"]}
+        if groups:
+            plot_sensitivity(groups, os.path.join(out, fname),
+                             f"φe = {SENS_PHI:g}°, σ3 = {SENS_SIGMA3:g} Pa: {title}", label, failed)

@@ -1,4 +1,4 @@
-"""The speed/accuracy study's tables and figures (yade_scripts/tradeoffs.py; docs/TRADEOFFS.md).
+"""The speed/accuracy study's tables and figures (engines.run.tradeoffs runs it; docs/TRADEOFFS.md).
 
 ``analyse(out, jobs, meta)`` reads OUT/runs/<job>/result.json, computes each setting's errors
 against its case's reference (engines.studies.tradeoffs: ensemble means over the starts, chaos floors),
@@ -26,7 +26,6 @@ LABELS = {"pressure_rms": "block pressure RMS", "porosity_change": "porosity cha
 DIAGNOSTIC = "pressure_rms_below_surface"
 TARGET = 0.05          # every metric's systematic error (noise-corrected estimate) of the defaults
 SPEEDUP_TARGET = 10.0  # the defaults' CPU speed-up over the paper's settings
-PAPER_DT = 1e-6
 
 
 def load(path):
@@ -67,7 +66,7 @@ def record_cost(results, meta):
 
 
 def is_paper(knob, value):
-    return knob == "dt" and value == PAPER_DT
+    return knob == "dt" and value == tr.PAPER_DT
 
 
 def analyse(out, jobs, meta, log=print):
@@ -89,7 +88,7 @@ def analyse(out, jobs, meta, log=print):
             log(f"{case}: no reference yet")
             continue
         floor = tr.floors(ref["data"])
-        if paper is None and ref["dt"] == PAPER_DT:  # a case whose reference is the paper's settings
+        if paper is None and ref["dt"] == tr.PAPER_DT:  # a case whose reference is the paper's settings
             paper = ref
         paper_cpu = paper["cpu_s"] if paper and paper.get("data") is not None else None
         doc["reference"][case] = {"settings": ref["overrides"], "dt": ref["dt"], "window_s": ref["window"],
@@ -129,7 +128,7 @@ def analyse(out, jobs, meta, log=print):
         if full is not None:  # the whole 0.18 s, against the paper's settings as the reference
             doc["defaults"]["full_duration"] = {k: full[k] for k in ("speedup", "error", "cpu_s")}
             doc["defaults"]["full_duration"]["floor"] = doc["reference"]["liquefaction_case1_full"]["floor"]
-    speed = os.path.join(out, "speed", "speed.json")  # yade_scripts/tradeoffs.py speed: interleaved in one process
+    speed = os.path.join(out, "speed", "speed.json")  # engines.run.tradeoffs.measure_speed: interleaved in one process
     if os.path.exists(speed):
         with open(speed) as f:
             doc["speed_interleaved"] = json.load(f)

@@ -1,5 +1,7 @@
-"""Studies of the numerics: speed against accuracy (tradeoffs), the stability map (stability).
+"""Studies of the numerics: speed against accuracy (tradeoffs), the stability map (stability):
+their points, metrics and judgements, no YADE.
 
 May import: engines.model, engines.compiled, engines.reference, packing, engines.yade; the
-scripts that run them are yade_scripts/tradeoffs.py and yade_scripts/stability.py.
+runs are engines.run.tradeoffs and engines.run.stability, the figures postproc.tradeoffs and
+postproc.stability.
 """

@@ -5,8 +5,8 @@ after a few milliseconds. A setting is therefore run from ``n`` perturbed starts
 and compared with the reference run from the same starts through ensemble means. The nudge must be
 large enough that the starts have parted before the window's events: a cloud of starts that is
 still one trajectory has a small spread (so a small floor) and a mean that any change of the step
-moves; check that the means do not depend on the size (yade_scripts/tradeoffs.py, the knob
-"perturbation"; docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
+moves; check that the means do not depend on the size (the knob "perturbation" of CASES;
+docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
 
 * ``pressure_rms``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
   <.> the mean over starts of the block-mean pore pressure histories (N/m, per block and time);
@@ -25,6 +25,10 @@ moves; check that the means do not depend on the size (yade_scripts/tradeoffs.py
   the same estimate over bootstrap resamples of both sets of starts.
 
 ``pareto_front`` marks the settings that no other setting beats on both cost and error.
+
+The study's points: CASES (per case its window, base dt and the values of each knob), ``points``
+in the order they run, their starts and perturbation sizes, their job names; engines.run.tradeoffs
+gives each point its scene settings and runs it, postproc.tradeoffs draws the tables and figures.
 Plain NumPy; no YADE.
 """
 import dataclasses
@@ -174,3 +178,113 @@ def pareto_front(cost, error):
             front.append(int(i))
             best = error[i]
     return front
+
+
+# -- the study's points ----------------------------------------------------------------------------
+RECORD = 5e-4      # s between samples of the histories (a multiple of every dt below)
+REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
+STARTS = 5         # perturbed starts per setting, unless the case's "starts" says more for a knob
+REFERENCE_DT = 5e-7
+PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (perturbed)
+PAPER_DT = 1e-6
+
+# Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
+# the values of each knob; "preset" (default: the key) and "reference_dt" (default REFERENCE_DT)
+# where they differ; "starts": {knob: starts} where a knob needs more than STARTS (the chaos floor
+# falls as 1/sqrt(starts)); "perturbation_size": the size of the perturbation of the starts [m] (default
+# PERTURBATION), large enough that the ensemble means no longer depend on it (the knob
+# "perturbation" checks that; docs/TRADEOFFS.md). "defaults" are the named settings chosen from the study.
+CASES = {
+    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5, "perturbation_size": 1e-7,
+                           "starts": {"reference": 20, "dt": 20, "defaults": 20, "candidate": 20, "perturbation": 20},
+                           "dt": [1e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4],
+                           # the ensemble's convergence in the size of the perturbation (at fast_dt)
+                           "perturbation": [1e-9, 1e-8, 3e-7],
+                           "water_interval": [2, 5, 10], "rebuild_period": [2e-4, 5e-4, 2e-3, 5e-3],
+                           "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
+                           "precision": ["longdouble"],
+                           "defaults": [{"name": "fast", "numerics.dt": "auto",  # at the schema's dt_auto_factor
+                                         "numerics.rebuild_interval": 50, "numerics.water_interval": 1},
+                                        {"name": "accurate", "numerics.dt": 1e-6, "numerics.rebuild_interval": 1000,
+                                         "numerics.water_interval": 1}],
+                           # settings tried for the fast setting around the largest dt still within 5 % (2e-5 s at
+                           # 1e-7 m starts; 5e-5 s is at 5 %): dt_auto_factor x eq 52 (1.108e-4 s), rebuilds every
+                           # ~1 ms, the water every M steps; f0.45_M2_rb20 is the earlier fast setting
+                           "candidate": [{"name": f"f{f:g}_M{m}_rb{rb}", "numerics.dt": "auto",
+                                          "numerics.dt_auto_factor": f, "numerics.rebuild_interval": rb,
+                                          "numerics.water_interval": m}
+                                         for f, m, rb in ((0.27, 1, 33), (0.27, 2, 33), (0.36, 1, 25), (0.36, 2, 25),
+                                                          (0.45, 1, 20), (0.45, 2, 20), (0.36, 1, 50))]},
+    "quicksand_case1": {"window": 0.03, "fast_dt": 1e-5,
+                        "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
+                        "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
+                        "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
+    # the fast setting over the whole 0.18 s against the paper's settings as the reference
+    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT, "perturbation_size": 1e-7,
+                                "fast_dt": 2e-5, "defaults": []},
+    "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
+}
+CASES["liquefaction_case1_full"]["defaults"] = CASES["liquefaction_case1"]["defaults"][:1]
+
+
+def dt_settings(dt):
+    """dt [s] with the pores rebuilt every REBUILD_PERIOD (so that the dt sweep does not also
+    change the rebuild period), water every step."""
+    return {"numerics.dt": dt, "numerics.rebuild_interval": max(1, int(round(REBUILD_PERIOD / dt))),
+            "numerics.water_interval": 1}
+
+
+PRIORITY = (("reference", "dt", "defaults", "perturbation", "candidate", "water_interval", "rebuild_period"),
+            ("smoothing", "transfer", "E_w_scale", "precision", "law"))
+LAST = ("liquefaction_case1_full", "liquefaction_case4")  # run after every knob of the other cases
+
+
+def points(cases=None):
+    """[(case, knob, value)] of the study in the order it runs: the references, dt (with the paper's
+    settings), water_interval and rebuild_period of every case, then the other knobs, case by case
+    in the order of CASES (liquefaction case 4 last), so that a stopped study has the first knobs."""
+    out = []
+    order = [(knobs, [c for c in CASES if c not in LAST]) for knobs in PRIORITY]
+    order.append((sum(PRIORITY, ()), list(LAST)))
+    for knobs, names in order:
+        for case in names:
+            spec = CASES[case]
+            if cases and case not in cases:
+                continue
+            for knob in knobs:
+                if knob == "reference":
+                    out.append((case, knob, spec.get("reference_dt", REFERENCE_DT)))
+                else:
+                    out += [(case, knob, v) for v in spec.get(knob, [])]
+    return out
+
+
+def starts_of(case, knob):
+    """Perturbed starts of one point of the study."""
+    return CASES[case].get("starts", {}).get(knob, STARTS)
+
+
+def perturbation_of(case, knob, value):
+    """The size [m] of the perturbation of the starts of one point of the study."""
+    return value if knob == "perturbation" else CASES[case].get("perturbation_size", PERTURBATION)
+
+
+def job_name(case, knob, value):
+    text = value if isinstance(value, str) else value["name"] if isinstance(value, dict) else repr(value)
+    safe = "".join(c if c.isalnum() or c in "._=,+-" else "_" for c in text)
+    return f"{case}.{knob}={safe}"[:120]
+
+
+def nested(flat):
+    """{"table.field": v} -> {table: {field: v}}."""
+    out = {}
+    for key, v in flat.items():
+        table, field = key.split(".", 1)
+        out.setdefault(table, {})[field] = v
+    return out
+
+
+def named_value(case, knob, text):
+    """The value of a study point from its text in a job name: a number, or a named setting."""
+    named = {v["name"]: v for v in CASES[case].get(knob, []) if isinstance(v, dict)}
+    return named[text] if text in named else float(text)

@@ -176,7 +176,7 @@ def test_study_cost_estimate_follows_steps_and_discs(tmp_path):
     """--estimate: CPU ∝ discs; the compression's steps ∝ strain / rate / Δt; done jobs not counted."""
     import json
 
-    from yade_scripts import biaxial_study as st
+    from engines.run import biaxial_study as st
 
     ref = st.predicted_cpu_s(st.sensitivity(1))
     assert st.predicted_cpu_s(st.sensitivity(1, n_discs=500)) == pytest.approx(ref / 2)

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from engines.seeds.particle_potential import (
+from engines.seeds.particle_potential import specimen
+from engines.seeds.particle_potential.model import (
     TONNE_FORCE,
     Kind,
     Model,
@@ -19,7 +20,6 @@ from engines.seeds.particle_potential import (
     tf_m2_to_pa,
     total_energy,
 )
-from yade_scripts import particle_potential as script
 
 POT = Potential(A_m=TONNE_FORCE, alpha=1.0, C=2.0, DL=1.8)
 
@@ -58,7 +58,7 @@ def test_lattice_distances_are_well_bottoms(alpha):
 
 
 def test_initial_specimen_is_unloaded_equilibrium():
-    spec = script.build_specimen(POT, moving_top=False)
+    spec = specimen.build_specimen(POT, moving_top=False)
     ref = spec.model.reference
     pairs = find_pairs(ref, spec.model)
     zero = np.zeros_like(ref)
@@ -68,9 +68,9 @@ def test_initial_specimen_is_unloaded_equilibrium():
 
 
 def test_specimen_counts_match_paper_figure_5():
-    kinds = script.build_specimen(POT, moving_top=False).model.kinds
+    kinds = specimen.build_specimen(POT, moving_top=False).model.kinds
     assert [np.sum(kinds == k) for k in (Kind.FREE, Kind.Z_ONLY, Kind.FIXED)] == [36, 12, 4]
-    kinds = script.build_specimen(POT, moving_top=True).model.kinds
+    kinds = specimen.build_specimen(POT, moving_top=True).model.kinds
     assert np.sum(kinds == Kind.MOVING) == 4
 
 
@@ -97,8 +97,8 @@ def test_free_dofs_by_kind():
 
 
 def test_reactions_balance_applied_top_load():
-    spec = script.build_specimen(POT, moving_top=False)
-    path = script.load_path(spec, tf_m2_to_pa(script.ramp(10.0, 0.5)), SolverSettings())
+    spec = specimen.build_specimen(POT, moving_top=False)
+    path = specimen.load_path(spec, tf_m2_to_pa(specimen.ramp(10.0, 0.5)), SolverSettings())
     assert not path.yielded
     final = path.increments[-1]
     applied = -final.forces[:, 1].sum()
@@ -113,7 +113,7 @@ def test_apparent_modulus_scales_with_alpha_squared_and_lies_between_lattice_bou
     moduli = []
     for alpha in (1.0, 2.0):
         pot = Potential(A_m=TONNE_FORCE, alpha=alpha, C=2.0, DL=1.8)
-        path = script.load_path(script.build_specimen(pot, moving_top=False), [tf_m2_to_pa(0.1)], SolverSettings())
+        path = specimen.load_path(specimen.build_specimen(pot, moving_top=False), [tf_m2_to_pa(0.1)], SolverSettings())
         e = pa_to_tf_m2(path.stress[0] / path.strain[0])
         k = pa_to_tf_m2(pair_stiffness_at_well(1.0, pot))
         assert 1.5 * k < e < 2.0 * k
@@ -124,7 +124,7 @@ def test_apparent_modulus_scales_with_alpha_squared_and_lies_between_lattice_bou
 def test_eq6_counts_every_pair_once_axis_pairs_included():
     """Eq 6 sums u over every pair j < k of the model: U of a deformed specimen equals that sum
     over all pairs closer than DL except boundary-boundary ones, computed here pair by pair."""
-    spec = script.build_specimen(POT, moving_top=False)
+    spec = specimen.build_specimen(POT, moving_top=False)
     rng = np.random.default_rng(5)
     pos = spec.model.reference + rng.normal(scale=0.03, size=spec.model.reference.shape)
     pairs = find_pairs(pos, spec.model)
@@ -140,7 +140,7 @@ def test_eq6_counts_every_pair_once_axis_pairs_included():
 def test_apparent_modulus_against_the_paper(alpha, paper_E):
     """§4: "みかけのヤング率はほぼ 300t/m²" (α = 1) and "ほぼ 1200 t/m²" (α = 2): within 5 %."""
     pot = Potential(A_m=TONNE_FORCE, alpha=alpha, C=2.0, DL=1.8)
-    path = script.load_path(script.build_specimen(pot, moving_top=False), [tf_m2_to_pa(0.25)], SolverSettings())
+    path = specimen.load_path(specimen.build_specimen(pot, moving_top=False), [tf_m2_to_pa(0.25)], SolverSettings())
     E = pa_to_tf_m2(path.stress[0] / path.strain[0])
     assert E == pytest.approx(paper_E, rel=0.05)
 
@@ -149,9 +149,9 @@ def test_yield_against_the_paper_and_independent_of_increment_and_trust_box():
     """§4: "載荷応力 26t/m² (ヒズミにして8.5%) で降伏" (α = 1): the converged limit load within 15 % of
     26 t/m²; two searches with different first increments and trust boxes agree within the 2 % the
     search converges to."""
-    spec = script.build_specimen(POT, moving_top=False)
-    a = script.yield_search(spec, SolverSettings(max_step=0.05), tf_m2_to_pa(0.5), tf_m2_to_pa(60.0))
-    b = script.yield_search(spec, SolverSettings(max_step=0.2), tf_m2_to_pa(0.25), tf_m2_to_pa(60.0))
+    spec = specimen.build_specimen(POT, moving_top=False)
+    a = specimen.yield_search(spec, SolverSettings(max_step=0.05), tf_m2_to_pa(0.5), tf_m2_to_pa(60.0))
+    b = specimen.yield_search(spec, SolverSettings(max_step=0.2), tf_m2_to_pa(0.25), tf_m2_to_pa(60.0))
     assert a.found and b.found
     assert pa_to_tf_m2(a.load) == pytest.approx(26.0, rel=0.15)
     assert a.load == pytest.approx(b.load, rel=0.02)
@@ -162,14 +162,14 @@ def test_yield_against_the_paper_and_independent_of_increment_and_trust_box():
 def test_alpha_2_does_not_yield_where_alpha_1_does():
     """§4: α = 2 "降伏点はみられない" (no yield point seen) over the range where α = 1 yields."""
     pot = Potential(A_m=TONNE_FORCE, alpha=2.0, C=2.0, DL=1.8)
-    spec = script.build_specimen(pot, moving_top=False)
-    lim = script.yield_search(spec, SolverSettings(), tf_m2_to_pa(1.0), tf_m2_to_pa(26.0 * 1.15))
+    spec = specimen.build_specimen(pot, moving_top=False)
+    lim = specimen.yield_search(spec, SolverSettings(), tf_m2_to_pa(1.0), tf_m2_to_pa(26.0 * 1.15))
     assert not lim.found
 
 
 def test_slope_collapse_is_yield_even_when_converged():
-    spec = script.build_specimen(POT, moving_top=True)
-    path = script.displacement_path(spec, script.ramp(1.5, 0.05), SolverSettings(max_step=0.5))
+    spec = specimen.build_specimen(POT, moving_top=True)
+    path = specimen.displacement_path(spec, specimen.ramp(1.5, 0.05), SolverSettings(max_step=0.5))
     assert path.yielded
     assert path.increments[-1].yielded
 

@@ -1,13 +1,11 @@
 """Monte-Carlo model sand layer (seed 004): distributions, load transmission, settlement."""
-import importlib.util
 import json
-import os
 
 import numpy as np
 import pytest
 from scipy import stats
 
-from engines import ROOT
+from engines.seeds.sand_layer import study
 from engines.seeds.sand_layer.layer import (
     DISCRETE_LEVELS,
     GrainSizeDistribution,
@@ -32,18 +30,11 @@ from engines.seeds.sand_layer.mechanics import (
     transmit_load,
     void_ratio_reduction,
 )
+from postproc.sand_layer import figures
 
 GSD = GrainSizeDistribution()
 LAYER = SandLayerSettings()
 MECH = MechanicsSettings()
-
-
-def load_script():
-    spec = importlib.util.spec_from_file_location(
-        "sand_layer_script", os.path.join(ROOT, "yade_scripts", "sand_layer.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 # --- grain sizes and void ratios -------------------------------------------------------------
@@ -209,13 +200,12 @@ def test_bad_input_is_rejected_naming_the_field(make, field):
         make()
 
 
-# --- the script ----------------------------------------------------------------------------------
+# --- the study ----------------------------------------------------------------------------------
 
-def test_script_writes_summary_and_figures(tmp_path):
-    script = load_script()
-    first = script.write_outputs(script.run(realisations=3, seed=4), str(tmp_path))
-    again = script.summary(script.run(realisations=3, seed=4))
-    other = script.summary(script.run(realisations=3, seed=5))
+def test_study_writes_summary_and_figures(tmp_path):
+    first = study.write_outputs(study.run(realisations=3, seed=4), str(tmp_path), figures)
+    again = study.summary(study.run(realisations=3, seed=4))
+    other = study.summary(study.run(realisations=3, seed=5))
     saved = json.loads((tmp_path / "summary.json").read_text())
     for key in ("settlement_mean", "settlement_std", "load_balance_error", "parameters"):
         assert key in saved
@@ -224,4 +214,4 @@ def test_script_writes_summary_and_figures(tmp_path):
     assert first["stress_fraction_under_load"] > first["settlement_fraction_under_load"]
     assert len(list(tmp_path.glob("*.png"))) == 4
     with pytest.raises(ValueError, match="load_width"):
-        script.strip_load(26, 0, 1e5)
+        study.strip_load(26, 0, 1e5)

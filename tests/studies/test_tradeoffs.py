@@ -137,10 +137,10 @@ def test_perturbed_starts_move_only_the_particles_by_about_the_size():
 
 
 def test_study_points_and_jobs():
-    from yade_scripts import tradeoffs as study
-    pts = study.points()
-    assert pts[0] == ("liquefaction_case1", "reference", study.REFERENCE_DT)
-    assert ("liquefaction_case1", "dt", study.PAPER_DT) in pts
+    from engines.run import tradeoffs as study
+    pts = tr.points()
+    assert pts[0] == ("liquefaction_case1", "reference", tr.REFERENCE_DT)
+    assert ("liquefaction_case1", "dt", tr.PAPER_DT) in pts
     cases = [c for c, _, _ in pts]
     assert cases.index("liquefaction_case4") > max(i for i, c in enumerate(cases) if c != "liquefaction_case4")
     # the dt sweep keeps the rebuild period at 1 ms, the paper's 1000 steps of 1e-6 s
@@ -157,7 +157,7 @@ def test_study_points_and_jobs():
     # the rows judged against 5 % get 20 starts (floor / 2), the other knobs STARTS
     starts = {meta[j.name][1]: dict(zip(j.argv, j.argv[1:]))["--starts"] for j in jobs if meta[j.name][0] == "liquefaction_case1"}
     assert starts["reference"] == starts["dt"] == starts["defaults"] == "20"
-    assert starts["water_interval"] == starts["smoothing"] == str(study.STARTS)
+    assert starts["water_interval"] == starts["smoothing"] == str(tr.STARTS)
     # the seismic starts are perturbed by 1e-7 m: with 1e-9 m the ensemble means still depend on the size
     # (docs/TRADEOFFS.md); the knob "perturbation" runs the other sizes, every other case keeps PERTURBATION
     size = {(meta[j.name][1], meta[j.name][2] if meta[j.name][1] == "perturbation" else None):
@@ -165,7 +165,7 @@ def test_study_points_and_jobs():
     assert size[("reference", None)] == size[("dt", None)] == size[("defaults", None)] == 1e-7
     assert {v: size[("perturbation", v)] for v in (1e-9, 1e-8, 3e-7)} == {1e-9: 1e-9, 1e-8: 1e-8, 3e-7: 3e-7}
     assert {float(dict(zip(j.argv, j.argv[1:]))["--perturbation"]) for j in jobs
-            if meta[j.name][0] == "quicksand_case1"} == {study.PERTURBATION}
+            if meta[j.name][0] == "quicksand_case1"} == {tr.PERTURBATION}
     sub, sub_meta = study.study_jobs(["liquefaction_case1"], knobs=["reference", "defaults"])
     assert {sub_meta[j.name][1] for j in sub} == {"reference", "defaults"}
 
@@ -217,18 +217,17 @@ def test_analyse_writes_the_issue_format(tmp_path):
 
 
 def test_speed_points_name_the_study_settings():
-    from yade_scripts import tradeoffs as study
-    assert study.named_value("liquefaction_case1", "dt", "1e-06") == 1e-6
-    fast = study.named_value("liquefaction_case1", "defaults", "fast")
-    assert fast is study.CASES["liquefaction_case1"]["defaults"][0]
-    over = study.nested(study.settings_of("liquefaction_case1", "defaults", fast)[0])
+    from engines.run import tradeoffs as study
+    assert tr.named_value("liquefaction_case1", "dt", "1e-06") == 1e-6
+    fast = tr.named_value("liquefaction_case1", "defaults", "fast")
+    assert fast is tr.CASES["liquefaction_case1"]["defaults"][0]
+    over = tr.nested(study.settings_of("liquefaction_case1", "defaults", fast)[0])
     assert over["numerics"]["dt"] == "auto" and over["numerics"]["water_interval"] == fast["numerics.water_interval"]
 
 
 def test_presets_are_the_study_defaults():
     """liquefaction_case1_fast/accurate.toml hold the numerics the study measured under their names."""
-    from yade_scripts import tradeoffs as study
-    for setting in study.CASES["liquefaction_case1"]["defaults"]:
+    for setting in tr.CASES["liquefaction_case1"]["defaults"]:
         num = scenes.preset(f"liquefaction_case1_{setting['name']}").numerics
         for key, value in setting.items():
             if key.startswith("numerics."):

@@ -1,0 +1,194 @@
+"""The speed/accuracy study run (yade_scripts/tradeoffs.py; docs/TRADEOFFS.md): the scene
+settings of each point of the study (settings_of; the points: engines.studies.tradeoffs), one
+setting from perturbed starts inside YADE (run_setting, run_point), the speed-ups measured in one
+process (measure_speed), and the study's jobs through the sweep runner with their analysis
+(study_jobs, run_study; the tables and figures: postproc.tradeoffs).
+"""
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from engines import ROOT
+from engines.studies.tradeoffs import (
+    CASES,
+    PERTURBATION,
+    RECORD,
+    REFERENCE_DT,
+    dt_settings,
+    job_name,
+    named_value,
+    nested,
+    perturbation_of,
+    perturbed,
+    points,
+    starts_of,
+)
+
+
+def settings_of(case, knob, value):
+    """(overrides, yade program) of one point of the study."""
+    spec = CASES[case]
+    base = dt_settings(spec["fast_dt"])
+    if knob == "reference":
+        return dt_settings(spec.get("reference_dt", REFERENCE_DT)), "yade"
+    if knob == "dt":
+        return dt_settings(value), "yade"
+    if knob == "perturbation":  # the base settings; the size goes to the job's --perturbation
+        return base, "yade"
+    if knob == "water_interval":
+        return {**base, "numerics.water_interval": value}, "yade"
+    if knob == "rebuild_period":
+        return {**base, "numerics.rebuild_interval": int(round(value / spec["fast_dt"]))}, "yade"
+    if knob in ("smoothing", "transfer"):
+        return {**base, f"water.{knob}": value}, "yade"
+    if knob == "E_w_scale":
+        from engines.run import scene as scenes
+        E_w = scenes.preset(case).water.E_w * value
+        return {**base, "water.E_w": E_w, "water.substep": True}, "yade"
+    if knob == "law":
+        return {**base, "contact.law": value}, "yade"
+    if knob == "precision":
+        return base, f"yade-{value}"
+    if knob in ("defaults", "candidate"):  # a named setting chosen from the study, or tried for it
+        return {k: v for k, v in value.items() if k != "name"}, "yade"
+    raise ValueError(f"unknown knob {knob!r}")
+
+
+def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None):
+    """Run one setting from n_starts starts perturbed by ``perturbation`` [m] (default
+    PERTURBATION); returns the result dict (yade_scripts/tradeoffs.py, ``run``, lists its fields)."""
+    from yade import O
+
+    from engines.model.time_step import resolve_dt
+    from engines.run import scene as scenes
+    from engines.run.preflight import InputError, preflight
+    from engines.yade.coupling import YadeCoupling
+    from engines.yade.deposition import scene_packing
+
+    sc = scenes.preset(case, overrides)
+    packing = scene_packing(sc)
+    sc = resolve_dt(sc, packing)
+    dt = sc.numerics.dt
+    every = max(1, int(round(record / dt)))
+    n_steps = int(round(window / dt))
+    YadeCoupling(sc, packing).run(10)  # loads the compiled kernels (numba's cache) outside the timing
+    starts, cpu, wall = [], 0.0, 0.0
+    for s in range(n_starts):
+        pk = perturbed(packing, s, PERTURBATION if perturbation is None else perturbation)
+        rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
+        try:
+            preflight(sc, pk, out_dir)
+            c0, w0 = time.process_time(), time.time()
+            cp = YadeCoupling(sc, pk)
+            mob = pk.mobile
+            k, c_rec, w_rec = 0, 0.0, 0.0  # the recording's own time, left out of the cost
+            while True:
+                r0, q0 = time.process_time(), time.time()
+                xz = cp.positions()
+                rec["t"].append(O.iter * dt)
+                rec["U"].append([float(u) for u in cp.block_pressures(xz)])
+                rec["porosity"].append(float(cp.porosity(xz)))
+                rec["height"].append(float(np.mean(xz[mob, 1])))
+                rec["kinetic_energy"].append(cp.kinetic_energy())
+                c_rec, w_rec = c_rec + time.process_time() - r0, w_rec + time.time() - q0
+                if k >= n_steps or not np.all(np.isfinite(xz)):
+                    break
+                cp.run(min(every, n_steps - k))
+                k += min(every, n_steps - k)
+            cpu_s, wall_s = time.process_time() - c0 - c_rec, time.time() - w0 - w_rec
+            w, wm = cp.water, cp.water_model
+            rec.update(status="ok" if np.all(np.isfinite(xz)) else "nan", cpu_s=cpu_s, wall_s=wall_s, steps=int(O.iter),
+                       cpu_record_s=c_rec,
+                       water_balance_error=w.balance_error() if w else 0.0,
+                       substeps_max=wm.substeps_max if wm else 0, substeps_total=wm.substeps_total if wm else 0,
+                       n_rebuilds=wm.n_rebuilds if wm else 0,
+                       contact_list_builds=cp.core.contact.list_builds if cp.core is not None else None)
+            cpu += cpu_s
+            wall += wall_s
+        except InputError as e:  # refused up front
+            rec.update(status="refused", message=str(e), steps=0)
+        except ValueError as e:  # stopped by an engine (DarcyStabilityError ...)
+            rec.update(status="failed", message=str(e), steps=int(O.iter))
+        starts.append(rec)
+    ok = [r for r in starts if r["status"] == "ok"]
+    return {"case": case, "overrides": overrides, "dt": dt, "window": window, "record": record,
+            "perturbation": PERTURBATION if perturbation is None else perturbation,
+            "n_steps": n_steps, "cpu_s": cpu / max(len(ok), 1), "wall_s": wall / max(len(ok), 1),
+            "starts": starts, "program": os.path.basename(sys.argv[0]) if sys.argv else "yade"}
+
+
+def run_point(case, sets, window, record, n_starts, out_dir, perturbation):
+    """``tradeoffs.py run``: run_setting of the preset ``case`` with the scene settings ``sets``
+    [(table, field, value)] for ``window`` seconds; writes OUT/result.json; returns (the
+    overrides, the result)."""
+    over = {}
+    for table, field, value in sets:
+        over.setdefault(table, {})[field] = value
+    over.setdefault("numerics", {})["duration"] = window
+    result = run_setting(case, over, window, record, n_starts, out_dir, perturbation)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "result.json"), "w") as f:
+        json.dump(result, f)
+    return over, result
+
+
+def measure_speed(case, settings, repeats, out):
+    """Speed-ups measured in one YADE process: each of ``settings`` (texts KNOB=VALUE of the study,
+    the first the base) run from one start per repeat, the settings interleaved (their order
+    rotated every repeat), CPU seconds as in ``run_setting``; the median over the repeats of each
+    over the first setting's (the paper's) -> OUT/speed.json, which it returns."""
+    spec = CASES[case]
+    pairs = [p.split("=", 1) for p in settings]
+    cpu = {p: [] for p in settings}
+    for rep in range(repeats):
+        for k in range(len(pairs)):
+            knob, text = pairs[(k + rep) % len(pairs)]
+            over = nested(settings_of(case, knob, named_value(case, knob, text))[0])
+            over.setdefault("numerics", {})["duration"] = spec["window"]
+            res = run_setting(spec.get("preset", case), over, spec["window"], RECORD, 1, out,
+                              perturbation_of(case, knob, named_value(case, knob, text)))
+            cpu[f"{knob}={text}"].append(res["cpu_s"])
+            print(f"repeat {rep}: {knob}={text}: {res['cpu_s']:.2f} CPU s", flush=True)
+    med = {p: float(np.median(c)) for p, c in cpu.items()}
+    doc = {"case": case, "window_s": spec["window"], "repeats": repeats, "cpu_s": cpu, "median_cpu_s": med,
+           "speedup": {p: med[settings[0]] / m for p, m in med.items()}}
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "speed.json"), "w") as f:
+        json.dump(doc, f, indent=1)
+    return doc
+
+
+def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
+    """(jobs for engines.run.sweep, {job name: (case, knob, value)}) of the study's points (of the
+    knobs ``knobs`` only, when given)."""
+    from engines.run.sweep import Job
+    jobs, meta = [], {}
+    for case, knob, value in points(cases):
+        if knobs and knob not in knobs:
+            continue
+        over, program = settings_of(case, knob, value)
+        name = job_name(case, knob, value)
+        argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run",
+                "--case", CASES[case].get("preset", case), "--window", repr(CASES[case]["window"]),
+                "--starts", str(starts_of(case, knob)), "--perturbation", repr(perturbation_of(case, knob, value)),
+                "--out", "{out}"]
+        for k, v in over.items():
+            argv += ["--set", f"{k}={json.dumps(v)}"]
+        jobs.append(Job(name, argv, {"PYTHONPATH": ROOT}))
+        meta[name] = (case, knob, value)
+    return jobs, meta
+
+
+def run_study(out, workers=1, scheduler=None, cases=None, knobs=None, analyse_only=False):
+    """``tradeoffs.py study``: the study's jobs (of ``cases`` and ``knobs`` only, when given) through
+    the sweep runner (none with ``analyse_only``), then postproc.tradeoffs.analyse: OUT/tradeoffs.json,
+    table.md and the figures; returns the tradeoffs.json dict."""
+    jobs, meta = study_jobs(cases, knobs=knobs)
+    if not analyse_only:
+        from engines.run.sweep import run_sweep
+        run_sweep(jobs, os.path.join(out, "runs"), workers=workers, scheduler=scheduler)
+    from postproc.tradeoffs import analyse
+    return analyse(out, jobs, meta)

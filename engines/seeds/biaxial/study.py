@@ -1,0 +1,268 @@
+"""Seed 003's study (Murakami et al. §3, docs/BIAXIAL.md): its parts and their settings, and its
+numbers from the finished runs: φ*, c*, peaks and E50 of the main grid and the eq 4 fits
+(analyse_main), the sensitivities (analyse_sensitivity), the curves calibrate.py inverts
+(calibration_from), study.json (summarise) and the tables beside the paper's (write_table).
+No YADE: engines.run.biaxial_study runs the jobs, postproc.biaxial_plots draws the figures.
+"""
+import json
+import math
+import os
+
+import numpy as np
+
+from engines.seeds.biaxial.calibration import Calibration, eq4_e50, fit_eq4
+from engines.seeds.biaxial.specimen import Curve, mohr_coulomb_fit
+
+PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "sideload")
+DEFAULT_PARTS = PARTS[:-1]
+PHI_E = (5.0, 10.0, 15.0)
+SIGMA3 = (100.0, 200.0, 300.0, 400.0)
+KN = 1e8
+KS = 0.25
+SENS_PHI, SENS_SIGMA3, SENS_STRAIN = 10.0, 200.0, 4.0  # the paper's sensitivity runs (§3(1)–(2), Fig. 13–14)
+RATES = (25.0, 50.0)                                     # %/min, besides the reference 100 (the paper's)
+DTS = (2.5e-5, 1e-4)                                     # s, besides the reference 0.5e-4
+DISCS = (125, 250, 500)                                  # besides the reference 1000
+KNS = (0.5e8, 2e8)
+KSS = (0.125, 0.5)
+KS_DT = {0.5: 3.5e-5}  # s: at stable_dt (4.08e-5 s) the 500-disc specimen did not come to rest (docs/BIAXIAL.md)
+SMALL_DISCS = 500  # the specimen of the stiffness and dt sensitivities (docs/BIAXIAL.md: the budget)
+PAPER = {"phi_star_deg": {15.0: 27.4}, "c_star_pa": {15.0: 0.4}, "peak_deviator_200_pa": {5.0: 140.0, 10.0: 240.0, 15.0: 330.0}}
+CALIBRATION_TARGET_SIGMA3 = 250.0  # Pa: between the study's σ3, so the round trip interpolates in σ3 too
+
+
+def sensitivity_name(seed, **changes):
+    label = "_".join(f"{k}{v:g}" if isinstance(v, float) else f"{k}{v}" for k, v in changes.items()) or "reference"
+    return f"sens_{label}_seed{seed}"
+
+
+def ks_dt(ks_ratio):
+    """The time step option of a ks/kn sensitivity run: KS_DT's, else none (stable_dt)."""
+    return {"dt": KS_DT[ks_ratio]} if ks_ratio in KS_DT else {}
+
+
+def read_run(runs, name):
+    """(summary, {σ3: Curve}) of a finished run, or (None, {}) if it failed without results."""
+    path = os.path.join(runs, name)
+    try:
+        with open(os.path.join(path, "summary.json")) as f:
+            summary = json.load(f)
+    except OSError:
+        return None, {}
+    d = np.loadtxt(os.path.join(path, "curves.csv"), delimiter=",", skiprows=1, ndmin=2)
+    curves = {}
+    for s3 in np.unique(d[:, 0]):
+        m = d[:, 0] == s3
+        curves[float(s3)] = Curve(float(s3), d[m, 1], d[m, 3], d[m, 4], d[m, 5], d[m, 6] - d[m, 1])
+    return summary, curves
+
+
+def job_status(runs, name):
+    try:
+        with open(os.path.join(runs, name, "job.json")) as f:
+            rec = json.load(f)
+    except OSError:
+        return {"status": "missing"}
+    return {k: rec.get(k) for k in ("status", "wall_s", "stderr_tail")}
+
+
+def mean_sd(values):
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], float)
+    if len(v) == 0:
+        return {"mean": None, "sd": None, "n": 0, "values": []}
+    return {"mean": float(v.mean()), "sd": float(v.std(ddof=1)) if len(v) > 1 else 0.0, "n": int(len(v)),
+            "values": v.tolist()}
+
+
+def analyse_main(runs, seeds):
+    """φ*, c*, peaks and E50 per φe and seed; the eq 4 fits."""
+    out = {"per_phi_e": {}, "points": [], "fits": {}, "rows": []}
+    for p in PHI_E:
+        per = {"phi_star_deg": [], "c_star_pa": [], "peak": {s3: [] for s3 in SIGMA3}, "e50": {s3: [] for s3 in SIGMA3},
+               "peak_strain": {s3: [] for s3 in SIGMA3}, "peak_at_end": 0, "curves": {}}
+        for s in seeds:
+            summary, curves = read_run(runs, f"main_phi{p:g}_seed{s}")
+            if summary is None or "error" in summary:
+                continue
+            s3s = sorted(curves)
+            phi, c_star = mohr_coulomb_fit(s3s, [s3 + curves[s3].peak()[1] for s3 in s3s])
+            per["phi_star_deg"].append(phi)
+            per["c_star_pa"].append(c_star)
+            out["rows"].append({"phi_e_deg": p, "seed": s, "phi_star_deg": phi, "c_star_pa": c_star})
+            per["curves"][s] = curves
+            for s3, c in sorted(curves.items()):  # peak and E50 from the records (engines.seeds.biaxial.specimen)
+                eps_f, q_f = c.peak()
+                per["peak"][s3].append(q_f)
+                per["e50"][s3].append(c.e50())
+                per["peak_strain"][s3].append(eps_f)
+                per["peak_at_end"] += int(eps_f >= c.strain[-1] - 0.001)
+                out["points"].append({"phi_e_deg": p, "seed": s, "sigma3_pa": s3, "kn": KN, "e50_pa": c.e50(),
+                                      "peak_deviator_pa": q_f})
+        pts = [x for x in out["points"] if x["phi_e_deg"] == p]
+        if len(pts) >= 2:
+            out["fits"][p] = fit_eq4([x["sigma3_pa"] for x in pts], [x["kn"] for x in pts], [x["e50_pa"] for x in pts])
+        out["per_phi_e"][p] = per
+    return out
+
+
+def phi_one_circle(q_f, sigma3):
+    """φ [deg] of the line through the origin tangent to one Mohr circle (c* = 0)."""
+    return math.degrees(math.asin(q_f / (q_f + 2 * sigma3)))
+
+
+def analyse_sensitivity(runs, seeds):
+    """Peak, E50 and φ (line through the origin, c* = 0) at σ3 = 200 Pa for each knob's value
+    (the reference value's runs are those of the knob's specimen: 1000 or SMALL_DISCS discs)."""
+    small = {"n_discs": SMALL_DISCS}
+    groups = {"strain_rate_pct_min": ("strain_rate", RATES, 100.0, lambda v: {}, {}),
+              "dt_s": ("dt", DTS, 5e-5, lambda v: {"packing_dt": 5e-5}, small),
+              "n_discs": ("n_discs", DISCS, 1000, lambda v: {}, {}),
+              "kn_pa_per_m": ("kn", KNS, KN, lambda v: {}, small), "ks_ratio": ("ks_ratio", KSS, KS, ks_dt, small)}
+    out = {}
+    for label, (opt, values, ref, extra, base) in groups.items():
+        res = {}
+        for v in sorted((*values, ref)):
+            cells = {"peak_deviator_pa": [], "e50_pa": [], "phi0_deg": [], "failed": [], "curves": [], "wall_s": []}
+            for s in seeds:
+                changes = base if v == ref else {opt: v, **extra(v), **base}
+                name = sensitivity_name(s, **changes)
+                summary, curves = read_run(runs, name)
+                st = job_status(runs, name)
+                if st["status"] != "ok" or summary is None or "error" in summary:
+                    cells["failed"].append({"seed": s, "status": st["status"],
+                                            "reason": (st.get("stderr_tail") or "").strip().splitlines()[-1:]})
+                    continue
+                c = curves[SENS_SIGMA3]
+                q_f = c.peak()[1]
+                cells["peak_deviator_pa"].append(q_f)
+                cells["e50_pa"].append(c.e50())
+                cells["phi0_deg"].append(phi_one_circle(q_f, SENS_SIGMA3))
+                cells["curves"].append(c)
+                cells["wall_s"].append(summary["wall_s"])
+            res[v] = cells
+        out[label] = res
+    return out
+
+
+def calibration_from(main):
+    """fit.json: φ*(φe) means and A(φe), m(φe) (eq 2, 4) from the main grid."""
+    pe = [p for p in PHI_E if p in main["fits"] and main["per_phi_e"][p]["phi_star_deg"]]
+    return Calibration(pe, [float(np.mean(main["per_phi_e"][p]["phi_star_deg"])) for p in pe],
+                       [main["fits"][p][0] for p in pe], [main["fits"][p][1] for p in pe], KN, KS)
+
+
+def calibration_target(cal):
+    """A target inside the studied range and off its grid: φ* halfway between the φe = 10° and
+    15° grounds, and the E50 at σ3 = 250 Pa that eq 4 gives there for kn = 1.5e8 Pa/m."""
+    phi_star = 0.5 * (cal.phi_star[-2] + cal.phi_star[-1])
+    A, m = cal.eq4_at(cal.phi_e_for(phi_star))
+    return phi_star, float(eq4_e50(CALIBRATION_TARGET_SIGMA3, 1.5e8, A, m)), CALIBRATION_TARGET_SIGMA3
+
+
+def summarise(main, sens, seeds):
+    """study.json's numbers (curves left out)."""
+    m = {"phi_star_deg": {}, "c_star_pa": {}, "peak_deviator_pa": {}, "e50_pa": {}, "peak_strain": {}, "eq4": {},
+         "peaks_at_end_of_test": {}}
+    for p, per in main["per_phi_e"].items():
+        m["phi_star_deg"][f"{p}"] = mean_sd(per["phi_star_deg"])
+        m["c_star_pa"][f"{p}"] = mean_sd(per["c_star_pa"])
+        m["peak_deviator_pa"][f"{p}"] = {f"{s3}": mean_sd(v) for s3, v in per["peak"].items()}
+        m["e50_pa"][f"{p}"] = {f"{s3}": mean_sd(v) for s3, v in per["e50"].items()}
+        m["peak_strain"][f"{p}"] = {f"{s3}": mean_sd(v) for s3, v in per["peak_strain"].items()}
+        m["peaks_at_end_of_test"][f"{p}"] = per["peak_at_end"]
+        if p in main["fits"]:
+            m["eq4"][f"{p}"] = {"A": main["fits"][p][0], "m": main["fits"][p][1]}
+    s = {}
+    for key, res in sens.items():
+        s[key] = {f"{v:g}": {"peak_deviator_pa": mean_sd(c["peak_deviator_pa"]), "e50_pa": mean_sd(c["e50_pa"]),
+                             "phi0": mean_sd(c["phi0_deg"]), "wall_s": mean_sd(c["wall_s"]), "failed": c["failed"]}
+                  for v, c in res.items()}
+    return {"seeds": list(seeds), "main": m, "sensitivity": s}
+
+
+def _num(x, fmt="{:.1f}"):
+    return "–" if x is None else fmt.format(x)
+
+
+def _ms(stat, fmt="{:.1f}", unit=""):
+    """'mean ± s.d. (n)' of a mean_sd record, '–' when nothing finished."""
+    if not stat or stat["mean"] is None:
+        return "–"
+    return f"{fmt.format(stat['mean'])} ± {fmt.format(stat['sd'])}{unit} (n = {stat['n']})"
+
+
+SENS_ROWS = (("strain_rate_pct_min", "strain rate [%/min] (Fig. 5)", "1000"),
+             ("dt_s", "Δt [s] (Fig. 6)", f"{SMALL_DISCS}"), ("n_discs", "discs (Fig. 8)", "—"),
+             ("kn_pa_per_m", "kn [Pa/m] (Fig. 13)", f"{SMALL_DISCS}"), ("ks_ratio", "ks/kn (Fig. 14)", f"{SMALL_DISCS}"))
+
+
+def write_table(study, path):
+    """The side-by-side tables with the paper (markdown): main grid, sensitivities, calibration,
+    time steps, cost."""
+    m, sens, cal = study["main"], study["sensitivity"], study.get("calibration")
+    paper_q = PAPER["peak_deviator_200_pa"]
+    lines = ["Main grid (1000 discs, 100 %/min, 5 % strain; mean ± s.d. over packings):", "",
+             "| φe | φ* paper | φ* model | c* paper | c* model [Pa] | peak q at σ3 = 200 Pa, paper | model [Pa] |"
+             " φ at σ3 = 200 Pa, c* = 0 | eq 4: A | m |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for p in PHI_E:
+        k = f"{p}"
+        eq4 = m["eq4"].get(k)
+        q200 = m["peak_deviator_pa"].get(k, {}).get("200.0")
+        lines.append(f"| {p:g}° | {PAPER['phi_star_deg'].get(p, '–')} | {_ms(m['phi_star_deg'].get(k), unit='°')} | "
+                     f"{PAPER['c_star_pa'].get(p, '–')} | {_ms(m['c_star_pa'].get(k))} | ≈ {paper_q[p]:g} | "
+                     f"{_ms(q200, '{:.0f}')} | {_ms(q200 and mean_sd([phi_one_circle(q, 200.0) for q in q200['values']]), unit='°')} | "
+                     f"{_num(eq4 and eq4['A'], '{:.3g}')} | {_num(eq4 and eq4['m'], '{:.3f}')} |")
+    ref = sens.get("n_discs", {}).get("1000")
+    if ref and ref["peak_deviator_pa"]["n"]:
+        lines += ["", f"φe = {SENS_PHI:g}° at σ3 = {SENS_SIGMA3:g} Pa from the sensitivity reference runs (1000 discs packed "
+                  f"straight to {SENS_SIGMA3:g} Pa, {SENS_STRAIN:g} % strain): peak q = "
+                  f"{_ms(ref['peak_deviator_pa'], '{:.0f}')} Pa (paper ≈ {paper_q[SENS_PHI]:g}), φ (c* = 0) = "
+                  f"{_ms(ref['phi0'], unit='°')}, E50 = {_ms(ref['e50_pa'], '{:.3g}')} Pa."]
+    lines += ["", "Peak deviator and E50 against σ3 (Fig. 9–11, 15):", "",
+              "| φe | σ3 [Pa] | peak q [Pa] | strain at peak [%] | E50 [Pa] |", "|---|---|---|---|---|"]
+    for p in PHI_E:
+        for s3 in SIGMA3:
+            k, j = f"{p}", f"{s3}"
+            eps = m["peak_strain"].get(k, {}).get(j)
+            eps = eps and {**eps, **{x: eps[x] and 100 * eps[x] for x in ("mean", "sd")}}
+            lines.append(f"| {p:g}° | {s3:g} | {_ms(m['peak_deviator_pa'].get(k, {}).get(j), '{:.0f}')} | "
+                         f"{_ms(eps, '{:.2f}')} | {_ms(m['e50_pa'].get(k, {}).get(j), '{:.3g}')} |")
+    lines += ["", f"Sensitivities (φe = {SENS_PHI:g}°, σ3 = {SENS_SIGMA3:g} Pa, {SENS_STRAIN:g} % strain; "
+              "φ from the one circle with c* = 0):", "",
+              "| knob | discs | value | peak q [Pa] | E50 [Pa] | φ (c* = 0) | failed |", "|---|---|---|---|---|---|---|"]
+    for key, label, discs in SENS_ROWS:
+        for v, c in sens.get(key, {}).items():
+            lines.append(f"| {label} | {v if key == 'n_discs' else discs} | {v} | {_ms(c['peak_deviator_pa'], '{:.0f}')} | "
+                         f"{_ms(c['e50_pa'], '{:.3g}')} | {_ms(c['phi0'], unit='°')} | {len(c['failed']) or ''} |")
+    if cal and cal.get("verified"):
+        v, t = cal["verified"], cal["target"]
+        lines += ["", "Calibration round trip (eq 5–6, then the biaxial test again, 1000 discs):", "",
+                  "| | target | inverted | verified (mean of packings) | error |", "|---|---|---|---|---|",
+                  f"| φ* | {t['phi_star_deg']:.2f}° | φe = {cal['inverted']['phi_e_deg']:.2f}° | "
+                  f"{v['phi_star_deg']['mean']:.2f}° ({', '.join(f'{x:.2f}' for x in v['phi_star_deg']['values'])}) | "
+                  f"{100 * v['phi_star_error']:+.1f} % |",
+                  f"| E50 at σ3 = {t['sigma3_pa']:g} Pa | {t['e50_pa']:.4g} Pa | kn = {cal['inverted']['kn_pa_per_m']:.4g} Pa/m | "
+                  f"{v['e50_pa']['mean']:.4g} Pa ({', '.join(f'{x:.4g}' for x in v['e50_pa']['values'])}) | "
+                  f"{100 * v['e50_error']:+.1f} % |"]
+    elif cal:
+        why = cal.get("error") or "no result from " + ", ".join(f["job"] for f in cal.get("failed", []))
+        inv = cal.get("inverted")
+        lines += ["", "Calibration round trip: not verified: " + why + (
+            f" (eq 5–6 gave φe = {inv['phi_e_deg']:.2f}°, kn = {inv['kn_pa_per_m']:.4g} Pa/m for φ* = "
+            f"{cal['target']['phi_star_deg']:.2f}°, E50 = {cal['target']['e50_pa']:.4g} Pa at σ3 = "
+            f"{cal['target']['sigma3_pa']:g} Pa)" if inv else "")]
+    if study.get("stability"):
+        st = study["stability"]
+        lines += ["", f"Time steps ({st['n_discs']} discs packed at 0.5e-4 s, left at rest {st['rest_time_s']:g} s):", "",
+                  "| contact width / harmonic-mean radius | kn [Pa/m] | ks/kn | Δt [s] | unbalanced force ratio | "
+                  "σ change over the last half | outcome |", "|---|---|---|---|---|---|---|"]
+        lines += [f"| {c['width_factor']:g} | {c['kn_pa_per_m']:.0e} | {c['ks_ratio']:g} | {c['dt_s']:.2e} | "
+                  f"{c['unbalanced']:.1e} | {100 * c['stress_change']:.2f} % | {c['outcome']} |" for c in st["cases"]]
+    t = study.get("timing")
+    if t:
+        lines += ["", f"Cost: {t['jobs']} jobs, {t['cpu_min']:.1f} CPU minutes recorded ({t['jobs_with_cpu']} jobs), "
+                  f"{t['wall_min']:.1f} wall minutes; {_ms(t['ms_cpu_per_step_1000_discs'], '{:.2f}')} CPU ms per "
+                  "1000-disc step."]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return "\n".join(lines)
