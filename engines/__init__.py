@@ -6,13 +6,14 @@ The packages, each importing only those before it (tests/test_layers.py checks i
   compiled/   its numba twins (the same arithmetic, tested equal to round-off)
   reference/  the independent reference, written from the paper; imports nothing of the above
   yade/       everything that talks to YADE: bulk I/O, the two engines, the coupling, checkpoints
-  run/        a run as a user starts it: scene files, preflight, command line, runner, provenance
-  studies/    the speed-accuracy and stability studies
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
+  studies/    the speed-accuracy and stability studies (their points and analysis, no YADE)
+  run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,
+              sweeps; the cross-check's cases; the studies' runs
 
-Outside engines/: packing/ (the Packing file format, size distributions, lattices), postproc/
-(reads run files, draws figures; never imports yade/ or run/), yade_scripts/ (thin command-line
-scripts, scenes/ presets), tests/ (mirrors this tree).
+Outside engines/: packing/ (the Packing file format, size distributions, lattices; after
+reference/), postproc/ (reads run files, draws figures; after studies/, never imports yade/ or
+run/), yade_scripts/ (thin command-line scripts, scenes/ presets), tests/ (mirrors this tree).
 
 One step k of the model (model/pore_dem.py, PoreDEM.step; the YADE law skips a-c and e):
   a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
@@ -29,16 +30,18 @@ Observables (window porosity, block means): model/observe.py.
 
 Where to add ...
   a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
-    a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WaterSettings
-    (model/pore_water.py) and in the [water] table of SCHEMA (run/scene.py).
-  a wall type: the wall codes of model/pores.py (WALL_*), which link discs to walls in
-    build_pores; boundary flows in PoreWater.flows; the group codes of a packing file in
-    packing/packing.py; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
+    a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WATER_FIELDS
+    (model/pore_water.py: WaterSettings and the scene's [water] table are made from them).
+  a wall type: the group codes of model/groups.py (WALL_*, the one table; packing files store
+    them), which link discs to walls in build_pores (model/pores.py); boundary flows in
+    PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
   an output column: Recorder in run/runner.py (its ``columns`` and ``row``), from what the
     coupling (yade/coupling.py) measured at the step.
-  a scene option: SCHEMA in run/scene.py (field, unit, default, range: validated there), read
-    where the setting is used (the settings dataclasses, yade/coupling.py); run/preflight.py
-    if it needs a check before the run.
+  a scene option: a constant of the contact law or of the water goes into CONTACT_FIELDS
+    (model/contact.py) or WATER_FIELDS (model/pore_water.py), which make both the settings class
+    and the scene's table; any other into SCHEMA in run/scene.py (field, unit, default, range:
+    model/fields.py validates both), read where it is used (yade/coupling.py, run/runner.py);
+    a stability limit into model/limits.py; run/preflight.py if it needs a check before the run.
 """
 import os
 

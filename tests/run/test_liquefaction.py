@@ -1,7 +1,6 @@
 """The seismic box in the engine: the driven base, the side walls on springs, the
 drained side flux, the porosity window of the history, and the liquefaction script. Short runs."""
 import json
-import re
 import os
 import re
 import subprocess
