@@ -47,7 +47,7 @@ def compare(scene, packing, steps, repeats):
 
     def general_path():  # no one-call step (how this scene ran while its side-wall ties were NumPy)
         cp = YadeCoupling(scene, packing)
-        cp.core.kernel_step_args = lambda: None
+        cp.core.kernel_step_args = lambda rows, held: None
         return cp.run
 
     setups = {"yade_alone": floor, "compiled": lambda: YadeCoupling(scene, packing).run,
@@ -91,14 +91,15 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     cp.run(2000)  # how often the pair list is rebuilt
     list_builds_per_step = (c.list_builds - builds0) / (O.iter - k0)
     xz = cp.positions()
-    due, law_args, water_args, tie_args = core.kernel_step_args()
-    h = water_args[0]
+    step_args = core.kernel_step_args(eng._dynamic, eng.held)
+    law_args, water_args = law.kernel_args(), wm.kernel_args(wm.water_interval * law.dt)
     F_out = np.zeros_like(eng.held)
     part = wm._part
+    net = wm.water.net
     geometry = (xz, wm.r, net.links, part("vec0").reshape(-1, 2), net.corner_pore, net.corner_sign, net.corner_link,
                 net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m, part("poly"),
                 part("sect"), part("void"), part("length"), part("contact") > 0, part("theta"),
-                part("vec").reshape(-1, 2), part("rot"), part("cross")) if (net := wm.water.net) else ()
+                part("vec").reshape(-1, 2), part("rot"), part("cross"))
     flow = (wm.water.W, part("void"), geometry[16], net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
             part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))
@@ -107,17 +108,17 @@ def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
     W0 = wm.water.W.copy()
     parts = {
         "law (kernels.law_step)": lambda: kernels.law_step(xz, *law_args),
-        "side-wall ties (kernels.tie_forces)": lambda: kernels.tie_forces(xz, law.du, law.dt, *tie_args),
+        "side-wall ties (kernels.tie_forces)": lambda: kernels.tie_forces(xz, law.du, law.dt, *core._tie_args),
         "side-wall ties, NumPy path (SideWallTies.forces)": lambda: core._tie_forces(xz, law.du),
         "water (kernels.water_step)": lambda: kernels.water_step(xz, *water_args),
         "  of which pore measure": lambda: kernels.measure(*geometry),
         "  of which flows": lambda: kernels.darcy_flows(*flow),
         "  of which pressure forces": lambda: kernels.pressure_forces(*forces),
-        "law + ties + water + forces to write (kernels.dem_step)":
-            lambda: kernels.dem_step(xz, F_out, eng._dynamic, eng.held, due, *law_args, *water_args, *tie_args),
+        "law + ties + water + forces to write (kernels.dem_step)": lambda: kernels.dem_step(xz, F_out, *step_args),
         "read positions (bridge)": lambda: eng.io.positions(),
         "write forces (bridge)": lambda: eng.forced.set_permanent_forces(F_out),
-        "Python around a step": lambda: (core.kernel_step_args(), core.law._fixes([], None), [f() for f in eng.hooks]),
+        "Python around a step": lambda: (core.kernel_step_args(eng._dynamic, eng.held), core.law._fixes([], None),
+                                         [f() for f in eng.hooks]),
         "  of which base motion and wall velocity (BaseMotion.step, hook)":
             lambda: (core.base.step(), [f() for f in eng.hooks]),
         "whole engine step (PaperLawEngine._kernel_work)": lambda: eng._kernel_work() or eng._work(eng._write_held),

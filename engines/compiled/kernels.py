@@ -11,8 +11,8 @@ reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 r
   pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
   tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
 
-and two per-step kernels chain them, so that a step costs one call from Python (each array passed to
-a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~60 arrays):
+and per-step kernels chain them, so that a step costs one call from Python (each array passed to
+a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us):
 
   law_step          engines.model.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.model.water_model.WaterModel.advance  (measure, flows, update, eq 32, 33)
@@ -20,10 +20,18 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us; a step passes ~6
                     forces to write
   water_forces_step engines.yade.water_engine.WaterEngine: water_step and the forces to write
 
+Arguments by name (engines.compiled.layout): each kernel called from Python has the layout of its
+parameters (``LAW = Layout.of(law_step, 1)``), and its callers build its arguments by name
+(``LAW_OWN.values(xz_prev=..., ...) + CONTACT.values(...)``); a kernel that spells out the
+arguments of those it calls has its list checked to be theirs one after the other (DEM_STEP is
+rows, held, water_due, LAW, WATER, TIES), and passes them on under their own names (tested). The
+network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
+name. These lists stay in this file: numba's cache is renewed when this file changes.
+
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
-functions of engines.yade.yadebulk, passed as addresses (so that this module stays cacheable and free of
-YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the bridge's O.step())
-between its water steps: many DEM steps in one call.
+functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that this module stays cacheable
+and free of YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the
+bridge's O.step()) between its water steps: many DEM steps in one call.
 
 The pore measure takes each link's turn since the build with ``turn`` (a short series for the
 small turns between rebuilds, else atan2) where engines.model.pores.measure calls arctan2: the same
@@ -40,6 +48,8 @@ import numba as nb
 import numpy as np
 from llvmlite import ir
 from numba.extending import intrinsic
+
+from engines.compiled.layout import Layout
 
 jit = nb.njit(cache=True, nogil=True)
 
@@ -122,6 +132,9 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
     return n_lost
 
 
+CONTACT = Layout.of(contact_forces, 3)  # the arguments of contact_forces after (xz, du, dpsi)
+
+
 @jit
 def max_sq_displacement(xz, xz_ref):
     """max_a |xz_a - xz_ref_a|^2 [m^2] (the Verlet-list check)."""
@@ -157,6 +170,11 @@ def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
     spin_update(omega, M, inertia, mobile, dt)
     xz_prev[:] = xz
     return n_lost
+
+
+LAW = Layout.of(law_step, 1)  # the arguments of law_step after xz: LAW_OWN, then CONTACT
+LAW_OWN = Layout("LAW_OWN", LAW.names[:-len(CONTACT.names)])
+LAW.check(LAW_OWN, CONTACT)
 
 
 # atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 7 terms leave < 1e-22 relative
@@ -277,21 +295,15 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
 
 
 # The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
-# unboxes each array argument, ~0.2 us each): the parts in this order, each flattened.
-WATER_INTS = ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link", "throat_i", "throat_j",
-              "throat_link")
-WATER_FLOATS = ("corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained",
-                "bottom", "wp", "eps_m_a_min", "r",                                      # inputs
-                "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",  # measure
-                "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",             # flows
-                "balance", "Fj", "lam")                                                  # update, forces
-
-
-def pack(parts):
-    """(buffer, offsets): the arrays ``parts`` flattened one after the other into one buffer; part k
-    is buffer[offsets[k]:offsets[k + 1]]."""
-    at = np.cumsum([0] + [np.size(p) for p in parts]).astype(np.int64)
-    return np.concatenate([np.ravel(p) for p in parts]), at
+# unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack).
+WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link",
+                                   "throat_i", "throat_j", "throat_link"))
+WATER_FLOATS = Layout("WATER_FLOATS", (
+    "corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained", "bottom",  # inputs
+    "wp", "eps_m", "a_min", "r",
+    "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",                         # measure
+    "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",                                    # flows
+    "balance", "Fj", "lam", "has_q_prev"))                                               # update, forces, eq 46
 
 
 @jit
@@ -307,38 +319,47 @@ def _part2(buf, at, k):
 
 
 @jit
-def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
-    """Advance the water by h [s] at centres xz and recompute the pressure forces F (N, 2) [N]
+def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
+    """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
     n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
     throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
-    arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (``pack``);
-    "lam" gets the Gershgorin bound of the first and of the last flows, "balance" the water of this
-    step. Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or
-    -1 - p when pore p would fall dry (W as after the previous sub-step)."""
-    links, link_pores = _part2(ints, i_at, 0), _part2(ints, i_at, 1)
-    c_pore, c_link, c_next = _part(ints, i_at, 2), _part(ints, i_at, 3), _part(ints, i_at, 4)
-    ti, tj, t_link = _part(ints, i_at, 5), _part(ints, i_at, 6), _part(ints, i_at, 7)
-    c_sign, vec0, c_theta0, c_r2 = (_part(floats, f_at, 0), _part2(floats, f_at, 1), _part(floats, f_at, 2),
-                                    _part(floats, f_at, 3))
-    rattler_area, surface, drained, bottom = (_part(floats, f_at, 4), _part(floats, f_at, 5), _part(floats, f_at, 6),
-                                              _part(floats, f_at, 7))
-    wp, eps_m, a_min, r = _part(floats, f_at, 8), floats[f_at[9]], floats[f_at[9] + 1], _part(floats, f_at, 10)
-    poly, sect, A_measured, length = (_part(floats, f_at, 11), _part(floats, f_at, 12), _part(floats, f_at, 13),
-                                      _part(floats, f_at, 14))
-    contact, theta, vec = _part(floats, f_at, 15), _part(floats, f_at, 16), _part2(floats, f_at, 17)
-    rot, cross = _part(floats, f_at, 18), _part(floats, f_at, 19)
-    q, q_s, q_d, q_in = _part(floats, f_at, 20), _part(floats, f_at, 21), _part(floats, f_at, 22), _part(floats, f_at, 23)
-    g, g_b, U = _part(floats, f_at, 24), _part(floats, f_at, 25), _part(floats, f_at, 26)
-    acc_i, acc_j, balance = _part(floats, f_at, 27), _part(floats, f_at, 28), _part(floats, f_at, 29)
-    Fj, lam = _part2(floats, f_at, 30), _part(floats, f_at, 31)
+    arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at)
+    (Layout.pack); "lam" gets the Gershgorin bound of the first and of the last flows, "balance"
+    the water of this step, "has_q_prev" is 1 once q_prev holds the flows of an earlier water step.
+    Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or -1 - p
+    when pore p would fall dry (W as after the previous sub-step)."""
+    links, link_pores = _part2(ints, i_at, WATER_INTS.links), _part2(ints, i_at, WATER_INTS.link_pores)
+    c_pore = _part(ints, i_at, WATER_INTS.corner_pore)
+    c_link = _part(ints, i_at, WATER_INTS.corner_link)
+    c_next = _part(ints, i_at, WATER_INTS.corner_next_link)
+    ti, tj = _part(ints, i_at, WATER_INTS.throat_i), _part(ints, i_at, WATER_INTS.throat_j)
+    t_link = _part(ints, i_at, WATER_INTS.throat_link)
+    c_sign, vec0 = _part(floats, f_at, WATER_FLOATS.corner_sign), _part2(floats, f_at, WATER_FLOATS.vec0)
+    c_theta0, c_r2 = _part(floats, f_at, WATER_FLOATS.corner_theta0), _part(floats, f_at, WATER_FLOATS.corner_r2)
+    rattler_area = _part(floats, f_at, WATER_FLOATS.rattler_area)
+    surface, drained = _part(floats, f_at, WATER_FLOATS.surface), _part(floats, f_at, WATER_FLOATS.drained)
+    bottom, wp = _part(floats, f_at, WATER_FLOATS.bottom), _part(floats, f_at, WATER_FLOATS.wp)
+    eps_m, a_min = floats[f_at[WATER_FLOATS.eps_m]], floats[f_at[WATER_FLOATS.a_min]]
+    r = _part(floats, f_at, WATER_FLOATS.r)
+    poly, sect = _part(floats, f_at, WATER_FLOATS.poly), _part(floats, f_at, WATER_FLOATS.sect)
+    void, length = _part(floats, f_at, WATER_FLOATS.void), _part(floats, f_at, WATER_FLOATS.length)
+    contact, theta = _part(floats, f_at, WATER_FLOATS.contact), _part(floats, f_at, WATER_FLOATS.theta)
+    vec, rot = _part2(floats, f_at, WATER_FLOATS.vec), _part(floats, f_at, WATER_FLOATS.rot)
+    cross, q = _part(floats, f_at, WATER_FLOATS.cross), _part(floats, f_at, WATER_FLOATS.q)
+    q_s, q_d = _part(floats, f_at, WATER_FLOATS.q_s), _part(floats, f_at, WATER_FLOATS.q_d)
+    q_in, g = _part(floats, f_at, WATER_FLOATS.q_in), _part(floats, f_at, WATER_FLOATS.g)
+    g_b, U = _part(floats, f_at, WATER_FLOATS.g_b), _part(floats, f_at, WATER_FLOATS.U)
+    acc_i, acc_j = _part(floats, f_at, WATER_FLOATS.acc_i), _part(floats, f_at, WATER_FLOATS.acc_j)
+    balance, Fj = _part(floats, f_at, WATER_FLOATS.balance), _part2(floats, f_at, WATER_FLOATS.Fj)
+    lam, has_q_prev = _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev)
 
     measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
-            poly, sect, A_measured, length, contact, theta, vec, rot, cross)
-    A = A_measured
+            poly, sect, void, length, contact, theta, vec, rot, cross)
+    A = void
     if smoothing:  # eq 45
         for p in range(len(A_prev)):
-            A_prev[p] = 0.5 * (A_prev[p] + A_measured[p])
+            A_prev[p] = 0.5 * (A_prev[p] + void[p])
         A = A_prev
     flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
     lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
@@ -353,50 +374,58 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints
         if sub > 0:
             lam[1] = darcy_flows(W, A, contact, *flow)
         if smoothing:  # eq 46
+            running = has_q_prev[0] != 0.0
             for t in range(len(q)):
-                if has_q_prev:
+                if running:
                     q[t] = 0.5 * (q_prev[t] + q[t])
                 q_prev[t] = q[t]
-            has_q_prev = True
+            has_q_prev[0] = 1.0
         bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
         if bad >= 0:
             return -1 - bad
     pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
-    pressure_forces(links, link_pores, r, U, length, vec, F, Fj)
+    pressure_forces(links, link_pores, r, U, length, vec, F_water, Fj)
     return n_sub
+
+
+WATER = Layout.of(water_step, 1)  # the arguments of water_step after xz
 
 
 LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
 
 
 @jit
-def tie_forces(xz, du, dt, pairs, rest, prm, T):
+def tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T):
     """x-forces T[0] (N,) [N] of the side-wall ties (engines.model.side_walls) at centres xz (N, 2) with
-    velocities du / dt: tie t pulls its upper disc pairs[t, 1] by f = -k's [(x_u - x_l) - rest[t]]
-    - eta's (v_u - v_l) and its lower disc pairs[t, 0] by -f; prm = (k's, eta's); T (2, N), T[1]
-    is scratch."""
-    ks, eta = prm[0], prm[1]
+    velocities du / dt: tie t pulls its upper disc tie_pairs[t, 1] by f = -k's [(x_u - x_l) - tie_rest[t]]
+    - eta's (v_u - v_l) and its lower disc tie_pairs[t, 0] by -f; tie_prm = (k's, eta's); T (2, N),
+    T[1] is scratch."""
+    ks, eta = tie_prm[0], tie_prm[1]
     T[:] = 0.0
-    for t in range(len(rest)):
-        lo, up = pairs[t, 0], pairs[t, 1]
-        f = -ks * ((xz[up, 0] - xz[lo, 0]) - rest[t]) - eta * (du[up, 0] / dt - du[lo, 0] / dt)
+    for t in range(len(tie_rest)):
+        lo, up = tie_pairs[t, 0], tie_pairs[t, 1]
+        f = -ks * ((xz[up, 0] - xz[lo, 0]) - tie_rest[t]) - eta * (du[up, 0] / dt - du[lo, 0] / dt)
         T[0, up] += f
         T[1, lo] += f
     for a in range(T.shape[1]):
         T[0, a] -= T[1, a]
 
 
+TIES = Layout.of(tie_forces, 3)  # the arguments of tie_forces after (xz, du, dt)
+
+
 @jit
 def dem_step(xz, F_out, rows, held, water_due,
              xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
              acc_j, lost,
-             h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+             h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
              tie_pairs, tie_rest, tie_prm, T):
-    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (its arguments from xz_prev
-    to lost), ``tie_forces`` of the side walls (from tie_pairs on; no ties: empty arrays),
-    ``water_step`` when water_due (from h to f_at; a dry scene passes an empty F_water), then
-    F_out = (F + T + F_water)[rows] + held (n, 2) [N], the forces to write. Returns (law_step's
-    answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list is stale."""
+    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (LAW: its arguments from
+    xz_prev to lost), ``tie_forces`` of the side walls (TIES: from tie_pairs on; no ties: empty
+    arrays), ``water_step`` when water_due (WATER: from h to f_at; a dry scene passes an empty
+    F_water), then F_out = (F + T + F_water)[rows] + held (n, 2) [N], the forces to write. Returns
+    (law_step's answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list
+    is stale."""
     n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
                       r, pi, pj, state, prm, spring, F, M, acc_j, lost)
     if n_lost == LIST_STALE:
@@ -406,7 +435,7 @@ def dem_step(xz, F_out, rows, held, water_due,
         tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T)
     n_sub = 1
     if water_due:
-        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at)
+        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
     wet = len(F_water) > 0
     for k in range(len(rows)):
         a = rows[k]
@@ -419,16 +448,39 @@ def dem_step(xz, F_out, rows, held, water_due,
     return n_lost, n_sub
 
 
+DEM_STEP = Layout.of(dem_step, 2).check(("rows", "held", "water_due"), LAW, WATER, TIES)
+
+
+def dem_step_args(rows, held, water_due, law, water, ties):
+    """The arguments of dem_step after (xz, F_out) (DEM_STEP): the forces to write F[rows] + held,
+    water_due, then the tuples LAW, WATER and TIES."""
+    return (rows, held, water_due) + law + water + ties
+
+
 @jit
-def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at,
+def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at,
                       floats, f_at):
-    """``water_step`` (arguments from h on), then F_out = held + F[rows] (n, 2) [N], the forces to
-    write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n) when it failed."""
-    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at)
+    """``water_step`` (WATER: its arguments from h on), then F_out = held + F_water[rows] (n, 2)
+    [N], the forces to write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n)
+    when it failed."""
+    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
     for k in range(len(rows)):
-        F_out[k, 0] = held[k, 0] + F[rows[k], 0]
-        F_out[k, 1] = held[k, 1] + F[rows[k], 1]
+        F_out[k, 0] = held[k, 0] + F_water[rows[k], 0]
+        F_out[k, 1] = held[k, 1] + F_water[rows[k], 1]
     return (n_sub if n_sub > 0 else -1), n_sub
+
+
+WATER_FORCES_STEP = Layout.of(water_forces_step, 2).check(("rows", "held"), WATER)
+
+
+def water_forces_step_args(rows, held, water):
+    """The arguments of water_forces_step after (xz, F_out) (WATER_FORCES_STEP): the forces to
+    write F_water[rows] + held, then the tuple WATER."""
+    return (rows, held) + water
+
+# The addresses of the C functions of engines.yade.yadebulk a kernel calls: the position read, the
+# permanent-force write and YADE's steps (yadebulk.c_steps).
+BRIDGE = Layout("BRIDGE", ("get_pos", "set_perm", "steps"))
 
 
 @intrinsic
@@ -453,71 +505,77 @@ def _write_forces(status, set_perm, ids, F):
     return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
 
 
-# The two steps between a position read and a force write. Their arguments are spelled out: with
-# *args numba types the argument tuple in Python at every call (measured: 10-120 us a call).
+# The two steps between a position read and a force write. Their arguments are spelled out: numba
+# 0.56 computes the type of a tuple argument of more than a few arrays through a fingerprint whose
+# first 40 bytes it leaves unset, so that its cache misses at random (a ~0.6 ms Python typeof each).
 @jit
-def dem_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held, water_due,
+def dem_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held, water_due,
                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                      F, M, acc_j, lost,
-                     h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                     h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                      tie_pairs, tie_rest, tie_prm, T):
     """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), set_perm(ids_out <- F_out) if its status
-    is >= 0. Returns (the C functions' error code, dem_step's status, its info)."""
-    rc = _read_positions(get_pos, ids_in, xz)
+    is >= 0 (bridge: BRIDGE). Returns (the C functions' error code, dem_step's status, its info)."""
+    rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
     if rc != 0:
         return rc, -1, 0
     status, info = dem_step(xz, F_out, rows, held, water_due,
                             xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm,
                             spring, F, M, acc_j, lost,
-                            h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F_water, ints, i_at, floats, f_at,
+                            h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                             tie_pairs, tie_rest, tie_prm, T)
-    return _write_forces(status, set_perm, ids_out, F_out), status, info
+    return _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out), status, info
+
+
+Layout.of(dem_step_bulk_io, 5).check(DEM_STEP)
 
 
 @jit
-def water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
-                              h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+def water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
+                              h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """As dem_step_bulk_io for water_forces_step."""
-    rc = _read_positions(get_pos, ids_in, xz)
+    rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
     if rc != 0:
         return rc, -1, 0
-    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
                                      ints, i_at, floats, f_at)
-    return _write_forces(status, set_perm, ids_out, F_out), status, info
+    return _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out), status, info
 
 
-BALANCE = WATER_FLOATS.index("balance")
+Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
 
 
 @jit
-def water_drive_bulk_io(steps, n, k, k0, water_interval, totals, get_pos, set_perm, ids_in, xz, ids_out, F_out, rows,
-                        held, h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F, ints, i_at, floats, f_at):
+def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, ids_in, xz, ids_out, F_out, rows, held,
+                        h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """WaterEngine.drive without Python: n DEM steps from step index k, each step whose
     (index - k0) is a multiple of water_interval preceded by water_forces_step_bulk_io (arguments
-    from get_pos on), each step made by steps() (YADE's O.step(), engines.yade.yadebulk.c_steps).
-    totals (3,) [m^2] gets the water balance (inflow, surface, side) of every water step that
-    needed no sub-steps. Stops before stepping after a water step that did not answer 1 (sub-steps
-    or a failure: its bookkeeping is the caller's) or at an error code. Returns (DEM steps done,
-    water steps done, the last water step's answer or 1, the bridge's error code)."""
-    balance = _part(floats, f_at, BALANCE)
+    from ids_in on), each step made by bridge's steps() (YADE's O.step()). totals (3,) [m^2] gets
+    the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
+    before stepping after a water step that did not answer 1 (sub-steps or a failure: its
+    bookkeeping is the caller's) or at an error code. Returns (DEM steps done, water steps done,
+    the last water step's answer or 1, the bridge's error code)."""
+    balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water = 0
     for s in range(n):
         if (k + s - k0) % water_interval == 0:
-            rc, status, n_sub = water_forces_step_bulk_io(get_pos, set_perm, ids_in, xz, ids_out, F_out, rows, held,
-                                                          h, W, A_prev, q_prev, smoothing, substep, has_q_prev, F,
+            rc, status, n_sub = water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
+                                                          h, W, A_prev, q_prev, smoothing, substep, F_water,
                                                           ints, i_at, floats, f_at)
             if rc != 0:
                 return s, n_water, n_sub, rc
             n_water += 1
-            has_q_prev = has_q_prev or smoothing  # eq 46 from the second water step on
             if n_sub != 1:
                 return s, n_water, n_sub, 0
             for a in range(3):
                 totals[a] += balance[a]
-        rc = _c_bulk_call(steps, 0, 1, 0)
+        rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
             return s, n_water, 1, rc
     return n, n_water, 1, 0
+
+
+Layout.of(water_drive_bulk_io, 10).check(WATER_FORCES_STEP)
 
 
 @jit
@@ -540,15 +598,17 @@ with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step
 
 
 def dry_water_args():
-    """Arguments of dem_step from h to f_at for a scene without water."""
+    """The arguments of dem_step from h to f_at (WATER) for a scene without water."""
     no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
-    return 0.0, no_f, no_f, no_f, False, False, False, np.zeros((0, 2)), no_i, np.zeros(1, np.int64), no_f, \
-        np.zeros(1, np.int64)
+    return WATER.values(h=0.0, W=no_f, A_prev=no_f, q_prev=no_f, smoothing=False, substep=False,
+                        F_water=np.zeros((0, 2)), ints=no_i, i_at=np.zeros(1, np.int64), floats=no_f,
+                        f_at=np.zeros(1, np.int64))
 
 
 def no_tie_args():
-    """Arguments of dem_step from tie_pairs on for a scene without side-wall ties."""
-    return np.zeros((0, 2), np.int64), np.zeros(0), np.zeros(2), np.zeros((2, 0))
+    """The arguments of dem_step from tie_pairs on (TIES) for a scene without side-wall ties."""
+    return TIES.values(tie_pairs=np.zeros((0, 2), np.int64), tie_rest=np.zeros(0), tie_prm=np.zeros(2),
+                       T=np.zeros((2, 0)))
 
 
 @jit

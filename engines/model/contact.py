@@ -87,13 +87,15 @@ class ContactLaw:
         return (0.5 * self.skin) ** 2
 
     def kernel_args(self, dt):
-        """The arguments of kernels.contact_forces after (xz, du, dpsi), for time step dt [s]."""
+        """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
+        of dt [s]."""
         if self._prm[-1] != dt:
             self._prm = kernels.contact_params(self.s, dt)
             self._args = None
         if self._args is None:
-            self._args = (self.r, self.i, self.j, self.state, self._prm, self._spring, self._F, self._M, self._acc,
-                          self._lost)
+            self._args = kernels.CONTACT.values(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
+                                                spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
+                                                lost=self._lost)
         return self._args
 
     @property
@@ -105,17 +107,30 @@ class ContactLaw:
         """Normal force of each pair at the last step [N] (0 when not touching)."""
         return self.state[:, kernels.F_N]
 
+    def _stale(self, xz):
+        """Has a disc moved by half the skin since the pair list was built (or is there none)?"""
+        if self.xz_list is None:
+            return True
+        if self.compiled:
+            moved = kernels.max_sq_displacement(xz, self.xz_list)
+        else:
+            moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
+        return moved >= self.half_skin2
+
     def _update_list(self, xz):
-        """Rebuild the pair list at xz if a disc has moved by half the skin since the last build:
-        the pairs with a mobile disc and R <= r_i + r_j + eps_m + skin, so that no other pair can
-        touch before the next build."""
-        if self.xz_list is not None:
-            if self.compiled:
-                moved = kernels.max_sq_displacement(xz, self.xz_list)
-            else:
-                moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
-            if moved < self.half_skin2:
-                return
+        """Rebuild the pair list at xz if it is stale (``_stale``)."""
+        if not self._stale(xz):
+            return
+        self.i, self.j, self.state = self._pairs_near(xz)
+        self.xz_list = xz.copy()
+        self.list_builds += 1
+        self._lost = np.zeros(len(self.i), np.int64)
+        self._args = None
+
+    def _pairs_near(self, xz):
+        """(i, j, state) of a pair list built at xz: the pairs with a mobile disc and
+        R <= r_i + r_j + eps_m + skin, so that no other pair can touch before the next build,
+        sorted by (i, j), with the state of the pairs already listed."""
         pairs = cKDTree(xz).query_pairs(self.reach + self.skin, output_type="ndarray").astype(np.int64)
         d = xz[pairs[:, 1]] - xz[pairs[:, 0]]
         near = np.hypot(d[:, 0], d[:, 1]) <= self.r[pairs[:, 0]] + self.r[pairs[:, 1]] + self.s.eps_m + self.skin
@@ -125,16 +140,12 @@ class ContactLaw:
         order = np.argsort(key_new)
         pairs, key_new = pairs[order], key_new[order]
         key_old = self.i * self.n + self.j  # sorted by construction
-        old, self.state = self.state, np.zeros((len(pairs), 6))
+        state = np.zeros((len(pairs), 6))
         if len(key_old):
             pos = np.minimum(np.searchsorted(key_old, key_new), len(key_old) - 1)
             hit = key_old[pos] == key_new
-            self.state[hit] = old[pos[hit]]
-        self.i, self.j = np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1])
-        self.xz_list = xz.copy()
-        self.list_builds += 1
-        self._lost = np.zeros(len(pairs), np.int64)
-        self._args = None
+            state[hit] = self.state[pos[hit]]
+        return np.ascontiguousarray(pairs[:, 0]), np.ascontiguousarray(pairs[:, 1]), state
 
     def forces(self, xz, du, dpsi, dt):
         """Contact forces (N, 2) [N] and moments (N,) [N m, counter-clockwise] at positions xz.
@@ -146,8 +157,14 @@ class ContactLaw:
         if self.compiled:
             n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
             return self._F, self._M, self._separations(xz, self._lost[:n_lost])
-        s, r, i, j = self.s, self.r, self.i, self.j
-        touching, u_n_old, e_n_old, e_s_old, vn_coll, _ = self.state.T
+        F, M, self.state, lost = self._forces_numpy(xz, du, dpsi, dt, self.i, self.j, self.state)
+        return F, M, self._separations(xz, lost)
+
+    def _forces_numpy(self, xz, du, dpsi, dt, i, j, state):
+        """(F, M, new state, indices of the pairs that stopped touching) of the pairs (i, j) with
+        ``state`` of the last step (eq 1-13)."""
+        s, r = self.s, self.r
+        touching, u_n_old, e_n_old, e_s_old, vn_coll, _ = state.T
         touching = touching != 0
         d = xz[j] - xz[i]
         R = np.sqrt(d[:, 0] ** 2 + d[:, 1] ** 2)
@@ -183,10 +200,28 @@ class ContactLaw:
         F = np.column_stack([np.bincount(i, fx, minlength=n) - np.bincount(j, fx, minlength=n),
                              np.bincount(i, fz, minlength=n) - np.bincount(j, fz, minlength=n)])
         M = -(np.bincount(i, r[i] * f_s, minlength=n) + np.bincount(j, r[j] * f_s, minlength=n))  # eq 13c
-        separations = self._separations(xz, np.flatnonzero(touching & ~now))
-        self.state = np.column_stack([now, u_n, e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
-                                      np.where(now, f_n, 0.0)])
-        return F, M, separations
+        new_state = np.column_stack([now, u_n, e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
+                                     np.where(now, f_n, 0.0)])
+        return F, M, new_state, np.flatnonzero(touching & ~now)
+
+    def touching_at(self, xz, du, dpsi, dt, keep=None):
+        """(pairs (K, 2), f_n (K,), e_s (K,) [N]) of the pairs touching at centres xz after the
+        increments du, dpsi of a step of dt [s] (eq 1-13): what ``forces`` would give there, from
+        the pair list it would use, the law's state left as it is. ``keep(i, j)``: a mask of the
+        listed pairs to evaluate (default all); the compiled kernel advances a copy of their state."""
+        i, j, state = self._pairs_near(xz) if self._stale(xz) else (self.i, self.j, self.state)
+        if keep is not None:
+            sel = keep(i, j)
+            i, j, state = i[sel], j[sel], state[sel]
+        if self.compiled:
+            new, n = state.copy(), self.n
+            kernels.contact_forces(xz, du, dpsi, *kernels.CONTACT.values(
+                r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
+                F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
+        else:
+            new = self._forces_numpy(xz, du, dpsi, dt, i, j, state)[2]
+        t = new[:, kernels.TOUCHING] != 0
+        return np.column_stack([i[t], j[t]]), new[t, kernels.F_N], new[t, kernels.E_S]
 
     def _separations(self, xz, lost):
         """SeparationEvents of the pairs ``lost`` (their vn_coll is that of their first touch)."""

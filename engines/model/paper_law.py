@@ -69,10 +69,19 @@ class PaperLaw:
             self.contact._update_list(xz)
 
     def kernel_args(self):
-        """The arguments of kernels.law_step after xz (compiled, after the first step)."""
+        """The arguments of kernels.law_step after xz (kernels.LAW: LAW_OWN, then the contact's
+        CONTACT; compiled, after the first step)."""
         c = self.contact
-        return (self.xz_prev, c.xz_list, c.half_skin2, self.omega, self._dpsi, self.du, self.inertia, self.mobile,
-                self.dt) + c.kernel_args(self.dt)
+        return kernels.LAW_OWN.values(xz_prev=self.xz_prev, xz_list=c.xz_list, half_skin2=c.half_skin2,
+                                      omega=self.omega, dpsi=self._dpsi, du=self.du, inertia=self.inertia,
+                                      mobile=self.mobile, dt=self.dt) + c.kernel_args(self.dt)
+
+    def contact_pairs(self, xz, keep=None):
+        """(pairs (K, 2), f_n (K,), e_s (K,) [N]) of the pairs touching at centres xz, as this law's
+        step at xz would find them (eq 17: du = xz - xz_prev, dpsi = omega dt), its state left as it
+        is (ContactLaw.touching_at; ``keep`` as there)."""
+        du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev
+        return self.contact.touching_at(xz, du, self.omega * self.dt, self.dt, keep)
 
     def finish_kernel_step(self, xz, n_lost):
         """The SeparationEvents of a law_step at xz that returned n_lost."""

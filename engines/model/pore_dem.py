@@ -68,17 +68,18 @@ def water_model(scene, packing, compiled=True):
                       num.dt, num.rebuild_interval, num.water_interval, compiled)
 
 
-def pore_state(water, xz, r):
-    """(network, measures, U) of PoreWater ``water`` at xz, or None for a dry scene."""
-    if water is None:
+def pore_state(water_model, xz):
+    """(network, void areas (Np,) [m^2], U (Np,) [N/m]) of the pores of ``water_model`` (WaterModel)
+    at centres xz (eq 29, 32: one measure of these positions), or None for a dry scene."""
+    if water_model is None:
         return None
-    m = pg.measure(water.net, xz, r)
-    return water.net, m, water.pressure(m.void_area)
+    A = water_model.void_area(xz)
+    return water_model.water.net, A, water_model.water.pressure(A)
 
 
-def block_pressures(water, xz, r, bounds):
-    """Mean excess pore pressure of each output block [N/m] (nan where no pore or dry)."""
-    state = pore_state(water, xz, r)
+def block_pressures(water_model, xz, bounds):
+    """Mean excess pore pressure of each output block [N/m] at centres xz (nan where no pore or dry)."""
+    state = pore_state(water_model, xz)
     if state is None:
         return np.full(len(bounds), np.nan)
     net, _, U = state
@@ -130,7 +131,7 @@ class PoreDEM:
         self.wall_velocity = 0.0
         self.ties = side_wall_ties(scene, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
-        self._tie_args = kernels.no_tie_args() if self.ties is None else self.ties.kernel_args()
+        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
         self.water_model = water_model(scene, packing, compiled)
 
     def _tie_forces(self, xz, du):
@@ -177,26 +178,25 @@ class PoreDEM:
         self.k += 1
 
     # -- the same step as one compiled call (engines.compiled.kernels.dem_step) ----------------------------
-    def kernel_step_args(self):
-        """(water due, law_step's arguments, water_step's, tie_forces') for kernels.dem_step at
-        step k, or None when this step needs the general ``step`` (NumPy path, first step, a
-        rebuild of the pores)."""
+    def kernel_step_args(self, rows, held):
+        """The arguments of kernels.dem_step after (xz, F_out) (kernels.DEM_STEP) for step k, the
+        forces to write F[rows] + held, or None when this step needs the general ``step`` (NumPy
+        path, first step, a rebuild of the pores)."""
         law, wm = self.law, self.water_model
         if not law.compiled or law.xz_prev is None:
             return None
         if wm is None:
-            return False, law.kernel_args(), kernels.dry_water_args(), self._tie_args
+            return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
         if wm.rebuild_due(self.k):
             return None
-        return (self.k % wm.water_interval == 0, law.kernel_args(), wm.kernel_args(wm.water_interval * self.dt),
-                self._tie_args)
+        return kernels.dem_step_args(rows, held, self.k % wm.water_interval == 0, law.kernel_args(),
+                                     wm.kernel_args(wm.water_interval * self.dt), self._tie_args)
 
     def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
         """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
         kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
-        due, _, water_args, _ = args
         fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
-        if due:
-            self.water_model.finish_kernel_step(water_args[0], n_sub, water_args)
+        if args[kernels.DEM_STEP.water_due]:
+            self.water_model.finish_kernel_step(args[kernels.DEM_STEP.h], n_sub)
         self._move_walls()
         return fixes

@@ -79,25 +79,25 @@ class WaterModel:
                 "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
         floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
                   "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
-                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m_a_min": [self.eps_m, net.a_min],
+                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
                   "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
-                  "lam": np.zeros(2)}  # the rest: outputs and scratch of the kernels, by length
+                  "lam": np.zeros(2), "has_q_prev": 0.0}  # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
                             ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
             floats.update((name, np.zeros(size)) for name in names.split())
-        self._ints, self._i_at = kernels.pack([np.asarray(ints[k], np.int64) for k in kernels.WATER_INTS])
-        self._floats, self._f_at = kernels.pack([np.asarray(floats[k], float) for k in kernels.WATER_FLOATS])
+        self._ints, self._i_at = kernels.WATER_INTS.pack(ints, np.int64)
+        self._floats, self._f_at = kernels.WATER_FLOATS.pack(floats, float)
         self._q_prev = np.zeros(n_t)  # eq 46 running throat flows, while PoreWater.q_prev is None
         self._views()
 
     def _views(self):
-        """Views of the float buffer read after each water step; kernel_args built again."""
-        self._lam, self._balance = self._part("lam"), self._part("balance")
+        """Views of the float buffer read around each water step; kernel_args built again."""
+        self._lam, self._balance, self._has_q_prev = (self._part(name) for name in ("lam", "balance", "has_q_prev"))
         self._args_key = None
 
     def __getstate__(self):  # a pickle copies views: leave them out, make them again on loading
         state = dict(self.__dict__)
-        for name in ("_lam", "_balance", "_args", "_args_key"):
+        for name in ("_lam", "_balance", "_has_q_prev", "_args", "_args_key"):
             state.pop(name, None)
         return state
 
@@ -107,8 +107,7 @@ class WaterModel:
 
     def _part(self, name):
         """A view of the part ``name`` of the float buffer of kernels.water_step."""
-        k = kernels.WATER_FLOATS.index(name)
-        return self._floats[self._f_at[k]:self._f_at[k + 1]]
+        return kernels.WATER_FLOATS.part(self._floats, self._f_at, name)
 
     # -- per step ---------------------------------------------------------------------------------
     def rebuild_due(self, k):
@@ -155,27 +154,29 @@ class WaterModel:
             A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
             self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
             return
-        args = self.kernel_args(h)
-        self.finish_kernel_step(h, kernels.water_step(xz, *args), args)
+        self.finish_kernel_step(h, kernels.water_step(xz, *self.kernel_args(h)))
 
     def kernel_args(self, h):
-        """The arguments of kernels.water_step after xz, for a water step of h [s] (compiled); the
-        same tuple while h, the water's arrays and the eq 46 state stay (the tuple holds the arrays,
-        so their ids are not reused while it is kept)."""
+        """The arguments of kernels.water_step after xz (kernels.WATER), for a water step of h [s]
+        (compiled), with the buffer's eq 46 flag "has_q_prev" set from the water; the same tuple
+        while h, the water's arrays and the eq 46 state stay (the tuple holds the arrays, so their
+        ids are not reused while it is kept)."""
         w, s = self.water, self.settings
+        self._has_q_prev[0] = w.q_prev is not None
         key = (h, id(w.W), id(w.A_prev), id(w.q_prev))
         if self._args_key != key:
             q_prev = self._q_prev if w.q_prev is None else w.q_prev
-            self._args = (h, w.W, w.A_prev, q_prev, s.smoothing, s.substep, w.q_prev is not None, self.F,
-                          self._ints, self._i_at, self._floats, self._f_at)
+            self._args = kernels.WATER.values(h=h, W=w.W, A_prev=w.A_prev, q_prev=q_prev, smoothing=s.smoothing,
+                                              substep=s.substep, F_water=self.F, ints=self._ints, i_at=self._i_at,
+                                              floats=self._floats, f_at=self._f_at)
             self._args_key = key
         return self._args
 
-    def finish_kernel_step(self, h, n_sub, args):
-        """Book a water_step(xz, *args) that returned n_sub: the Darcy limit, sub-steps, balance;
-        raise DarcyStabilityError if it refused or a pore fell dry."""
+    def finish_kernel_step(self, h, n_sub):
+        """Book a water_step(xz, *kernel_args(h)) that returned n_sub: the Darcy limit, sub-steps,
+        balance; raise DarcyStabilityError if it refused or a pore fell dry."""
         w = self.water
-        self.after_kernel_steps(args)
+        self.after_kernel_steps()
         lam = self._lam
         if n_sub != 1:
             n = self._substeps(h)  # raises above the limit without settings.substep
@@ -188,11 +189,11 @@ class WaterModel:
         b.surface_outflow += surface
         b.side_outflow += side
 
-    def after_kernel_steps(self, args):
-        """After water steps run by kernels with ``args``: the eq 46 state they hold and the Darcy
-        limit of the last one."""
+    def after_kernel_steps(self):
+        """After water steps run by kernels with the arguments of ``kernel_args``: the eq 46 state
+        they hold and the Darcy limit of the last one."""
         if self.settings.smoothing:
-            self.water.q_prev = args[3]
+            self.water.q_prev = self._args[kernels.WATER.q_prev]
         self.last_limit = limits.gershgorin_limit(self._lam[0])
 
     def _substeps(self, h):
@@ -210,9 +211,10 @@ class WaterModel:
         return n
 
     # -- observations ------------------------------------------------------------------------------
-    def measures(self, xz):
-        return pg.measure(self.water.net, xz, self.r)
+    def void_area(self, xz):
+        """Void areas (Np,) [m^2] of the pores at centres xz (eq 29)."""
+        return self._void_area(self.water.net, xz)
 
     def pressures(self, xz):
         """U (Np,) [N/m] at centres xz (eq 32)."""
-        return self.water.pressure(self.measures(xz).void_area)
+        return self.water.pressure(self.void_area(xz))

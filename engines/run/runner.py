@@ -145,10 +145,10 @@ def snapshot_data(cp, xz, k):
     pk = cp.packing
     snap = dict(t=k * cp.scene.numerics.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
                 vel=cp.velocities(), pairs=pairs, f_n=fn, f_s=fs)
-    state = pore_state(cp.water, xz, pk.r)
+    state = pore_state(cp.water_model, xz)
     if state is not None:
-        net, m, U = state
-        snap.update(tri=net.tri, tri_pore=net.tri_pore, U=U, W=cp.water.W.copy(), A=m.void_area, rule=cp.water.rule)
+        net, A, U = state
+        snap.update(tri=net.tri, tri_pore=net.tri_pore, U=U, W=cp.water.W.copy(), A=A, rule=cp.water.rule)
     return snap
 
 
@@ -161,7 +161,7 @@ def write_failure_state(cp, path):
     if cp.core is not None:
         data.update(du=cp.core.du, omega=cp.core.omega, contact_pairs=np.column_stack([cp.core.contact.i, cp.core.contact.j]),
                     contact_state=cp.core.contact.state)
-    state = pore_state(cp.water, xz, cp.packing.r)
+    state = pore_state(cp.water_model, xz)
     if state is not None:
         data.update(W=cp.water.W, U=state[2])
     np.savez_compressed(path, **data)

@@ -21,7 +21,6 @@ without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.ru
 returns early when it is true (engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into
 a checkpoint (engines.yade.checkpoint): keep closures out of its state.
 """
-import copy
 import math
 import time
 
@@ -258,7 +257,7 @@ class YadeCoupling:
         return self.io.velocities()
 
     def block_pressures(self, xz):
-        return pore_dem.block_pressures(self.water, xz, self.packing.r, self.block_bounds)
+        return pore_dem.block_pressures(self.water_model, xz, self.block_bounds)
 
     def porosity(self, xz):
         """Void fraction of the fixed porosity window moved with the base (engines.model.observe)."""
@@ -283,15 +282,14 @@ class YadeCoupling:
         omega = self.core.omega if self.core is not None else self.io.spins()
         return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
 
-    def contact_pairs(self, xz):
+    def contact_pairs(self, xz, keep=None):
         """(pairs (K, 2) disc indices, normal force (K,), elastic shear force (K,) [N]) of the pairs
-        touching at centres xz (the current ones). The shear force is signed along t of eq 3b
-        (counter-clockwise about i), without its dashpot part, as YADE's phys.shearForce. The
-        paper's law is evaluated on a copy, its state is left as it is."""
+        touching at centres xz (the current ones); ``keep(i, j)``: a mask of the pairs (disc indices
+        i, j) to report (default all). The shear force is signed along t of eq 3b (counter-clockwise
+        about i), without its dashpot part, as YADE's phys.shearForce. The paper's law evaluates its
+        pairs at xz without advancing its state (PaperLaw.contact_pairs)."""
         if self.core is not None:
-            law = copy.deepcopy(self.core.law)
-            law.step(xz)
-            return law.contact.contact_pairs()
+            return self.core.law.contact_pairs(xz, keep)
         index = {i: k for k, i in enumerate(self.ids.tolist())}
         pairs, fn, fs = [], [], []
         for inter in O.interactions:
@@ -303,17 +301,22 @@ class YadeCoupling:
                 t = np.array([-d[1], d[0]]) / np.hypot(*d)  # (-sin a, cos a)
                 s = inter.phys.shearForce  # YADE's force on id2; eq 13 puts -f_s t on i, so +f_s t on j
                 fs.append(s[0] * t[0] + s[2] * t[1])
-        return np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
+        pairs, fn, fs = np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
+        if keep is None:
+            return pairs, fn, fs
+        sel = keep(pairs[:, 0], pairs[:, 1])
+        return pairs[sel], fn[sel], fs[sel]
 
     def bottom_normal_force(self, xz):
-        """Mean normal force [N] of the touching pairs whose midpoint lies in the first block."""
-        pairs, fn, _ = self.contact_pairs(xz)
-        if len(fn) == 0:
-            return 0.0
-        zmid = 0.5 * (xz[pairs[:, 0], 1] + xz[pairs[:, 1], 1])
+        """Mean normal force [N] of the touching pairs whose midpoint lies in the first block (0 if none)."""
         z0, z1 = self.block_bounds[0]
-        sel = (zmid >= z0) & (zmid < z1)
-        return float(fn[sel].mean()) if sel.any() else 0.0
+
+        def in_first_block(i, j):
+            zmid = 0.5 * (xz[i, 1] + xz[j, 1])
+            return (zmid >= z0) & (zmid < z1)
+
+        _, fn, _ = self.contact_pairs(xz, in_first_block)
+        return float(fn.mean()) if len(fn) else 0.0
 
 
 def simulate(scene, packing, n_steps, record_every, hooks=()):

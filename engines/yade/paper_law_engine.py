@@ -91,12 +91,10 @@ class PaperLawEngine:
         call with the bridge; engines.yade.yade_io.run_kernel). False when the step needs ``_work``."""
         core = self.core
         while True:
-            args = core.kernel_step_args()
+            args = core.kernel_step_args(self._dynamic, self.held)
             if args is None:
                 return False
-            due, law_args, water_args, tie_args = args
-            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out,
-                                             self._dynamic, self.held, due, *law_args, *water_args, *tie_args)
+            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args)
             if n_lost != kernels.LIST_STALE:
                 break
             core.law.contact._update_list(self._xz)

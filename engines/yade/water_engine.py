@@ -139,15 +139,15 @@ class WaterEngine:
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
         k = O.iter
         done, n_water, n_sub, rc = yade_io.drive_water(n, k, m.k0, m.water_interval, totals, self.io, self._xz,
-                                                       self.forced, self._F_out, self._dynamic, self.F_const, args)
+                                                       self.forced, self._F_out, self._forces_step_args(args))
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             last = k + done - (1 if n_sub == 1 else 0)  # the last water step
             self.k = last - (last - m.k0) % m.water_interval
-            m.after_kernel_steps(args)
+            m.after_kernel_steps()
         yade_io.check(rc)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
-            m.finish_kernel_step(h, n_sub, args)
+            m.finish_kernel_step(h, n_sub)
             O.step()
             done += 1
         return done
@@ -164,14 +164,18 @@ class WaterEngine:
         if m.compiled and not rebuild:  # read, water, write: one compiled call
             args = m.kernel_args(h)
             _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
-                                        self._dynamic, self.F_const, *args)
-            m.finish_kernel_step(h, n_sub, args)
+                                        self._forces_step_args(args))
+            m.finish_kernel_step(h, n_sub)
             return
         xz = self.io.positions()
         if rebuild:
             m.rebuild(xz, self.k)
         m.advance(h, xz)
         self.write_forces()
+
+    def _forces_step_args(self, water):
+        """The arguments of kernels.water_forces_step after (xz, F_out) for the water step arguments ``water``."""
+        return kernels.water_forces_step_args(self._dynamic, self.F_const, water)
 
     def write_forces(self):
         """The permanent forces: the last water step's pressure forces plus buoyancy."""

@@ -43,6 +43,7 @@ BACKEND = "yadebulk" if _BULK is not None else "python"
 if _BULK is not None:  # addresses of the bridge's position read, permanent-force write and step, for kernels
     _GET_POS, _SET_PERM, _STEPS = (ctypes.cast(f, ctypes.c_void_p).value
                                    for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_steps))
+    _BRIDGE = kernels.BRIDGE.values(get_pos=_GET_POS, set_perm=_SET_PERM, steps=_STEPS)
 
 
 class Bodies:
@@ -124,7 +125,7 @@ class Bodies:
             list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
 
 
-def run_kernel(kernel, reader, xz, writer, out, *args):
+def run_kernel(kernel, reader, xz, writer, out, args):
     """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
     into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
     (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one compiled
@@ -135,18 +136,18 @@ def run_kernel(kernel, reader, xz, writer, out, *args):
         if status >= 0:
             writer.set_permanent_forces(out)
         return status, info
-    rc, status, info = kernels.with_bulk_io[kernel](_GET_POS, _SET_PERM, reader.ids, xz, writer.ids, out, *args)
+    rc, status, info = kernels.with_bulk_io[kernel](_BRIDGE, reader.ids, xz, writer.ids, out, *args)
     check(rc, reader.ids if status < 0 else writer.ids)
     return status, info
 
 
-def drive_water(n, k, k0, water_interval, totals, reader, xz, writer, out, rows, held, args):
+def drive_water(n, k, k0, water_interval, totals, reader, xz, writer, out, args):
     """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps from step
     k, the water steps' positions read from ``reader`` and forces out written to ``writer``
-    (Bodies), args those of kernels.water_step after xz. Returns its (steps, water steps, answer,
-    error code)."""
-    return kernels.water_drive_bulk_io(_STEPS, n, k, k0, water_interval, totals, _GET_POS, _SET_PERM, reader.ids, xz,
-                                       writer.ids, out, rows, held, *args)
+    (Bodies), args those of kernels.water_forces_step after (xz, out). Returns its (steps, water
+    steps, answer, error code)."""
+    return kernels.water_drive_bulk_io(_BRIDGE, n, k, k0, water_interval, totals, reader.ids, xz, writer.ids, out,
+                                       *args)
 
 
 def check(rc, ids=None):

@@ -353,3 +353,43 @@ def test_settings_accept_any_positive_stiffness_and_refuse_a_zero_force_cap():
     for spring in ("a", "c", "d"):
         with pytest.raises(ValueError, match=r"\[contact\] f_max: must be > 0"):
             ContactSettings(spring=spring, f_max=0.0)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_touching_at_is_what_a_step_would_give_without_taking_it(compiled):
+    """ContactLaw.touching_at: the touching pairs, normal and elastic shear forces that ``forces``
+    would give at the next positions (a stepped copy of the law), also when the pair list is
+    stale there and a pair it did not list touches; the law itself is left as it was (state,
+    list, builds). ``keep`` evaluates a subset of the listed pairs."""
+    import copy
+    rng = np.random.default_rng(5)
+    n = 16
+    r = 1e-3 * (0.9 + 0.1 * rng.random(n))
+    xz = np.column_stack([np.arange(n) % 4 * 1.9e-3, np.arange(n) // 4 * 1.9e-3])
+    s = ContactSettings(spring="d", kn=1e5, eta_n=0.3, ks=4e4, eta_s=0.1, mu=0.5, f_max=2.0)
+    law = ContactLaw(s, r, mobile=np.arange(n) >= 4, compiled=compiled)
+    dt, x_prev = 1e-6, xz
+    for step in range(6):
+        x = x_prev + 2e-5 * rng.standard_normal(xz.shape)
+        law.forces(x, x - x_prev, 1e-3 * rng.standard_normal(n), dt)
+        x_prev = x
+    for stale in (False, True):
+        x = x_prev + 1e-6 * rng.standard_normal(xz.shape)
+        x[5] = x[4] + [r[4] + r[5] - 1e-6, 0.0]         # a listed pair pressed together
+        if stale:                                        # disc 15 jumps next to disc 0: not listed
+            x[15] = x[0] - [r[0] + r[15] - 1e-6, 0.0]
+        du, dpsi = x - x_prev, 1e-3 * rng.standard_normal(n)
+        before = (law.state.copy(), law.i.copy(), law.list_builds)
+        pairs, fn, es = law.touching_at(x, du, dpsi, dt)
+        assert np.array_equal(law.state, before[0]) and np.array_equal(law.i, before[1])
+        assert law.list_builds == before[2]
+        stepped = copy.deepcopy(law)
+        stepped.forces(x, du, dpsi, dt)
+        assert stepped.list_builds == before[2] + stale
+        for got, expected in zip((pairs, fn, es), stepped.contact_pairs()):
+            assert np.array_equal(got, expected)
+        assert [4, 5] in pairs.tolist() and ([0, 15] in pairs.tolist()) == stale and len(fn) > 5
+        low = pairs.min(axis=1) < 8
+        sub = law.touching_at(x, du, dpsi, dt, keep=lambda i, j: np.minimum(i, j) < 8)
+        for got, expected in zip(sub, (pairs[low], fn[low], es[low])):
+            assert np.array_equal(got, expected)

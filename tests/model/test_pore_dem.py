@@ -126,10 +126,10 @@ def test_dry_scene_has_no_water_and_nan_pressures():
     pk = wet_box()
     s = scene()
     core = PoreDEM(s, pk)
-    assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water, pk.xz, pk.r) is None
+    assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water_model, pk.xz) is None
     assert pore_dem.water_model(s, pk) is None
     bounds = pk.block_bounds(s.output.block_z)
-    dry_blocks = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    dry_blocks = pore_dem.block_pressures(core.water_model, pk.xz, bounds)
     assert dry_blocks.shape == (len(bounds),) and np.all(np.isnan(dry_blocks))
     F, fixes = core.step(pk.xz)
     assert np.all(np.isfinite(F)) and fixes == {}
@@ -141,12 +141,12 @@ def test_block_pressures_are_means_of_the_pores_in_each_block():
     core = PoreDEM(s, pk)
     rng = np.random.default_rng(0)
     core.water.W = core.water.W * (1 + 0.1 * rng.random(core.water.net.n_pores))
-    net, m, U = pore_dem.pore_state(core.water, pk.xz, pk.r)
-    np.testing.assert_allclose(m.void_area, pg.measure(net, pk.xz, pk.r).void_area, rtol=1e-15)
-    np.testing.assert_allclose(U, s.water.E_w * (1 - m.void_area / core.water.W), rtol=1e-12)   # eq 32
+    net, A, U = pore_dem.pore_state(core.water_model, pk.xz)
+    np.testing.assert_allclose(A, pg.measure(net, pk.xz, pk.r).void_area, rtol=1e-15)
+    np.testing.assert_allclose(U, s.water.E_w * (1 - A / core.water.W), rtol=1e-12)   # eq 32
     cz = pg.pore_centroids(net, pk.xz)[:, 1]
     bounds = pk.block_bounds(s.output.block_z)
-    got = pore_dem.block_pressures(core.water, pk.xz, pk.r, bounds)
+    got = pore_dem.block_pressures(core.water_model, pk.xz, bounds)
     assert len(got) == len(bounds)
     for (z0, z1), g in zip(bounds, got):
         sel = (cz >= z0) & (cz < z1)
@@ -183,19 +183,27 @@ def test_kinetic_energy_with_spin_of_the_mobile_discs():
 
 def test_a_disc_pressed_into_a_wall_feels_the_spring():
     """A free disc overlapping a bottom wall disc by 1e-7 m: the step's force is kn x overlap
-    upwards (spring a, no dashpot at rest), the pair is listed with that normal force."""
+    upwards (spring a, no dashpot at rest), the pair is listed with that normal force, the one the
+    law reported for these positions before the step (PaperLaw.contact_pairs)."""
     s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
     core = PoreDEM(s, pk)
+    ahead = core.law.contact_pairs(pk.xz)
     F, _ = core.step(pk.xz)
+    for got, expected in zip(ahead, core.contact.contact_pairs()):
+        assert np.array_equal(got, expected)
     assert F[1, 1] == pytest.approx(s.contact.kn * 1e-7, rel=1e-9) and F[1, 0] == pytest.approx(0.0, abs=1e-15)
     pairs, fn, es = core.contact.contact_pairs()
     assert sorted(pairs.ravel().tolist()) == [0, 1] and fn == pytest.approx([s.contact.kn * 1e-7], rel=1e-9)
     assert es == pytest.approx([0.0], abs=1e-15)                 # no tangential motion: no shear spring
     moved = pk.xz.copy()
     moved[1, 1] += 3e-9
+    ahead = core.law.contact_pairs(moved)
     core.step(moved)
     np.testing.assert_allclose(core.du, [[0.0, 0.0], [0.0, 3e-9]], atol=1e-20)   # eq 17: du of the step
+    assert ahead[1] == pytest.approx([s.contact.kn * (1e-7 - 3e-9)], rel=1e-9)
+    for got, expected in zip(ahead, core.contact.contact_pairs()):
+        assert np.array_equal(got, expected)
 
 
 def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
@@ -295,8 +303,9 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
         expected = np.zeros_like(diff)
         expected[[d, below, above], 0] = [-2 * tie, tie, tie]
         np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
-    assert (ties.kernel_step_args() is None) == (not compiled)  # the ties run in the one-call step too
-    assert (fixed.kernel_step_args() is None) == (not compiled)
+    rows, held = np.arange(len(pk.r)), np.zeros((len(pk.r), 2))
+    assert (ties.kernel_step_args(rows, held) is None) == (not compiled)  # the ties run in the one-call step too
+    assert (fixed.kernel_step_args(rows, held) is None) == (not compiled)
 
 
 def test_side_wall_ties_refuse_a_step_above_their_limit():
@@ -318,18 +327,17 @@ def fused_step(core, xz, vel=None):
     kernel_step_args and finish_kernel_step (the pair list rebuilt when the kernel finds it
     stale), or the general ``step`` where kernel_step_args says None. Returns (F, fixes, fused)."""
     from engines.compiled import kernels
-    args = core.kernel_step_args()
+    rows, held = np.arange(len(xz)), np.zeros_like(xz)
+    args = core.kernel_step_args(rows, held)
     if args is None:
         return (*core.step(xz, vel), False)
     F = np.zeros_like(xz)
-    rows, held = np.arange(len(xz)), np.zeros_like(xz)
     while True:
-        due, law_args, water_args, tie_args = args
-        n_lost, n_sub = kernels.dem_step(xz, F, rows, held, due, *law_args, *water_args, *tie_args)
+        n_lost, n_sub = kernels.dem_step(xz, F, *args)
         if n_lost != kernels.LIST_STALE:
             return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
         core.law.contact._update_list(xz)
-        args = core.kernel_step_args()
+        args = core.kernel_step_args(rows, held)
 
 
 @pytest.mark.parametrize("wet", [None, "plain", "smoothing_substeps"])
@@ -364,7 +372,7 @@ def test_one_compiled_call_per_step_equals_the_general_step(wet):
         assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
     every = PoreDEM(wet_scene(rebuild_interval=1), pk)
     every.step(pk.xz)
-    assert every.kernel_step_args() is None                      # k = 1: a rebuild is due
+    assert every.kernel_step_args(np.arange(len(pk.r)), np.zeros((len(pk.r), 2))) is None   # k = 1: a rebuild is due
 
 
 def test_one_compiled_call_adjusts_the_caller_velocities():

@@ -193,14 +193,14 @@ def _fused_and_general(sc, packing, n=200):
         cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
         step_args = cp.core.kernel_step_args
         if fused:
-            def counted():
+            def counted(rows, held):
                 nonlocal fused_steps
-                args = step_args()
+                args = step_args(rows, held)
                 fused_steps += args is not None
                 return args
             cp.core.kernel_step_args = counted
         else:
-            cp.core.kernel_step_args = lambda: None
+            cp.core.kernel_step_args = lambda rows, held: None
         cp.run(n)
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
