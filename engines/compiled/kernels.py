@@ -10,6 +10,7 @@ reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 r
   darcy_update      engines.model.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
   tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
+  gershgorin_limit, substep_count   engines.model.limits (the Darcy check of a water step)
 
 and per-step kernels chain them, so that a step costs one call from Python (each array passed to
 a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us):
@@ -319,6 +320,18 @@ def _part2(buf, at, k):
 
 
 @jit
+def gershgorin_limit(lam):
+    """Twin of engines.model.limits.gershgorin_limit: 2 / lambda [s], inf when lambda is 0."""
+    return 2.0 / lam if lam > 0 else np.inf
+
+
+@jit
+def substep_count(h, limit):
+    """Twin of engines.model.limits.substep_count: 1, or ceil(h / limit) sub-steps when h > limit."""
+    return 1 if h <= limit else int(math.ceil(h / limit))
+
+
+@jit
 def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
@@ -363,12 +376,9 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
         A = A_prev
     flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
     lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
-    limit = 2.0 / lam[0] if lam[0] > 0 else np.inf
-    n_sub = 1
-    if h > limit:
-        if not substep:
-            return 0
-        n_sub = int(math.ceil(h / limit))
+    n_sub = substep_count(h, gershgorin_limit(lam[0]))
+    if n_sub > 1 and not substep:
+        return 0
     balance[:] = 0.0
     for sub in range(n_sub):
         if sub > 0:

@@ -3,7 +3,8 @@
 Every "is this step stable?" question is answered here: preflight (engines.run.preflight) asks
 them of a scene at its start, dt = "auto" (engines.model.time_step) takes the smallest, the
 engines ask the contact and tie limits at construction and the Darcy limit at every water step
-(the compiled water step runs ``substep_count`` and ``gershgorin_limit`` themselves, jitted).
+(the compiled water step runs the twins of ``substep_count`` and ``gershgorin_limit`` in
+engines.compiled.kernels, tested equal).
 
 * contact (eq 52): 2 sqrt(m_min / kn) over the mobile particles; dt is refused above
   [numerics] dt_safety times it;

@@ -218,3 +218,12 @@ def test_refuses_a_water_step_above_the_darcy_limit():
     m = WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3, substep=False), r, walls, xz, 0.0, 0.3, 1e-3)
     with pytest.raises(DarcyStabilityError, match="substep"):
         m.step(0, xz)
+
+
+def test_the_darcy_check_twins_equal_the_model_limits():
+    """kernels.gershgorin_limit and substep_count give what engines.model.limits gives."""
+    from engines.model import limits
+    for lam in (0.0, 1e-300, 0.5, 4.0, 3e7):
+        assert kernels.gershgorin_limit(lam) == limits.gershgorin_limit(lam)
+    for h, limit in ((1e-3, 1e-3), (0.5e-3, 1e-3), (2.5e-3, 1e-3), (1.0, np.inf), (3e-6, 1e-6 + 1e-22), (7.0, 0.7)):
+        assert kernels.substep_count(h, limit) == limits.substep_count(h, limit)
