@@ -1,5 +1,5 @@
 """Cost of the pore core: rebuild (links, pores, re-meshing) and one water step (areas + flow + forces),
-NumPy path and compiled kernels (engines.model.water_model.WaterModel).
+NumPy path and compiled kernels (engines.compiled.water_model.WaterModel).
 
     yade -n -x benchmarks/pores.py --json out/bench-pores.json [--sizes 239 2000 10000]
 
@@ -20,9 +20,9 @@ import numpy as np
 
 from benchmarks import write_json
 from benchmarks.floor import native_floor, per_step, step_by_step
+from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
 from engines.model.pore_water import PoreWater, WaterSettings
-from engines.model.water_model import WaterModel
 from engines.run import scene as scenes
 from packing.layouts import random_discs
 from packing.packing import Packing

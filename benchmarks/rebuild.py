@@ -25,9 +25,10 @@ import numpy as np
 
 from benchmarks import write_json
 from benchmarks.coupling import box_packing
+from engines.compiled import water_model as cw
 from engines.model import pore_water as pw
 from engines.model import pores as pg
-from engines.model.water_model import WaterModel
+from engines.model import water_model as mw
 
 EPS_M, L_M = 2e-4, 3.5e-4
 SETTINGS = pw.WaterSettings(E_w=2400.0, k1=1e3, k2=1e2)
@@ -36,10 +37,11 @@ SETTINGS = pw.WaterSettings(E_w=2400.0, k1=1e3, k2=1e2)
 def parts(packing, xz, compiled):
     """{part: function} of one path; xz: the moved centres the rebuild sees."""
     r, walls = packing.r, packing.group
-    model = WaterModel(SETTINGS, r, walls, packing.xz, EPS_M, L_M, 1e-6, compiled=compiled, log=lambda msg: None)
+    model = (cw if compiled else mw).WaterModel(SETTINGS, r, walls, packing.xz, EPS_M, L_M, 1e-6, log=lambda msg: None)
+    build, remesh = model.build_steps, model.remesh_steps
     old, W_old = model.water.net, model.water.W.copy()
-    tri = pg.regular_triangulation(xz, r, compiled)
-    new = pg.build_pores(xz, r, EPS_M, L_M, walls=walls, compiled=compiled)
+    tri = pg.regular_triangulation(xz, r, build)
+    new = pg.build_pores(xz, r, EPS_M, L_M, walls=walls, steps=build)
     A_old = pg.measure(old, xz, r).void_area
     U_old = pw.pressure(W_old, A_old, SETTINGS.E_w)
 
@@ -48,12 +50,12 @@ def parts(packing, xz, compiled):
         model.rebuild(xz)
 
     return {
-        "triangulation": lambda: pg.regular_triangulation(xz, r, compiled),
-        "insertion": lambda: pg.insert_missing_links(xz, r, tri, EPS_M + L_M, compiled),
-        "build_pores": lambda: pg.build_pores(xz, r, EPS_M, L_M, walls=walls, compiled=compiled),
+        "triangulation": lambda: pg.regular_triangulation(xz, r, build),
+        "insertion": lambda: pg.insert_missing_links(xz, r, tri, EPS_M + L_M, build),
+        "build_pores": lambda: pg.build_pores(xz, r, EPS_M, L_M, walls=walls, steps=build),
         "measures": lambda: (model._void_area(new, xz), model._void_area(old, xz)),
-        "rules": lambda: pw.pressures_by_rule(old, U_old, A_old > old.a_min, new, compiled),
-        "overlaps": lambda: pg.pore_overlaps(old, new, xz, compiled),
+        "rules": lambda: pw.pressures_by_rule(old, U_old, A_old > old.a_min, new, remesh),
+        "overlaps": lambda: remesh.pore_overlaps(old, new, xz),
         "rebuild": rebuild,
     }
 

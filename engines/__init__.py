@@ -3,7 +3,9 @@
 The packages, each importing only those before it (tests/test_layers.py checks it):
 
   model/      the seed-000 physics, NumPy only, no YADE
-  compiled/   its numba twins (the same arithmetic, tested equal to round-off)
+  compiled/   its numba twins (the same arithmetic, tested equal to round-off): the kernels, and the
+              model's classes by the same names (contact, paper_law, water_model, pore_dem), which
+              the YADE layer and the runs use
   reference/  the independent reference, written from the paper; imports nothing of the above
   yade/       everything that talks to YADE: bulk I/O, the two engines, the coupling, checkpoints
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
@@ -15,7 +17,8 @@ Outside engines/: packing/ (the Packing file format, size distributions, lattice
 reference/), postproc/ (reads run files, draws figures; after studies/, never imports yade/ or
 run/), yade_scripts/ (thin command-line scripts, scenes/ presets), tests/ (mirrors this tree).
 
-One step k of the model (model/pore_dem.py, PoreDEM.step; the YADE law skips a-c and e):
+One step k of the model (model/pore_dem.py, PoreDEM.step, compiled/pore_dem.py in one kernel call;
+the YADE law skips a-c and e):
   a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24

@@ -11,10 +11,6 @@ from engines import ROOT
 # each package imports only those before it (engines.ROOT, the root package, is open to all)
 ORDER = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.yade", "engines.seeds",
          "engines.studies", "postproc", "engines.run"]
-# the one edge against the order: these model classes run their compiled twins when asked
-# (compiled=True); compiled/ imports nothing of the project, so there is no cycle
-MODEL_CALLS_COMPILED = {"engines.model.contact", "engines.model.paper_law", "engines.model.pore_dem",
-                        "engines.model.pore_water", "engines.model.pores", "engines.model.water_model"}
 NO_YADE = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
 LIBRARY = ["engines", "packing", "postproc"]
 SCRIPTS = ["yade_scripts", "benchmarks"]
@@ -81,10 +77,7 @@ def test_each_package_imports_only_those_before_it():
     for (a, b), mods in edges().items():
         if b in ("engines", "yade") or ORDER.index(b) < ORDER.index(a):
             continue
-        if (a, b) == ("engines.model", "engines.compiled"):
-            mods = set(mods) - MODEL_CALLS_COMPILED
-        if mods:
-            wrong.append(f"{a} -> {b}: {sorted(set(mods))}")
+        wrong.append(f"{a} -> {b}: {sorted(set(mods))}")
     assert wrong == []
 
 

@@ -1,5 +1,5 @@
 """How fast the seismic box drains: a uniform excess pore pressure U0 in the still packing, the
-water advanced alone (engines.model.water_model.WaterModel, the compiled kernels) with the surface at
+water advanced alone (engines.compiled.water_model.WaterModel, the compiled kernels) with the surface at
 U = 0 and undrained (case 1) or drained (case 3) sides, at Table 5's permeabilities and at
 ``--k-scale`` times them. Tells whether drained sides can keep U small within the 0.18-s run
 (docs/LIQUEFACTION.md, trend 2). No YADE:
@@ -19,6 +19,7 @@ import numpy as np
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
 from engines.model.pore_dem import water_model
 from engines.run import scene as scenes
@@ -36,7 +37,7 @@ def drainage(case, k_scale, U0=100.0, times=TIMES):
     w = sc.water
     sc = sc.with_overrides({"water": {"k1": w.k1 * k_scale, "k2": w.k2 * k_scale, "k3": w.k3 * k_scale}})
     pk = Packing.load(sc.packing.file)
-    wm = water_model(sc, pk)
+    wm = water_model(sc, pk, WaterModel)
     water = wm.water
     A = pg.measure(water.net, pk.xz, pk.r).void_area
     water.W = A * sc.water.E_w / (sc.water.E_w - U0)  # eq 32 inverted: U = U0 in every pore

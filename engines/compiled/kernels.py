@@ -27,7 +27,9 @@ parameters (``LAW = Layout.of(law_step, 1)``), and its callers build its argumen
 arguments of those it calls has its list checked to be theirs one after the other (DEM_STEP is
 rows, held, water_due, LAW, WATER, TIES), and passes them on under their own names (tested). The
 network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
-name. These lists stay in this file: numba's cache is renewed when this file changes.
+name. These lists stay in this file: numba's cache is renewed when this file changes (not when a
+module it imports does: the contact state's columns, engines.model.contact.TOUCHING ..., are read
+as constants; after changing them, delete engines/compiled/__pycache__).
 
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
 functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that this module stays cacheable
@@ -51,11 +53,10 @@ from llvmlite import ir
 from numba.extending import intrinsic
 
 from engines.compiled.layout import Layout
+from engines.model.contact import E_N, E_S, F_N, TOUCHING, U_N, VN_COLL  # the state columns, numba constants
 
 jit = nb.njit(cache=True, nogil=True)
 
-# columns of the per-pair contact state (engines.model.contact.ContactLaw.state)
-TOUCHING, U_N, E_N, E_S, VN_COLL, F_N = range(6)
 SPRING_CODE = {"a": 0, "b": 0, "c": 1, "d": 2}  # linear, capped elastic, capped hysteretic
 
 

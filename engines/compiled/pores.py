@@ -6,13 +6,13 @@ reference path and is tested against it (tests/compiled/test_pores.py: integer a
 to 1e-12 relative):
 
   lifted_points      model.pores._lifted_points           the points of the regular triangulation's hull
-  lower_ccw          model.pores.regular_triangulation    the lower hull facets, counter-clockwise
-  missing_pairs      model.pores.insert_missing_links     the eq 28 pairs that are no edge
+  lower_ccw          model.pores._lower_triangles         the lower hull facets, counter-clockwise
+  missing_pairs      model.pores._missing_pairs           the eq 28 pairs that are no edge
   faces              model.pores._faces                   neighbours, eq 28 links, faces (a union-find
                                                           over triangles across non-link edges), eq 29
   links_and_corners  model.pores._links_and_corners       links, throats, surface, vertex sets, the
                                                           half-edge walk, corner angles (eq 29)
-  near_vertex_sets   pore_water.pressures_by_rule         rule (b): old vertex sets that contain or are
+  near_vertex_sets   pore_water.near_vertex_sets          rule (b): old vertex sets that contain or are
                                                           contained in a new one
   spread_to_neighbours  pore_water.spread_to_neighbours   rule (c)
   pore_overlaps      model.pores.pore_overlaps            overlap areas of old and new pores (clipping
@@ -24,12 +24,18 @@ counting sort over discs or pores and insertion sort of the few entries of each 
 NumPy path cost more than the rest at these sizes); pairs are found on grids of cells. Sums that
 NumPy makes in another order (means of rules (b), (c), overlap sums) agree to round-off. numba
 compiles on first use and caches the machine code beside this file (``cache=True``); fastmath is off.
+
+``BUILD`` and ``REMESH`` are these kernels as the steps of engines.model.pores.build_pores and
+engines.model.pore_water.PoreWater.remesh (``steps=``), what the compiled WaterModel uses.
 """
 import numba as nb
 import numpy as np
 
+from engines.model import pore_water
+from engines.model import pores as pg
+
 jit = nb.njit(cache=True, nogil=True)
-OUTER = -1  # engines.model.pores.OUTER
+OUTER = pg.OUTER
 
 
 @jit
@@ -605,3 +611,29 @@ def _grown(x, m):
     out = np.empty(2 * m, x.dtype)
     out[:m] = x[:m]
     return out
+
+
+def _lifted_points(xz, r):
+    return lifted_points(xz, r, xz.mean(axis=0))
+
+
+def _lower_triangles(hull, n, xz):
+    tri = lower_ccw(hull.simplices, hull.equations[:, 2], n, xz, pg.LOWER_FACET_TOL)
+    return tri if len(tri) else None
+
+
+def _missing_pairs(xz, r, reach, tri):
+    return missing_pairs(xz, r, float(reach), tri)
+
+
+def _near_vertex_sets(old_net, U_old, old_valid, new_net, todo):
+    return near_vertex_sets(old_net.pore_vertex_ptr, old_net.pore_vertex_idx, np.asarray(old_valid, bool),
+                            new_net.pore_vertex_ptr, new_net.pore_vertex_idx, todo, U_old, new_net.n_discs)
+
+
+def _pore_overlaps(old_net, new_net, xz):
+    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)
+
+
+BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, faces, links_and_corners)
+REMESH = pore_water.RemeshSteps(_pore_overlaps, _near_vertex_sets, spread_to_neighbours)

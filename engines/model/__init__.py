@@ -1,5 +1,6 @@
 """The seed-000 physics in NumPy: contact law, separation, pores, water, loading, limits, the step.
 
-May import: NumPy, SciPy, and engines.compiled (the model classes run their compiled twins when
-asked, compiled=True). Never YADE: everything here is tested with plain pytest (tests/model/).
+The readable path: the compiled twins (engines.compiled) subclass these classes and plug into
+their steps, never the other way round. May import: NumPy, SciPy. Never YADE: everything here is
+tested with plain pytest (tests/model/).
 """

@@ -22,8 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from engines.compiled import kernels
 from engines.model.fields import NONNEG, POS, Field, settings_class
+
+# columns of the per-pair contact state (ContactLaw.state; the compiled kernels read the same columns)
+TOUCHING, U_N, E_N, E_S, VN_COLL, F_N = range(6)
 
 
 CONTACT_FIELDS = {  # the scene file's [contact] table holds these and the engine's own choices
@@ -56,14 +58,13 @@ class ContactLaw:
     """State and forces of all disc pairs. Pairs come from a Verlet list (cKDTree) rebuilt when
     a disc has moved by more than half the skin; state is carried over by pair key.
 
-    ``state`` (m, 6) holds per pair the columns of engines.compiled.kernels (TOUCHING, U_N, E_N, E_S,
-    VN_COLL, F_N): touching flag, accumulated overlap u_n [m], elastic forces e_n, e_s [N],
-    approach velocity at first touch [m/s], last normal force [N]. ``compiled=True`` runs the
-    per-step loop in engines.compiled.kernels.contact_forces (the same arithmetic as the NumPy code below,
-    which stays the readable path); the returned F, M are then buffers reused by the next call.
+    ``state`` (m, 6) holds per pair the columns TOUCHING, U_N, E_N, E_S, VN_COLL, F_N: touching flag,
+    accumulated overlap u_n [m], elastic forces e_n, e_s [N], approach velocity at first touch [m/s],
+    last normal force [N]. Its compiled twin engines.compiled.contact.ContactLaw runs the per-step loop
+    in a kernel (the same arithmetic as the NumPy code here, which stays the readable path).
     """
 
-    def __init__(self, settings, r, mobile, skin=None, compiled=False):
+    def __init__(self, settings, r, mobile, skin=None):
         self.s = settings
         self.r = np.ascontiguousarray(r, float)
         self.mobile = np.asarray(mobile, bool)
@@ -74,58 +75,39 @@ class ContactLaw:
         self.xz_list = None
         self.state = np.zeros((0, 6))
         self.list_builds = 0
-        self.compiled = compiled
-        if compiled:
-            self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
-            self._spring = kernels.SPRING_CODE[settings.spring]
-            self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
-            self._args = None
 
     @property
     def half_skin2(self):
         """(skin / 2)^2 [m^2]: the list is rebuilt once a disc has moved that far (squared)."""
         return (0.5 * self.skin) ** 2
 
-    def kernel_args(self, dt):
-        """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
-        of dt [s]."""
-        if self._prm[-1] != dt:
-            self._prm = kernels.contact_params(self.s, dt)
-            self._args = None
-        if self._args is None:
-            self._args = kernels.CONTACT.values(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
-                                                spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
-                                                lost=self._lost)
-        return self._args
-
     @property
     def touching(self):
-        return self.state[:, kernels.TOUCHING] != 0
+        return self.state[:, TOUCHING] != 0
 
     @property
     def f_n(self):
         """Normal force of each pair at the last step [N] (0 when not touching)."""
-        return self.state[:, kernels.F_N]
+        return self.state[:, F_N]
 
     def _stale(self, xz):
         """Has a disc moved by half the skin since the pair list was built (or is there none)?"""
         if self.xz_list is None:
             return True
-        if self.compiled:
-            moved = kernels.max_sq_displacement(xz, self.xz_list)
-        else:
-            moved = np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
-        return moved >= self.half_skin2
+        return self._max_sq_moved(xz) >= self.half_skin2
+
+    def _max_sq_moved(self, xz):
+        """The largest squared displacement of a disc since the list was built [m^2]."""
+        return np.max(np.sum((xz - self.xz_list) ** 2, axis=1), initial=0.0)
 
     def _update_list(self, xz):
-        """Rebuild the pair list at xz if it is stale (``_stale``)."""
+        """Rebuild the pair list at xz if it is stale (``_stale``); True if it was rebuilt."""
         if not self._stale(xz):
-            return
+            return False
         self.i, self.j, self.state = self._pairs_near(xz)
         self.xz_list = xz.copy()
         self.list_builds += 1
-        self._lost = np.zeros(len(self.i), np.int64)
-        self._args = None
+        return True
 
     def _pairs_near(self, xz):
         """(i, j, state) of a pair list built at xz: the pairs with a mobile disc and
@@ -154,9 +136,6 @@ class ContactLaw:
         increments [rad, counter-clockwise]. Returns (F, M, separations).
         """
         self._update_list(xz)
-        if self.compiled:
-            n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
-            return self._F, self._M, self._separations(xz, self._lost[:n_lost])
         F, M, self.state, lost = self._forces_numpy(xz, du, dpsi, dt, self.i, self.j, self.state)
         return F, M, self._separations(xz, lost)
 
@@ -208,20 +187,18 @@ class ContactLaw:
         """(pairs (K, 2), f_n (K,), e_s (K,) [N]) of the pairs touching at centres xz after the
         increments du, dpsi of a step of dt [s] (eq 1-13): what ``forces`` would give there, from
         the pair list it would use, the law's state left as it is. ``keep(i, j)``: a mask of the
-        listed pairs to evaluate (default all); the compiled kernel advances a copy of their state."""
+        listed pairs to evaluate (default all); the compiled twin steps a copy of their state."""
         i, j, state = self._pairs_near(xz) if self._stale(xz) else (self.i, self.j, self.state)
         if keep is not None:
             sel = keep(i, j)
             i, j, state = i[sel], j[sel], state[sel]
-        if self.compiled:
-            new, n = state.copy(), self.n
-            kernels.contact_forces(xz, du, dpsi, *kernels.CONTACT.values(
-                r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
-                F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
-        else:
-            new = self._forces_numpy(xz, du, dpsi, dt, i, j, state)[2]
-        t = new[:, kernels.TOUCHING] != 0
-        return np.column_stack([i[t], j[t]]), new[t, kernels.F_N], new[t, kernels.E_S]
+        new = self._stepped_state(xz, du, dpsi, dt, i, j, state)
+        t = new[:, TOUCHING] != 0
+        return np.column_stack([i[t], j[t]]), new[t, F_N], new[t, E_S]
+
+    def _stepped_state(self, xz, du, dpsi, dt, i, j, state):
+        """The state of the pairs (i, j) after a step from ``state`` (left as it is)."""
+        return self._forces_numpy(xz, du, dpsi, dt, i, j, state)[2]
 
     def _separations(self, xz, lost):
         """SeparationEvents of the pairs ``lost`` (their vn_coll is that of their first touch)."""
@@ -231,7 +208,7 @@ class ContactLaw:
             d = xz[b] - xz[a]
             R = np.sqrt(d[0] ** 2 + d[1] ** 2)
             out.append(SeparationEvent(int(a), int(b), np.array([d[0] / R, d[1] / R]),
-                                       float(self.state[k, kernels.VN_COLL])))
+                                       float(self.state[k, VN_COLL])))
         return out
 
     def touch_count(self):
@@ -243,7 +220,7 @@ class ContactLaw:
         """(pairs (K, 2), normal force f_n (K,), elastic shear force e_s (K,) [N]) of the touching
         pairs, for plots and VTK (e_s along t of eq 3b; the dashpot part d_s is not kept)."""
         t = self.touching
-        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy(), self.state[t, kernels.E_S].copy()
+        return np.column_stack([self.i[t], self.j[t]]), self.f_n[t].copy(), self.state[t, E_S].copy()
 
 
 def separation_adjustment(events, touch_count, vel, mass, mobile, e):

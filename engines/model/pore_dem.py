@@ -26,7 +26,6 @@ constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent
 """
 import numpy as np
 
-from engines.compiled import kernels
 from engines.model import ground_motion, limits
 from engines.model import pores as pg
 from engines.model.observe import block_means, box_window, porosity
@@ -58,14 +57,15 @@ def moving_walls(scene, packing):
     return np.isin(packing.group, groups)
 
 
-def water_model(scene, packing, compiled=True):
-    """The scene's WaterModel on the packing's discs (true radii), or None for a dry scene."""
+def water_model(scene, packing, cls=WaterModel):
+    """The scene's WaterModel (``cls``: engines.model.water_model.WaterModel or its compiled twin) on
+    the packing's discs (true radii), or None for a dry scene."""
     settings = scene.water_settings()
     if settings is None:
         return None
     num = scene.numerics
-    return WaterModel(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
-                      num.dt, num.rebuild_interval, num.water_interval, compiled)
+    return cls(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
+               num.dt, num.rebuild_interval, num.water_interval)
 
 
 def pore_state(water_model, xz):
@@ -113,10 +113,13 @@ class PoreDEM:
     """State and per-step work of one scene (see the module docstring for the order).
 
     ``law``: the paper's contact law (engines.model.paper_law.PaperLaw); ``water_model``: the pores and
-    water (engines.model.water_model.WaterModel) or None for a dry scene. ``compiled=False`` runs the
-    readable NumPy path of both (the compiled kernels are tested against it)."""
+    water (engines.model.water_model.WaterModel) or None for a dry scene: the readable NumPy path of
+    both. Its compiled twin engines.compiled.pore_dem.PoreDEM (tested against it) runs the compiled
+    law and water and offers the whole step as one kernel call."""
 
-    def __init__(self, scene, packing, compiled=True):
+    law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
+
+    def __init__(self, scene, packing):
         self.scene, self.packing = scene, packing
         self.r = packing.r
         self.mobile = packing.mobile
@@ -124,15 +127,14 @@ class PoreDEM:
         self.dt = scene.numerics.dt
         num = scene.numerics
         limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], scene.contact.kn)
-        self.law = PaperLaw(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt, compiled)
+        self.law = self.law_class(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt)
         self.k = 0
         accel = ground_motion.input_acceleration(scene)
         self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
         self.ties = side_wall_ties(scene, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
-        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
-        self.water_model = water_model(scene, packing, compiled)
+        self.water_model = water_model(scene, packing, self.water_class)
 
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""
@@ -176,27 +178,3 @@ class PoreDEM:
         if self.base is not None:                                       # f
             self.wall_velocity = self.base.step()
         self.k += 1
-
-    # -- the same step as one compiled call (engines.compiled.kernels.dem_step) ----------------------------
-    def kernel_step_args(self, rows, held):
-        """The arguments of kernels.dem_step after (xz, F_out) (kernels.DEM_STEP) for step k, the
-        forces to write F[rows] + held, or None when this step needs the general ``step`` (NumPy
-        path, first step, a rebuild of the pores)."""
-        law, wm = self.law, self.water_model
-        if not law.compiled or law.xz_prev is None:
-            return None
-        if wm is None:
-            return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
-        if wm.rebuild_due(self.k):
-            return None
-        return kernels.dem_step_args(rows, held, self.k % wm.water_interval == 0, law.kernel_args(),
-                                     wm.kernel_args(wm.water_interval * self.dt), self._tie_args)
-
-    def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
-        """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
-        kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
-        fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
-        if args[kernels.DEM_STEP.water_due]:
-            self.water_model.finish_kernel_step(args[kernels.DEM_STEP.h], n_sub)
-        self._move_walls()
-        return fixes

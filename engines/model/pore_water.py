@@ -33,12 +33,12 @@ forward Euler is stable for dt <= 2 / lambda (engines.model.limits). For two equ
 exact: dt <= 2 / k.
 """
 from dataclasses import dataclass
+from typing import Callable, NamedTuple
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from engines.compiled import pores as kp
 from engines.model import limits
 from engines.model import pores as pg
 from engines.model.fields import NONNEG, POS, Field, settings_class
@@ -226,7 +226,7 @@ class PoreWater:
         return fl
 
     # -- re-meshing --------------------------------------------------------------------------------
-    def remesh(self, new_net, A_new, A_old, xz=None, compiled=False):
+    def remesh(self, new_net, A_new, A_old, xz=None, steps=None):
         """Move the water onto a rebuilt network (§3.4(2)); A_new, A_old: void areas of the new and
         the old network at the current positions xz (N, 2) [m].
 
@@ -238,14 +238,15 @@ class PoreWater:
         transfer = "paper": W is recomputed from U and the new A (eq 32).
         transfer = "conserving": W from ``conserving_water`` (needs xz); new pores that overlap no
         old pore take the water of the pressure of rules (a)-(d) (counted as "unmatched").
-        ``compiled``: rules (b), (c) and the overlaps by engines.compiled.pores (the same results).
-        Returns the counts per rule.
+        ``steps``: RemeshSteps, by default NUMPY_REMESH; engines.compiled.pores.REMESH: rules (b), (c)
+        and the overlaps by compiled kernels (the same results). Returns the counts per rule.
         """
+        steps = steps or NUMPY_REMESH
         U_old = pressure(self.W, A_old, self.settings.E_w)
-        U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net, compiled)
+        U_new, rule = pressures_by_rule(self.net, U_old, A_old > self.net.a_min, new_net, steps)
         counts = rule_counts(rule)
         A_new, A_old = np.asarray(A_new, float), np.asarray(A_old, float)
-        overlaps = None if xz is None else pg.pore_overlaps(self.net, new_net, xz, compiled)
+        overlaps = None if xz is None else steps.pore_overlaps(self.net, new_net, xz)
         if self.settings.transfer == "conserving":
             if xz is None:
                 raise ValueError("transfer = 'conserving' needs the positions xz at re-meshing")
@@ -274,10 +275,11 @@ def rule_counts(rule):
     return {name: int(np.sum(rule == k)) for k, name in enumerate(RULES, 1)}
 
 
-def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
+def pressures_by_rule(old_net, U_old, old_valid, new_net, steps=None):
     """Pressures for the pores of ``new_net`` from those U_old of ``old_net`` (only where ``old_valid``)
     by rules (a)-(d) of §3.4(2) (``PoreWater.remesh``): (U_new (Np_new,), rule code 1-4 of (a)-(d)
-    (Np_new,) int8). ``compiled``: rules (b) and (c) by engines.compiled.pores."""
+    (Np_new,) int8). ``steps``: RemeshSteps for rules (b) and (c) (default NUMPY_REMESH)."""
+    steps = steps or NUMPY_REMESH
     n_new = new_net.n_pores
     U = np.full(n_new, np.nan)
     rule = np.zeros(n_new, np.int8)
@@ -290,27 +292,32 @@ def pressures_by_rule(old_net, U_old, old_valid, new_net, compiled=False):
         same = sorted_sig[pos] == new_net.pore_signature
         U[same], rule[same] = U_old[order[pos[same]]], 1
     todo = np.flatnonzero(np.isnan(U))
-    if len(todo) and compiled:  # (b) split or merge: old vertex set contains or is contained in the new one
-        U_b = kp.near_vertex_sets(old_net.pore_vertex_ptr, old_net.pore_vertex_idx, np.asarray(old_valid, bool),
-                                  new_net.pore_vertex_ptr, new_net.pore_vertex_idx, todo, U_old, new_net.n_discs)
+    if len(todo):  # (b) split or merge: old vertex set contains or is contained in the new one
+        U_b = steps.near_vertex_sets(old_net, U_old, old_valid, new_net, todo)
         U[todo] = U_b
         rule[todo[~np.isnan(U_b)]] = 2
-    elif len(todo):
-        by_vertex = {}
-        for q in valid:
-            for v in old_net.vertices_of(q).tolist():
-                by_vertex.setdefault(v, []).append(q)
-        for p in todo:
-            mine = set(new_net.vertices_of(p).tolist())
-            cands = {q for v in mine for q in by_vertex.get(v, ())}
-            near = [q for q in cands if _subset_or_superset(set(old_net.vertices_of(q).tolist()), mine)]
-            if near:
-                U[p], rule[p] = float(np.mean(U_old[near])), 2
     # (c) mean over the assigned neighbouring pores ("まわりのすべての図形"); the outside is not a pore
-    (kp.spread_to_neighbours if compiled else spread_to_neighbours)(U, rule, new_net.throat_conns)
+    steps.spread_to_neighbours(U, rule, new_net.throat_conns)
     left = np.isnan(U)  # (d)
     U[left], rule[left] = 0.0, 4
     return U, rule
+
+
+def near_vertex_sets(old_net, U_old, old_valid, new_net, todo):
+    """Rule (b) for the new pores ``todo``: the mean U_old of the old pores (where ``old_valid``)
+    whose vertex set contains or is contained in theirs, nan where there is none (len(todo),)."""
+    by_vertex = {}
+    for q in np.flatnonzero(old_valid):
+        for v in old_net.vertices_of(q).tolist():
+            by_vertex.setdefault(v, []).append(q)
+    U_b = np.full(len(todo), np.nan)
+    for k, p in enumerate(todo):
+        mine = set(new_net.vertices_of(p).tolist())
+        cands = {q for v in mine for q in by_vertex.get(v, ())}
+        near = [q for q in cands if _subset_or_superset(set(old_net.vertices_of(q).tolist()), mine)]
+        if near:
+            U_b[k] = float(np.mean(U_old[near]))
+    return U_b
 
 
 def spread_to_neighbours(U, rule, conns):
@@ -335,6 +342,17 @@ def spread_to_neighbours(U, rule, conns):
 
 def _subset_or_superset(a, b):
     return a <= b or b <= a
+
+
+class RemeshSteps(NamedTuple):
+    """The parts of ``PoreWater.remesh`` that have compiled twins (engines.compiled.pores.REMESH)."""
+
+    pore_overlaps: Callable         # as engines.model.pores.pore_overlaps
+    near_vertex_sets: Callable      # as near_vertex_sets
+    spread_to_neighbours: Callable  # as spread_to_neighbours
+
+
+NUMPY_REMESH = RemeshSteps(pg.pore_overlaps, near_vertex_sets, spread_to_neighbours)
 
 
 SINKHORN_TOL, SINKHORN_MAX_ITER = 1e-13, 500

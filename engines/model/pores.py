@@ -21,8 +21,9 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
 
-Every step of a build but qhull, and of the re-meshing in engines.model.pore_water, has a compiled twin in
-engines.compiled.pores (``compiled=True``, what the water engine uses), tested to give the same network.
+Every step of a build but qhull (``BuildSteps``), and of the re-meshing in engines.model.pore_water, has
+a compiled twin in engines.compiled.pores (``steps=engines.compiled.pores.BUILD``, what the water engine
+uses), tested to give the same network.
 
 Degenerate pores: a face whose void area is <= ``a_min`` when the pores are built is *closed*: it is
 not a pore (no water, U = 0). ``a_min = degenerate_fraction * mean(pi r^2)``.
@@ -32,13 +33,13 @@ gets no links and counts as a rattler of the pore that contains its centre.
 """
 from collections import deque
 from dataclasses import dataclass
+from typing import Callable, NamedTuple
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from engines.compiled import pores as kp
 from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
 
 OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
@@ -190,28 +191,33 @@ def _ccw(xz, tri):
 LOWER_FACET_TOL = 1e-12  # a hull facet is lower when its unit normal's lift component is below -this
 
 
-def regular_triangulation(xz, r, compiled=False):
+def regular_triangulation(xz, r, steps=None):
     """Counter-clockwise triangles (T, 3) of the regular (power) triangulation of the discs, or None.
 
     The lower convex hull of the lifted points (x, z, x^2 + z^2 - r^2) (centred and scaled by the
     extent of the centres), one triangle per hull facet whose outward normal points down. An extra
     point lifted above all others, at the centroid, is never on the lower hull; it makes a 3D hull
     of three discs or of lifted points that lie in one plane (cocircular equal discs). Collinear
-    centres stay flat: None. Discs whose power cell is empty are in no triangle.
+    centres stay flat: None. Discs whose power cell is empty are in no triangle. ``steps``:
+    BuildSteps (default NUMPY_BUILD).
     """
+    steps = steps or NUMPY_BUILD
     n = len(xz)
     if n < 3:
         return None
-    points = kp.lifted_points(xz, r, xz.mean(axis=0)) if compiled else _lifted_points(xz, r)
+    points = steps.lifted_points(xz, r)
     if points is None:
         return None
     try:
         hull = ConvexHull(points)
     except QhullError:
         return None
-    if compiled:
-        tri = kp.lower_ccw(hull.simplices, hull.equations[:, 2], n, xz, LOWER_FACET_TOL)
-        return tri if len(tri) else None
+    return steps.lower_triangles(hull, n, xz)
+
+
+def _lower_triangles(hull, n, xz):
+    """The counter-clockwise triangles (T, 3) of the lower facets of regular_triangulation's hull
+    of n discs at xz, or None."""
     lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
     return _ccw(xz, hull.simplices[lower]) if lower.any() else None
 
@@ -339,22 +345,15 @@ class _FlipTriangulation:
         self._star(d).add(c)
 
 
-def insert_missing_links(xz, r, tri, reach, compiled=False):
+def insert_missing_links(xz, r, tri, reach, steps=None):
     """Make every eq 28 pair between triangulation vertices that crosses no link an edge (and so a
     link), by edge flips, the pairs in order of their gap R - r_i - r_j (then of their indices).
     Only edges that are not links are flipped, so no link is lost.
 
-    Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m].
+    Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m]; ``steps``: BuildSteps
+    (default NUMPY_BUILD).
     """
-    if compiled:
-        missing = kp.missing_pairs(xz, r, float(reach), tri)
-    else:
-        n = len(r)
-        pairs = eq28_pairs(xz, r, reach)
-        is_vertex = np.zeros(n, bool)
-        is_vertex[tri.ravel()] = True
-        edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
-        missing = pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
+    missing = (steps or NUMPY_BUILD).missing_pairs(xz, r, reach, tri)
     if not len(missing):
         return tri, 0
     d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
@@ -375,6 +374,16 @@ def insert_missing_links(xz, r, tri, reach, compiled=False):
     return (ft.triangles() if inserted else tri), inserted
 
 
+def _missing_pairs(xz, r, reach, tri):
+    """The eq 28 pairs (M, 2), i < j, of triangulation vertices that are no edge of ``tri``."""
+    n = len(r)
+    pairs = eq28_pairs(xz, r, reach)
+    is_vertex = np.zeros(n, bool)
+    is_vertex[tri.ravel()] = True
+    edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
+    return pairs[~np.isin(pairs @ np.array([n, 1]), edge_keys) & is_vertex[pairs].all(axis=1)]
+
+
 def _locate(xz, tri, points):
     """Index of a triangle containing each point (M, 2), -1 where none (brute force, for few points)."""
     a, b, c = (xz[tri[:, k]][None] for k in range(3))
@@ -387,15 +396,15 @@ def _locate(xz, tri, points):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, compiled=False):
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, steps=None):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
     An edge between two wall discs is a wall element, not a free surface. The candidate links are
     the regular triangulation plus the eq 28 pairs it hides (module docstring).
-    ``compiled``: everything but qhull by the kernels of engines.compiled.pores instead of the
-    readable NumPy functions (``_lifted_points``, ``_faces``, ``_links_and_corners``, ...): the
-    same network (tests/compiled/test_pores.py).
+    ``steps``: the BuildSteps, by default NUMPY_BUILD, the readable NumPy functions (``_lifted_points``,
+    ``_faces``, ``_links_and_corners``, ...); engines.compiled.pores.BUILD: everything but qhull by
+    compiled kernels, the same network (tests/compiled/test_pores.py).
     Returns a PoreNetwork; positions may then move and ``measure`` gives the new areas.
     """
     xz, r = check_discs(xz, r)
@@ -410,18 +419,15 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     if bad.any():
         raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
-    tri = regular_triangulation(xz, r, compiled)
+    steps = steps or NUMPY_BUILD
+    tri = regular_triangulation(xz, r, steps)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
-    tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, compiled)
-    if compiled:
-        faces, links_and_corners = kp.faces, kp.links_and_corners
-    else:
-        faces, links_and_corners = _faces, _links_and_corners
-    nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = faces(xz, r, tri, eps_m + l_m, a_min)
+    tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, steps)
+    nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = steps.faces(xz, r, tri, eps_m + l_m, a_min)
     t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
-    *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
+    *arrays, touches = steps.links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
                                          off_mesh[p_in >= 0], p_in[p_in >= 0])
     arrays = dict(zip(NETWORK_ARRAYS, arrays))
     links = arrays["links"]
@@ -543,6 +549,19 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
             ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
             he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, rattler_area, touches)
+
+
+class BuildSteps(NamedTuple):
+    """The parts of ``build_pores`` that have compiled twins (engines.compiled.pores.BUILD)."""
+
+    lifted_points: Callable      # (xz, r) -> the hull's points (N + 1, 3), or None
+    lower_triangles: Callable    # (hull, n, xz) -> the lower facets, counter-clockwise (T, 3), or None
+    missing_pairs: Callable      # (xz, r, reach, tri) -> the eq 28 pairs (M, 2) that are no edge
+    faces: Callable              # as _faces
+    links_and_corners: Callable  # as _links_and_corners
+
+
+NUMPY_BUILD = BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, _links_and_corners)
 
 
 def _mix64(v):
@@ -683,16 +702,15 @@ def _clip_areas(subj, clip):
     return np.where(count >= 3, 0.5 * np.sum(np.where(i < count[:, None], cr, 0.0), axis=1), 0.0)
 
 
-def pore_overlaps(old_net, new_net, xz, compiled=False):
+def pore_overlaps(old_net, new_net, xz):
     """Polygon overlap areas of the pores of two networks at positions xz (N, 2) [m].
 
     Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
     others are clipped against the nearby triangles of the other network (``_clip_areas``).
-    ``compiled``: by engines.compiled.pores.pore_overlaps (the same pairs, the areas summed in another order).
+    Compiled twin: engines.compiled.pores.REMESH.pore_overlaps (the same pairs, the areas summed in
+    another order).
     """
-    if compiled:
-        return kp.pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)
     n = len(xz)
     to, tn = old_net.tri, new_net.tri
 

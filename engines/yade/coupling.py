@@ -42,6 +42,7 @@ from yade.wrapper import (
 
 from engines.model import ground_motion, limits, pore_dem
 from engines.model import pores as pg
+from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
 from engines.model.pore_water import buoyancy
 from engines.reference.trajectory import Trajectory
@@ -111,7 +112,8 @@ def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=No
 
 class YadeCoupling:
     """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
-    between chunks of steps (see ``run``)."""
+    between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
+    or the water engine's model by compiled kernels, else their NumPy classes (engines.model)."""
 
     def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
         self.scene, self.packing = scene, packing
@@ -121,7 +123,7 @@ class YadeCoupling:
         wet = scene.water.enabled
         self.core = self.water_engine = None
         if self.law == "paper":
-            self.core = PoreDEM(scene, packing, compiled)
+            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene, packing)
             ties = self.core.ties
             x_only = ties.moving if ties is not None else None
             self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)

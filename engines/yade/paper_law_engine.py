@@ -1,9 +1,11 @@
 """The paper's contact law as a YADE engine (seed 000 §2); the per-step work is
-engines.model.paper_law.PaperLaw's, this module reads the centres in bulk, calls it and adds the forces.
+engines.model.paper_law.PaperLaw's (by its compiled twin engines.compiled.paper_law.PaperLaw unless
+``compiled=False``), this module reads the centres in bulk, calls it and adds the forces.
 """
 import numpy as np
 
 from engines.compiled import kernels
+from engines.compiled import paper_law as compiled_paper_law
 from engines.model.paper_law import PaperLaw
 
 
@@ -22,7 +24,7 @@ class PaperLawEngine:
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
-    engines.model.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
+    engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
     run after each step's forces are written.
     """
 
@@ -40,8 +42,9 @@ class PaperLawEngine:
         if core is None:
             if not O.dt > 0:
                 raise ValueError("set O.dt before creating the PaperLawEngine")
-            core = PaperLaw(settings, [b.shape.radius for b in bodies], dynamic, [b.state.mass for b in bodies],
-                            [b.state.inertia[1] for b in bodies], O.dt, compiled)
+            law = compiled_paper_law.PaperLaw if compiled else PaperLaw
+            core = law(settings, [b.shape.radius for b in bodies], dynamic, [b.state.mass for b in bodies],
+                       [b.state.inertia[1] for b in bodies], O.dt)
         self.core = core
         self._dynamic = np.flatnonzero(dynamic)
         self.forced = yade_io.Bodies(self.io.ids[dynamic])

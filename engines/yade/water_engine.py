@@ -16,7 +16,8 @@ Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.y
 rebuilds the pores when due (engines.model.water_model.rebuild_due), measures the void areas (eq 29),
 advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
 (eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
-itself is engines.model.water_model.WaterModel's (no YADE there).
+itself is engines.model.water_model.WaterModel's, by its compiled twin
+engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
 
 With ``settings.substep`` a water step above the Darcy limit is split into sub-steps; the engine
 prints the count when it first sub-steps and whenever the count doubles, and keeps
@@ -27,6 +28,7 @@ import time
 import numpy as np
 
 from engines.compiled import kernels
+from engines.compiled import water_model as compiled_water_model
 from engines.model import pore_water
 from engines.model import pores as pg
 from engines.model.water_model import WaterModel, steps_to_rebuild
@@ -66,8 +68,10 @@ class WaterEngine:
             code[[pos[i] for i in group]] = pg.WALL_CODES[name]
         if not O.dt > 0:
             raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
-        self.model = WaterModel(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
-                                rebuild_interval, water_interval, compiled, k0=O.iter)
+        self.compiled = compiled  # engines.compiled.water_model.WaterModel, else the NumPy one
+        model = compiled_water_model.WaterModel if compiled else WaterModel
+        self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
+                           water_interval, k0=O.iter)
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
         self.forced = yade_io.Bodies(ids[dynamic])
         self._dynamic = np.flatnonzero(dynamic)
@@ -102,7 +106,7 @@ class WaterEngine:
 
         from engines.yade import yade_io
         n, done = int(n), 0
-        fast = (stop is None and self.model.compiled and yade_io.BACKEND == "yadebulk"
+        fast = (stop is None and self.compiled and yade_io.BACKEND == "yadebulk"
                 and not any(isinstance(e, PyRunner) for e in O.engines))
         due, errors = self.due, yade_io.ERRORS
         while done < n:
@@ -161,7 +165,7 @@ class WaterEngine:
         self.k = O.iter
         h = m.water_interval * O.dt
         rebuild = m.rebuild_due(self.k)
-        if m.compiled and not rebuild:  # read, water, write: one compiled call
+        if self.compiled and not rebuild:  # read, water, write: one compiled call
             args = m.kernel_args(h)
             _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
                                         self._forces_step_args(args))

@@ -6,13 +6,14 @@ cancel to ~0 from large contact forces; its round-off is relative to those).
 import numpy as np
 import pytest
 
-from engines.compiled import kernels
+from engines.compiled import contact, kernels, paper_law, water_model
+from engines.model import contact as model_contact
+from engines.model import paper_law as model_paper_law
 from engines.model import pores as pg
-from engines.model.contact import ContactLaw, ContactSettings
-from engines.model.paper_law import PaperLaw
+from engines.model import water_model as model_water_model
+from engines.model.contact import ContactSettings
 from engines.model.pore_water import WaterSettings
 from engines.model.side_walls import SideWallTies
-from engines.model.water_model import WaterModel
 from engines.yade.deposition import wall_box
 from packing.layouts import hex_lattice, random_discs
 
@@ -47,7 +48,7 @@ def test_contact_law_compiled_equals_numpy(spring):
     s = ContactSettings(spring=spring, kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0,
                         eps_m=0.01 if spring == "b" else 0.0)
     mobile = walls == 0
-    laws = [ContactLaw(s, r, mobile, compiled=c) for c in (False, True)]
+    laws = [law(s, r, mobile) for law in (model_contact.ContactLaw, contact.ContactLaw)]
     x_prev = xz.copy()
     n_sep = 0
     for step in range(60):
@@ -68,7 +69,7 @@ def test_contact_law_compiled_equals_numpy(spring):
         x_prev = x
     assert laws[0].touching.sum() > 50 and n_sep > 10  # the test went through contacts and separations
     if spring in ("c", "d"):
-        assert np.any(laws[0].state[:, kernels.E_N] == s.f_max)  # and the cap
+        assert np.any(laws[0].state[:, model_contact.E_N] == s.f_max)  # and the cap
 
 
 def test_paper_law_step_compiled_equals_numpy():
@@ -79,7 +80,7 @@ def test_paper_law_step_compiled_equals_numpy():
     mobile = walls == 0
     mass = np.pi * r**2
     s = ContactSettings(spring="d", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0, eps_m=0.01)
-    laws = [PaperLaw(s, r, mobile, mass, 0.5 * mass * r**2, 1e-3, compiled=c) for c in (False, True)]
+    laws = [law(s, r, mobile, mass, 0.5 * mass * r**2, 1e-3) for law in (model_paper_law.PaperLaw, paper_law.PaperLaw)]
     x = xz.copy()
     n_fixes = 0
     for step in range(40):
@@ -165,8 +166,8 @@ def test_water_model_compiled_equals_numpy(case):
     pressure_forces over moving discs, rebuilds included; one pore pinched for a while."""
     xz, r, walls, rng = _column(n=250, gap=0.0)
     s = SETTINGS[case]
-    models = [WaterModel(s, r, walls, xz, 0.0, 0.3, 1e-4, rebuild_interval=7, compiled=c, log=lambda m: None)
-              for c in (False, True)]
+    models = [model(s, r, walls, xz, 0.0, 0.3, 1e-4, rebuild_interval=7, log=lambda m: None)
+              for model in (model_water_model.WaterModel, water_model.WaterModel)]
     pinched = int(np.flatnonzero(~models[0].water.net.pore_surface)[0])
     x = xz.copy()
     for k in range(20):
@@ -215,7 +216,7 @@ def test_tie_forces_compiled_equals_numpy():
 def test_refuses_a_water_step_above_the_darcy_limit():
     from engines.model.limits import DarcyStabilityError
     xz, r, walls, _ = _column(n=120, gap=0.0)
-    m = WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3, substep=False), r, walls, xz, 0.0, 0.3, 1e-3)
+    m = water_model.WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3, substep=False), r, walls, xz, 0.0, 0.3, 1e-3)
     with pytest.raises(DarcyStabilityError, match="substep"):
         m.step(0, xz)
 

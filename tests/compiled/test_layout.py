@@ -11,10 +11,10 @@ import pytest
 
 from engines.compiled import kernels
 from engines.compiled.layout import Layout
+from engines.compiled.pore_dem import PoreDEM
+from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
-from engines.model.pore_dem import PoreDEM
 from engines.model.pore_water import WaterSettings
-from engines.model.water_model import WaterModel
 from tests.model.test_pore_dem import R, fused_step, moving_positions, wet_box, wet_scene
 
 BUFFERS = ("WATER_INTS", "WATER_FLOATS")

@@ -113,7 +113,7 @@ def _build(name, **kw):
 
 @pytest.mark.parametrize("name", PACKINGS)
 def test_compiled_build_gives_the_same_network(name):
-    assert_same_network(_build(name, compiled=True), _build(name))
+    assert_same_network(_build(name, steps=kp.BUILD), _build(name))
 
 
 def test_the_packings_exercise_every_branch():
@@ -166,7 +166,7 @@ def test_compiled_rules_give_the_same_pressures(seed, jitter):
     U_old = rng.standard_normal(old.n_pores)
     valid = rng.random(old.n_pores) > 0.2  # pinched old pores pass on nothing
     U, rule = pressures_by_rule(old, U_old, valid, new)
-    Uc, rule_c = pressures_by_rule(old, U_old, valid, new, compiled=True)
+    Uc, rule_c = pressures_by_rule(old, U_old, valid, new, kp.REMESH)
     assert_same(rule_c, rule, "rule")
     assert_same(Uc, U, "U")
     assert set(np.unique(rule)) >= {1, 2, 3}
@@ -185,7 +185,7 @@ def test_spread_reaches_pores_far_from_any_known_one_in_rounds():
 @pytest.mark.parametrize("jitter", [0.0, 0.02, 0.3, 3.0])
 def test_compiled_overlaps_are_the_same(jitter):
     old, new, xz2, r, _ = _moved(3, jitter)
-    for got, want in zip(pg.pore_overlaps(old, new, xz2, compiled=True), pg.pore_overlaps(old, new, xz2)):
+    for got, want in zip(kp.REMESH.pore_overlaps(old, new, xz2), pg.pore_overlaps(old, new, xz2)):
         assert_same(got, want, "overlaps")
 
 
@@ -206,9 +206,9 @@ def test_compiled_remesh_moves_the_same_water(transfer):
     A_old, A_new = pg.measure(old, xz2, r).void_area, pg.measure(new, xz2, r).void_area
     W0 = A_old * (1 + 0.1 * rng.random(old.n_pores))
     waters = []
-    for compiled in (False, True):
+    for steps in (None, kp.REMESH):
         w = PoreWater(old, A_old, WaterSettings(E_w=2400.0, k1=1e3, k2=1e2, transfer=transfer), W=W0)
-        counts = w.remesh(new, A_new, A_old, xz=xz2, compiled=compiled)
+        counts = w.remesh(new, A_new, A_old, xz=xz2, steps=steps)
         waters.append((w, counts))
     (w, counts), (wc, counts_c) = waters
     assert counts_c == counts and counts["b"] > 0
@@ -224,6 +224,6 @@ def test_a_wall_code_out_of_range_is_refused():
     xz, r, _, eps_m, l_m = PACKINGS["hex"]()
     walls = np.zeros(len(r), np.int64)
     walls[5] = 7
-    for compiled in (False, True):
+    for steps in (None, kp.BUILD):
         with pytest.raises(ValueError, match="walls: codes must be 0-3, got 7"):
-            pg.build_pores(xz, r, eps_m, l_m, walls=walls, compiled=compiled)
+            pg.build_pores(xz, r, eps_m, l_m, walls=walls, steps=steps)

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from engines.compiled import contact as compiled_contact
 from engines.model.contact import (
     ContactLaw,
     ContactSettings,
@@ -289,14 +290,14 @@ def test_a_disc_at_rest_left_by_a_receding_wall_is_not_scaled():
     np.testing.assert_array_equal(fix[0], [0.0, 0.4])
 
 
-@pytest.mark.parametrize("compiled", [False, True])
-def test_discs_exactly_touching_are_in_contact(compiled):
+@pytest.mark.parametrize("law_class", [ContactLaw, compiled_contact.ContactLaw])
+def test_discs_exactly_touching_are_in_contact(law_class):
     """Eq 1: contact when r_i + r_j >= R_ij, so discs exactly touching (overlap 0, exact in binary)
     and approaching at 0.1 m/s feel the dashpot eta_n du_n / dt (the spring is still 0) and count
     as touching."""
     r = np.array([0.5, 0.5])
-    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=2.0, ks=0.0, eta_s=0.0), r,
-                     mobile=np.array([True, True]), compiled=compiled)
+    law = law_class(ContactSettings(spring="a", kn=1e6, eta_n=2.0, ks=0.0, eta_s=0.0), r,
+                     mobile=np.array([True, True]))
     dt = 1e-6
     xz = np.array([[0.0, 0.0], [1.0, 0.0]])
     F, _, _ = law.forces(xz, np.array([[1e-7, 0.0], [0.0, 0.0]]), np.zeros(2), dt)
@@ -333,13 +334,13 @@ def test_separation_pattern_c_with_the_wall_first_in_the_pair():
     assert fix[2][1] - fix[1][1] == pytest.approx(e * 1.0, rel=1e-12)      # i leaves the adjusted j at e Vn_ji
 
 
-@pytest.mark.parametrize("compiled", [False, True])
-def test_eps_m_wider_than_the_skin_is_in_the_pair_list(compiled):
+@pytest.mark.parametrize("law_class", [ContactLaw, compiled_contact.ContactLaw])
+def test_eps_m_wider_than_the_skin_is_in_the_pair_list(law_class):
     """Eq 26 with eps_m larger than the neighbour list's skin (0.25 r): two discs 0.35 mm apart with
     eps_m = 0.4 mm touch from the first step, with the spring kn (r_i + r_j + eps_m - R)."""
     r = np.array([1e-3, 1e-3])
-    law = ContactLaw(ContactSettings(spring="a", kn=1e6, eta_n=0.0, eps_m=0.4e-3), r,
-                     mobile=np.array([True, True]), compiled=compiled)
+    law = law_class(ContactSettings(spring="a", kn=1e6, eta_n=0.0, eps_m=0.4e-3), r,
+                     mobile=np.array([True, True]))
     xz = np.array([[0.0, 0.0], [2.35e-3, 0.0]])
     F, _, _ = law.forces(xz, np.zeros((2, 2)), np.zeros(2), 1e-6)
     np.testing.assert_array_equal(law.touch_count(), [1, 1])
@@ -355,8 +356,8 @@ def test_settings_accept_any_positive_stiffness_and_refuse_a_zero_force_cap():
             ContactSettings(spring=spring, f_max=0.0)
 
 
-@pytest.mark.parametrize("compiled", [False, True])
-def test_touching_at_is_what_a_step_would_give_without_taking_it(compiled):
+@pytest.mark.parametrize("law_class", [ContactLaw, compiled_contact.ContactLaw])
+def test_touching_at_is_what_a_step_would_give_without_taking_it(law_class):
     """ContactLaw.touching_at: the touching pairs, normal and elastic shear forces that ``forces``
     would give at the next positions (a stepped copy of the law), also when the pair list is
     stale there and a pair it did not list touches; the law itself is left as it was (state,
@@ -367,7 +368,7 @@ def test_touching_at_is_what_a_step_would_give_without_taking_it(compiled):
     r = 1e-3 * (0.9 + 0.1 * rng.random(n))
     xz = np.column_stack([np.arange(n) % 4 * 1.9e-3, np.arange(n) // 4 * 1.9e-3])
     s = ContactSettings(spring="d", kn=1e5, eta_n=0.3, ks=4e4, eta_s=0.1, mu=0.5, f_max=2.0)
-    law = ContactLaw(s, r, mobile=np.arange(n) >= 4, compiled=compiled)
+    law = law_class(s, r, mobile=np.arange(n) >= 4)
     dt, x_prev = 1e-6, xz
     for step in range(6):
         x = x_prev + 2e-5 * rng.standard_normal(xz.shape)

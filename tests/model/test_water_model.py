@@ -48,7 +48,7 @@ def test_steps_to_rebuild_counts_to_the_step_at_which_rebuild_due_holds():
 def test_the_model_records_the_step_of_its_last_build():
     sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 4, "water_interval": 1}})
     pk = Packing.load(sc.packing.file)
-    wm = water_model(sc, pk, compiled=False)
+    wm = water_model(sc, pk)
     assert isinstance(wm, WaterModel) and wm.k_built == 0
     for k in range(10):
         wm.step(k, pk.xz)

@@ -10,6 +10,7 @@ import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
 
 from engines import ROOT
+from engines.compiled.water_model import WaterModel
 from engines.model import ground_motion as gm
 from engines.model import pores as pg
 from engines.model.observe import box_window, porosity
@@ -126,7 +127,7 @@ def test_drained_side_flux_in_the_water_engine():
     for case, k3 in ((3, 1e3), (1, 0.0)):
         sc = preset(case)
         pk = packing_of(sc)
-        wm = water_model(sc, pk)
+        wm = water_model(sc, pk, WaterModel)
         w, s = wm.water, sc.water
         A = pg.measure(w.net, pk.xz, pk.r).void_area
         U0 = 100.0
@@ -196,7 +197,7 @@ def test_liquefaction_script_refuses_in_one_line(tmp_path, capsys, args, match):
 def test_tie_time_step_is_refused_before_the_run(tmp_path):
     """dt above sqrt(m_min / k's) of the side-wall ties: refused by preflight (one line naming
     ks_wall, nothing written) and by the engine at construction."""
-    from engines.model.pore_dem import PoreDEM
+    from engines.compiled.pore_dem import PoreDEM
     from engines.run.preflight import InputError, preflight
     sc = preset(1, contact={"ks_wall": 1e11})
     pk = packing_of(sc)

@@ -2,10 +2,11 @@
 import numpy as np
 import pytest
 
+from engines.compiled.pore_dem import PoreDEM
 from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.ground_motion import BaseMotion, input_acceleration
 from engines.model.observe import box_window, porosity
-from engines.model.pore_dem import PoreDEM, disc_masses
+from engines.model.pore_dem import disc_masses
 from engines.model.side_walls import SideWallTies
 from engines.run import scene as scenes
 from engines.yade.deposition import outside_box

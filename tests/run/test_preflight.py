@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from engines import ROOT
+from engines.compiled.pore_dem import PoreDEM
 from engines.model.limits import DarcyStabilityError, critical_time_step
-from engines.model.pore_dem import PoreDEM, disc_masses
+from engines.model.pore_dem import disc_masses
 from engines.model.time_step import limits
 from engines.run import scene as scenes
 from engines.run.preflight import InputError, check_output_dir, number, preflight

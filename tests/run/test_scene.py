@@ -4,7 +4,7 @@ import os
 import numpy as np
 import pytest
 
-from engines.model.pore_dem import PoreDEM
+from engines.compiled.pore_dem import PoreDEM
 from engines.run import scene as scenes
 from packing.packing import Packing
 

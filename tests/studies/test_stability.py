@@ -143,7 +143,7 @@ def test_substepping_by_default_keeps_the_water_bounded_and_conserved(qs, tmp_pa
     dt / n: the water equals a strict run at dt / n step for step, and the balance closes."""
     import math
 
-    from engines.model.pore_dem import PoreDEM
+    from engines.compiled.pore_dem import PoreDEM
 
     sc, pk = qs
     s = sc.with_overrides({"water": {"k1": 1e6}, "numerics": {"dt": 1e-6, "rebuild_interval": 10 ** 6}})

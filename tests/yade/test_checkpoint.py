@@ -15,7 +15,7 @@ import pytest
 from yade import O
 
 from engines import ROOT
-from engines.model.water_model import WaterModel
+from engines.compiled.water_model import WaterModel
 from engines.run import runner
 from engines.run import scene as scenes
 from engines.run.runner import resume_run, run_scene

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
 
+from engines.compiled.water_model import WaterModel
 from engines.model import pore_water
-from engines.model.water_model import WaterModel
 from engines.run import scene as scenes
 from engines.run.runner import run_scene
 from engines.yade.coupling import YadeCoupling, simulate

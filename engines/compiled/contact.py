@@ -1,0 +1,52 @@
+"""The paper's contact law with its per-step loop compiled: engines.model.contact.ContactLaw, whose
+NumPy arithmetic kernels.contact_forces repeats (tests/compiled/test_kernels.py). No YADE."""
+import numpy as np
+
+from engines.compiled import kernels
+from engines.model import contact
+
+
+class ContactLaw(contact.ContactLaw):
+    """engines.model.contact.ContactLaw, stepped by kernels.contact_forces; the F, M that ``forces``
+    returns are buffers reused by the next call."""
+
+    def __init__(self, settings, r, mobile, skin=None):
+        super().__init__(settings, r, mobile, skin)
+        self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
+        self._spring = kernels.SPRING_CODE[settings.spring]
+        self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes
+        self._args = None
+
+    def kernel_args(self, dt):
+        """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
+        of dt [s]."""
+        if self._prm[-1] != dt:
+            self._prm = kernels.contact_params(self.s, dt)
+            self._args = None
+        if self._args is None:
+            self._args = kernels.CONTACT.values(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
+                                                spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
+                                                lost=self._lost)
+        return self._args
+
+    def _max_sq_moved(self, xz):
+        return kernels.max_sq_displacement(xz, self.xz_list)
+
+    def _update_list(self, xz):
+        if not super()._update_list(xz):
+            return False
+        self._lost = np.zeros(len(self.i), np.int64)
+        self._args = None
+        return True
+
+    def forces(self, xz, du, dpsi, dt):
+        self._update_list(xz)
+        n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
+        return self._F, self._M, self._separations(xz, self._lost[:n_lost])
+
+    def _stepped_state(self, xz, du, dpsi, dt, i, j, state):
+        new, n = state.copy(), self.n
+        kernels.contact_forces(xz, du, dpsi, *kernels.CONTACT.values(
+            r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
+            F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
+        return new

@@ -1,0 +1,134 @@
+"""The pores and water of N discs stepped by compiled kernels: engines.model.water_model.WaterModel
+with its pore builds and re-meshing by engines.compiled.pores (BUILD, REMESH) and its water steps by
+kernels.water_step (the pore measure, the Darcy step, eq 32, 33 in one call). No YADE."""
+import numpy as np
+
+from engines.compiled import kernels
+from engines.compiled import pores as cp
+from engines.model import limits, water_model
+from engines.model.limits import DarcyStabilityError
+
+
+class WaterModel(water_model.WaterModel):
+    """engines.model.water_model.WaterModel by compiled kernels (tests/compiled/: the same results);
+    the network's arrays are packed into the buffers of kernels.water_step at each build."""
+
+    build_steps, remesh_steps = cp.BUILD, cp.REMESH
+
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
+                 log=print, k0=0):
+        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0)
+        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
+        self._buffers()
+
+    def _buffers(self):
+        """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
+        net, n = self.water.net, len(self.r)
+        n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
+        surface, drained, bottom = self.water._boundary_masks()
+        ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
+                "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
+                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
+        floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
+                  "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
+                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
+                  "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
+                  "lam": np.zeros(2), "has_q_prev": 0.0}  # the rest: outputs and scratch of the kernels, by length
+        for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
+                            ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
+            floats.update((name, np.zeros(size)) for name in names.split())
+        self._ints, self._i_at = kernels.WATER_INTS.pack(ints, np.int64)
+        self._floats, self._f_at = kernels.WATER_FLOATS.pack(floats, float)
+        self._q_prev = np.zeros(n_t)  # eq 46 running throat flows, while PoreWater.q_prev is None
+        self._views()
+
+    def _views(self):
+        """Views of the float buffer read around each water step; kernel_args built again."""
+        self._lam, self._balance, self._has_q_prev = (self._part(name) for name in ("lam", "balance", "has_q_prev"))
+        self._args_key = None
+
+    def __getstate__(self):  # a pickle copies views: leave them out, make them again on loading
+        state = dict(self.__dict__)
+        for name in ("_lam", "_balance", "_has_q_prev", "_args", "_args_key"):
+            state.pop(name, None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._views()
+
+    def _part(self, name):
+        """A view of the part ``name`` of the float buffer of kernels.water_step."""
+        return kernels.WATER_FLOATS.part(self._floats, self._f_at, name)
+
+    def rebuild(self, xz, k=None):
+        super().rebuild(xz, k)
+        self._buffers()
+
+    def _void_area(self, net, xz):
+        """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
+        n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
+        void = np.empty(n_p)
+        kernels.measure(xz, self.r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
+                        net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
+                        np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
+                        np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
+        return void
+
+    def advance(self, h, xz):
+        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
+        self.finish_kernel_step(h, kernels.water_step(xz, *self.kernel_args(h)))
+
+    def kernel_args(self, h):
+        """The arguments of kernels.water_step after xz (kernels.WATER), for a water step of h [s],
+        with the buffer's eq 46 flag "has_q_prev" set from the water; the same tuple
+        while h, the water's arrays and the eq 46 state stay (the tuple holds the arrays, so their
+        ids are not reused while it is kept)."""
+        w, s = self.water, self.settings
+        self._has_q_prev[0] = w.q_prev is not None
+        key = (h, id(w.W), id(w.A_prev), id(w.q_prev))
+        if self._args_key != key:
+            q_prev = self._q_prev if w.q_prev is None else w.q_prev
+            self._args = kernels.WATER.values(h=h, W=w.W, A_prev=w.A_prev, q_prev=q_prev, smoothing=s.smoothing,
+                                              substep=s.substep, F_water=self.F, ints=self._ints, i_at=self._i_at,
+                                              floats=self._floats, f_at=self._f_at)
+            self._args_key = key
+        return self._args
+
+    def finish_kernel_step(self, h, n_sub):
+        """Book a water_step(xz, *kernel_args(h)) that returned n_sub: the Darcy limit, sub-steps,
+        balance; raise DarcyStabilityError if it refused or a pore fell dry."""
+        w = self.water
+        self.after_kernel_steps()
+        lam = self._lam
+        if n_sub != 1:
+            n = self._substeps(h)  # raises above the limit without settings.substep
+            if n_sub < 0:
+                raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of {h / n:.3e} s")
+            self.last_limit = limits.gershgorin_limit(lam[1])  # at the last sub-step, as PoreWater reports it
+        inflow, surface, side = self._balance.tolist()
+        b = w.balance
+        b.inflow += inflow
+        b.surface_outflow += surface
+        b.side_outflow += side
+
+    def after_kernel_steps(self):
+        """After water steps run by kernels with the arguments of ``kernel_args``: the eq 46 state
+        they hold and the Darcy limit of the last one."""
+        if self.settings.smoothing:
+            self.water.q_prev = self._args[kernels.WATER.q_prev]
+        self.last_limit = limits.gershgorin_limit(self._lam[0])
+
+    def _substeps(self, h):
+        """The sub-steps a water step of h [s] needs (engines.model.limits.substeps: refused without
+        settings.substep); logged when sub-stepping starts and whenever the count doubles."""
+        n = limits.substeps(h, self.last_limit, self.settings.substep, self.settings.E_w)
+        if n == 1:
+            return 1
+        if n >= 2 * max(self.substeps_max, 1):
+            self.log(f"water: step {h:.3e} s > Darcy limit {self.last_limit:.3e} s: {n} sub-steps per water step "
+                     f"(each costs one flow and one update kernel pass, about {limits.SUBSTEP_COST:.0%} of a "
+                     f"water step)")
+        self.substeps_max = max(self.substeps_max, n)
+        self.substeps_total += n
+        return n
