@@ -29,7 +29,10 @@ the YADE law skips a-c and e):
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
 Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py; a scene's
 limits at its start and dt = "auto": model/time_step.py.
-Observables (window porosity, block means): model/observe.py.
+Observables: the window porosity and block means (model/observe.py); block pressures from one
+measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
+without taking it (ContactLaw.touching_at: the bottom wall's normal force).
+Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
 
 Where to add ...
   a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
