@@ -281,3 +281,14 @@ def test_the_vtk_series_of_a_run_holds_the_numbers_of_its_history(full_run):
         assert f_n[bottom].mean() == pytest.approx(h["fn_bottom_mean"][k], rel=1e-8)
         checked_rows += 1
     assert checked_rows == 3
+
+
+def test_a_checkpoint_of_another_format_is_refused_by_name(tmp_path):
+    """A checkpoint written before the classes it pickles moved (format 1: the model classes ran
+    their compiled twins) would resume on other classes: it is refused with the format named."""
+    import pickle
+    path = tmp_path / checkpoint.NAME
+    with open(path, "wb") as f:
+        pickle.dump({"format": checkpoint.FORMAT - 1, "step": 10, "info": {}}, f)
+    with pytest.raises(checkpoint.CheckpointError, match=f"not a checkpoint of format {checkpoint.FORMAT}"):
+        checkpoint.read_info(str(path))
