@@ -1,10 +1,13 @@
 """The sweep runner (engines.run.sweep) from the command line: jobs on the local cores or on a
 Dask cluster, each in its own directory, resumable.
 
-Command line:
-    yade -n -x yade_scripts/sweep.py --out DIR --table T.table --script S.py [--workers N]
+Command line (under /usr/bin/python3, or yade -n -x, alike):
+    /usr/bin/python3 yade_scripts/sweep.py --out DIR --table T.table --script S.py [--workers N]
                                            [--scheduler ADDR] [--no-resume]
-    yade -n -x yade_scripts/sweep.py --out DIR --jobs jobs.json ...   # [{"name", "argv", "env"}]
+    /usr/bin/python3 yade_scripts/sweep.py --out DIR --jobs jobs.json ...   # [{"name", "argv", "env", "timeout"}]
+
+Each job runs in the directory the sweep was started from (relative paths in its command line
+and --script resolve there) and writes into its own directory DIR/NAME.
 """
 import json
 import os

@@ -25,6 +25,7 @@ import time
 
 import numpy as np
 
+from engines.run.command_line import batch_out
 from engines.run.preflight import ArgumentParser, number, output_dir
 
 PERCENT_PER_MIN = 1.0 / 6000.0  # 1 %/min in 1/s
@@ -114,7 +115,7 @@ def table_argv(ap):
         if v is not None:
             argv += [opt, ",".join(map(str, v)) if isinstance(v, (tuple, list)) else str(v)]
     if table.out is None:
-        argv += ["--out", os.environ.get("SWEEP_JOB_DIR") or os.path.join("out", "biaxial-batch", O.tags["description"])]
+        argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), O.tags["description"])]
     return argv
 
 

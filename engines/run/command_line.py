@@ -12,7 +12,8 @@ Under yade-batch (the YADE_BATCH variable names table:line) the job's line is re
 (``duration``, ``dt``, ``case``, ``vtk``: true/false) gives that option, a column ``TABLE.FIELD``
 (e.g. ``water.k1``) gives ``--set TABLE.FIELD=VALUE``. Values are Python expressions, as
 readParamsFromTable reads them (quote strings: 'my.toml'). Without an ``out`` column each job
-writes to out/batch/<the job's description>, the name yade-batch gives its log.
+writes to the sweep runner's job directory (engines.run.sweep; SWEEP_JOB_DIR), else to
+out/batch/<the job's description>, the name yade-batch gives its log.
 """
 import argparse
 import os
@@ -21,6 +22,7 @@ import sys
 import tomllib
 
 from engines.run.preflight import InputError, check_output_dir, number, output_dir, preflight
+from engines.run.sweep import JOB_DIR
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -55,8 +57,8 @@ def resume_dir(path):
 
 def add_run_arguments(ap):
     """The options every scene script has (see the module docstring)."""
-    ap.add_argument("--out", type=output_dir, help=f"output directory (required; under yade-batch "
-                                                   f"default {BATCH_OUT}/<job description>)")
+    ap.add_argument("--out", type=output_dir, help=f"output directory (required; a table's job's default: the "
+                                                   f"sweep runner's job directory, or {BATCH_OUT}/<job description>)")
     ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
                     help="simulated time [s] (default: the scene's; with --resume: a later end)")
     ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
@@ -84,6 +86,12 @@ def overrides_of(args):
 def batch_job():
     """'table:line' of this yade-batch job, or None (yade-batch of a lone script sets YADE_BATCH empty)."""
     return os.environ.get("YADE_BATCH") or None
+
+
+def batch_out(root, description):
+    """The output directory of a table's job without an ``out`` column: the sweep runner's job
+    directory, or under yade-batch ROOT/DESCRIPTION."""
+    return os.environ.get(JOB_DIR) or os.path.join(root, description.replace(os.sep, "_"))
 
 
 def _as_argument(value):
@@ -121,7 +129,7 @@ def job_argv(ap, argv):
             ap.error(f"yade-batch table {batch_job()}: column {name!r} is neither an option of this script "
                      f"nor a scene field TABLE.FIELD")
     if "out" not in values and "resume" not in values:
-        args += ["--out", os.path.join(BATCH_OUT, O.tags["description"].replace(os.sep, "_"))]
+        args += ["--out", batch_out(BATCH_OUT, O.tags["description"])]
     return args + list(argv)
 
 

@@ -7,19 +7,24 @@ local cores or on a Dask distributed cluster, resumable.
     records = run_sweep(jobs, "out/study", workers=2, scheduler=None, resume=True)
 
 A job is a name and a command line; ``{out}`` in an argument becomes the job's directory
-``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR). Each job writes
-there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
-"failed"), return code, wall and CPU seconds, command, host, and the tail of stderr. ``run_sweep``
-returns the records of all jobs in the order given, prints one line per finished job and a
-summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job whose job.json says
-"ok" for the same command is not run again; failed, interrupted or changed jobs are.
+``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR, where a scene
+script run from a table writes). A job runs in the directory the sweep was started from,
+wherever it runs, so relative paths in its command line mean the same on every worker. Each job
+writes there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
+"failed"), return code, wall and CPU seconds, command, working directory, host, and the tail of
+stderr. ``run_sweep`` returns the records of all jobs in the order given, prints one line per
+finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job
+whose job.json says "ok" for the same command is not run again; failed, interrupted or changed
+jobs are.
 
 Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
 is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the same jobs run
-on its workers, which need this project importable (PYTHONPATH) and ROOT on a shared file
-system. YADE's own parameter tables (yade-batch's format) become jobs with ``jobs_from_table``:
-one job per table line, run as yade-batch runs it (YADE_BATCH=table:line, read by the script
-with ``yade.utils.readParamsFromTable``).
+on its workers, which need ROOT and the sweep's directory on a shared file system, not this
+project on their path (the runner is sent to them by value). YADE's own parameter tables
+(yade-batch's format) become jobs with ``jobs_from_table``: one job per table line, run as
+yade-batch runs it (YADE_BATCH=table:line, read by the script with
+``yade.utils.readParamsFromTable``). The module imports nothing of YADE: the sweep runs under a
+plain ``python3``; YADE's table reader runs in a ``yade -n`` process.
 
 The command line is yade_scripts/sweep.py.
 """
@@ -28,6 +33,8 @@ import os
 import re
 import socket
 import subprocess
+import sys
+import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -35,6 +42,7 @@ from dataclasses import dataclass, field
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
+JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
 
 
 @dataclass(frozen=True)
@@ -75,10 +83,10 @@ def read_record(root, name):
         return None
 
 
-def _run_timed(cmd, stdout, stderr, env, timeout):
-    """Run ``cmd`` to its end: (return code, CPU seconds it used (user + system, with the children
-    it waited for), whether it was killed at ``timeout`` seconds)."""
-    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env)
+def _run_timed(cmd, stdout, stderr, env, timeout, cwd):
+    """Run ``cmd`` in ``cwd`` to its end: (return code, CPU seconds it used (user + system, with
+    the children it waited for), whether it was killed at ``timeout`` seconds)."""
+    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env, cwd=cwd)
     killed = threading.Event()
 
     def kill():
@@ -97,22 +105,29 @@ def _run_timed(cmd, stdout, stderr, env, timeout):
     return proc.returncode, usage.ru_utime + usage.ru_stime, killed.is_set()
 
 
-def run_job(job, root):
-    """Run one job in its directory (blocking); write and return its record. Runs wherever it is
-    called: in a local thread or on a Dask worker."""
+def _environment(extra):
+    """This process's environment with ``extra``; with HOME, which YADE needs (its config folder)
+    and a clean environment (env -i) or a service's worker lacks."""
+    return {"HOME": os.path.expanduser("~"), **os.environ, **extra}
+
+
+def run_job(job, root, cwd=None):
+    """Run one job (blocking) in the directory ``cwd`` (None: this process's), its outputs in its
+    own directory under ``root``; write and return its record. Runs wherever it is called: in a
+    local thread or on a Dask worker."""
     out = os.path.abspath(os.path.join(root, job.name))
     os.makedirs(out, exist_ok=True)
     cmd = job.command(out)
-    rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "host": socket.gethostname(),
-           "started": time.time()}
+    rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "cwd": cwd,
+           "host": socket.gethostname(), "started": time.time()}
     _write_json(os.path.join(out, "job.json"), rec)
-    env = {**os.environ, **job.env, "SWEEP_JOB_DIR": out}
+    env = _environment({**job.env, JOB_DIR: out})
     t0 = time.time()
     err_path = os.path.join(out, "stderr.log")
     cpu_s, note = 0.0, ""
     try:
         with open(os.path.join(out, "stdout.log"), "w") as so, open(err_path, "w") as se:
-            rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout)
+            rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout, cwd)
         if timed_out:
             rc, note = -9, f"timeout after {job.timeout} s"
     except OSError as e:
@@ -123,6 +138,16 @@ def run_job(job, root):
                finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
     _write_json(os.path.join(out, "job.json"), rec)
     return rec
+
+
+def _fields(job):
+    """A job as built-in types, which a worker unpickles without this module."""
+    return {"name": job.name, "argv": job.argv, "env": dict(job.env), "timeout": job.timeout}
+
+
+def _run_fields(fields, root, cwd):
+    """run_job of the job ``_fields`` gave (on a Dask worker)."""
+    return run_job(Job(**fields), root, cwd)
 
 
 def is_done(job, root):
@@ -145,6 +170,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     if not (isinstance(workers, int) and workers >= 1):
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
     os.makedirs(root, exist_ok=True)
+    root, cwd = os.path.abspath(root), os.getcwd()
     log = log or (lambda *a: None)
     t0 = time.time()
     kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
@@ -165,18 +191,20 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
 
     if scheduler is None:
         with ThreadPoolExecutor(max_workers=workers) as pool:
-            futures = {pool.submit(run_job, j, root): j for j in todo}
+            futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
             for fut in as_completed(futures):
                 finished(futures[fut], fut)
     elif todo:
+        import cloudpickle
         from distributed import Client
         from distributed import as_completed as dask_completed
 
+        # the workers get this module's functions by value: they need not import the project
+        cloudpickle.register_pickle_by_value(sys.modules[__name__])
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
-            root_abs = os.path.abspath(root)
-            futures = {client.submit(run_job, j, root_abs, key=f"sweep-{j.name}-{time.time_ns()}", pure=False): j
-                       for j in todo}
+            futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
+                                     pure=False): j for j in todo}
             for fut in dask_completed(list(futures)):
                 finished(futures[fut], fut)
         finally:
@@ -187,7 +215,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         rec = dict(kept[j.name], kept=True) if j.name in kept else done[j.name]
         records.append(rec)
     failed = [r["name"] for r in records if r["status"] != "ok"]
-    summary = {"root": os.path.abspath(root), "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
+    summary = {"root": root, "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
                "wall_s": time.time() - t0, "jobs": records}
     _write_json(os.path.join(root, "sweep.json"), summary)
     log(format_summary(records))
@@ -212,11 +240,28 @@ def jobs_from_table(table, script, yade=("yade", "-n")):
     """Jobs from a yade-batch parameter table: one per line, named by its description (the
     ``description`` column, or YADE's synthesised name=value list), run as ``yade -x script``
     with YADE_BATCH=table:line, so the script reads its line by readParamsFromTable."""
-    from yade.utils import TableParamReader  # YADE's own reader of the format
-
     table = os.path.abspath(table)
     jobs = []
-    for line, params in sorted(TableParamReader(table).paramDict().items()):
+    for line, params in sorted(read_table(table, yade).items()):
         name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params["description"])
         jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
     return jobs
+
+
+def read_table(table, yade=("yade", "-n")):
+    """{line number: {column: text}} of a yade-batch table, read by YADE's own TableParamReader
+    in a ``yade -x`` process running this file (so this process needs no YADE)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        result = os.path.join(tmp, "table.json")
+        run = subprocess.run([*yade, "-x", os.path.abspath(__file__), table, result], capture_output=True, text=True,
+                             env=_environment({}))
+        if run.returncode != 0 or not os.path.exists(result):
+            why = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}"])[-1]
+            raise ValueError(f"{table}: YADE could not read the table: {why}")
+        with open(result) as f:
+            return {int(line): params for line, params in json.load(f).items()}
+
+
+if __name__ == "__main__":  # under yade -x, from read_table: TABLE RESULT.json
+    from yade.utils import TableParamReader  # YADE's own reader of the format
+    _write_json(sys.argv[2], TableParamReader(sys.argv[1]).paramDict())

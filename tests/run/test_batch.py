@@ -41,6 +41,15 @@ def test_table_columns_become_options_and_scene_fields(tmp_path, monkeypatch):
     assert job_argv(quicksand().parser(), ["--case", "1"]) == ["--case", "1"]  # outside yade-batch: argv as given
 
 
+def test_under_the_sweep_runner_a_job_writes_into_its_job_directory(tmp_path, monkeypatch):
+    table = tmp_path / "t.table"
+    table.write_text("duration\n0.002\n")
+    monkeypatch.setenv("SWEEP_JOB_DIR", str(tmp_path / "job"))
+    assert job_args(monkeypatch, table, 2).out == str(tmp_path / "job")
+    table.write_text("duration out\n0.002 'mine'\n")  # the table's own out column still wins
+    assert job_args(monkeypatch, table, 2).out == "mine"
+
+
 def test_an_unknown_column_is_refused_in_one_line(tmp_path, monkeypatch, capsys):
     table = tmp_path / "t.table"
     table.write_text("duraton\n0.002\n")
