@@ -7,7 +7,8 @@ The packages, each importing only those before it (tests/test_layers.py checks i
               model's classes by the same names (contact, paper_law, water_model, pore_dem), which
               the YADE layer and the runs use
   reference/  the independent reference, written from the paper; imports nothing of the above
-  yade/       everything that talks to YADE: bulk I/O, the two engines, the coupling, checkpoints
+  yade/       everything that talks to YADE: bulk I/O, the two engines, the water engine's contract
+              (checks of the bodies it is given), the coupling, checkpoints
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
   studies/    the speed-accuracy and stability studies (their points and analysis, no YADE)
   run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,

@@ -30,6 +30,7 @@ from yade.wrapper import (
 )
 
 from engines.model.pore_water import WaterSettings
+from engines.yade.contract import set_disc_mass
 from engines.yade.water_engine import WaterEngine
 from engines.yade.yade_io import freeze_gc, raise_pending
 
@@ -39,8 +40,7 @@ R, RHO = 0.45e-3, 2700.0  # grain radius [m], density [kg/m^3]
 def disc(x, z, material, fixed=False):
     """A sphere kept in the x-z plane, with per-unit-thickness mass and inertia (SPEC §1)."""
     b = utils.sphere((x, 0.0, z), R, fixed=fixed, material=material)
-    b.state.mass = RHO * math.pi * R**2
-    b.state.inertia = (0.5 * b.state.mass * R**2,) * 3
+    set_disc_mass(b, RHO)
     if not fixed:
         b.state.blockedDOFs = "yXZ"
     return O.bodies.append(b)
@@ -91,7 +91,7 @@ def main(argv):
     freeze_gc()  # optional: keeps Python's garbage collector off the scene's objects (faster writes)
 
     O.run(args.steps, True)  # or, with no runner added, water.drive(args.steps): no PyRunner dispatch
-    raise_pending()  # an error inside the water engine paused YADE: raise it here
+    raise_pending()  # optional: raise an error of the water engine here (else the script exits with status 1)
     net, U = water.model.water.net, water.pressures()
     print(f"{len(grains)} grains, {net.n_pores} pores after {O.iter} steps ({O.time * 1e3:.1f} ms): "
           f"mean U bottom pores {np.mean(U[net.pore_touches['bottom']]):.1f} N/m, "

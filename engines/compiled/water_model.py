@@ -104,7 +104,8 @@ class WaterModel(water_model.WaterModel):
         if n_sub != 1:
             n = self._substeps(h)  # raises above the limit without settings.substep
             if n_sub < 0:
-                raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of {h / n:.3e} s")
+                raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of "
+                                          f"{h / n:.3e} s; {limits.DRY_HINT}")
             self.last_limit = limits.gershgorin_limit(lam[1])  # at the last sub-step, as PoreWater reports it
         inflow, surface, side = self._balance.tolist()
         b = w.balance

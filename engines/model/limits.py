@@ -36,6 +36,11 @@ class DarcyStabilityError(ValueError):
     """A water step exceeds the explicit Darcy limit, or a pore's water would fall to zero."""
 
 
+# what to change when a pore's water falls to zero, as the engine's arguments and the scene's fields
+DRY_HINT = ("reduce the water step (O.dt or WaterEngine water_interval=; [numerics] dt or water_interval in a "
+            "scene file)")
+
+
 def refuse_dt(dt, limit, what):
     """Raise ValueError "[numerics] dt = ... exceeds <what> <limit>" when dt > limit."""
     if dt > limit:

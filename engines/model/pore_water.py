@@ -217,7 +217,8 @@ class PoreWater:
         W_new = self.W - fl.net_out * h  # eq 42
         if np.any(W_new <= 0):
             p = int(np.flatnonzero(W_new <= 0)[0])
-            raise DarcyStabilityError(f"water area of pore {p} fell to {W_new[p]:.3e} m^2 in a step of {h:.3e} s")
+            raise DarcyStabilityError(f"water area of pore {p} fell to {W_new[p]:.3e} m^2 in a step of {h:.3e} s; "
+                                      f"{limits.DRY_HINT}")
         self.W = W_new
         b = self.balance
         b.inflow += fl.inflow_q.sum() * h
@@ -405,5 +406,6 @@ def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     if np.any(W_new[matched] <= 0):
         k = int(np.flatnonzero(matched & ~(W_new > 0))[0])
         raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2); "
-                         f"use transfer = 'paper'")
+                         f"use the paper's transfer (WaterSettings transfer='paper'; [water] transfer = \"paper\" "
+                         f"in a scene file)")
     return W_new, matched

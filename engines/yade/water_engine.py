@@ -10,7 +10,11 @@ plane), its own collider and contact law adds the water in a few lines::
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]   # before NewtonIntegrator
     O.run(3000, True)
-    yade_io.raise_pending()   # an error inside the engine pauses YADE; this raises it in the script
+    yade_io.raise_pending()   # optional: raise an engine error here (else the script exits with status 1)
+
+The bodies are checked at construction (engines.yade.contract: spheres in one x-z plane, masses
+per metre of thickness, pores built, an inflow boundary when q_w > 0) and refused in one line naming
+the body; bodies added later are refused at the next rebuild.
 
 Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
 rebuilds the pores when due (engines.model.water_model.rebuild_due), measures the void areas (eq 29),
@@ -32,6 +36,7 @@ from engines.compiled import water_model as compiled_water_model
 from engines.model import pore_water
 from engines.model import pores as pg
 from engines.model.water_model import WaterModel, steps_to_rebuild
+from engines.yade import contract
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
 
@@ -55,8 +60,7 @@ class WaterEngine:
 
         self.io = yade_io.Bodies(disc_ids)
         ids = self.io.ids
-        if radii is None:
-            radii = [O.bodies[i].shape.radius for i in ids.tolist()]
+        radii = contract.check_discs(O.bodies, ids.tolist(), radii)
         code = np.zeros(len(ids), np.int64)
         pos = {i: k for k, i in enumerate(ids.tolist())}
         for name, group in (walls or {}).items():
@@ -72,6 +76,8 @@ class WaterEngine:
         model = compiled_water_model.WaterModel if compiled else WaterModel
         self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
                            water_interval, k0=O.iter)
+        contract.check_pores(self.model.water.net, settings, len(ids), l_m)
+        self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
         self.forced = yade_io.Bodies(ids[dynamic])
         self._dynamic = np.flatnonzero(dynamic)
@@ -173,6 +179,7 @@ class WaterEngine:
             return
         xz = self.io.positions()
         if rebuild:
+            contract.check_added(O.bodies, self._n_bodies)
             m.rebuild(xz, self.k)
         m.advance(h, xz)
         self.write_forces()

@@ -15,10 +15,12 @@ The backend is chosen once, at import:
 
 Set the environment variable PORE_DEM_IO=python to force the Python backend (benchmarks, tests).
 """
+import atexit
 import builtins
 import ctypes
 import gc
 import os
+import sys
 import traceback
 
 import numpy as np
@@ -71,8 +73,9 @@ class Bodies:
         if len(x) != self._n_listed:  # bodies were added or removed: the lists list the existing ones
             existing = np.array([b.id for b in O.bodies if b is not None], np.int64)
             self._index = np.searchsorted(existing, self.ids)
-            if np.any(self._index >= len(existing)) or np.any(existing[np.minimum(self._index, len(existing) - 1)] != self.ids):
-                raise ValueError("yade_io: some of the engine's body ids do not exist in O.bodies")
+            gone = (self._index >= len(existing)) | (existing[np.minimum(self._index, len(existing) - 1)] != self.ids)
+            if gone.any():
+                raise IndexError(f"body id {self.ids[gone][0]} is out of range or erased; nothing was done")
             self._n_listed = len(x)
         out[:, 0] = np.asarray(x)[self._index]
         out[:, 1] = np.asarray(z)[self._index]
@@ -183,7 +186,7 @@ def _guarded(callback):
     def run():
         try:
             callback()
-        except BaseException as e:  # stop YADE cleanly; the driver re-raises (raise_pending)
+        except BaseException as e:  # stop YADE cleanly; raise_pending re-raises, else _exit_if_pending
             if not ERRORS:
                 traceback.print_exc()
             ERRORS.append(e)
@@ -199,10 +202,22 @@ def raise_pending():
         raise err
 
 
+@atexit.register
+def _exit_if_pending():
+    """At the interpreter's exit (the end of `yade -x script.py`), an engine error the script never
+    raised (``raise_pending``) ends the process with status 1 and the error in one line on stderr."""
+    if ERRORS:
+        sys.stdout.flush()
+        err = ERRORS[0]
+        print(f"error inside a YADE engine, never raised by the script: {type(err).__name__}: "
+              + " ".join(str(err).split()), file=sys.stderr, flush=True)
+        os._exit(1)
+
+
 def py_runner(callback, iter_period=1, label=""):
     """A PyRunner that calls ``callback()`` every ``iter_period`` steps (registered in builtins,
     so the command works in any namespace YADE runs it in). An exception in the callback pauses
-    YADE and is kept for ``raise_pending``."""
+    YADE and is kept for ``raise_pending`` (never raised: the process exits with status 1)."""
     slot = getattr(builtins, _REGISTRY, None)
     if slot is None:
         slot = []

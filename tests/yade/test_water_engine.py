@@ -51,13 +51,14 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
     )
 
     from engines.model.pore_water import WaterSettings
+    from engines.yade.contract import set_disc_mass
     from engines.yade.water_engine import WaterEngine
     O.reset()
     mat = O.materials.append(FrictMat(young=3e9, poisson=0.25, frictionAngle=0.5, density=2700))
     ids = []
     for (x, z), r, mob in zip(packing.xz, packing.r, packing.mobile):
         b = utils.sphere((x, 0, z), r, fixed=not mob, material=mat)
-        b.state.mass = 2700 * np.pi * r**2
+        set_disc_mass(b, 2700)
         if mob:
             b.state.blockedDOFs = "yXZ"
         ids.append(O.bodies.append(b))

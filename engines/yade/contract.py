@@ -1,0 +1,107 @@
+"""What the WaterEngine needs of a YADE scene, checked: each broken rule is refused in one line
+naming the body id (``ContractError``), and ``set_disc_mass`` gives a sphere the mass it needs.
+
+The rules (docs/ENGINE.md):
+
+* every body of ``disc_ids`` exists and is a sphere (a YADE Box or Wall is refused: walls are
+  wall discs for now);
+* the discs lie in one plane y = const (the median y of the discs, to 1e-6 of each radius) and stay
+  there: every dynamic disc has y among its blockedDOFs, and no disc has a velocity along y;
+* the masses are per metre of thickness (SPEC §1): m = f rho pi r^2 with rho the density of the
+  body's material and f its density factor (the paper's dense top discs: f = 5 and 10). A dynamic
+  disc with m < MIN_FACTOR rho pi r^2 is refused; YADE's own 3D sphere mass 4/3 pi r^3 rho is
+  4/3 r [m] of that (6.7e-4 at r = 0.5 mm), the message says when the mass is that one. A disc free
+  to spin about y needs I_y >= MIN_FACTOR m r^2 / 2 (the disc's m r^2/2, eq 15; YADE's sphere
+  inertia 2/5 m r^2 with its 3D mass is far below);
+* q_w > 0 needs an inflow boundary: a pore with a bottom wall disc as a vertex;
+* the discs build pores;
+* bodies are not added after the engine is made (refused at its next pore rebuild, ``check_added``);
+  an erased disc is refused by the next read of the positions (engines.yade.yade_io), which names it.
+"""
+import math
+
+import numpy as np
+
+MIN_FACTOR = 0.5  # the smallest accepted m / (rho pi r^2) and I_y / (m r^2 / 2) of a dynamic disc
+
+
+class ContractError(ValueError):
+    """A scene the WaterEngine cannot take; the message names the body and what is wrong."""
+
+
+def set_disc_mass(body, rho, factor=1.0, r=None):
+    """Per-thickness mass m = factor rho pi r^2 [kg/m] and inertia m r^2 / 2 [kg m] (SPEC §1,
+    eq 15) of the YADE sphere ``body`` of radius r (default its shape's radius)."""
+    r = body.shape.radius if r is None else r
+    body.state.mass = factor * rho * math.pi * r**2
+    body.state.inertia = (0.5 * body.state.mass * r**2,) * 3
+
+
+def check_discs(bodies, ids, radii=None):
+    """Refuse the bodies ``ids`` of O.bodies ``bodies`` that are not discs of the engine (the rules
+    above), with radii (n,) [m] the true ones (None: the spheres'). Returns the radii."""
+    found = []
+    for i in ids:
+        b = bodies[i] if 0 <= i < len(bodies) else None
+        if b is None:
+            raise ContractError(f"body {i}: not in O.bodies (disc_ids must be existing spheres)")
+        shape = type(b.shape).__name__
+        if shape in ("Box", "Wall"):
+            raise ContractError(f"body {i}: a YADE {shape}; the WaterEngine takes spheres only, and walls are wall "
+                                f"discs for now (spheres in disc_ids, named in walls={{'bottom': ...}})")
+        if shape != "Sphere":
+            raise ContractError(f"body {i}: a {shape}, not a sphere (disc_ids must be spheres)")
+        found.append(b)
+    if radii is None:
+        radii = [b.shape.radius for b in found]
+    y = np.array([b.state.pos[1] for b in found])
+    plane = float(np.median(y)) if len(y) else 0.0
+    for i, b, yi, r in zip(ids, found, y.tolist(), radii):
+        if abs(yi - plane) > 1e-6 * r:
+            raise ContractError(f"body {i}: centre at y = {yi:.6g} m, off the plane y = {plane:.6g} m of the discs "
+                                f"(the WaterEngine works in the x-z plane: put every disc at the same y)")
+        if b.state.vel[1] != 0:
+            raise ContractError(f"body {i}: velocity {b.state.vel[1]:.3g} m/s along y, out of the x-z plane")
+        if b.dynamic:
+            check_dynamic(i, b, r)
+    return radii
+
+
+def check_dynamic(i, b, r):
+    """Refuse the dynamic disc b (id i, radius r) when free to leave the plane or not massed per
+    metre of thickness."""
+    s = b.state
+    if "y" not in s.blockedDOFs:
+        raise ContractError(f"body {i}: free to leave the x-z plane (blockedDOFs {s.blockedDOFs!r} lacks 'y'; "
+                            f"use 'yXZ')")
+    rho = b.material.density
+    per_thickness = rho * math.pi * r**2
+    if s.mass < MIN_FACTOR * per_thickness:
+        looks = ("YADE's 3D sphere mass 4/3 pi r^3 rho" if math.isclose(s.mass, 4 / 3 * r * per_thickness, rel_tol=1e-3)
+                 else f"{s.mass / per_thickness:.3g} x rho pi r^2")
+        raise ContractError(f"body {i}: mass {s.mass:.3g} kg is {looks}; the WaterEngine's forces are per metre of "
+                            f"thickness: m = f rho pi r^2 = {per_thickness:.3g} f kg/m (rho = {rho:g} of its material, "
+                            f"f >= {MIN_FACTOR:g} its density factor; engines.yade.contract.set_disc_mass sets it)")
+    if "Y" not in s.blockedDOFs and s.inertia[1] < MIN_FACTOR * 0.5 * s.mass * r**2:
+        raise ContractError(f"body {i}: inertia I_y {s.inertia[1]:.3g} kg m below {MIN_FACTOR:g} x m r^2/2 = "
+                            f"{MIN_FACTOR * 0.5 * s.mass * r**2:.3g} of a disc of its mass (engines.yade.contract."
+                            f"set_disc_mass sets it)")
+
+
+def check_pores(net, settings, n_discs, l_m):
+    """Refuse a pore network ``net`` (engines.model.pores) without pores, or without an inflow
+    boundary when settings.q_w > 0."""
+    if net.n_pores == 0:
+        raise ContractError(f"no pores between the {n_discs} discs: the WaterEngine needs discs in the x-z plane that "
+                            f"touch or lie within l_m = {l_m:g} m of each other")
+    if settings.q_w > 0 and not net.pore_touches["bottom"].any():
+        raise ContractError(f"q_w = {settings.q_w:g} m/s but no pore has a bottom wall disc as a vertex: the inflow "
+                            f"needs walls={{'bottom': ids}} under the discs (or q_w = 0)")
+
+
+def check_added(bodies, n_bodies):
+    """Refuse bodies added to O.bodies ``bodies`` since it held ``n_bodies`` slots."""
+    added = [i for i in range(n_bodies, len(bodies)) if bodies[i] is not None]
+    if added:
+        raise ContractError(f"body {added[0]}: added after the WaterEngine was made; its discs are fixed at "
+                            f"construction (add the bodies first, then make the WaterEngine)")
