@@ -3,7 +3,7 @@ its yade-batch form.
 
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
-    add_run_arguments(ap)                         # --out --duration --dt --set --vtk --resume
+    add_run_arguments(ap)                         # --out --overwrite --duration --dt --set --vtk --resume
     args = ap.parse_args(job_argv(ap, argv))      # argv, or the yade-batch job's table line
     run_script(ap, args, load_scene)              # preflight, run or resume, exit status
 
@@ -20,7 +20,7 @@ import re
 import sys
 import tomllib
 
-from engines.run.preflight import InputError, check_output_dir, number, output_dir, preflight
+from engines.run.preflight import InputError, check_fresh_output, check_output_dir, number, output_dir, preflight
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -57,6 +57,8 @@ def add_run_arguments(ap):
     """The options every scene script has (see the module docstring)."""
     ap.add_argument("--out", type=output_dir, help=f"output directory (required; under yade-batch "
                                                    f"default {BATCH_OUT}/<job description>)")
+    ap.add_argument("--overwrite", action="store_true",
+                    help="replace the outputs of another run in --out (refused without it)")
     ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
                     help="simulated time [s] (default: the scene's; with --resume: a later end)")
     ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
@@ -134,7 +136,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     if args.resume:
-        given = [f"--{k}" for k in ("out", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
+        given = [f"--{k}" for k in ("out", "overwrite", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
@@ -143,6 +145,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         if args.resume:
             check_resume(args.resume, args.duration)
         else:
+            if not args.overwrite:
+                check_fresh_output(args.out, resumable=True)
             sc = load_scene(overrides_of(args))
             if check is not None:
                 check(sc)
@@ -153,11 +157,12 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     except ValueError as e:
         sys.exit(f"error: {e}")
     from engines.run import runner
+    out = args.resume or args.out
+    print(f"output: {os.path.abspath(out)}", flush=True)
     if args.resume:
         summary = runner.resume_run(args.resume, args.duration)
     else:
         summary = runner.run_scene(sc, packing, args.out)
-    out = args.resume or args.out
     if summary["status"] == "interrupted":
         stop = summary.get("interrupt", {})
         print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "
