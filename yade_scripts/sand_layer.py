@@ -24,7 +24,7 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines.run.preflight import ArgumentParser, InputError, check_fresh_output, number, output_dir
+from engines.run.preflight import ArgumentParser, InputError, announce_output, check_fresh_output, number, output_dir
 from engines.seeds.sand_layer.layer import SandLayerSettings
 from engines.seeds.sand_layer.study import LOAD_STRESS, LOAD_WIDTH, run, write_outputs
 from postproc.sand_layer import UM, figures
@@ -52,7 +52,7 @@ def main(argv=None):
             check_fresh_output(args.out)
         except InputError as e:
             sys.exit(f"error: {e}")
-    print(f"output: {os.path.abspath(args.out)}", flush=True)
+    announce_output(args.out)
     study = run(args.realisations, args.seed, args.load_width, args.load_stress, args.sampling)
     result = write_outputs(study, args.out, figures)
     print(f"settlement under the load: {result['settlement_mean'] * UM:.1f} ± "

@@ -20,7 +20,8 @@ import re
 import sys
 import tomllib
 
-from engines.run.preflight import InputError, check_fresh_output, check_output_dir, number, output_dir, preflight
+from engines.run.preflight import (InputError, announce_output, check_fresh_output, check_output_dir, number, output_dir,
+                                   preflight)
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -158,7 +159,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         sys.exit(f"error: {e}")
     from engines.run import runner
     out = args.resume or args.out
-    print(f"output: {os.path.abspath(out)}", flush=True)
+    announce_output(out)
     if args.resume:
         summary = runner.resume_run(args.resume, args.duration)
     else:

@@ -4,7 +4,8 @@
 step against the stability limits at the start (engines.model.time_step.check_start: eq 52, the
 side-wall ties, the water stiffness, the Darcy limit and the sub-step count), the duration, the
 loading record, the packing against the walls' box and the contact law (``check_packing``) and the
-output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs.
+output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs;
+``announce_output`` prints the folder a script writes into.
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -92,6 +93,11 @@ def check_fresh_output(path, arg="--out", resumable=False):
         resume = f", or --resume {path} to continue that run" if resumable else ""
         raise InputError(f"{arg} {path} holds another run's outputs ({', '.join(found)}): give --overwrite to "
                          f"replace them{resume}")
+
+
+def announce_output(path):
+    """Print the folder a script writes into, before it writes: ``output: /absolute/path``."""
+    print(f"output: {os.path.abspath(path)}", flush=True)
 
 
 def output_dir(path):

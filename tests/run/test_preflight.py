@@ -316,10 +316,18 @@ def test_overwrite_replaces_another_runs_outputs_and_the_folder_is_printed(tmp_p
     assert not (out / "snapshot_000.01ms.npz").exists()
 
 
-def test_sand_layer_needs_an_explicit_out_and_keeps_another_runs(tmp_path):
-    run = subprocess.run([sys.executable, "yade_scripts/sand_layer.py"], cwd=ROOT, env=ENV, capture_output=True,
-                         text=True, timeout=120)
-    assert run.returncode == 2 and "--out" in run.stderr
+@pytest.mark.parametrize("argv", [["sand_layer.py"], ["stability.py"], ["crosscheck.py"], ["biaxial_study.py"],
+                                  ["tradeoffs.py", "study"], ["quicksand.py"],
+                                  ["calibrate.py", "--phi-star", "25", "--e50", "8000", "--sigma3", "200"]])
+def test_every_script_needs_an_explicit_out(tmp_path, argv):
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "yade_scripts", argv[0]), *argv[1:]], cwd=tmp_path, env=ENV,
+                         capture_output=True, text=True, timeout=120)
+    errors = [line for line in run.stderr.splitlines() if "error" in line]
+    assert run.returncode == 2 and len(errors) == 1 and "--out" in errors[0] and "required" in errors[0], run.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sand_layer_keeps_another_runs_outputs(tmp_path):
     (tmp_path / "summary.json").write_text("{}")
     run = subprocess.run([sys.executable, "yade_scripts/sand_layer.py", "--out", str(tmp_path)], cwd=ROOT, env=ENV,
                          capture_output=True, text=True, timeout=120)
