@@ -1,11 +1,21 @@
-"""A packing: disc centres, radii, groups and density factors, saved as CSV (x, z, r, group, density_factor)."""
+"""A packing: disc centres, radii, groups and density factors, saved as CSV (x, z, r, group, density_factor).
+
+Refusals name the disc: in a file by its line number (the header is line 1, so the first disc is
+line 2), otherwise by its 0-based index. A packing refuses a non-finite value, a radius or density
+factor <= 0, a group code not in engines.model.groups, and two discs with the same centre
+(duplicated rows); ``check_fit`` also refuses particles outside the walls' box and overlaps deeper
+than a tolerance (preflight gives it the scene's contact law).
+"""
 import os
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_NONE
+from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
 from engines.model.pores import check_discs
+
+COLUMNS = ("x", "z", "r", "group", "density_factor")
 
 
 @dataclass
@@ -18,16 +28,87 @@ class Packing:
     r: np.ndarray
     group: np.ndarray
     density_factor: np.ndarray
+    path: str = None  # the CSV file it was read from (named in refusals)
 
     def __post_init__(self):
-        self.xz, self.r = check_discs(self.xz, self.r)
-        self.group = np.asarray(self.group, np.int64)
-        self.density_factor = np.asarray(self.density_factor, float)
-        n = len(self.r)
-        if self.group.shape != (n,) or not np.isin(self.group, list(GROUP_NAMES)).all():
-            raise ValueError(f"group: expected {n} codes in {sorted(GROUP_NAMES)}")
-        if self.density_factor.shape != (n,) or np.any(self.density_factor <= 0):
-            raise ValueError(f"density_factor: expected {n} values > 0")
+        r = np.asarray(self.r, float)
+        n = r.shape[0] if r.ndim == 1 else -1
+        columns = dict(zip(COLUMNS, (*np.asarray(self.xz, float).T, r, np.asarray(self.group, float),
+                                     np.asarray(self.density_factor, float))))
+        if np.shape(self.xz) != (n, 2) or any(v.shape != (n,) for v in columns.values()):
+            raise ValueError(f"{self.source}: expected columns x, z, r, group, density_factor of one length, "
+                             f"got xz {np.shape(self.xz)}, r {np.shape(self.r)}, group {np.shape(self.group)}, "
+                             f"density_factor {np.shape(self.density_factor)}")
+        for name, values in columns.items():
+            self._refuse_first(~np.isfinite(values), f"{name} = {{}} is not a number", values)
+        self._refuse_first(r <= 0, "r = {} m: a radius must be > 0", r)
+        self._refuse_first(columns["density_factor"] <= 0, "density_factor = {}: must be > 0", columns["density_factor"])
+        g = columns["group"]
+        self._refuse_first(~np.isin(g, list(GROUP_NAMES)), f"group = {{}}: not a group code "
+                           f"({', '.join(f'{c} {name}' for c, name in GROUP_NAMES.items())})", g)
+        _, first, inverse = np.unique(columns["x"] + 1j * columns["z"], return_index=True, return_inverse=True)
+        twin = first[inverse.ravel()]
+        self._refuse_first(twin != np.arange(n), "the same centre as {}: a duplicated disc",
+                           np.array([self.row_name(i) for i in twin], dtype=object))
+        self.xz, self.r = check_discs(self.xz, r)
+        self.group = g.astype(np.int64)
+        self.density_factor = columns["density_factor"]
+
+    @property
+    def source(self):
+        return f"packing file {self.path}" if self.path else "packing"
+
+    def row_name(self, i):
+        """Disc ``i`` as refusals name it: its line in the file (the header is line 1) or its index."""
+        return f"line {i + 2}" if self.path else f"disc {i}"
+
+    def _refuse_first(self, bad, what, values):
+        """ValueError naming the file, the first disc where ``bad`` and ``what`` with its value."""
+        if np.any(bad):
+            i = int(np.flatnonzero(bad)[0])
+            raise ValueError(f"{self.source}, {self.row_name(i)}: {what.format(values[i])}")
+
+    def inner_faces(self):
+        """The walls' inner faces [m] by wall code, of the walls present: the left wall discs'
+        max(x + r), the right's min(x - r), the bottom's max(z + r)."""
+        x, z, r, g = self.xz[:, 0], self.xz[:, 1], self.r, self.group
+        faces = {WALL_LEFT: lambda w: (x + r)[w].max(), WALL_RIGHT: lambda w: (x - r)[w].min(),
+                 WALL_BOTTOM: lambda w: (z + r)[w].max()}
+        return {code: float(face(g == code)) for code, face in faces.items() if (g == code).any()}
+
+    def outside_box(self):
+        """Indices of the particles whose centre is not strictly inside the walls' box: between the
+        side walls' inner faces and above the bottom's (``inner_faces``; open at the top)."""
+        faces = self.inner_faces()
+        x, z = self.xz[:, 0], self.xz[:, 1]
+        out = np.zeros(len(self.r), bool)
+        out |= x <= faces.get(WALL_LEFT, -np.inf)
+        out |= x >= faces.get(WALL_RIGHT, np.inf)
+        out |= z <= faces.get(WALL_BOTTOM, -np.inf)
+        return np.flatnonzero(out & self.mobile)
+
+    def check_fit(self, max_overlap, tolerance="the tolerance"):
+        """Refuse (ValueError naming the file and line) a particle outside the walls' box
+        (``outside_box``) and two discs (not both wall discs) overlapping by more than
+        ``max_overlap`` [m] (named ``tolerance``)."""
+        out = self.outside_box()
+        if len(out):
+            i = out[0]
+            faces = ", ".join(f"{GROUP_NAMES[c]} {'z' if c == WALL_BOTTOM else 'x'} = {f:.6g}"
+                              for c, f in self.inner_faces().items())
+            raise ValueError(f"{self.source}, {self.row_name(i)}: particle centre (x, z) = ({self.xz[i, 0]:.6g}, "
+                             f"{self.xz[i, 1]:.6g}) m is outside the walls' box (inner faces {faces} m)")
+        m = self.mobile
+        pairs = cKDTree(self.xz).query_pairs(2 * self.r.max(), output_type="ndarray")
+        i, j = pairs.T
+        overlap = self.r[i] + self.r[j] - np.linalg.norm(self.xz[i] - self.xz[j], axis=1)
+        bad = (overlap > max_overlap) & (m[i] | m[j])
+        if bad.any():
+            k = np.flatnonzero(bad)
+            k = k[np.lexsort((j[k], i[k]))[0]]  # the first disc in the file, then its first partner
+            raise ValueError(f"{self.source}, {self.row_name(i[k])}: overlaps {self.row_name(j[k])} by "
+                             f"{overlap[k]:.3g} m ({overlap[k] / min(self.r[i[k]], self.r[j[k]]):.1%} of the smaller "
+                             f"radius), deeper than {tolerance} = {max_overlap:.3g} m")
 
     @property
     def mobile(self):
@@ -66,4 +147,4 @@ class Packing:
             raise ValueError(f"packing file {path}: {e}") from None
         if d.shape[1] != 5:
             raise ValueError(f"packing file {path}: expected 5 columns x,z,r,group,density_factor, got {d.shape[1]}")
-        return cls(d[:, :2], d[:, 2], d[:, 3].astype(np.int64), d[:, 4])
+        return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path)

@@ -33,13 +33,14 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines.run.biaxial_study import run_study
+from engines.run.preflight import announce_output, output_dir
 from engines.seeds.biaxial.study import DEFAULT_PARTS, PARTS
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default="out/biaxial", help="output directory (runs in OUT/runs)")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory (runs in OUT/runs)")
     ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address: run the jobs on that cluster")
     ap.add_argument("--parts", default=",".join(DEFAULT_PARTS),
@@ -55,6 +56,7 @@ def main(argv=None):
     if unknown:
         ap.error(f"--parts: unknown {', '.join(sorted(unknown))}")
     seeds = [int(s) for s in a.seeds.split(",")]
+    announce_output(a.out)
     table = run_study(a.out, parts, seeds, workers=a.workers, scheduler=a.scheduler, estimate_only=a.estimate,
                       analyse_only=a.analyse_only, quick=a.quick)
     if table is not None:

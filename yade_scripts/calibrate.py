@@ -1,7 +1,7 @@
 """Contact constants for a target model ground (Murakami et al. §3(3)c, eq 5–6), verified.
 
-    /usr/bin/python3 yade_scripts/calibrate.py --phi-star DEG --e50 PA --sigma3 PA
-                     [--fit out/biaxial/fit.json] [--out out/calibrate] [--seeds 1,2,3]
+    /usr/bin/python3 yade_scripts/calibrate.py --phi-star DEG --e50 PA --sigma3 PA --out DIR
+                     [--fit out/biaxial/fit.json] [--seeds 1,2,3]
                      [--workers 2] [--scheduler ADDR] [--no-verify]
 
 From the curves `make biaxial` fitted (fit.json: φ*(φe), A(φe), m(φe) at kn = 1e8 Pa/m,
@@ -18,7 +18,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines.run.biaxial_study import calibrate
-from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.run.preflight import ArgumentParser, announce_output, number, output_dir
 from engines.seeds.biaxial.calibration import Calibration
 
 
@@ -32,7 +32,7 @@ def main(argv=None):
     ap.add_argument("--sigma3", type=number(float, 0, lo_open=True, unit="Pa"), required=True,
                     help="confining stress of the target E50 [Pa]")
     ap.add_argument("--fit", default="out/biaxial/fit.json", help="the study's curves (make biaxial writes them)")
-    ap.add_argument("--out", type=output_dir, default="out/calibrate", help="output directory")
+    ap.add_argument("--out", type=output_dir, required=True, help="output directory")
     ap.add_argument("--seeds", default="1,2,3", help="packings of the verification")
     ap.add_argument("--workers", type=number(int, 1), default=2, help="local processes (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address")
@@ -40,6 +40,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if not os.path.exists(a.fit):
         ap.error(f"--fit {a.fit}: not found (run `make biaxial` first)")
+    announce_output(a.out)
     try:
         cal = Calibration.load(a.fit)
         phi_e, kn = cal.invert(a.phi_star, a.e50, a.sigma3)

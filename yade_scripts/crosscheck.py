@@ -13,17 +13,18 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines import ROOT
 from engines.run.crosscheck import crosscheck, precision_study
+from engines.run.preflight import announce_output
 
 
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=os.path.join(ROOT, "out", "crosscheck"))
+    ap.add_argument("--out", required=True, help="output directory (make test: out/crosscheck)")
     ap.add_argument("--precision", action="store_true",
                     help="run only the reference in float32, float64 and longdouble (make precision): DIR/precision.json")
     ap.add_argument("--only", nargs="+", metavar="CASE", help="run only these cases (names in engines/run/crosscheck.py)")
     args = ap.parse_args(argv)
+    announce_output(args.out)
     if args.precision:
         result = precision_study()
         print("precision:", json.dumps(result, indent=1), flush=True)

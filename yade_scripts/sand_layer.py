@@ -24,7 +24,7 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
-from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.run.preflight import ArgumentParser, InputError, announce_output, check_fresh_output, number, output_dir
 from engines.seeds.sand_layer.layer import SandLayerSettings
 from engines.seeds.sand_layer.study import LOAD_STRESS, LOAD_WIDTH, run, write_outputs
 from postproc.sand_layer import UM, figures
@@ -35,7 +35,8 @@ def parse_args(argv=None):
     parser = ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--realisations", type=number(int, lo=1), default=25)
     parser.add_argument("--seed", type=number(int, lo=0), default=0)
-    parser.add_argument("--out", type=output_dir, default="out/sand-layer", help="output directory")
+    parser.add_argument("--out", type=output_dir, required=True, help="output directory")
+    parser.add_argument("--overwrite", action="store_true", help="replace the outputs of an earlier run in --out")
     parser.add_argument("--load-width", type=number(int, lo=1, hi=SandLayerSettings().n_columns),
                         default=LOAD_WIDTH, help="elements")
     parser.add_argument("--load-stress", type=number(lo=0, lo_open=True, unit="Pa"), default=LOAD_STRESS,
@@ -46,6 +47,12 @@ def parse_args(argv=None):
 
 def main(argv=None):
     args = parse_args(argv)
+    if not args.overwrite:
+        try:
+            check_fresh_output(args.out)
+        except InputError as e:
+            sys.exit(f"error: {e}")
+    announce_output(args.out)
     study = run(args.realisations, args.seed, args.load_width, args.load_stress, args.sampling)
     result = write_outputs(study, args.out, figures)
     print(f"settlement under the load: {result['settlement_mean'] * UM:.1f} ± "

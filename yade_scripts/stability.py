@@ -23,15 +23,16 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] i
 
 
 def main(argv):
-    from engines.run.preflight import output_dir
+    from engines.run.preflight import announce_output, output_dir
     from engines.run.stability import run_map
     from postproc.stability import replot
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", type=output_dir, default=os.path.join("out", "stability"))
+    ap.add_argument("--out", type=output_dir, required=True)
     ap.add_argument("--window", type=float, default=0.003, help="simulated seconds per point (dt points: 0.01)")
     ap.add_argument("--plot-only", action="store_true", help="redraw OUT/map.png from OUT/map.json")
     a = ap.parse_args(argv)
+    announce_output(a.out)
     os.makedirs(a.out, exist_ok=True)
     if a.plot_only:
         print("figure:", replot(a.out))

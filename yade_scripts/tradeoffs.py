@@ -73,9 +73,9 @@ def speed_main(argv):
 
 
 def study_main(argv):
-    from engines.run.preflight import ArgumentParser, number
+    from engines.run.preflight import ArgumentParser, announce_output, number, output_dir
     ap = ArgumentParser(prog="tradeoffs.py study")
-    ap.add_argument("--out", default=os.path.join("out", "tradeoffs"))
+    ap.add_argument("--out", type=output_dir, required=True)
     ap.add_argument("--workers", type=number(int, 1), default=int(os.environ.get("TRADE_JOBS", "1")),
                     help="local processes at a time (default 1: the study is timed)")
     ap.add_argument("--scheduler", help="Dask scheduler address (timings then come from the workers)")
@@ -83,6 +83,7 @@ def study_main(argv):
     ap.add_argument("--knobs", nargs="+", help="a subset of the knobs (e.g. reference dt defaults)")
     ap.add_argument("--analyse-only", action="store_true", help="skip the runs, analyse what is there")
     a = ap.parse_args(argv)
+    announce_output(a.out)
     run_study(a.out, workers=a.workers, scheduler=a.scheduler, cases=a.cases, knobs=a.knobs,
               analyse_only=a.analyse_only)
 

@@ -3,7 +3,7 @@ its yade-batch form.
 
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
-    add_run_arguments(ap)                         # --out --duration --dt --set --vtk --resume
+    add_run_arguments(ap)                         # --out --overwrite --duration --dt --set --vtk --resume
     args = ap.parse_args(job_argv(ap, argv))      # argv, or the yade-batch job's table line
     run_script(ap, args, load_scene)              # preflight, run or resume, exit status
 
@@ -21,7 +21,8 @@ import re
 import sys
 import tomllib
 
-from engines.run.preflight import InputError, check_output_dir, number, output_dir, preflight
+from engines.run.preflight import (InputError, announce_output, check_fresh_output, check_output_dir, number, output_dir,
+                                   preflight)
 from engines.run.sweep import JOB_DIR
 
 BATCH_OUT = os.path.join("out", "batch")
@@ -59,6 +60,8 @@ def add_run_arguments(ap):
     """The options every scene script has (see the module docstring)."""
     ap.add_argument("--out", type=output_dir, help=f"output directory (required; a table's job's default: the "
                                                    f"sweep runner's job directory, or {BATCH_OUT}/<job description>)")
+    ap.add_argument("--overwrite", action="store_true",
+                    help="replace the outputs of another run in --out (refused without it)")
     ap.add_argument("--duration", type=number(lo=0, lo_open=True, unit="s"),
                     help="simulated time [s] (default: the scene's; with --resume: a later end)")
     ap.add_argument("--dt", type=number(lo=0, lo_open=True, unit="s"), help="time step [s] (default: the scene's)")
@@ -86,6 +89,13 @@ def overrides_of(args):
 def batch_job():
     """'table:line' of this yade-batch job, or None (yade-batch of a lone script sets YADE_BATCH empty)."""
     return os.environ.get("YADE_BATCH") or None
+
+
+def sweep_job_dir(path):
+    """Is ``path`` the job directory the sweep runner gave this job? The runner re-runs only jobs
+    that did not finish, so their outputs there are replaced without --overwrite."""
+    job = os.environ.get(JOB_DIR)
+    return bool(job) and os.path.abspath(job) == os.path.abspath(path)
 
 
 def batch_out(root, description):
@@ -142,7 +152,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     if args.resume:
-        given = [f"--{k}" for k in ("out", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
+        given = [f"--{k}" for k in ("out", "overwrite", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
@@ -151,6 +161,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         if args.resume:
             check_resume(args.resume, args.duration)
         else:
+            if not (args.overwrite or sweep_job_dir(args.out)):
+                check_fresh_output(args.out, resumable=True)
             sc = load_scene(overrides_of(args))
             if check is not None:
                 check(sc)
@@ -161,11 +173,12 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     except ValueError as e:
         sys.exit(f"error: {e}")
     from engines.run import runner
+    out = args.resume or args.out
+    announce_output(out)
     if args.resume:
         summary = runner.resume_run(args.resume, args.duration)
     else:
         summary = runner.run_scene(sc, packing, args.out)
-    out = args.resume or args.out
     if summary["status"] == "interrupted":
         stop = summary.get("interrupt", {})
         print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "

@@ -3,7 +3,9 @@
 ``preflight(scene, packing, out_dir)`` checks what can be known before the first step: the time
 step against the stability limits at the start (engines.model.time_step.check_start: eq 52, the
 side-wall ties, the water stiffness, the Darcy limit and the sub-step count), the duration, the
-loading record and the output directory.
+loading record, the packing against the walls' box and the contact law (``check_packing``) and the
+output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs;
+``announce_output`` prints the folder a script writes into.
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -15,6 +17,10 @@ import argparse
 import math
 import os
 import tempfile
+
+from engines.yade.checkpoint import NAME as CHECKPOINT
+
+RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT)  # their presence marks a run's directory
 
 
 class InputError(ValueError):
@@ -79,6 +85,21 @@ def check_output_dir(path, arg="--out"):
         raise InputError(f"{arg}: {problem}")
 
 
+def check_fresh_output(path, arg="--out", resumable=False):
+    """Raise InputError (naming ``arg``) if ``path`` holds another run's outputs: any of
+    RUN_OUTPUTS (a run writes history.csv and its first checkpoint at its start)."""
+    found = [name for name in RUN_OUTPUTS if os.path.exists(os.path.join(path, name))]
+    if found:
+        resume = f", or --resume {path} to continue that run" if resumable else ""
+        raise InputError(f"{arg} {path} holds another run's outputs ({', '.join(found)}): give --overwrite to "
+                         f"replace them{resume}")
+
+
+def announce_output(path):
+    """Print the folder a script writes into, before it writes: ``output: /absolute/path``."""
+    print(f"output: {os.path.abspath(path)}", flush=True)
+
+
 def output_dir(path):
     """argparse type of an output directory: refused unless it can be written."""
     problem = output_problem(path)
@@ -93,6 +114,21 @@ def check_limits(scene, packing):
     from engines.model.time_step import check_start
     try:
         check_start(scene, packing)
+    except ValueError as e:
+        raise InputError(str(e)) from None
+
+
+def max_overlap(contact):
+    """The deepest overlap a packing may start with [m]: f_max / kn, where the elastic force of
+    springs c and d reaches its cap (eq 27) and stops growing, so that the law cannot push the discs
+    apart any harder; springs a and b are held to the same force scale f_max."""
+    return contact.f_max / contact.kn
+
+
+def check_packing(scene, packing):
+    """Particles inside the walls' box, no overlap deeper than ``max_overlap`` (Packing.check_fit)."""
+    try:
+        packing.check_fit(max_overlap(scene.contact), "[contact] f_max / kn")
     except ValueError as e:
         raise InputError(str(e)) from None
 
@@ -126,6 +162,7 @@ def preflight(scene, packing, out_dir):
     check_output_dir(out_dir)
     check_duration(scene)
     check_record(scene)
+    check_packing(scene, packing)
     check_limits(scene, packing)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:

@@ -46,24 +46,9 @@ def guard_columns(n_bottom, n_side, radius, top):
     return xz, np.concatenate([np.full(len(zs), WALL_LEFT), np.full(len(zs), WALL_RIGHT)])
 
 
-def outside_box(packing):
-    """Indices of the particles whose centre is not inside the box: not strictly between the
-    centres of the left and right wall columns, or not above the bottom wall centres."""
-    g, x, z = packing.group, packing.xz[:, 0], packing.xz[:, 1]
-    m = np.flatnonzero(packing.mobile)
-    out = np.zeros(len(m), bool)
-    if (g == WALL_LEFT).any():
-        out |= x[m] <= x[g == WALL_LEFT].max()
-    if (g == WALL_RIGHT).any():
-        out |= x[m] >= x[g == WALL_RIGHT].min()
-    if (g == WALL_BOTTOM).any():
-        out |= z[m] <= z[g == WALL_BOTTOM].max()
-    return m[out]
-
-
 def check_inside_box(packing, what="packing"):
-    """Raise ValueError naming the particles outside the box (see ``outside_box``)."""
-    out = outside_box(packing)
+    """Raise ValueError naming the particles outside the box (Packing.outside_box)."""
+    out = packing.outside_box()
     if len(out):
         where = ", ".join(f"{i} at ({packing.xz[i, 0] * 1e3:.2f}, {packing.xz[i, 1] * 1e3:.2f}) mm" for i in out[:5])
         raise ValueError(f"{what}: {len(out)} particle(s) outside the box: {where}"

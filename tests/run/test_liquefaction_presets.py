@@ -9,7 +9,6 @@ from engines.model.observe import box_window, porosity
 from engines.model.pore_dem import disc_masses
 from engines.model.side_walls import SideWallTies
 from engines.run import scene as scenes
-from engines.yade.deposition import outside_box
 from packing.packing import Packing
 
 CASES = {  # SPEC §2.5: water, sides, spring, input, (k1, k2, k3)
@@ -66,7 +65,7 @@ def test_the_seismic_packing():
     sc = scenes.preset("liquefaction_case1")
     pk = Packing.load(sc.packing.file)
     assert pk.mobile.sum() == 192 and (~pk.mobile).sum() == 47
-    assert len(outside_box(pk)) == 0
+    assert len(pk.outside_box()) == 0
     walls = ~pk.mobile
     assert np.all(pk.density_factor[walls] == 10.0) and np.all(pk.r[walls] == sc.packing.wall_radius)
     dense = pk.mobile & (pk.density_factor == 10.0)

@@ -15,8 +15,10 @@ from engines.model.limits import DarcyStabilityError, critical_time_step
 from engines.model.pore_dem import disc_masses
 from engines.model.time_step import limits
 from engines.run import scene as scenes
-from engines.run.preflight import InputError, check_output_dir, number, preflight
+from engines.run.preflight import (RUN_OUTPUTS, InputError, check_fresh_output, check_output_dir, check_packing,
+                                   max_overlap, number, preflight)
 from engines.yade.deposition import scene_packing
+from packing.packing import Packing
 
 PRESET = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
 ENV = dict(os.environ, PYTHONPATH=ROOT, MPLBACKEND="Agg")
@@ -195,3 +197,156 @@ def test_output_dir_checks(tmp_path):
     with pytest.raises(InputError, match="--out"):
         check_output_dir("")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f"]
+
+
+# -- packings and output folders -------------------------------------------------------------------
+def test_every_preset_packing_file_passes():
+    files = 0
+    for name in sorted(os.listdir(scenes.SCENE_DIR)):
+        if name.endswith(".toml"):
+            sc = scenes.load(os.path.join(scenes.SCENE_DIR, name))
+            if sc.packing.source == "file":
+                check_packing(sc, scene_packing(sc))
+                files += 1
+    assert files >= 10  # the quick-sand and seismic presets
+
+
+def _moved_towards_neighbour(packing, overlap):
+    """The packing with particle 0 moved along the line to its nearest disc so that they overlap by ``overlap``."""
+    xz = packing.xz.copy()
+    d = np.linalg.norm(xz - xz[0], axis=1)
+    d[0] = np.inf
+    j = int(np.argmin(d))
+    gap = d[j] - packing.r[0] - packing.r[j]
+    xz[0] += (gap + overlap) * (xz[j] - xz[0]) / d[j]
+    return Packing(xz, packing.r, packing.group, packing.density_factor, path="p.csv"), j
+
+
+def test_the_overlap_tolerance_is_the_contact_laws_f_max_over_kn(packing):
+    sc = scenes.preset("quicksand_case1")
+    tol = max_overlap(sc.contact)
+    assert tol == sc.contact.f_max / sc.contact.kn == pytest.approx(2.5 / 1.4e6)
+    check_packing(sc, _moved_towards_neighbour(packing, 0.99 * tol)[0])
+    deep, j = _moved_towards_neighbour(packing, 1.01 * tol)
+    with pytest.raises(InputError, match=rf"^packing file p.csv, line 2: overlaps line {j + 2} by .* deeper than "
+                                         rf"\[contact\] f_max / kn = 1.79e-06 m$"):
+        check_packing(sc, deep)
+    check_packing(sc.with_overrides({"contact": {"f_max": 5.0}}), deep)  # a law that holds twice the force
+
+
+def test_check_fresh_output(tmp_path):
+    check_fresh_output(str(tmp_path / "new"))
+    check_fresh_output(str(tmp_path))  # empty
+    (tmp_path / "notes.txt").write_text("")
+    check_fresh_output(str(tmp_path))  # no run's outputs
+    assert RUN_OUTPUTS == ("summary.json", "history.csv", "checkpoint.pkl")
+    for name in RUN_OUTPUTS:
+        (tmp_path / name).write_text("")
+        with pytest.raises(InputError, match=rf"^--out {tmp_path} holds another run's outputs \(.*{name}.*\): "
+                                             rf"give --overwrite to replace them$"):
+            check_fresh_output(str(tmp_path))
+        (tmp_path / name).unlink()
+
+
+def _bad_packing_file(folder, edit):
+    """The quick-sand preset's packing with ``edit(lines)`` applied, saved in ``folder``."""
+    lines = open(os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")).read().splitlines()
+    edit(lines)
+    path = folder / "bad.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return f'[packing]\nfile = "bad.csv"\n', str(path)
+
+
+def _set(line_no, column, value):
+    def edit(lines):
+        cells = lines[line_no - 1].split(",")
+        cells[column] = value
+        lines[line_no - 1] = ",".join(cells)
+    return edit
+
+
+@pytest.mark.parametrize("edit,why", [
+    (_set(3, 2, "nan"), "line 3: r = nan is not a number"),
+    (_set(3, 2, "-1e-4"), "line 3: r = -0.0001 m: a radius must be > 0"),
+    (_set(4, 3, "9"), "line 4: group = 9.0: not a group code"),
+    (lambda lines: lines.append(lines[5]), "line 78: the same centre as line 6: a duplicated disc"),
+    (_set(2, 0, "0.5"), "line 2: particle centre (x, z) = (0.5, "),      # 0.5 m outside the 12.6-mm box
+    (_set(2, 1, "-0.5"), "line 2: particle centre (x, z) = ("),          # under the bottom
+])
+def test_quicksand_refuses_a_bad_packing_file_naming_it_and_the_line(tmp_path, edit, why):
+    body, path = _bad_packing_file(tmp_path, edit)
+    out = tmp_path / "run"
+    msg = refused(QUICKSAND + ["--scene", user_scene(tmp_path, body), "--out", str(out)], out, why)
+    assert f"packing file {path}, {why}" in msg
+
+
+def test_quicksand_refuses_a_deep_overlap_in_the_packing_file(tmp_path, packing):
+    """A 40 % overlap of the smaller radius (the issue's case), far above f_max / kn = 1.8 um."""
+    _, j = _moved_towards_neighbour(packing, 0.0)
+    deep, _ = _moved_towards_neighbour(packing, 0.4 * min(packing.r[0], packing.r[j]))
+    deep.save(str(tmp_path / "bad.csv"))
+    out = tmp_path / "run"
+    msg = refused(QUICKSAND + ["--scene", user_scene(tmp_path, '[packing]\nfile = "bad.csv"\n'), "--out", str(out)],
+                  out, "[contact] f_max / kn")
+    assert f"packing file {tmp_path / 'bad.csv'}, line 2: overlaps line {j + 2} by " in msg and "(40.0% of" in msg
+
+
+@pytest.mark.parametrize("name", RUN_OUTPUTS)
+def test_a_scene_script_refuses_an_out_holding_another_runs_outputs(tmp_path, name):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / name).write_text("another run's\n")
+    run = subprocess.run(QUICKSAND + ["--out", str(out)], cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1 and run.stderr.splitlines() == [
+        f"error: --out {out} holds another run's outputs ({name}): give --overwrite to replace them, "
+        f"or --resume {out} to continue that run"], run.stderr
+    assert os.listdir(out) == [name] and (out / name).read_text() == "another run's\n"
+
+
+def test_overwrite_replaces_another_runs_outputs_and_the_folder_is_printed(tmp_path):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "summary.json").write_text("{}")
+    (out / "snapshot_000.01ms.npz").write_text("")
+    run = subprocess.run(["yade", "-n", "-x", "yade_scripts/quicksand.py", "--duration", "2e-5", "--overwrite",
+                          "--out", str(out)], cwd=ROOT, env=ENV, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert f"output: {out}" in run.stdout.splitlines()
+    assert '"status": "completed"' in (out / "summary.json").read_text()
+    assert not (out / "snapshot_000.01ms.npz").exists()
+
+
+@pytest.mark.parametrize("argv", [["sand_layer.py"], ["stability.py"], ["crosscheck.py"], ["biaxial_study.py"],
+                                  ["tradeoffs.py", "study"], ["quicksand.py"],
+                                  ["calibrate.py", "--phi-star", "25", "--e50", "8000", "--sigma3", "200"]])
+def test_every_script_needs_an_explicit_out(tmp_path, argv):
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "yade_scripts", argv[0]), *argv[1:]], cwd=tmp_path, env=ENV,
+                         capture_output=True, text=True, timeout=120)
+    errors = [line for line in run.stderr.splitlines() if "error" in line]
+    assert run.returncode == 2 and len(errors) == 1 and "--out" in errors[0] and "required" in errors[0], run.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sand_layer_keeps_another_runs_outputs(tmp_path):
+    (tmp_path / "summary.json").write_text("{}")
+    run = subprocess.run([sys.executable, "yade_scripts/sand_layer.py", "--out", str(tmp_path)], cwd=ROOT, env=ENV,
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1 and run.stderr.splitlines() == [
+        f"error: --out {tmp_path} holds another run's outputs (summary.json): give --overwrite to replace them"]
+    assert os.listdir(tmp_path) == ["summary.json"]
+
+
+def test_the_sweep_runner_replaces_the_outputs_of_its_own_unfinished_job(tmp_path):
+    """In the job directory the sweep runner gave it (SWEEP_JOB_DIR), a job it re-runs (only jobs
+    that did not finish are) replaces that job's earlier outputs; any other folder stays refused."""
+    job = tmp_path / "job"
+    job.mkdir()
+    (job / "history.csv").write_text("an unfinished attempt\n")
+    argv = ["yade", "-n", "-x", "yade_scripts/quicksand.py", "--duration", "2e-5", "--out", str(job)]
+    run = subprocess.run(argv, cwd=ROOT, env={**ENV, "SWEEP_JOB_DIR": str(job)}, capture_output=True, text=True,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert '"status": "completed"' in (job / "summary.json").read_text()
+    run = subprocess.run(argv, cwd=ROOT, env={**ENV, "SWEEP_JOB_DIR": str(tmp_path / "other")}, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 1 and "holds another run's outputs" in run.stderr
