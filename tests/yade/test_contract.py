@@ -3,10 +3,8 @@ with one thing broken, and an engine error ending a plain `yade -x` script with 
 import math
 import os
 import subprocess
-import sys
 import textwrap
 
-import numpy as np
 import pytest
 import yade  # noqa: F401  (fails loudly if YADE is missing)
 
