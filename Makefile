@@ -27,9 +27,9 @@ ext: $(EXT_SO)
 $(EXT_SO): engines/yade/yadebulk/yadebulk.c engines/yade/yadebulk/steps.cpp
 	g++ -O2 -fPIC -shared -Wall -Wextra -o $@ -x c engines/yade/yadebulk/yadebulk.c -x c++ engines/yade/yadebulk/steps.cpp -ldl
 
-# The main job: Tarumi & Hakuno quick sand, case 1, with its figures.
+# The main job: Tarumi & Hakuno quick sand, case 1, with its figures (a second demo replaces the first).
 demo: deps
-	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --out $(OUT)/quicksand-case1
+	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --overwrite --out $(OUT)/quicksand-case1
 
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the unit tests
 # (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests instead of skipping).
@@ -104,8 +104,8 @@ LIQ_CONSERVING ?= 1 3
 LIQ_JOBS ?= 2
 LIQ_RUN := $(YADE) -n -x yade_scripts/liquefaction.py
 liquefaction: deps
-	@{ for n in $(LIQ_CASES); do echo "--case $$n --out $(OUT)/liquefaction/case$$n"; done; \
-	   for n in $(LIQ_CONSERVING); do echo "--case $$n --transfer conserving --out $(OUT)/liquefaction/case$$n-conserving"; done; } \
+	@{ for n in $(LIQ_CASES); do echo "--case $$n --overwrite --out $(OUT)/liquefaction/case$$n"; done; \
+	   for n in $(LIQ_CONSERVING); do echo "--case $$n --transfer conserving --overwrite --out $(OUT)/liquefaction/case$$n-conserving"; done; } \
 	 | xargs -P $(LIQ_JOBS) -L 1 $(LIQ_RUN)
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
