@@ -14,10 +14,16 @@ ORDER = ["engines.model", "engines.compiled", "engines.reference", "packing", "e
 NO_YADE = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
 LIBRARY = ["engines", "packing", "postproc"]
 SCRIPTS = ["yade_scripts", "benchmarks"]
-BOOTSTRAP = ('sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__"'
-             ' else __file__))))')
 SYS_PATH_EDIT = re.compile(r"sys\.path\.(insert|append|extend|remove|pop)\(|sys\.path\s*(\[[^]]*\])?\s*\+?=(?!=)")
 PROJECT = ("engines", "packing", "postproc", "benchmarks", "yade_scripts")
+
+
+def bootstrap(depth):
+    """The one line that puts the project's folder first on sys.path, in a script ``depth`` folders
+    below it (yade_scripts/x.py: 1, yade_scripts/examples/x.py: 2)."""
+    up = depth + 1
+    return ("sys.path.insert(0, " + "os.path.dirname(" * up
+            + 'os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__)' + ")" * up + ")")
 
 
 def modules(*tops):
@@ -143,7 +149,7 @@ def test_library_modules_never_edit_sys_path():
 
 def test_scripts_find_the_project_one_way():
     """A script (a file with a __main__ block) that imports the project puts the project's folder
-    on sys.path by BOOTSTRAP, once, before its first project import, and edits sys.path no other way
+    on sys.path by its bootstrap line, once, before its first project import, and edits sys.path no other way
     (but before_after.py, which also puts the tree it times first)."""
     problems = []
     for name, path in modules(*SCRIPTS).items():
@@ -154,7 +160,7 @@ def test_scripts_find_the_project_one_way():
         first_import = next((k for k, line in enumerate(lines)
                              if line.startswith(("from ", "import ")) and line.split()[1].split(".")[0] in PROJECT), None)
         edits = [k for k, line in enumerate(lines) if SYS_PATH_EDIT.search(line)]
-        boot = [k for k, line in enumerate(lines) if line == BOOTSTRAP]
+        boot = [k for k, line in enumerate(lines) if line == bootstrap(name.count("."))]
         if first_import is None:
             continue
         if len(boot) != 1 or boot[0] > first_import:

@@ -1,4 +1,4 @@
-"""The WaterEngine's contract (engines.yade.contract): each refusal, on example_engine's column
+"""The WaterEngine's contract (engines.yade.contract): each refusal, on viscel_column's column
 with one thing broken, and an engine error ending a plain `yade -x` script with status 1."""
 import math
 import os
@@ -16,10 +16,10 @@ SETTINGS = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4)
 
 
 def column():
-    """example_engine's column (fresh scene, dt = 1e-6 s): (bottom, left, right, grains) ids."""
+    """viscel_column's column (fresh scene, dt = 1e-6 s): (bottom, left, right, grains) ids."""
     from yade import O
 
-    from yade_scripts import example_engine as ex
+    from yade_scripts.examples import viscel_column as ex
     ids = ex.build_column()
     O.engines = ex.engines()
     O.dt = 1e-6
@@ -186,7 +186,7 @@ SCRIPT = """
 from yade import O
 from engines.model.pore_water import WaterSettings
 from engines.yade.water_engine import WaterEngine
-from yade_scripts import example_engine as ex
+from yade_scripts.examples import viscel_column as ex
 bottom, left, right, grains = ex.build_column()
 O.engines = ex.engines()
 O.dt = 1e-6

@@ -17,10 +17,10 @@ def packing():
 
 
 def test_example_script_inflow_raises_the_bottom_pressure():
-    """yade_scripts/example_engine.py: YADE's collider and ViscEl law, water every 10 steps."""
+    """yade_scripts/examples/viscel_column.py: YADE's collider and ViscEl law, water every 10 steps."""
     from yade import O
 
-    from yade_scripts.example_engine import main
+    from yade_scripts.examples.viscel_column import main
     water = main(["--steps", "3000"])
     net, U = water.model.water.net, water.pressures()
     assert O.iter == 3000 and water.k == 2990  # the runner ran every 10 steps, the last at 2990
@@ -33,6 +33,31 @@ def test_example_script_inflow_raises_the_bottom_pressure():
     expected = water.model.F[grain] + [0.0, 1000.0 * np.pi * r**2 * 9.81]
     np.testing.assert_allclose([O.forces.permF(bid)[0], O.forces.permF(bid)[2]], expected, rtol=1e-12, atol=1e-15)
     assert O.forces.permF(int(water.io.ids[0])).norm() == 0  # a wall disc
+
+
+def test_the_engine_replaces_a_users_permanent_forces_on_its_dynamic_discs():
+    """On its dynamic discs the engine sets the permanent force (docs/ENGINE.md): a user's own
+    setPermF there is replaced at the next water step, y component included; on its fixed discs
+    (walls) it is kept."""
+    from yade import O
+
+    from engines.model.pore_water import WaterSettings
+    water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 1000, 1)
+    grain = water._dynamic[0]
+    bid = int(water.io.ids[grain])
+    O.forces.setPermF(bid, (1.0, 2.0, 3.0))
+    O.step()
+    water()
+    O.step()  # YADE's permanent forces are read back after a step
+    r = O.bodies[bid].shape.radius
+    F = water.model.F[grain] + [0.0, 1000.0 * np.pi * r**2 * 9.81]
+    P = O.forces.permF(bid)
+    np.testing.assert_allclose([P[0], P[1], P[2]], [F[0], 0.0, F[1]], rtol=1e-12, atol=1e-15)
+    assert O.forces.permF(int(water.io.ids[0])).norm() == 0  # a wall disc: the engine leaves it alone
+    O.forces.setPermF(int(water.io.ids[0]), (1.0, 2.0, 3.0))
+    water()
+    O.step()
+    assert tuple(O.forces.permF(int(water.io.ids[0]))) == (1.0, 2.0, 3.0)
 
 
 def test_water_engine_with_frictmat_cundallstrack(packing):
@@ -80,11 +105,11 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
 
 
 def column_engine(settings, rebuild_interval, water_interval):
-    """example_engine's column in a fresh scene (dt = 1e-6 s) with a WaterEngine over all its discs."""
+    """viscel_column's column in a fresh scene (dt = 1e-6 s) with a WaterEngine over all its discs."""
     from yade import O
 
     from engines.yade.water_engine import WaterEngine
-    from yade_scripts import example_engine as ex
+    from yade_scripts.examples import viscel_column as ex
     bottom, left, right, grains = ex.build_column()
     O.engines = ex.engines()
     O.dt = 1e-6
@@ -107,7 +132,7 @@ def run_as(water, how, n):
 def test_drive_is_the_runner_without_the_pyrunner(water_interval, smoothing, k1, k3):
     """WaterEngine.drive(n) (the engine before O.step on its steps), in Python and compiled between
     rebuilds (kernels.water_drive_bulk_io), and the PyRunner with O.run(n) give the same run bit for
-    bit: example_engine's column with two rebuilds; water every 10 steps with drained sides, or
+    bit: viscel_column's column with two rebuilds; water every 10 steps with drained sides, or
     every step with the eq 45-46 smoothing and a k1 at which one water step needs sub-steps."""
     from yade import O
 

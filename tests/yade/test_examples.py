@@ -1,0 +1,29 @@
+"""The examples of yade_scripts/examples/, each run as a user runs it (``yade -n -x``, short):
+exit 0 and the physical checks it prints (yade_scripts.examples.report)."""
+import os
+import re
+import subprocess
+
+import pytest
+
+from engines import ROOT
+
+CHECKS = re.compile(r"^checks: (\d+) pores \((\d+) rebuilds\), max U (\S+) N/m \(E_w (\S+) N/m\), water balance error "
+                    r"(\S+), re-meshing (\S+) of the inflow, (\d+) grains outside the box$", re.M)
+
+
+@pytest.mark.parametrize("name, steps", [("frictmat_box", 2000), ("viscel_column", 3000), ("makecloud_discs", 2000)])
+def test_example_runs_physically(name, steps):
+    """Pores exist and were rebuilt, every U stays below E_w (eq 32: U < E_w while the void areas
+    are those of the current positions), the water balance closes to 1e-12, no grain left the box."""
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    p = subprocess.run(["yade", "-n", "-x", os.path.join("yade_scripts", "examples", f"{name}.py"), "--steps", str(steps)],
+                       capture_output=True, text=True, cwd=ROOT, env=env, timeout=600)
+    assert p.returncode == 0, p.stderr[-2000:]
+    found = CHECKS.findall(p.stdout)
+    assert len(found) == 1, p.stdout[-2000:]
+    pores, rebuilds, max_U, E_w, balance, _, outside = found[0]
+    assert int(pores) > 0 and int(rebuilds) > 0
+    assert float(max_U) <= float(E_w)
+    assert float(balance) <= 1e-12
+    assert int(outside) == 0
