@@ -20,13 +20,14 @@ class PoreDEM(pore_dem.PoreDEM):
     def kernel_step_args(self, rows, held):
         """The arguments of kernels.dem_step after (xz, F_out) (kernels.DEM_STEP) for step k, the
         forces to write F[rows] + held, or None when this step needs the general ``step`` (the
-        first step, a rebuild of the pores)."""
+        first step, a rebuild of the pores, and every step with a rebuild_distance: the positions
+        it checks are read inside the kernel call)."""
         law, wm = self.law, self.water_model
         if law.xz_prev is None:
             return None
         if wm is None:
             return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
-        if wm.rebuild_due(self.k):
+        if wm.rebuild_distance > 0 or wm.rebuild_due(self.k):
             return None
         return kernels.dem_step_args(rows, held, self.k % wm.water_interval == 0, law.kernel_args(),
                                      wm.kernel_args(wm.water_interval * self.dt), self._tie_args)

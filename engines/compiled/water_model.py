@@ -16,8 +16,9 @@ class WaterModel(water_model.WaterModel):
     build_steps, remesh_steps = cp.BUILD, cp.REMESH
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0):
-        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0)
+                 log=print, k0=0, rebuild_distance=0.0):
+        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
+                         rebuild_distance)
         self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
         self._buffers()
 
@@ -60,6 +61,10 @@ class WaterModel(water_model.WaterModel):
     def _part(self, name):
         """A view of the part ``name`` of the float buffer of kernels.water_step."""
         return kernels.WATER_FLOATS.part(self._floats, self._f_at, name)
+
+    def max_sq_moved(self, xz):
+        """max over the discs of |xz - xz_built|^2 [m^2] (kernels.max_sq_displacement)."""
+        return kernels.max_sq_displacement(np.ascontiguousarray(xz, float), self.xz_built)
 
     def rebuild(self, xz, k=None):
         super().rebuild(xz, k)

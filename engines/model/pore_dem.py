@@ -9,7 +9,8 @@ contract shared with the reference (engines/reference/model.py):
   a. du = x_t - x_{t-dt}, dpsi = omega dt (zero at k = 0)
   b. contact forces (engines.model.contact, eq 1-13)
   c. velocity adjustment of discs that became free (eq 18-24)
-  d. water: pores rebuilt at k = n rebuild_interval (n >= 1; WaterModel.rebuild_due); water advanced when
+  d. water: pores rebuilt at k = n rebuild_interval (n >= 1; WaterModel.rebuild_due), or with [numerics]
+     rebuild_distance > 0 when a disc has moved that far since the last build; water advanced when
      k % water_interval == 0 by water_interval dt at the areas of x_t; pressure forces (eq 33)
      recomputed then and held in between
   e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
@@ -65,7 +66,7 @@ def water_model(scene, packing, cls=WaterModel):
         return None
     num = scene.numerics
     return cls(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
-               num.dt, num.rebuild_interval, num.water_interval)
+               num.dt, num.rebuild_interval, num.water_interval, rebuild_distance=num.rebuild_distance)
 
 
 def pore_state(water_model, xz):

@@ -11,6 +11,11 @@ is one more pass over throats and pores inside the flow kernel (measured at a fe
 water step), about what testing whether the areas changed enough to need a new check would cost,
 so the check is exact at every step instead. Above it the step is sub-stepped with
 ``settings.substep`` and refused without.
+
+Rebuilds: one schedule (``WaterModel.rebuild_due``) with two triggers, every ``rebuild_interval``
+steps (``rebuild_due``, the paper's, SPEC §2.6) and, with ``rebuild_distance`` d > 0, as soon as a
+disc is more than d from its centre at the last build (YADE's collider keeps its Verlet lists so);
+the interval is then an upper bound.
 """
 import numpy as np
 
@@ -40,13 +45,15 @@ class WaterModel:
     r (N,) radii [m] (the true ones: pores use them even where a contact law enlarges them by
     eps_m/2); walls (N,) wall codes of engines.model.pores; xz (N, 2) initial centres [m], those
     of DEM step k0. ``F`` (N, 2) [N] holds the pressure forces of the last water step; ``k_built``
-    is the step of the last pore build (``rebuild_due``).
+    is the step of the last pore build (``rebuild_due``) and ``xz_built`` its centres.
+    rebuild_distance [m]: > 0 also rebuilds when a disc has moved more than this since the last
+    build (0: off, the interval only).
     """
 
     build_steps, remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH  # of build_pores and PoreWater.remesh
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0):
+                 log=print, k0=0, rebuild_distance=0.0):
         self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
         self.r = np.ascontiguousarray(r, float)
         self.walls = np.asarray(walls, np.int64)
@@ -54,12 +61,16 @@ class WaterModel:
         if self.rebuild_interval < 1 or self.water_interval < 1:
             raise ValueError(f"rebuild_interval and water_interval must be >= 1, got "
                              f"{rebuild_interval}, {water_interval}")
+        self.rebuild_distance = float(rebuild_distance)
+        if not self.rebuild_distance >= 0:
+            raise ValueError(f"rebuild_distance must be >= 0 [m], got {rebuild_distance}")
         self.log = log
         self.F = np.zeros((len(self.r), 2))
         self.n_rebuilds = 0
         self.k0 = self.k_built = int(k0)
         self.substeps_max = self.substeps_total = 0
         self.last_limit = np.inf  # Darcy limit of the last water step [s]
+        self.xz_built = np.array(xz, float)
         net = self._build(xz)
         self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
 
@@ -67,14 +78,24 @@ class WaterModel:
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps)
 
     # -- per step ---------------------------------------------------------------------------------
-    def rebuild_due(self, k):
-        """Is a pore rebuild due at step k (``rebuild_due``)?"""
-        return rebuild_due(k, self.k_built, self.k0, self.rebuild_interval)
+    def rebuild_due(self, k, xz=None):
+        """Is a pore rebuild due at step k (``rebuild_due``), or, with rebuild_distance > 0 and the
+        centres xz (N, 2) [m] of step k given, has a disc moved more than rebuild_distance since
+        the last build?"""
+        if rebuild_due(k, self.k_built, self.k0, self.rebuild_interval):
+            return True
+        d = self.rebuild_distance
+        return xz is not None and d > 0 and self.max_sq_moved(xz) > d * d
+
+    def max_sq_moved(self, xz):
+        """max over the discs of |xz - xz_built|^2 [m^2]."""
+        return float(np.max(np.sum((xz - self.xz_built) ** 2, axis=1)))
 
     def step(self, k, xz):
-        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when due (at k0 + n rebuild_interval),
-        advance when k % water_interval == 0. Returns True when ``F`` was recomputed."""
-        if self.rebuild_due(k):
+        """Step k of the DEM at centres xz (N, 2) [m]: rebuild when due (at k0 + n rebuild_interval,
+        or by displacement), advance when k % water_interval == 0. Returns True when ``F`` was
+        recomputed."""
+        if self.rebuild_due(k, xz):
             self.rebuild(xz, k)
         if k % self.water_interval != 0:
             return False
@@ -87,6 +108,7 @@ class WaterModel:
         old, new = self.water.net, self._build(xz)
         self.water.remesh(new, self._void_area(new, xz), self._void_area(old, xz), xz=xz, steps=self.remesh_steps)
         self.n_rebuilds += 1
+        self.xz_built = np.array(xz, float)
         if k is not None:
             self.k_built = int(k)
 

@@ -87,7 +87,8 @@ SCHEMA = {
     "numerics": {
         "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.model.time_step)"),
         "duration": (float, 0.06, POS, "simulated time [s]"),
-        "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2))"),
+        "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2)); with rebuild_distance > 0 an upper bound"),
+        "rebuild_distance": (float, 0.0, (0.0, math.inf), "> 0: the pores are also rebuilt as soon as a disc has moved more than this [m] since the last build (WaterEngine's default in users' scripts: 0.25 l_m, docs/ENGINE.md); 0: off, every rebuild_interval steps as the paper does"),
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
         # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor

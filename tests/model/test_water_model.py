@@ -54,3 +54,49 @@ def test_the_model_records_the_step_of_its_last_build():
         wm.step(k, pk.xz)
     assert (wm.n_rebuilds, wm.k_built) == (2, 8)
     assert np.isfinite(wm.F).all()
+
+
+def moved_model(cls, d, interval=1000):
+    """A quicksand_case1 WaterModel (class ``cls``) rebuilding by displacement d [m], with the
+    packing and the index of one particle."""
+    sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": interval, "water_interval": 1,
+                                                        "rebuild_distance": d}})
+    pk = Packing.load(sc.packing.file)
+    return water_model(sc, pk, cls), pk, int(np.flatnonzero(pk.mobile)[0])
+
+
+def shifted(xz, a, dist):
+    """xz with disc a moved by dist [m] along (3, 4) / 5."""
+    out = xz.copy()
+    out[a] += dist * np.array([0.6, 0.8])
+    return out
+
+
+def rebuild_steps_by_displacement(cls):
+    """The rebuild steps of a model with d = 1e-5 m asked at each step, one disc moved by hand
+    just under d at step 3 and just over at step 5, back to its built place at step 7 (moved over
+    d from the new build: rebuilt); the interval 20 still rebuilds at its steps 20, 40."""
+    d = 1e-5
+    wm, pk, a = moved_model(cls, d, interval=20)
+    under, over = shifted(pk.xz, a, d * (1 - 1e-9)), shifted(pk.xz, a, d * (1 + 1e-9))
+    built = []
+    for k in range(41):
+        xz = pk.xz if k < 3 else under if k < 5 else over if k < 7 else pk.xz
+        n = wm.n_rebuilds
+        wm.step(k, xz)
+        if wm.n_rebuilds > n:
+            built.append(k)
+            assert np.array_equal(wm.xz_built, xz)
+    return built
+
+
+def test_a_rebuild_is_due_exactly_when_a_disc_has_moved_past_the_rebuild_distance():
+    from engines.compiled.water_model import WaterModel as CompiledWaterModel
+    for cls in (WaterModel, CompiledWaterModel):
+        assert rebuild_steps_by_displacement(cls) == [5, 7, 20, 40], cls
+
+
+def test_without_rebuild_distance_a_moved_disc_does_not_rebuild():
+    wm, pk, a = moved_model(WaterModel, 0.0, interval=4)
+    far = shifted(pk.xz, a, 1e-3)
+    assert not wm.rebuild_due(1, far) and wm.rebuild_due(4, far)
