@@ -557,19 +557,27 @@ Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
 
 
 @jit
-def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, ids_in, xz, ids_out, F_out, rows, held,
-                        h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
+def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out, F_out,
+                        rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """WaterEngine.drive without Python: n DEM steps from step index k, each step whose
     (index - k0) is a multiple of water_interval preceded by water_forces_step_bulk_io (arguments
     from ids_in on), each step made by bridge's steps() (YADE's O.step()). totals (3,) [m^2] gets
     the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
     before stepping after a water step that did not answer 1 (sub-steps or a failure: its
-    bookkeeping is the caller's) or at an error code. Returns (DEM steps done, water steps done,
-    the last water step's answer or 1, the bridge's error code)."""
+    bookkeeping is the caller's) or at an error code; with moved2 > 0 [m^2], also before a water
+    step at which a disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] (a
+    rebuild by displacement is due: that water step is the caller's, nothing done of it). Returns
+    (DEM steps done, water steps done, the last water step's answer or 1, the bridge's error code)."""
     balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water = 0
     for s in range(n):
         if (k + s - k0) % water_interval == 0:
+            if moved2 > 0.0:  # the positions read once more, for the displacement since the build
+                rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
+                if rc != 0:
+                    return s, n_water, 1, rc
+                if max_sq_displacement(xz, xz_built) > moved2:
+                    return s, n_water, 1, 0
             rc, status, n_sub = water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
                                                           h, W, A_prev, q_prev, smoothing, substep, F_water,
                                                           ints, i_at, floats, f_at)
@@ -586,7 +594,7 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, ids_in, xz, id
     return n, n_water, 1, 0
 
 
-Layout.of(water_drive_bulk_io, 10).check(WATER_FORCES_STEP)
+Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
 
 
 @jit

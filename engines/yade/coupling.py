@@ -146,7 +146,8 @@ class YadeCoupling:
                 walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
                 self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
                                                 scene.contact.eps_m, packing.r, num.rebuild_interval,
-                                                num.water_interval, True, scene.material.rho_w, g, compiled)
+                                                num.water_interval, True, scene.material.rho_w, g, compiled,
+                                                rebuild_distance=num.rebuild_distance)
         self.io = yade_io.Bodies(self.ids)
         self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()

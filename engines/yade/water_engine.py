@@ -17,8 +17,9 @@ per metre of thickness, pores built, an inflow boundary when q_w > 0) and refuse
 the body; bodies added later are refused at the next rebuild.
 
 Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
-rebuilds the pores when due (engines.model.water_model.rebuild_due), measures the void areas (eq 29),
-advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
+rebuilds the pores when due (WaterModel.rebuild_due: a disc farther than ``rebuild_distance``
+from its centre at the last build, or each multiple of ``rebuild_interval`` steps from the
+engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
 (eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
 itself is engines.model.water_model.WaterModel's, by its compiled twin
 engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
@@ -39,6 +40,12 @@ from engines.model.water_model import WaterModel, steps_to_rebuild
 from engines.yade import contract
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
+# The default rebuild_distance, a fraction of l_m. Links join discs closer than l_m beyond touching
+# (eq 28) and a pore's void area is measured on the links of its build (eq 29): with every disc
+# within l_m / 4 of its centre at the build, a link's length has changed by less than l_m / 2, so
+# the built links stay those the discs would be given now to within half the link range, and the
+# measured areas stay close to the true ones (frictmat_box: every U <= E_w).
+REBUILD_FRACTION = 0.25
 
 
 class WaterEngine:
@@ -50,10 +57,14 @@ class WaterEngine:
     bodies; give them when the contact law enlarges the spheres by eps_m/2). eps_m: contact range
     of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
     dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
+    rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
+    farther than this from its centre at the last build (default None: REBUILD_FRACTION x l_m,
+    see there; 0: off); rebuild_interval [steps] bounds the time between rebuilds.
     """
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
-                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True):
+                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True,
+                 rebuild_distance=None):
         from yade import O  # YADE only here and below
 
         from engines.yade import yade_io
@@ -74,8 +85,10 @@ class WaterEngine:
             raise ValueError("set O.dt before creating the WaterEngine (the water step is water_interval x O.dt)")
         self.compiled = compiled  # engines.compiled.water_model.WaterModel, else the NumPy one
         model = compiled_water_model.WaterModel if compiled else WaterModel
+        if rebuild_distance is None:
+            rebuild_distance = REBUILD_FRACTION * l_m
         self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
-                           water_interval, k0=O.iter)
+                           water_interval, k0=O.iter, rebuild_distance=rebuild_distance)
         contract.check_pores(self.model.water.net, settings, len(ids), l_m)
         self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
@@ -106,7 +119,8 @@ class WaterEngine:
         and the next step's PyRunner). ``stop()`` true, or an error kept by an engine callback
         (yade_io.ERRORS), ends early. Without ``stop`` and without a PyRunner among O.engines, with
         the bulk bridge, the steps between two rebuilds run in compiled calls of about CHUNK_SECONDS
-        (``_drive_compiled``): the same run without Python per step."""
+        (``_drive_compiled``, which stops before a water step due for a rebuild by displacement: that
+        step is made here): the same run without Python per step."""
         from yade import O
         from yade.wrapper import PyRunner
 
@@ -119,10 +133,12 @@ class WaterEngine:
             m = min(n - done, self._steps_before_rebuild(O.iter), self._chunk) if fast else 0
             if m > 0:
                 t0 = time.perf_counter()
-                done += self._drive_compiled(m)
-                if m == self._chunk:
+                got = self._drive_compiled(m)
+                done += got
+                if got == m == self._chunk:
                     self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), 10), 1e6))
-                continue
+                if got == m or done >= n:
+                    continue
             if due(O.iter):
                 self()
             O.step()
@@ -138,7 +154,7 @@ class WaterEngine:
     def _drive_compiled(self, n):
         """Up to n steps by kernels.water_drive_bulk_io, no rebuild among them; returns the steps
         done (fewer after a water step that needed sub-steps: its bookkeeping and its step follow
-        here; an error is raised)."""
+        here; fewer before a water step due for a rebuild by displacement; an error is raised)."""
         from yade import O
 
         from engines.yade import yade_io
@@ -148,8 +164,10 @@ class WaterEngine:
         b = m.water.balance
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
         k = O.iter
-        done, n_water, n_sub, rc = yade_io.drive_water(n, k, m.k0, m.water_interval, totals, self.io, self._xz,
-                                                       self.forced, self._F_out, self._forces_step_args(args))
+        d = m.rebuild_distance
+        done, n_water, n_sub, rc = yade_io.drive_water(n, k, m.k0, m.water_interval, totals, m.xz_built, d * d,
+                                                       self.io, self._xz, self.forced, self._F_out,
+                                                       self._forces_step_args(args))
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             last = k + done - (1 if n_sub == 1 else 0)  # the last water step
@@ -163,21 +181,23 @@ class WaterEngine:
         return done
 
     def __call__(self):
-        """One water step: rebuild when due (the first call at or after each multiple of
-        rebuild_interval steps from the engine's creation), advance by water_interval x O.dt,
-        write the forces."""
+        """One water step: rebuild when due (a disc farther than rebuild_distance from its centre
+        at the last build, or the first call at or after each multiple of rebuild_interval steps
+        from the engine's creation), advance by water_interval x O.dt, write the forces."""
         from yade import O
         m = self.model
         self.k = O.iter
         h = m.water_interval * O.dt
-        rebuild = m.rebuild_due(self.k)
+        xz = self.io.positions() if m.rebuild_distance > 0 else None
+        rebuild = m.rebuild_due(self.k, xz)
         if self.compiled and not rebuild:  # read, water, write: one compiled call
             args = m.kernel_args(h)
             _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
                                         self._forces_step_args(args))
             m.finish_kernel_step(h, n_sub)
             return
-        xz = self.io.positions()
+        if xz is None:
+            xz = self.io.positions()
         if rebuild:
             contract.check_added(O.bodies, self._n_bodies)
             m.rebuild(xz, self.k)

@@ -144,13 +144,14 @@ def run_kernel(kernel, reader, xz, writer, out, args):
     return status, info
 
 
-def drive_water(n, k, k0, water_interval, totals, reader, xz, writer, out, args):
+def drive_water(n, k, k0, water_interval, totals, xz_built, moved2, reader, xz, writer, out, args):
     """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps from step
     k, the water steps' positions read from ``reader`` and forces out written to ``writer``
-    (Bodies), args those of kernels.water_forces_step after (xz, out). Returns its (steps, water
-    steps, answer, error code)."""
-    return kernels.water_drive_bulk_io(_BRIDGE, n, k, k0, water_interval, totals, reader.ids, xz, writer.ids, out,
-                                       *args)
+    (Bodies), args those of kernels.water_forces_step after (xz, out); it stops early before a
+    water step at which a disc is farther than sqrt(moved2) [m] from xz_built (moved2 > 0). Returns
+    its (steps, water steps, answer, error code)."""
+    return kernels.water_drive_bulk_io(_BRIDGE, n, k, k0, water_interval, totals, xz_built, moved2, reader.ids, xz,
+                                       writer.ids, out, *args)
 
 
 def check(rc, ids=None):

@@ -104,8 +104,9 @@ def test_water_engine_with_frictmat_cundallstrack(packing):
 
 
 
-def column_engine(settings, rebuild_interval, water_interval):
-    """viscel_column's column in a fresh scene (dt = 1e-6 s) with a WaterEngine over all its discs."""
+def column_engine(settings, rebuild_interval, water_interval, rebuild_distance=0.0):
+    """viscel_column's column in a fresh scene (dt = 1e-6 s) with a WaterEngine over all its discs
+    (rebuilt every rebuild_interval steps only, unless rebuild_distance [m] > 0)."""
     from yade import O
 
     from engines.yade.water_engine import WaterEngine
@@ -114,7 +115,8 @@ def column_engine(settings, rebuild_interval, water_interval):
     O.engines = ex.engines()
     O.dt = 1e-6
     return WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                       settings=settings, l_m=1.3e-4, rebuild_interval=rebuild_interval, water_interval=water_interval)
+                       settings=settings, l_m=1.3e-4, rebuild_interval=rebuild_interval, water_interval=water_interval,
+                       rebuild_distance=rebuild_distance)
 
 
 def run_as(water, how, n):
@@ -282,3 +284,46 @@ def test_the_engine_rebuilds_on_the_schedule_of_the_paper_law():
         water.model.rebuild = lambda xz, k=None: built.append(k) or rebuild(xz, k)
         run_as(water, how, 63)
         assert built == expected, how
+
+
+def test_rebuilds_by_displacement_are_the_same_run_by_the_runner_and_by_drive():
+    """With a rebuild_distance d of 1 um (the column settles by several d in 1205 steps) and no
+    interval within reach: the pores are rebuilt at water steps at which a disc is farther than d
+    from its built centre, and the PyRunner, drive in Python and drive compiled (stopping before
+    those steps) give the same run bit for bit."""
+    from yade import O
+
+    from engines.model.pore_water import WaterSettings
+    from engines.yade import yade_io
+    d, runs, chunks = 1e-6, [], []
+    for how in ("runner", "python", "compiled"):
+        water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 10**6, 5, rebuild_distance=d)
+        if how == "compiled":
+            compiled = water._drive_compiled
+            water._drive_compiled = lambda n: chunks.append(n) or compiled(n)
+        built, rebuild = [], water.model.rebuild
+        water.model.rebuild = lambda xz, k=None: built.append((k, water.model.max_sq_moved(xz))) or rebuild(xz, k)
+        run_as(water, how, 1205)
+        runs.append(([k for k, _ in built], O.iter, water.io.positions(), water.model.water.W.copy()))
+        assert all(moved > d * d and (k - water.model.k0) % 5 == 0 for k, moved in built), how
+    assert len(runs[0][0]) >= 3
+    if yade_io.BACKEND == "yadebulk":
+        assert len(chunks) > len(runs[0][0])  # the compiled loop ran, stopped before each of them
+    for other in runs[1:]:
+        assert other[:2] == runs[0][:2]
+        assert np.array_equal(other[2], runs[0][2]) and np.array_equal(other[3], runs[0][3])
+
+
+@pytest.mark.parametrize("law", ["paper", "yade"])
+def test_the_scene_option_rebuild_distance_rebuilds_by_displacement_in_both_laws(packing, law):
+    """[numerics] rebuild_distance d > 0 with no interval within reach: the pores are rebuilt,
+    each time with a disc farther than d from its built centre; d = 0 (the presets): never."""
+    for d in (1e-8, 0.0):
+        sc = scenes.preset("quicksand_case1", {"contact": {"law": law, "spring": "a"},
+                                               "numerics": {"rebuild_interval": 10**6, "rebuild_distance": d}})
+        cp = YadeCoupling(sc, packing)
+        model = cp.core.water_model if law == "paper" else cp.water_engine.model
+        moved, rebuild = [], model.rebuild
+        model.rebuild = lambda xz, k=None: moved.append(model.max_sq_moved(xz)) or rebuild(xz, k)
+        cp.run(300)
+        assert (len(moved) >= 2 and min(moved) > d * d) if d else moved == [], (law, d, moved)

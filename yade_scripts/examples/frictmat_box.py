@@ -53,13 +53,10 @@ O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
 O.dt = 0.5 * utils.PWaveTimeStep()
 O.run(2000, True)  # dry settling
 
-# the pore water, before NewtonIntegrator. At this dt (4.8e-5 s) the default rebuild_interval of
-# 1000 steps is 48 ms on one mesh: the pores go stale and U can rise far above E_w. Rebuilt at
-# every water step (10 steps), no grain moved more than 2.7e-5 m = 0.2 l_m between two rebuilds
-# (measured over the default run)
+# the pore water, before NewtonIntegrator. The pores are rebuilt when a grain has moved l_m / 4
+# since the last build (the engine's default rebuild_distance), at most 1000 steps apart
 water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4), l_m=1.3e-4,
-                    rebuild_interval=10, water_interval=10)
+                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4), l_m=1.3e-4, water_interval=10)
 O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
 O.run(args.steps, True)
 print(f"dt {O.dt:.3g} s, {len(grains)} grains, {O.iter} steps ({O.time * 1e3:.2f} ms)")

@@ -85,11 +85,11 @@ def main(argv):
     O.dt = 1e-6
 
     # the pore water, in a few lines: disc ids, wall groups, water constants; the runner goes
-    # after the InteractionLoop and before NewtonIntegrator. Pores rebuilt every 100 steps (0.1 ms):
-    # no grain moved more than 7.5e-6 m = 0.06 l_m between two rebuilds over the default run
+    # after the InteractionLoop and before NewtonIntegrator. The pores are rebuilt when a grain
+    # has moved l_m / 4 since the last build (the default rebuild_distance)
     water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
-                        rebuild_interval=100, water_interval=args.water_interval)
+                        water_interval=args.water_interval)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
     freeze_gc()  # optional: keeps Python's garbage collector off the scene's objects (faster writes)
 
