@@ -39,7 +39,7 @@ EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/
 TESTS = ["tests/model/test_pore_water.py", "tests/model/test_pores.py", "tests/model/test_contact.py",
          "tests/model/test_pore_dem.py", "tests/run/test_scene.py", "tests/model/test_pore_candidates.py",
          "tests/model/test_remesh_transfer.py", "tests/compiled/test_kernels.py",
-         "tests/model/test_limits.py"]
+         "tests/model/test_limits.py", "tests/model/test_fields.py"]
 COPY = ["engines", "packing", "yade_scripts", "tests"]
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_mutants.txt")
 KILLED = {"killed", "timeout", "segfault"}

@@ -1,6 +1,7 @@
 """The stability limits (engines.model.limits) on analytic cases: eq 52, the ties, the water
 stiffness, the Darcy bound (eigsh and Gershgorin) and the sub-step count."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -117,3 +118,62 @@ def test_sub_steps_are_the_ceiling_of_the_step_over_the_limit():
     assert lim.substeps(0.9e-3, 1e-3, False, 240.0) == 1
     assert lim.gershgorin_limit(0.0) == math.inf and lim.gershgorin_limit(4.0) == 0.5
     assert lim.substep_cost(1) == 1 and lim.substep_cost(5) == 1 + 4 * lim.SUBSTEP_COST
+
+
+def test_water_stiffness_weighs_each_disc_by_its_width_squared():
+    """k_w = E_w sum_p (2 r)^2 / A_p with unequal radii (2 r != 1, so the power of the width
+    shows), for an E_w small enough that k_w < 1 N/m; no open pore: no stiffness, no limit."""
+    xz, r0, net = _two_pores()
+    A = pg.measure(net, xz, r0).void_area
+    r = np.array([0.3, 0.45, 0.6, 0.8])
+    E_w = 1e-3
+    k = lim.water_stiffness(net, A, r, E_w)
+    for p in range(net.n_pores):
+        v = net.vertices_of(p)
+        assert np.all(k[v] >= E_w * 4 * r[v] ** 2 / A[p] * (1 - 1e-12))
+    assert k.sum() == pytest.approx(sum(E_w * np.sum(4 * r[net.vertices_of(p)] ** 2) / A[p]
+                                        for p in range(net.n_pores)), rel=1e-12)
+    assert k.max() < 1
+    mass, mobile = np.full(4, 2.0), np.ones(4, bool)
+    assert lim.water_stiffness_limit(net, A, r, E_w, mass, mobile) == pytest.approx(
+        2 * np.sqrt(2.0 / k.max()), rel=1e-12)
+    closed = np.zeros_like(A)  # every pore pinched shut: no stiffness at all
+    assert lim.water_stiffness_limit(net, closed, r, E_w, mass, mobile) == math.inf
+
+
+def test_check_water_stiffness_refuses_just_above_its_limit():
+    lim.check_water_stiffness(0.999e-4, 1e-4, 240.0)
+    with pytest.raises(ValueError, match=r"water-stiffness limit .*E_w = 240 N/m"):
+        lim.check_water_stiffness(1.001e-4, 1e-4, 240.0)
+
+
+def test_the_refusal_states_its_limit():
+    mass, kn = np.array([3.0]), 2e6
+    limit = 2 * math.sqrt(3.0 / kn)
+    with pytest.raises(ValueError) as err:
+        lim.check_contact(2 * limit, 1.0, mass, kn)
+    said = float(re.search(r"limit (\S+) s", str(err.value)).group(1))
+    assert said == pytest.approx(limit, rel=5e-3)  # printed to 3 digits
+
+
+def test_darcy_eigen_limit_without_exchange_and_for_a_slow_one():
+    """No permeability: no exchange, no limit (inf). k1 = 0.01 1/s: lambda = k < 1, 2 / k."""
+    xz, r, net = _two_pores()
+    m = pg.measure(net, xz, r)
+    dry = PoreWater(net, m.void_area, WaterSettings(E_w=1000.0, k1=0.0, k2=0.0))
+    assert lim.darcy_eigen_limit(dry, m.void_area, m.link_contact) == math.inf
+    slow = PoreWater(net, m.void_area, WaterSettings(E_w=1000.0, k1=0.01, k2=0.0))
+    assert lim.darcy_eigen_limit(slow, m.void_area, m.link_contact) == pytest.approx(2 / 0.01, rel=1e-12)
+
+
+def test_lambda_max_is_the_largest_eigenvalue_on_the_dense_path():
+    import scipy.sparse as sp
+    d = np.array([3.0, 1.0, 7.0, 2.0, 5.0])  # 3 <= n < 50: the dense path; the largest is not last
+    assert lim.lambda_max(sp.diags(d).tocsr()) == 7.0
+    assert lim.lambda_max(sp.csr_matrix((0, 0))) == 0.0
+
+
+def test_a_tie_of_one_newton_per_metre_still_bounds_the_step():
+    ties = _column(ks=1.0)
+    mass = np.full(ties.n, 4.0)
+    assert lim.tie_limit(ties, mass) == pytest.approx(2.0, rel=1e-15)
