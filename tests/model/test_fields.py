@@ -5,17 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from engines.model.fields import (
-    COUNT,
-    NONNEG,
-    POS,
-    POS_OR_AUTO,
-    POSITIVE,
-    Field,
-    check,
-    check_each,
-    describe_check,
-)
+from engines.model.fields import COUNT, NONNEG, POS, POS_OR_AUTO, POSITIVE, Field, check, check_each, describe_check
 
 
 def test_numbers_are_converted_to_the_fields_type():
