@@ -16,9 +16,9 @@ class WaterModel(water_model.WaterModel):
     build_steps, remesh_steps = cp.BUILD, cp.REMESH
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0, rebuild_distance=0.0):
+                 log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
         super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
-                         rebuild_distance)
+                         rebuild_distance, flat_walls)  # flat walls: refused by build_pores (NumPy only)
         self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
         self._buffers()
 

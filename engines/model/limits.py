@@ -78,10 +78,12 @@ def check_ties(dt, ties, mass):
 
 # -- the stiffness the water adds -------------------------------------------------------------------
 def water_stiffness(net, A, r, E_w):
-    """k_w (N,) [N/m]: E_w sum over the open pores p that disc i bounds of (2 r_i)^2 / A_p."""
+    """k_w (N,) [N/m]: E_w sum over the open pores p that disc i bounds of (2 r_i)^2 / A_p (flat
+    walls, vertices >= N, take none)."""
     k = np.zeros(net.n_discs)
     for p in np.flatnonzero(A > net.a_min):
         v = net.vertices_of(p)
+        v = v[v < net.n_discs]
         k[v] += E_w * (2 * r[v]) ** 2 / A[p]
     return k
 

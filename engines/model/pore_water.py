@@ -10,6 +10,9 @@ modulus E_w in N/m, permeabilities k in 1/s, flows q in m^2/s.
 * free surface (a pore with a non-wall edge on the outer face): q = k1 W U / E_w to U = 0 outside
 * drained side walls: q = k3 W U / E_w for pores touching a side wall; undrained: nothing
 * quick-sand inflow: q_w into every pore that has a bottom-wall disc as a vertex (§5.1)
+* flat walls (engines.model.flat_walls, SPEC §2.6), by their boundary: a pore with a drained one as a
+  vertex drains as a side-wall pore (booked as side outflow), one with an inflow one receives q_w
+  as a bottom pore (once per pore, however many such walls or wall discs it has); undrained: nothing
 * optional smoothing (eq 45-46): the areas and the pore-to-pore flows used are the running
   averages [A]_t = ([A]_{t-dt} + A'_t)/2 and [q]_t = ([q]_{t-dt} + q'_t)/2 of the values used at the
   previous step and the new ones; boundary outflows are not smoothed
@@ -151,7 +154,10 @@ class PoreWater:
         net, s = self.net, self.settings
         side = net.pore_touches["left"] | net.pore_touches["right"]
         drained = side if s.sides == "drained" else np.zeros_like(side)
-        return net.pore_surface, drained, net.pore_touches["bottom"]
+        inflow = net.pore_touches["bottom"]
+        if net.flat_walls:
+            drained, inflow = drained | net.flat_wall_pores("drained"), inflow | net.flat_wall_pores("inflow")
+        return net.pore_surface, drained, inflow
 
     def flows(self, A, link_contact):
         """Throat and boundary flows [m^2/s] for void areas A and link states (eq 38-43)."""

@@ -20,6 +20,9 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 * The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
   a uniform pressure gives exactly zero net force.
+* Flat walls (engines.model.flat_walls, SPEC §2.6) add zero-radius vertices on the faces: the feet of
+  the discs linked to a wall and the corners of two walls. The link arrays index these vertices
+  after the N discs (``vertex_positions``); the pores' vertex sets count each wall as one vertex.
 
 Every step of a build but qhull (``BuildSteps``), and of the re-meshing in engines.model.pore_water, has
 a compiled twin in engines.compiled.pores (``steps=engines.compiled.pores.BUILD``, what the water engine
@@ -40,9 +43,11 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
+from engines.model import flat_walls as fw
 from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
 
 OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
+FLAT_VERTEX = WALL_RIGHT + 1  # the wall code of a flat wall's vertex: a link between two is a wall edge
 
 
 def check_finite_array(name, a, shape=None):
@@ -76,8 +81,11 @@ def check_discs(xz, r):
 class PoreNetwork:
     """Topology of the pores; fixed between rebuilds (positions move, the graph does not).
 
-    Attributes (N discs, L links, Np pores, Nt throats, K pore corners):
+    Attributes (N discs, L links, Np pores, Nt throats, K pore corners, W flat walls):
       n_discs, n_pores
+      wall_vertices  the flat_walls.WallVertices of the flat walls (None: none); with them the
+                     disc indices of tri, links, he_* and corner_disc run over its vertices
+      pore_walls     (W, Np) bool: the pore has flat wall w as a vertex
       tri, tri_pore  triangles inside pores (counter-clockwise at build) and their pore
       links          (L, 2) linked disc pairs (eq 28), i < j
       link_pores     (L, 2) pore on the left and on the right of i->j (OUTER = outer face or closed)
@@ -85,7 +93,7 @@ class PoreNetwork:
       pore_surface   (Np,) bool: the pore has a non-wall edge on the outer face (free surface)
       pore_touches   dict wall name -> (Np,) bool: the pore has a disc of that wall as a vertex
       pore_vertex_ptr, pore_vertex_idx   the vertex set of each pore (rattlers included) in CSR
-                     form: sorted discs of pore p are idx[ptr[p]:ptr[p + 1]]
+                     form: sorted discs of pore p are idx[ptr[p]:ptr[p + 1]]; flat wall w is N + w
       pore_signature (Np,) uint64 hash of each vertex set (equal sets, equal signatures)
       he_org, he_dst, he_left, he_next   half-edges of the links: h < L runs i->j of link h,
                      h >= L runs j->i of link h - L; he_left is the pore on its left; he_next the
@@ -130,10 +138,22 @@ class PoreNetwork:
     eps_m: float = 0.0
     l_m: float = 0.0
     n_inserted: int = 0
+    wall_vertices: fw.WallVertices = None
+    pore_walls: np.ndarray = None
 
     @property
     def n_pores(self):
         return len(self.pore_surface)
+
+    @property
+    def flat_walls(self):
+        """The FlatWall tuple of the network (empty: none)."""
+        return () if self.wall_vertices is None else self.wall_vertices.walls
+
+    def flat_wall_pores(self, boundary):
+        """(Np,) bool: the pore has a flat wall of that boundary ("drained", "inflow", ...) as a vertex."""
+        on = [w for w, wall in enumerate(self.flat_walls) if wall.boundary == boundary]
+        return self.pore_walls[on].any(axis=0) if on else np.zeros(self.n_pores, bool)
 
     def vertices_of(self, p):
         """Sorted disc indices of the vertex set of pore p."""
@@ -345,15 +365,17 @@ class _FlipTriangulation:
         self._star(d).add(c)
 
 
-def insert_missing_links(xz, r, tri, reach, steps=None):
+def insert_missing_links(xz, r, tri, reach, steps=None, wall_vertices=None):
     """Make every eq 28 pair between triangulation vertices that crosses no link an edge (and so a
     link), by edge flips, the pairs in order of their gap R - r_i - r_j (then of their indices).
     Only edges that are not links are flipped, so no link is lost.
 
     Returns (tri, number of pairs inserted). ``reach`` = eps_m + l_m [m]; ``steps``: BuildSteps
-    (default NUMPY_BUILD).
+    (default NUMPY_BUILD); ``wall_vertices``: the flat_walls.WallVertices of xz, r (their links).
     """
-    missing = (steps or NUMPY_BUILD).missing_pairs(xz, r, reach, tri)
+    wv = wall_vertices
+    missing = (steps or NUMPY_BUILD).missing_pairs(xz, r, reach, tri) if wv is None else \
+        _missing_pairs(xz, r, reach, tri, wv)
     if not len(missing):
         return tri, 0
     d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
@@ -362,7 +384,8 @@ def insert_missing_links(xz, r, tri, reach, steps=None):
     rr = r.tolist()
 
     def is_link(a, b):  # eq 28
-        return rr[a] + rr[b] + reach >= np.hypot(ft.p[b][0] - ft.p[a][0], ft.p[b][1] - ft.p[a][1])
+        eq28 = rr[a] + rr[b] + reach >= np.hypot(ft.p[b][0] - ft.p[a][0], ft.p[b][1] - ft.p[a][1])
+        return eq28 if wv is None else bool(wv.is_link(a, b, eq28))
 
     inserted = 0
     for k, l in missing.tolist():
@@ -374,10 +397,15 @@ def insert_missing_links(xz, r, tri, reach, steps=None):
     return (ft.triangles() if inserted else tri), inserted
 
 
-def _missing_pairs(xz, r, reach, tri):
-    """The eq 28 pairs (M, 2), i < j, of triangulation vertices that are no edge of ``tri``."""
+def _missing_pairs(xz, r, reach, tri, wall_vertices=None):
+    """The eq 28 pairs (M, 2), i < j, of triangulation vertices that are no edge of ``tri``; with
+    ``wall_vertices``, the links disc - foot too (flat_walls.WallVertices.is_link)."""
     n = len(r)
-    pairs = eq28_pairs(xz, r, reach)
+    if wall_vertices is None:
+        pairs = eq28_pairs(xz, r, reach)
+    else:
+        d = wall_vertices.n
+        pairs = np.concatenate([eq28_pairs(xz[:d], r[:d], reach), wall_vertices.disc_feet(np.unique(tri))])
     is_vertex = np.zeros(n, bool)
     is_vertex[tri.ravel()] = True
     edge_keys = np.unique(np.sort(tri[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1) @ np.array([n, 1]))
@@ -396,12 +424,14 @@ def _locate(xz, tri, points):
     return np.where(inside.any(axis=1), inside.argmax(axis=1), -1)
 
 
-def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, steps=None):
+def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4, steps=None, flat_walls=()):
     """Build links (eq 28) and pores (§3.1) for discs at ``xz`` [m] with radii ``r`` [m].
 
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
     An edge between two wall discs is a wall element, not a free surface. The candidate links are
     the regular triangulation plus the eq 28 pairs it hides (module docstring).
+    ``flat_walls``: flat_walls.FlatWall, ... (SPEC §2.6): the triangulation is that of the discs
+    and the wall vertices of the build (flat_walls.WallVertices.active); NumPy steps only.
     ``steps``: the BuildSteps, by default NUMPY_BUILD, the readable NumPy functions (``_lifted_points``,
     ``_faces``, ``_links_and_corners``, ...); engines.compiled.pores.BUILD: everything but qhull by
     compiled kernels, the same network (tests/compiled/test_pores.py).
@@ -420,22 +450,74 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
         raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     steps = steps or NUMPY_BUILD
+    if flat_walls:
+        return _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, fw.WallVertices(flat_walls, n))
     tri = regular_triangulation(xz, r, steps)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)
     tri, n_inserted = insert_missing_links(xz, r, tri, eps_m + l_m, steps)
-    nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = steps.faces(xz, r, tri, eps_m + l_m, a_min)
+    return _network(xz, r, walls, tri, n_inserted, eps_m, l_m, a_min, steps.faces, steps.links_and_corners)
+
+
+def _network(xz, r, walls, tri, n_inserted, eps_m, l_m, a_min, faces, links_and_corners):
+    """The PoreNetwork of the vertices at xz with radii r and wall codes ``walls`` on the
+    triangulation ``tri`` (links inserted), by the steps ``faces`` and ``links_and_corners``."""
+    nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = faces(xz, r, tri, eps_m + l_m, a_min)
     t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
-    *arrays, touches = steps.links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
+    *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
                                          off_mesh[p_in >= 0], p_in[p_in >= 0])
     arrays = dict(zip(NETWORK_ARRAYS, arrays))
     links = arrays["links"]
     return PoreNetwork(
-        n_discs=n, **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]],
+        n_discs=len(r), **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]],
         pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
         a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
+
+
+def _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv):
+    """build_pores with the flat walls of the flat_walls.WallVertices ``wv``: the network of the
+    discs and the wall vertices (flat_walls module docstring), whose vertex sets count each wall
+    as one vertex (``_wall_vertex_sets``)."""
+    if steps is not NUMPY_BUILD:
+        raise ValueError(fw.NUMPY_ONLY)
+    wv.check_inside(xz)
+    n, reach = wv.n, eps_m + l_m
+    points, radii = wv.positions(xz), wv.radii(r)
+    active = wv.active(xz, r, reach)
+    tri = regular_triangulation(points[active], radii[active], steps)
+    if tri is None:
+        net = _empty_network(n, a_min, eps_m, l_m)
+    else:
+        tri, n_inserted = insert_missing_links(points, radii, active[tri], reach, steps, wv)
+        codes = np.concatenate([walls, np.full(wv.n_vertices - n, FLAT_VERTEX)])
+
+        def faces(*args):  # the wall vertices that are no vertex of the build are no rattlers
+            *out, off_mesh = _faces(*args, wall_vertices=wv)
+            return *out, off_mesh[off_mesh < n]
+
+        net = _network(points, radii, codes, tri, n_inserted, eps_m, l_m, a_min, faces, _links_and_corners)
+    net.n_discs, net.wall_vertices = n, wv
+    net.pore_vertex_ptr, net.pore_vertex_idx, net.pore_signature, net.pore_walls = _wall_vertex_sets(
+        wv, net.pore_vertex_ptr, net.pore_vertex_idx)
+    return net
+
+
+def _wall_vertex_sets(wv, ptr, idx):
+    """The pores' vertex sets (CSR ptr, idx over the vertices of flat_walls.WallVertices ``wv``) with
+    the vertices on flat wall w counted as one, N + w (re-meshing rules (a)-(d)): (ptr, idx,
+    signature, pore_walls (W, Np) bool: the pore has a vertex on wall w)."""
+    n, n_p = wv.n, len(ptr) - 1
+    pore = np.repeat(np.arange(n_p), np.diff(ptr))
+    disc = idx < n
+    k, w = wv.split_bits(wv.bits[idx])
+    pore_walls = np.zeros((len(wv.walls), n_p), bool)
+    pore_walls[w, pore[k]] = True
+    m = n + len(wv.walls)
+    key = np.unique(np.concatenate([pore[disc] * m + idx[disc], pore[k] * m + n + w]))
+    ptr = np.searchsorted(key // m, np.arange(n_p + 1))
+    return ptr, key % m, _set_signatures(ptr, key % m), pore_walls
 
 
 NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link", "pore_surface",
@@ -444,7 +526,7 @@ NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "thr
                   "corner_theta0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
 
 
-def _faces(xz, r, tri, reach, a_min):
+def _faces(xz, r, tri, reach, a_min, wall_vertices=None):
     """The faces of the link graph from counter-clockwise triangles ``tri`` (T, 3).
 
     Half-edge h = 3 t + k of triangle t runs a = tri[t, k+1] -> b = tri[t, k+2] (the edge opposite
@@ -452,6 +534,7 @@ def _faces(xz, r, tri, reach, a_min):
     (eq 28 with reach = eps_m + l_m), tri_pore (T,) pore of each triangle (OUTER: the outer face or
     a closed one), bounded (T,) the triangle is not in the outer face, n_pores, n_closed faces,
     off_mesh: the discs in no triangle). Pores are numbered in the order of their first triangle.
+    ``wall_vertices``: the flat_walls.WallVertices of xz, r (their links: WallVertices.is_link).
     """
     t_count, n = len(tri), len(r)
     nb = _neighbours(tri).ravel()
@@ -459,6 +542,8 @@ def _faces(xz, r, tri, reach, a_min):
     b = tri[:, [2, 0, 1]].ravel()
     d = xz[b] - xz[a]
     is_link = r[a] + r[b] + reach >= np.hypot(d[:, 0], d[:, 1])  # eq 28
+    if wall_vertices is not None:
+        is_link = wall_vertices.is_link(a, b, is_link)
 
     # Pores: triangles joined across non-link edges; a non-link hull edge joins the outer face.
     joins = ~is_link
@@ -526,8 +611,8 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri[in_pore].ravel(), rat_pore * n + rat_disc]))
     pv_pore, pv_disc = pv_key // n, pv_key % n
     ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
-    signature = np.add.reduceat(_mix64(pv_disc), ptr[:-1]) if n_pores else np.zeros(0, np.uint64)  # no empty pore
-    touches = np.zeros((WALL_RIGHT + 1, n_pores), bool)
+    signature = _set_signatures(ptr, pv_disc)
+    touches = np.zeros((max(WALL_RIGHT, int(walls.max(initial=0))) + 1, n_pores), bool)
     touches[walls[pv_disc], pv_pore] = True
 
     # Boundary corners of the pores: the paper's walk over the link half-edges.
@@ -562,6 +647,12 @@ class BuildSteps(NamedTuple):
 
 
 NUMPY_BUILD = BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, _links_and_corners)
+
+
+def _set_signatures(ptr, v):
+    """(Np,) uint64 signature of each vertex set v[ptr[p]:ptr[p + 1]] (none empty): the wrapping sum
+    of the vertices' ``_mix64`` keys."""
+    return np.add.reduceat(_mix64(v), ptr[:-1]) if len(ptr) > 1 else np.zeros(0, np.uint64)
 
 
 def _mix64(v):
@@ -617,7 +708,9 @@ def measure(net, xz, r):
     Polygon area: shoelace over each pore's boundary links. Interior angle at each corner (eq 29):
     the build-time angle plus the difference of its two links' turns since the build (from
     ``link_vec0``), taken in (-pi, pi] (valid while no corner turns by pi between rebuilds).
+    Flat walls: their vertices are placed from the discs (``vertex_positions``), with radius 0.
     """
+    xz, r = vertex_positions(net, xz), vertex_radii(net, r)
     i, j = net.links[:, 0], net.links[:, 1]
     x, z = np.ascontiguousarray(xz[:, 0]), np.ascontiguousarray(xz[:, 1])
     xi, zi = x[i], z[i]
@@ -641,12 +734,14 @@ def pressure_forces(net, r, U, meas):
     Summing eq 33 over the pores around disc a gives, per link a-b with unit vector u = (b - a)/R,
     F_a += r_a (U_right - U_left) perp(u), perp(u) = (-u_z, u_x), and the same for b with r_b.
     The outer face and closed faces have U = 0. No torque (pressure acts through the centre).
-    ``meas`` is the PoreMeasures of the current positions.
+    ``meas`` is the PoreMeasures of the current positions. The wall vertices of flat walls have
+    r = 0 and take nothing here: their wall edges' force is ``flat_wall_forces``.
     """
-    n = net.n_discs
+    r = vertex_radii(net, r)
+    n = len(r)
     F = np.zeros((n, 2))
     if len(net.links) == 0:
-        return F
+        return F[:net.n_discs]
     Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
     i, j = net.links[:, 0], net.links[:, 1]
     s = (Uo[net.link_pores[:, 1]] - Uo[net.link_pores[:, 0]]) / meas.link_length
@@ -654,11 +749,54 @@ def pressure_forces(net, r, U, meas):
     ri, rj = r[i], r[j]
     F[:, 0] = np.bincount(i, ri * px, minlength=n) + np.bincount(j, rj * px, minlength=n)
     F[:, 1] = np.bincount(i, ri * pz, minlength=n) + np.bincount(j, rj * pz, minlength=n)
-    return F
+    return F[:net.n_discs]
+
+
+def flat_wall_forces(net, U, meas):
+    """Normal force (W,) [N per m thickness] of the pore pressures U (Np,) [N/m] on each flat wall,
+    positive when it pushes the wall outward (away from the discs; SPEC §2.6): the sum over the
+    wall's edges of U x edge length. A wall edge lies on the face, so its outer side is the outer
+    face (U = 0) and U of its pore is the sum over both sides. ``meas``: PoreMeasures."""
+    wv = net.wall_vertices
+    if wv is None:
+        return np.zeros(0)
+    Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
+    a, b = net.links[:, 0], net.links[:, 1]
+    k, w = wv.split_bits(wv.bits[a] & wv.bits[b])
+    U_edge = Uo[net.link_pores[k, 0]] + Uo[net.link_pores[k, 1]]
+    return np.bincount(w, U_edge * meas.link_length[k], minlength=len(wv.walls))
+
+
+class WallReactions(NamedTuple):
+    """Normal forces (W,) [N per m thickness] on the flat walls, positive pushing a wall outward
+    (the wall's reaction on the bed is the same along its inward normal)."""
+
+    total: np.ndarray  # the water's part plus the discs' contact forces
+    water: np.ndarray  # flat_wall_forces: the pore pressures on the wall edges
+
+
+def wall_reactions(net, U, meas, contact):
+    """WallReactions of the flat walls of ``net`` at pore pressures U (Np,) [N/m] (PoreMeasures
+    ``meas``), ``contact`` (W,) [N/m] the normal force of the discs' contacts on each wall (from
+    the DEM's contact law, positive pushing the wall outward)."""
+    water = flat_wall_forces(net, U, meas)
+    return WallReactions(water + np.asarray(contact, float), water)
+
+
+def vertex_positions(net, xz):
+    """Positions [m] of the network's vertices: the discs' xz (N, 2), then the flat walls' vertices
+    (flat_walls.WallVertices.positions)."""
+    return xz if net.wall_vertices is None else net.wall_vertices.positions(xz)
+
+
+def vertex_radii(net, r):
+    """Radii [m] of the network's vertices: the discs' r (N,), then 0 for the flat walls' vertices."""
+    return r if net.wall_vertices is None else net.wall_vertices.radii(r)
 
 
 def pore_centroids(net, xz):
     """Area-weighted centroid of each pore polygon (Np, 2) [m]."""
+    xz = vertex_positions(net, xz)
     p = xz[net.tri]
     area = _signed_area(p)
     c = p.mean(axis=1)
@@ -709,8 +847,9 @@ def pore_overlaps(old_net, new_net, xz):
     triangles: a triangle present in both networks (same three discs) overlaps only itself; the
     others are clipped against the nearby triangles of the other network (``_clip_areas``).
     Compiled twin: engines.compiled.pores.REMESH.pore_overlaps (the same pairs, the areas summed in
-    another order).
+    another order). Both networks have the same flat walls, if any.
     """
+    xz = vertex_positions(old_net, xz)
     n = len(xz)
     to, tn = old_net.tri, new_net.tri
 

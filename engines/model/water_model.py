@@ -47,14 +47,17 @@ class WaterModel:
     of DEM step k0. ``F`` (N, 2) [N] holds the pressure forces of the last water step; ``k_built``
     is the step of the last pore build (``rebuild_due``) and ``xz_built`` its centres.
     rebuild_distance [m]: > 0 also rebuilds when a disc has moved more than this since the last
-    build (0: off, the interval only).
+    build (0: off, the interval only). flat_walls: engines.model.flat_walls.FlatWall, ... (SPEC
+    §2.6); ``F_walls`` (W,) [N/m] holds the pore water's normal force on each of them
+    (pores.flat_wall_forces) of the last water step.
     """
 
     build_steps, remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH  # of build_pores and PoreWater.remesh
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0, rebuild_distance=0.0):
+                 log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
         self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
+        self.flat_walls = tuple(flat_walls)
         self.r = np.ascontiguousarray(r, float)
         self.walls = np.asarray(walls, np.int64)
         self.dt, self.rebuild_interval, self.water_interval = float(dt), int(rebuild_interval), int(water_interval)
@@ -66,6 +69,7 @@ class WaterModel:
             raise ValueError(f"rebuild_distance must be >= 0 [m], got {rebuild_distance}")
         self.log = log
         self.F = np.zeros((len(self.r), 2))
+        self.F_walls = np.zeros(len(self.flat_walls))
         self.n_rebuilds = 0
         self.k0 = self.k_built = int(k0)
         self.substeps_max = self.substeps_total = 0
@@ -75,7 +79,8 @@ class WaterModel:
         self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
 
     def _build(self, xz):
-        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps)
+        return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps,
+                              flat_walls=self.flat_walls)
 
     # -- per step ---------------------------------------------------------------------------------
     def rebuild_due(self, k, xz=None):
@@ -121,7 +126,9 @@ class WaterModel:
         m = pg.measure(self.water.net, xz, self.r)
         self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
         A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
-        self.F = pg.pressure_forces(self.water.net, self.r, self.water.pressure(A), m)
+        U = self.water.pressure(A)
+        self.F = pg.pressure_forces(self.water.net, self.r, U, m)
+        self.F_walls = pg.flat_wall_forces(self.water.net, U, m)
 
     # -- observations ------------------------------------------------------------------------------
     def void_area(self, xz):

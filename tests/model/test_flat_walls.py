@@ -1,0 +1,255 @@
+"""Flat walls as pore boundaries (SPEC §2.6): exact wall pores, forces on discs and walls (eq 33),
+corners, boundary flows, re-meshing with walls."""
+import numpy as np
+import pytest
+
+from engines.model import pores as pg
+from engines.model.flat_walls import FlatWall
+from engines.model.pore_water import PoreWater, WaterSettings, pressures_by_rule, rule_counts
+from engines.model.water_model import WaterModel
+from tests.layouts import random_sequential, square_lattice
+from tests.oracles import pore_polygon
+
+R = 1.0
+
+
+def bottom(boundary="undrained", z=0.0):
+    return FlatWall(1, z, +1, boundary)
+
+
+def box(width, height, boundaries=("undrained",) * 4):
+    """Bottom, left, right, top walls of the box [0, width] x [0, height] [m]."""
+    b, left, right, top = boundaries
+    return (FlatWall(1, 0.0, +1, b), FlatWall(0, 0.0, +1, left), FlatWall(0, width, -1, right),
+            FlatWall(1, height, -1, top))
+
+
+def lattice_box(nx, nz, gap=0.0):
+    """nx x nz equal touching discs of radius R in a square lattice, ``gap`` [m] from the four walls
+    of their box."""
+    xz = square_lattice(nx, nz, 2 * R, origin=(R + gap, R + gap))
+    return xz, np.full(len(xz), R), box(2 * R * nx + 2 * gap, 2 * R * nz + 2 * gap)
+
+
+def random_box(seed, size=12.0):
+    """A loose random packing of 25-40 discs (radii 0.6-1.0 m) inside a closed box of side ``size`` [m]."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_sequential(rng.uniform(1.2, 2.0, 300), size - 2.0, size - 2.0, rng)
+    return xz + 1.0, r, box(size, size)
+
+
+def arc_forces(net, xz, r, U):
+    """eq 33 summed over the pores, from the pores' polygons: on the arc of disc v between the
+    directions to its next and previous polygon vertices, F = U r (-(sin a2 - sin a1), cos a2 - cos a1).
+    An oracle for pores.pressure_forces (N, 2) [N/m]."""
+    P, n = pg.vertex_positions(net, xz), len(r)
+    F = np.zeros((n, 2))
+    for p in range(net.n_pores):
+        for cycle in pore_polygon(net, p):
+            for k, v in enumerate(cycle):
+                if v >= n:
+                    continue  # a wall vertex: no disc
+                u, w = P[cycle[k - 1]] - P[v], P[cycle[(k + 1) % len(cycle)]] - P[v]
+                a1 = np.arctan2(w[1], w[0])
+                a2 = a1 + np.mod(np.arctan2(u[1], u[0]) - a1, 2 * np.pi)
+                F[v] += U[p] * r[v] * np.array([-(np.sin(a2) - np.sin(a1)), np.cos(a2) - np.cos(a1)])
+    return F
+
+
+@pytest.mark.parametrize("gap", [0.0, 0.07])
+def test_a_row_on_a_flat_wall_has_exact_wall_pores(gap):
+    n = 6
+    xz = np.column_stack([2 * R * np.arange(n), np.full(n, R + gap)])
+    r = np.full(n, R)
+    net = pg.build_pores(xz, r, l_m=0.1, flat_walls=(bottom(),))
+    m = pg.measure(net, xz, r)
+    # the rectangle between two centres and their feet, 2R x (R + gap), less two quarter discs
+    assert net.n_pores == n - 1
+    np.testing.assert_allclose(m.void_area, 2 * R * (R + gap) - np.pi * R**2 / 2, rtol=1e-13)
+    assert all(len(c) == 1 and len(c[0]) == 4 for c in (pore_polygon(net, p) for p in range(net.n_pores)))
+    assert net.pore_walls.all() and all(n in net.vertices_of(p) for p in range(net.n_pores))  # the wall is vertex N
+    assert net.pore_surface.all()  # the tops are free surface; the wall edges are not
+
+
+def test_a_hexagonal_bed_on_a_flat_wall_has_exact_pores():
+    n, gap = 6, 0.03
+    row1 = np.column_stack([2 * R * np.arange(n), np.full(n, R + gap)])
+    row2 = np.column_stack([R + 2 * R * np.arange(n - 1), np.full(n - 1, R + gap + np.sqrt(3) * R)])
+    xz = np.vstack([row1, row2])
+    r = np.full(len(xz), R)
+    net = pg.build_pores(xz, r, l_m=0.1, flat_walls=(bottom(),))
+    A = pg.measure(net, xz, r).void_area
+    wall, triangle = 2 * R * (R + gap) - np.pi * R**2 / 2, np.sqrt(3) * R**2 - np.pi * R**2 / 2
+    on = net.pore_walls[0]
+    assert on.sum() == n - 1 and (~on).sum() == 2 * (n - 1) - 1  # the second row is out of the wall's reach
+    np.testing.assert_allclose(A[on], wall, rtol=1e-13)
+    np.testing.assert_allclose(A[~on], triangle, rtol=1e-13)
+
+
+def test_the_link_to_a_wall_is_a_contact_within_eps_m():
+    gaps, eps_m = np.array([-0.01, 0.0, 0.03, 0.08]), 0.02
+    xz = np.column_stack([2.2 * R * np.arange(4), R + gaps])
+    r = np.full(4, R)
+    net = pg.build_pores(xz, r, eps_m=eps_m, l_m=0.1, flat_walls=(bottom(),))
+    m = pg.measure(net, xz, r)
+    wv = net.wall_vertices
+    to_wall = {int(i): c for (i, j), c in zip(net.links.tolist(), m.link_contact) if j >= 4 and wv.owner[j] == i}
+    assert to_wall == {0: True, 1: True, 2: False, 3: False}  # eq 43 with the wall as a disc: gap <= eps_m
+    np.testing.assert_allclose(m.link_length[[k for k, (i, j) in enumerate(net.links) if j >= 4 and wv.owner[j] == i]],
+                               R + gaps, rtol=1e-14)
+
+
+def test_a_uniform_pressure_pushes_no_disc_and_each_wall_by_its_wetted_length():
+    for xz, r, walls in [lattice_box(4, 3), lattice_box(3, 3, gap=0.05), random_box(0), random_box(1)]:
+        net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+        m = pg.measure(net, xz, r)
+        width, height = walls[2].position, walls[3].position
+        assert net.n_closed == 0 and not net.pore_surface.any()
+        np.testing.assert_allclose(m.polygon_area.sum(), width * height, rtol=1e-13)  # the walls close the box
+        U = np.full(net.n_pores, 7.0)
+        np.testing.assert_allclose(pg.pressure_forces(net, r, U, m), 0.0, atol=1e-12)
+        np.testing.assert_allclose(pg.flat_wall_forces(net, U, m), 7.0 * np.array([width, height, height, width]),
+                                   rtol=1e-13)
+
+
+def test_pressure_forces_are_the_arcs_of_eq_33_with_walls():
+    rng = np.random.default_rng(5)
+    for xz, r, walls in [lattice_box(4, 3, gap=0.05), random_box(2)]:
+        net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+        m = pg.measure(net, xz, r)
+        U = rng.uniform(-5.0, 20.0, net.n_pores)
+        np.testing.assert_allclose(pg.pressure_forces(net, r, U, m), arc_forces(net, xz, r, U), atol=1e-12)
+
+
+def test_discs_and_walls_that_touch_take_the_whole_pore_pressure():
+    # touching discs and walls: each pore is closed by its discs' arcs and its wall edges, so the
+    # pressure on them sums to zero per pore, whatever U: discs + walls balance
+    xz, r, walls = lattice_box(5, 4)
+    net = pg.build_pores(xz, r, l_m=0.1, flat_walls=walls)
+    m = pg.measure(net, xz, r)
+    U = np.random.default_rng(3).uniform(-5.0, 20.0, net.n_pores)
+    on_walls = -pg.flat_wall_forces(net, U, m)[:, None] * np.array([w.normal() for w in walls])
+    np.testing.assert_allclose(pg.pressure_forces(net, r, U, m).sum(axis=0) + on_walls.sum(axis=0), 0.0, atol=1e-12)
+    assert np.abs(on_walls).max() > 10.0
+
+
+def test_two_walls_close_the_corner_pore():
+    xz = square_lattice(3, 3, 2 * R, origin=(R, R))
+    r = np.full(len(xz), R)
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1))
+    net = pg.build_pores(xz, r, l_m=0.1, flat_walls=walls)
+    m = pg.measure(net, xz, r)
+    n = len(r)
+    corner = [p for p in range(net.n_pores) if set(net.vertices_of(p).tolist()) == {0, n, n + 1}]
+    assert len(corner) == 1  # disc 0, counted with both walls
+    p = corner[0]
+    np.testing.assert_allclose(m.void_area[p], R**2 - np.pi * R**2 / 4, rtol=1e-13)  # square less a quarter disc
+    (cycle,) = pore_polygon(net, p)
+    P = pg.vertex_positions(net, xz)
+    assert len(cycle) == 4 and [0.0, 0.0] in P[cycle].tolist()  # disc 0, its two feet, the corner
+    assert net.n_pores == 4 + 2 + 2 + 1  # lattice squares, wall pores along each wall, the corner
+    U = np.zeros(net.n_pores)
+    U[p] = 3.0
+    np.testing.assert_allclose(pg.flat_wall_forces(net, U, m), [3.0 * R, 3.0 * R], rtol=1e-13)  # both edges
+
+
+def test_wall_reactions_add_the_contacts_to_the_water():
+    xz, r, walls = lattice_box(3, 2)
+    net = pg.build_pores(xz, r, l_m=0.1, flat_walls=walls)
+    m = pg.measure(net, xz, r)
+    U = np.full(net.n_pores, 2.0)
+    got = pg.wall_reactions(net, U, m, contact=[1.0, 0.0, 0.5, 0.0])
+    np.testing.assert_allclose(got.water, 2.0 * np.array([6.0, 4.0, 4.0, 6.0]), rtol=1e-13)
+    np.testing.assert_allclose(got.total, got.water + [1.0, 0.0, 0.5, 0.0], rtol=1e-15)
+
+
+def run_water(walls, q_w=0.02, k3=50.0, steps=300):
+    xz, r, _ = random_box(3)
+    net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+    m = pg.measure(net, xz, r)
+    W0 = m.void_area * (1 + 0.05 * np.random.default_rng(0).random(net.n_pores))
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=k3, q_w=q_w), W=W0)
+    w.U0 = w.pressure(m.void_area)
+    for _ in range(steps):
+        w.advance(1e-4, m.void_area, m.link_contact)
+    return net, w, m
+
+
+def test_water_is_conserved_with_a_drained_and_an_inflow_wall():
+    net, w, m = run_water(box(12.0, 12.0, ("inflow", "undrained", "drained", "undrained")))
+    b = w.balance
+    assert b.surface_outflow == 0.0 and b.side_outflow > 0
+    inflow_pores = net.pore_walls[0].sum()
+    assert inflow_pores >= 3
+    np.testing.assert_allclose(b.inflow, 0.02 * inflow_pores * 300 * 1e-4, rtol=1e-12)  # q_w per pore of the wall
+    assert w.balance_error() < 1e-13
+    drained = net.flat_wall_pores("drained")
+    U = w.pressure(m.void_area)
+    assert drained.any() and U[net.pore_walls[0]].mean() > U[drained].mean()
+
+
+def test_undrained_walls_let_no_water_through():
+    net, w, m = run_water(box(12.0, 12.0), q_w=0.02, k3=50.0)  # no inflow or drained wall: q_w, k3 unused
+    b = w.balance
+    assert b.inflow == b.surface_outflow == b.side_outflow == 0.0
+    assert abs(w.total_water() - b.initial) < 1e-14 * b.initial
+    U = w.pressure(m.void_area)
+    assert np.ptp(U) < 0.25 * np.ptp(w.U0)  # the water moved inside the box, towards equal pressures
+    _, drained, _ = run_water(box(12.0, 12.0, ("undrained", "drained", "undrained", "undrained")))
+    assert drained.balance.side_outflow > 0  # the same box with one drained wall loses water
+
+
+def lifted_row(lift):
+    """A row of 6 discs 0.05 m above a wall; disc 2 lifted by ``lift`` [m]."""
+    xz = np.column_stack([2 * R * np.arange(6), np.full(6, R + 0.05)])
+    xz[2, 1] += lift
+    return xz, np.full(6, R)
+
+
+def test_remeshing_counts_the_wall_as_one_vertex():
+    xz, r = lifted_row(0.0)
+    walls = (bottom("inflow"),)
+    old = pg.build_pores(xz, r, l_m=0.1, flat_walls=walls)
+    U_old = np.arange(1.0, old.n_pores + 1)
+    U, rule = pressures_by_rule(old, U_old, np.ones(old.n_pores, bool), pg.build_pores(xz, r, l_m=0.1, flat_walls=walls))
+    assert rule_counts(rule)["a"] == old.n_pores and np.array_equal(U, U_old)
+    moved, _ = lifted_row(0.1)  # disc 2 out of the wall's reach: its two wall pores merge
+    new = pg.build_pores(moved, r, l_m=0.1, flat_walls=walls)
+    assert new.n_pores == old.n_pores - 1
+    U, rule = pressures_by_rule(old, U_old, np.ones(old.n_pores, bool), new)
+    merged = [p for p in range(new.n_pores) if set(new.vertices_of(p).tolist()) == {1, 2, 3, 6}]
+    assert rule_counts(rule) == {"a": new.n_pores - 1, "b": 1, "c": 0, "d": 0} and rule[merged[0]] == 2
+    both = [q for q in range(old.n_pores) if set(old.vertices_of(q).tolist()) in ({1, 2, 6}, {2, 3, 6})]
+    assert U[merged[0]] == pytest.approx(U_old[both].mean(), rel=1e-15)
+
+
+def test_a_water_model_with_flat_walls_rebuilds_and_conserves_water():
+    xz, r = lifted_row(0.0)
+    s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=0.01, transfer="conserving")
+    model = WaterModel(s, r, np.zeros(6, np.int64), xz, 0.0, 0.1, 1e-4, rebuild_interval=5,
+                       flat_walls=(bottom("inflow"),))
+    for k in range(1, 5):
+        model.step(k, xz)
+    moved, _ = lifted_row(0.1)
+    model.step(5, moved)  # rebuilt: two wall pores merge
+    assert model.n_rebuilds == 1 and model.water.net.n_pores == 4
+    assert model.water.remesh_counts["b"] == 1
+    b = model.water.balance
+    assert b.inflow == pytest.approx(0.01 * 1e-4 * (4 * 5 + 4), rel=1e-12)  # 4 steps into 5 wall pores, 1 into 4
+    assert abs(b.remesh_change) < 1e-14 * b.initial  # conserving: the merged pore covers the same ground
+    assert model.water.balance_error() < 1e-13
+    U = model.pressures(moved)
+    m = pg.measure(model.water.net, moved, r)
+    np.testing.assert_allclose(model.F_walls, pg.flat_wall_forces(model.water.net, U, m), rtol=1e-15)
+
+
+def test_flat_walls_are_checked():
+    xz, r = lifted_row(0.0)
+    with pytest.raises(ValueError, match="disc 0 has its centre"):
+        pg.build_pores(xz, r, l_m=0.1, flat_walls=(FlatWall(0, 0.5, +1),))
+    with pytest.raises(ValueError, match="parallel walls must face each other"):
+        pg.build_pores(xz, r, l_m=0.1, flat_walls=(FlatWall(0, -2.0, +1), FlatWall(0, -1.0, +1)))
+    with pytest.raises(ValueError, match="boundary"):
+        FlatWall(1, 0.0, +1, "open")
+    with pytest.raises(ValueError, match="inward"):
+        FlatWall(1, 0.0, 0)
