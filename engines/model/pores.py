@@ -466,7 +466,7 @@ def _network(xz, r, walls, tri, n_inserted, eps_m, l_m, a_min, faces, links_and_
     t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
     *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
-                                         off_mesh[p_in >= 0], p_in[p_in >= 0])
+                                   off_mesh[p_in >= 0], p_in[p_in >= 0])
     arrays = dict(zip(NETWORK_ARRAYS, arrays))
     links = arrays["links"]
     return PoreNetwork(
