@@ -86,6 +86,20 @@ def test_a_hexagonal_bed_on_a_flat_wall_has_exact_pores():
     np.testing.assert_allclose(A[~on], triangle, rtol=1e-13)
 
 
+def test_a_disc_is_linked_to_its_own_foot_only():
+    # a small disc tucked under a large one, both on the wall: the foot of the small disc is within
+    # reach of the large disc (eq 28 with r = 0 would link them) but is not its link to the wall
+    xz, r = np.array([[0.0, 1.0], [0.83, 0.1]]), np.array([1.0, 0.1])
+    net = pg.build_pores(xz, r, l_m=0.3, flat_walls=(bottom(),))
+    assert np.hypot(0.83, 1.0) <= r[0] + 0.3  # the small disc's foot is in the large one's reach
+    a = np.arctan2(0.83, 0.9)  # at the large disc, between its foot and the small disc
+    # the trapezoid of the two centres and their feet less the sectors a at the large disc and
+    # pi - a at the small one (the right angles at the feet have no sector)
+    exact = 0.83 * (1.0 + 0.1) / 2 - a * 1.0**2 / 2 - (np.pi - a) * 0.1**2 / 2
+    assert net.n_pores == 1
+    np.testing.assert_allclose(pg.measure(net, xz, r).void_area, [exact], rtol=1e-13)
+
+
 def test_the_link_to_a_wall_is_a_contact_within_eps_m():
     gaps, eps_m = np.array([-0.01, 0.0, 0.03, 0.08]), 0.02
     xz = np.column_stack([2.2 * R * np.arange(4), R + gaps])
