@@ -587,20 +587,19 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
     balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water = 0
     for s in range(n):
-        if (k + s - k0) % water_interval == 0:
-            if moved2 > 0.0:  # the positions read once more, for the displacement since the build
-                rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
-                if rc != 0:
-                    return s, n_water, 1, rc
-                if max_sq_displacement(xz, xz_built) > moved2:
-                    return s, n_water, 1, 0
-            rc, status, n_sub = water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
-                                                          h, W, A_prev, q_prev, smoothing, substep, F_water,
-                                                          ints, i_at, floats, f_at)
+        if (k + s - k0) % water_interval == 0:  # water_forces_step_bulk_io, the rebuild triggers between
+            rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
+            if rc != 0:
+                return s, n_water, 1, rc
+            if moved2 > 0.0 and max_sq_displacement(xz, xz_built) > moved2:
+                return s, n_water, 1, 0  # a rebuild is due: that water step is the caller's
+            status, n_sub = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep,
+                                              F_water, ints, i_at, floats, f_at)
+            if n_sub == AREAS_OUT_OF_RANGE:
+                return s, n_water, 1, 0
+            rc = _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out)
             if rc != 0:
                 return s, n_water, n_sub, rc
-            if n_sub == AREAS_OUT_OF_RANGE:  # a rebuild is due: that water step is the caller's
-                return s, n_water, 1, 0
             n_water += 1
             if n_sub != 1:
                 return s, n_water, n_sub, 0
