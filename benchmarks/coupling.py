@@ -12,15 +12,19 @@ column), dt = 1e-6 s, under gravity. Columns (microseconds per step):
   yade_law_dry_us      [contact] law = "yade", dry: our setup, no Python engine
   yade_law_wet_us      law = "yade" + WaterEngine every step (forces as permanent forces)
   yade_law_wet_m10_us  law = "yade" + WaterEngine every 10 steps
+  yade_law_wet_d_us    yade_law_wet_us with the pores rebuilt by displacement ([numerics]
+                       rebuild_distance = the WaterEngine's default, REBUILD_FRACTION x l_m)
+  yade_law_wet_m10_d_us  yade_law_wet_m10_us so
   paper_law_dry_us     law = "paper" (PaperLawEngine, compiled kernels), dry
   paper_law_wet_us     law = "paper" + water every step, in the paper's step order
 
-The six are measured interleaved (one run of each in turn, ``repeats`` times, each repeat starting
+The eight are measured interleaved (one run of each in turn, ``repeats`` times, each repeat starting
 one column later: at 10,000 bodies the first column of a round ran 10-20 % slower) and the median is
-kept, of wall time (the six columns) and of the process's CPU time ("cpu_us", steadier on a shared
+kept, of wall time (the eight columns) and of the process's CPU time ("cpu_us", steadier on a shared
 machine), and "cpu_ratio_paired", the ratio to yade_alone within each repeat, median over the
-repeats (steadier when the load drifts); each run includes the pore rebuilds (every 1000 steps)
-that fall in it. Read the ratios, not the absolute times.
+repeats (steadier when the load drifts); each run includes the pore rebuilds (every 1000 steps,
+or by displacement) that fall in it, counted in "rebuilds" (median per timed run). Read the
+ratios, not the absolute times.
 """
 import argparse
 import os
@@ -38,6 +42,7 @@ from engines.model import pores as pg
 from engines.run import scene as scenes
 from engines.yade import yade_io
 from engines.yade.coupling import YadeCoupling
+from engines.yade.water_engine import REBUILD_FRACTION
 from packing.layouts import random_discs
 from packing.packing import Packing
 
@@ -53,6 +58,9 @@ COLUMNS = {
     "paper_law_dry_us": {"water": {"enabled": False}},
     "paper_law_wet_us": {},
 }
+MOVED = {"rebuild_distance": REBUILD_FRACTION * TABLE4["water"]["l_m"]}
+COLUMNS["yade_law_wet_d_us"] = {"contact": {"law": "yade"}, "numerics": MOVED}
+COLUMNS["yade_law_wet_m10_d_us"] = {"contact": {"law": "yade"}, "numerics": {"water_interval": 10, **MOVED}}
 
 
 def box_packing(n, seed=0):
@@ -79,32 +87,48 @@ def scene_for(over):
 
 
 def timed(setup, steps, warmup):
-    """(wall, CPU) microseconds per step of ``steps`` steps after ``warmup``; setup() -> run(n).
-    CPU time (all threads of the process) is the less noisy one on a shared machine."""
-    run = setup()
+    """(wall, CPU) microseconds per step of ``steps`` steps after ``warmup``, and the pore rebuilds
+    among them; setup() -> (run(n), rebuilds() -> count so far). CPU time (all threads of the
+    process) is the less noisy one on a shared machine."""
+    run, rebuilds = setup()
     run(warmup)
-    t0, c0 = time.perf_counter(), time.process_time()
+    n0, t0, c0 = rebuilds(), time.perf_counter(), time.process_time()
     run(steps)
-    return 1e6 * (time.perf_counter() - t0) / steps, 1e6 * (time.process_time() - c0) / steps
+    return 1e6 * (time.perf_counter() - t0) / steps, 1e6 * (time.process_time() - c0) / steps, rebuilds() - n0
+
+
+def floor_setup(packing):
+    """The (run, rebuilds) of ``timed`` for YADE alone on the packing (benchmarks.floor)."""
+    native_floor(scene_for({}), packing)
+    return run_steps, lambda: 0
+
+
+def coupling_setup(scene, packing):
+    """The (run, rebuilds) of ``timed`` for a YadeCoupling of the scene."""
+    cp = YadeCoupling(scene, packing)
+    return cp.run, lambda: cp.water_model.n_rebuilds if cp.water_model is not None else 0
 
 
 def bench_size(n, steps, repeats, log):
     packing = box_packing(n)
-    setups = {"yade_alone_us": lambda: (native_floor(scene_for({}), packing), run_steps)[1]}
+    setups = {"yade_alone_us": lambda: floor_setup(packing)}
     for name, over in COLUMNS.items():
-        setups[name] = (lambda over=over: YadeCoupling(scene_for(over), packing).run)
-    wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
+        setups[name] = (lambda over=over: coupling_setup(scene_for(over), packing))
+    wall, cpu, built = ({k: [] for k in setups} for _ in range(3))
     names = list(setups)
     for rep in range(repeats):
         for name in names[rep % len(names):] + names[:rep % len(names)]:  # each column first in turn
             setup = setups[name]
-            w, c = timed(setup, steps, warmup=200)
+            w, c, b = timed(setup, steps, warmup=200)
             wall[name].append(w)
             cpu[name].append(c)
-            log(f"  n = {len(packing.r)} rep {rep + 1}/{repeats} {name}: {w:.1f} us/step wall, {c:.1f} CPU")
+            built[name].append(b)
+            log(f"  n = {len(packing.r)} rep {rep + 1}/{repeats} {name}: {w:.1f} us/step wall, {c:.1f} CPU, "
+                f"{b} rebuilds")
     row = {"n_bodies": int(len(packing.r)), "steps": steps, "repeats": repeats}
     row.update({k: float(np.median(v)) for k, v in wall.items()})
     row["cpu_us"] = {k: float(np.median(v)) for k, v in cpu.items()}
+    row["rebuilds"] = {k: float(np.median(v)) for k, v in built.items()}
     row["samples_wall_us"], row["samples_cpu_us"] = wall, cpu
     # the ratio to YADE alone within each repeat (its columns run seconds apart), median over repeats:
     # steadier than a ratio of medians when the machine's load drifts

@@ -305,7 +305,7 @@ WATER_FLOATS = Layout("WATER_FLOATS", (
     "wp", "eps_m", "a_min", "r",
     "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",                         # measure
     "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",                                    # flows
-    "balance", "Fj", "lam", "has_q_prev"))                                               # update, forces, eq 46
+    "balance", "Fj", "lam", "has_q_prev", "check_areas"))                # update, forces, eq 46, rebuild trigger
 
 
 @jit
@@ -332,6 +332,18 @@ def substep_count(h, limit):
     return 1 if h <= limit else int(math.ceil(h / limit))
 
 
+AREAS_OUT_OF_RANGE = -(1 << 62)  # water_step's answer when a void area left its range (a rebuild is due)
+
+
+@jit
+def areas_in_range(void, poly):
+    """Twin of engines.model.water_model.areas_in_range: 0 <= A <= polygon area in every pore."""
+    for p in range(len(void)):
+        if not 0.0 <= void[p] <= poly[p]:
+            return False
+    return True
+
+
 @jit
 def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
@@ -341,8 +353,9 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at)
     (Layout.pack); "lam" gets the Gershgorin bound of the first and of the last flows, "balance"
     the water of this step, "has_q_prev" is 1 once q_prev holds the flows of an earlier water step.
-    Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); or -1 - p
-    when pore p would fall dry (W as after the previous sub-step)."""
+    Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); -1 - p
+    when pore p would fall dry (W as after the previous sub-step); AREAS_OUT_OF_RANGE, nothing
+    changed, when "check_areas" is 1 and a measured void area is out of range (``areas_in_range``)."""
     links, link_pores = _part2(ints, i_at, WATER_INTS.links), _part2(ints, i_at, WATER_INTS.link_pores)
     c_pore = _part(ints, i_at, WATER_INTS.corner_pore)
     c_link = _part(ints, i_at, WATER_INTS.corner_link)
@@ -370,6 +383,8 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
 
     measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
             poly, sect, void, length, contact, theta, vec, rot, cross)
+    if floats[f_at[WATER_FLOATS.check_areas]] != 0.0 and not areas_in_range(void, poly):
+        return AREAS_OUT_OF_RANGE
     A = void
     if smoothing:  # eq 45
         for p in range(len(A_prev)):
@@ -565,22 +580,24 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
     the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
     before stepping after a water step that did not answer 1 (sub-steps or a failure: its
     bookkeeping is the caller's) or at an error code; with moved2 > 0 [m^2], also before a water
-    step at which a disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] (a
-    rebuild by displacement is due: that water step is the caller's, nothing done of it). Returns
+    step at which a disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a
+    void area is out of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step
+    is the caller's, nothing done of it. Returns
     (DEM steps done, water steps done, the last water step's answer or 1, the bridge's error code)."""
     balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water = 0
     for s in range(n):
-        if (k + s - k0) % water_interval == 0:
-            if moved2 > 0.0:  # the positions read once more, for the displacement since the build
-                rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
-                if rc != 0:
-                    return s, n_water, 1, rc
-                if max_sq_displacement(xz, xz_built) > moved2:
-                    return s, n_water, 1, 0
-            rc, status, n_sub = water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
-                                                          h, W, A_prev, q_prev, smoothing, substep, F_water,
-                                                          ints, i_at, floats, f_at)
+        if (k + s - k0) % water_interval == 0:  # water_forces_step_bulk_io, the rebuild triggers between
+            rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
+            if rc != 0:
+                return s, n_water, 1, rc
+            if moved2 > 0.0 and max_sq_displacement(xz, xz_built) > moved2:
+                return s, n_water, 1, 0  # a rebuild is due: that water step is the caller's
+            status, n_sub = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep,
+                                              F_water, ints, i_at, floats, f_at)
+            if n_sub == AREAS_OUT_OF_RANGE:
+                return s, n_water, 1, 0
+            rc = _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out)
             if rc != 0:
                 return s, n_water, n_sub, rc
             n_water += 1

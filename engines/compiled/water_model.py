@@ -34,7 +34,8 @@ class WaterModel(water_model.WaterModel):
                   "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
                   "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
                   "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
-                  "lam": np.zeros(2), "has_q_prev": 0.0}  # the rest: outputs and scratch of the kernels, by length
+                  "lam": np.zeros(2), "has_q_prev": 0.0, "check_areas": float(self.rebuild_distance > 0)}
+        # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
                             ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
             floats.update((name, np.zeros(size)) for name in names.split())
@@ -80,9 +81,13 @@ class WaterModel(water_model.WaterModel):
                         np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
         return void
 
-    def advance(self, h, xz):
-        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
-        self.finish_kernel_step(h, kernels.water_step(xz, *self.kernel_args(h)))
+    def advance(self, h, xz, k=None):
+        """As engines.model.water_model.WaterModel.advance, by kernels.water_step."""
+        n_sub = kernels.water_step(xz, *self.kernel_args(h))
+        if n_sub == kernels.AREAS_OUT_OF_RANGE:
+            self.rebuild(xz, k)
+            n_sub = kernels.water_step(xz, *self.kernel_args(h))
+        self.finish_kernel_step(h, n_sub)
 
     def kernel_args(self, h):
         """The arguments of kernels.water_step after xz (kernels.WATER), for a water step of h [s],

@@ -12,10 +12,11 @@ water step), about what testing whether the areas changed enough to need a new c
 so the check is exact at every step instead. Above it the step is sub-stepped with
 ``settings.substep`` and refused without.
 
-Rebuilds: one schedule (``WaterModel.rebuild_due``) with two triggers, every ``rebuild_interval``
-steps (``rebuild_due``, the paper's, SPEC §2.6) and, with ``rebuild_distance`` d > 0, as soon as a
-disc is more than d from its centre at the last build (YADE's collider keeps its Verlet lists so);
-the interval is then an upper bound.
+Rebuilds: one schedule (``WaterModel.rebuild_due``), every ``rebuild_interval`` steps
+(``rebuild_due``, the paper's) and, with ``rebuild_distance`` d > 0 (SPEC §2.6), also as soon as a
+disc is more than d from its centre at the last build (YADE's collider keeps its Verlet lists so)
+or a measured void area leaves its range (``areas_in_range``; eq 32 would put U above E_w); the
+interval is then an upper bound.
 """
 import numpy as np
 
@@ -39,6 +40,14 @@ def steps_to_rebuild(k, k_built, k0, interval, call_interval):
     return t + (k0 - t) % call_interval - k
 
 
+def areas_in_range(void, poly):
+    """Are the void areas A (Np,) [m^2] in their range 0 <= A <= polygon area poly (Np,)? Below 0
+    the discs cover more than their pore's polygon, above it a sector is negative (a disc has
+    crossed a link): the pores no longer describe the discs. Every pore has A > a_min > 0 at its
+    build (engines.model.pores), so a rebuild brings the areas back into range."""
+    return bool(np.all((void >= 0) & (void <= poly)))
+
+
 class WaterModel:
     """Pores and water of N discs (no YADE). Units: SI per unit thickness (engines.model.pore_water).
 
@@ -47,9 +56,9 @@ class WaterModel:
     of DEM step k0. ``F`` (N, 2) [N] holds the pressure forces of the last water step; ``k_built``
     is the step of the last pore build (``rebuild_due``) and ``xz_built`` its centres.
     rebuild_distance [m]: > 0 also rebuilds when a disc has moved more than this since the last
-    build (0: off, the interval only). flat_walls: engines.model.flat_walls.FlatWall, ... (SPEC
-    §2.6); ``F_walls`` (W,) [N/m] holds the pore water's normal force on each of them
-    (pores.flat_wall_forces) of the last water step.
+    build or a void area is out of range (0: off, the interval only). flat_walls:
+    engines.model.flat_walls.FlatWall, ... (SPEC §2.6); ``F_walls`` (W,) [N/m] holds the pore
+    water's normal force on each of them (pores.flat_wall_forces) of the last water step.
     """
 
     build_steps, remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH  # of build_pores and PoreWater.remesh
@@ -98,13 +107,13 @@ class WaterModel:
 
     def step(self, k, xz):
         """Step k of the DEM at centres xz (N, 2) [m]: rebuild when due (at k0 + n rebuild_interval,
-        or by displacement), advance when k % water_interval == 0. Returns True when ``F`` was
+        or by displacement or an area out of range), advance when k % water_interval == 0. Returns True when ``F`` was
         recomputed."""
         if self.rebuild_due(k, xz):
             self.rebuild(xz, k)
         if k % self.water_interval != 0:
             return False
-        self.advance(self.water_interval * self.dt, xz)
+        self.advance(self.water_interval * self.dt, xz, k)
         return True
 
     def rebuild(self, xz, k=None):
@@ -121,9 +130,14 @@ class WaterModel:
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29)."""
         return pg.measure(net, xz, self.r).void_area
 
-    def advance(self, h, xz):
-        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``."""
+    def advance(self, h, xz, k=None):
+        """Advance the water by h [s] at centres xz and recompute the pressure forces ``F``. With
+        rebuild_distance > 0, a void area out of range (``areas_in_range``) rebuilds the pores at xz
+        first (those of step k; None: the schedule is left as it was)."""
         m = pg.measure(self.water.net, xz, self.r)
+        if self.rebuild_distance > 0 and not areas_in_range(m.void_area, m.polygon_area):
+            self.rebuild(xz, k)
+            m = pg.measure(self.water.net, xz, self.r)
         self.last_limit = self.water._limit(self.water.advance(h, m.void_area, m.link_contact))
         A = self.water.A_prev if self.settings.smoothing else m.void_area  # eq 45: the area used
         U = self.water.pressure(A)

@@ -19,7 +19,7 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/
      on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
      velocity replaces v before step e.
   d. water (water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
-     k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
+     k % rebuild_interval == 0 (or at the steps a run recorded, when given them: SPEC §2.6), pressures inherited by rules (a)-(d) of §3.4(2); the water is
      advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
      x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
      with the area actually used (eq 45) and held until the next water step.
@@ -878,11 +878,13 @@ class ReferenceModel:
     dtype: x, v (N, 2) [m, m/s], psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m];
     ``sliding`` (N,) the side-wall discs on springs, ``ties`` (lower, upper) and ``tie_rest``
     (column_ties). ``contact`` (PairRecords), ``pores`` / ``water`` (None when dry); ``counts``:
-    re-meshing rules, separation patterns, rebuilds.
+    re-meshing rules, separation patterns, rebuilds. ``rebuild_steps``: the steps of the pore
+    rebuilds, instead of every rebuild_interval (simulate_reference).
     """
 
-    def __init__(self, tables, packing, dtype=np.float64):
+    def __init__(self, tables, packing, dtype=np.float64, rebuild_steps=None):
         tables = tables if isinstance(tables, dict) else tables.as_dict()
+        self.rebuild_steps = None if rebuild_steps is None else set(rebuild_steps)
         s = self.s = read_settings(tables)
         dt_ = self.dtype = np.dtype(dtype).type
         self.group = np.asarray(packing.group)
@@ -960,7 +962,7 @@ class ReferenceModel:
             for d, vel in fixes.items():
                 self.v[d] = vel
         if self.water is not None:                                          # d
-            if k > 0 and k % s.rebuild_interval == 0:
+            if (k in self.rebuild_steps) if self.rebuild_steps is not None else (k > 0 and k % s.rebuild_interval == 0):
                 self.rebuild()
             if k % s.water_interval == 0:
                 geo = self._measure()
@@ -1004,11 +1006,13 @@ class ReferenceModel:
                     w.total() if w else np.nan, w.balance_error() if w else np.nan)
 
 
-def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64):
+def simulate_reference(tables, packing, n_steps, record_every, dtype=np.float64, rebuild_steps=None):
     """Run the scene ``tables`` (or a Scene) from ``packing`` for n_steps and record a Trajectory
     after every ``record_every`` steps (at t = (k + 1) dt); the contract shared with
-    engines.yade.coupling. ``traj.info["counts"]`` holds the re-meshing and separation counts."""
-    model = ReferenceModel(tables, packing, dtype)
+    engines.yade.coupling. ``traj.info["counts"]`` holds the re-meshing and separation counts.
+    ``rebuild_steps``: the steps at which to rebuild the pores instead of every rebuild_interval
+    (those a run rebuilding by displacement recorded)."""
+    model = ReferenceModel(tables, packing, dtype, rebuild_steps)
     traj = Trajectory(info={"implementation": "reference", "dtype": np.dtype(dtype).name})
     for k in range(n_steps):
         model.step()

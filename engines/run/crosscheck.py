@@ -14,6 +14,8 @@ Contact cases (short, deterministic):
 Feature cases (1,050-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE_WHY):
   settling_rules           loose discs falling into a wet box under 1000 m/s^2: re-meshing rules a-d
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
+  quicksand_displacement   the same inflow, the pores rebuilt by displacement (5 um, SPEC §2.6): the
+                           reference is handed the rebuild steps of the YADE run
   shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
                            eps_m > 0, water_interval 2, smoothing
   elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
@@ -305,6 +307,8 @@ def feature_cases():
         FeatureCase("settling_rules", settling_build(), 5000, 50, rules="abcd"),
         FeatureCase("quicksand_smoothing", quicksand_build(water={"q_w": 5e-3, "smoothing": True},
                                                            numerics={"rebuild_interval": 100}), 2100, 50),
+        FeatureCase("quicksand_displacement", quicksand_build(
+            water={"q_w": 5e-3}, numerics={"rebuild_interval": 10**6, "rebuild_distance": 5e-6}), 2100, 10),
         FeatureCase("shaken_drained_wet_d", quicksand_build(
             water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
             contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
@@ -322,7 +326,7 @@ def features_of(scene):
     """What a scene exercises, for crosscheck.json."""
     w, c, n, ld = scene.water, scene.contact, scene.numerics, scene.loading
     out = {"spring": c.spring, "eps_m": c.eps_m, "separation_adjustment": c.separation_adjustment,
-           "water": w.enabled, "rebuild_interval": n.rebuild_interval}
+           "water": w.enabled, "rebuild_interval": n.rebuild_interval, "rebuild_distance": n.rebuild_distance}
     if w.enabled:
         out.update(inflow_q_w=w.q_w, smoothing_eq45_46=w.smoothing, sides=w.sides,
                    k3=w.k3 if w.sides == "drained" else None, water_interval=n.water_interval)
@@ -340,20 +344,20 @@ def features_of(scene):
 
 def yade_remesh_counter():
     """A hook of engines.yade.coupling.simulate (called after each recorded chunk, so at most one rebuild
-    in between when record_every <= rebuild_interval) counting the fast code's re-meshing rules
-    per rebuild; (hook, counts). Rebuild n happens at step n x rebuild_interval."""
+    in between when record_every <= rebuild_interval, or small enough for the rebuilds by
+    displacement) counting the fast code's re-meshing rules per rebuild and its step; (hook, counts)."""
     counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "history": [], "separation": None}
 
     def hook(cp):
         model = cp.water_model
         if model is not None and model.n_rebuilds > counts["rebuilds"]:
             if model.n_rebuilds > counts["rebuilds"] + 1:
-                raise RuntimeError("more than one rebuild between two hook calls: record_every > rebuild_interval")
+                raise RuntimeError("more than one rebuild between two hook calls: record_every too long")
             counts["rebuilds"] = model.n_rebuilds
             this = {r: int(model.water.remesh_counts.get(r, 0)) for r in "abcd"}
             for r, v in this.items():
                 counts["remesh"][r] += v
-            counts["history"].append((model.n_rebuilds * model.rebuild_interval, this))
+            counts["history"].append((model.k_built, this))
     return hook, counts
 
 
@@ -428,14 +432,17 @@ def run_feature_case(case, yade_simulate, ref_simulate):
         t0 = time.time()
         ty = yade_simulate(scene, pk, case.n_steps, case.record_every, hooks=[hook])
         t1 = time.time()
-        tr = ref_simulate(scene, pk, case.n_steps, case.record_every)
+        ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
+        # rebuilds by displacement (SPEC §2.6): the reference rebuilds at the steps the YADE run did
+        steps = {"rebuild_steps": [k for k, _ in ycounts["history"]]} if scene.numerics.rebuild_distance > 0 else {}
+        tr = ref_simulate(scene, pk, case.n_steps, case.record_every, **steps)
         t2 = time.time()
         moved = pk.xz.copy()
         moved[pk.mobile] += PERTURBATION * mean_r
-        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every)
+        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
+                          **steps)
         t3 = time.time()
         rcounts = tr.info["counts"]
-        ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
         n_win, t_div = divergence(tp, tr, mean_r, scene.water.E_w)
         win = compare_window(ty, tr, n_win, mean_r) if n_win else {}
         same_rules = (rules_before(ycounts["history"], t_div, scene.numerics.dt)

@@ -18,8 +18,8 @@ the body; bodies added later are refused at the next rebuild.
 
 Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
 rebuilds the pores when due (WaterModel.rebuild_due: a disc farther than ``rebuild_distance``
-from its centre at the last build, or each multiple of ``rebuild_interval`` steps from the
-engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
+from its centre at the last build or a void area out of range, or each multiple of
+``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
 (eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
 itself is engines.model.water_model.WaterModel's, by its compiled twin
 engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
@@ -58,8 +58,9 @@ class WaterEngine:
     of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
     dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
     rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
-    farther than this from its centre at the last build (default None: REBUILD_FRACTION x l_m,
-    see there; 0: off); rebuild_interval [steps] bounds the time between rebuilds.
+    farther than this from its centre at the last build or a void area is out of range
+    (engines.model.water_model.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
+    0: off); rebuild_interval [steps] bounds the time between rebuilds.
     """
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
@@ -182,8 +183,9 @@ class WaterEngine:
 
     def __call__(self):
         """One water step: rebuild when due (a disc farther than rebuild_distance from its centre
-        at the last build, or the first call at or after each multiple of rebuild_interval steps
-        from the engine's creation), advance by water_interval x O.dt, write the forces."""
+        at the last build or a void area out of range, or the first call at or after each multiple
+        of rebuild_interval steps from the engine's creation), advance by water_interval x O.dt,
+        write the forces."""
         from yade import O
         m = self.model
         self.k = O.iter
@@ -194,14 +196,16 @@ class WaterEngine:
             args = m.kernel_args(h)
             _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
                                         self._forces_step_args(args))
-            m.finish_kernel_step(h, n_sub)
-            return
+            if n_sub != kernels.AREAS_OUT_OF_RANGE:
+                m.finish_kernel_step(h, n_sub)
+                return
+            rebuild = True  # nothing done: rebuilt and made below
         if xz is None:
             xz = self.io.positions()
         if rebuild:
             contract.check_added(O.bodies, self._n_bodies)
             m.rebuild(xz, self.k)
-        m.advance(h, xz)
+        m.advance(h, xz, self.k)
         self.write_forces()
 
     def _forces_step_args(self, water):

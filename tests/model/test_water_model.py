@@ -3,8 +3,9 @@ import itertools
 
 import numpy as np
 
+from engines.model import pores as pg
 from engines.model.pore_dem import water_model
-from engines.model.water_model import WaterModel, rebuild_due, steps_to_rebuild
+from engines.model.water_model import WaterModel, areas_in_range, rebuild_due, steps_to_rebuild
 from engines.run import scene as scenes
 from packing.packing import Packing
 
@@ -100,3 +101,38 @@ def test_without_rebuild_distance_a_moved_disc_does_not_rebuild():
     wm, pk, a = moved_model(WaterModel, 0.0, interval=4)
     far = shifted(pk.xz, a, 1e-3)
     assert not wm.rebuild_due(1, far) and wm.rebuild_due(4, far)
+
+
+def test_areas_are_in_range_between_zero_and_the_polygon_area():
+    from engines.compiled import kernels
+    poly = np.array([1.0, 2.0, 3.0])
+    for void, want in (([0.0, 2.0, 1.0], True), ([-1e-30, 1.0, 1.0], False), ([0.5, 2.0 + 1e-15, 1.0], False)):
+        void = np.array(void)
+        assert areas_in_range(void, poly) is want
+        assert kernels.areas_in_range(void, poly) is want
+
+
+def test_a_void_area_out_of_range_rebuilds_at_that_step_with_a_rebuild_distance_only():
+    """One disc pushed half its radius into its neighbours (a void area below 0, eq 32 would give
+    U > E_w), far less than d = 1 m: with d > 0 both classes rebuild at that step, to the same water,
+    and after it every area is in range; with d = 0 (the paper's schedule) nothing is rebuilt and U
+    exceeds E_w."""
+    from engines.compiled.water_model import WaterModel as CompiledWaterModel
+    W = []
+    for cls in (WaterModel, CompiledWaterModel):
+        for d in (1.0, 0.0):
+            wm, pk, a = moved_model(cls, d, interval=1000)
+            pushed = pk.xz.copy()
+            pushed[a, 0] += 0.5 * pk.r[a]
+            assert not areas_in_range(wm.void_area(pushed), pg.measure(wm.water.net, pushed, wm.r).polygon_area)
+            for k in range(3):
+                wm.step(k, pk.xz if k < 2 else pushed)
+            if d:
+                assert (wm.n_rebuilds, wm.k_built) == (1, 2), cls
+                m = pg.measure(wm.water.net, pushed, wm.r)
+                assert areas_in_range(m.void_area, m.polygon_area)
+                assert np.all(wm.pressures(pushed) < wm.settings.E_w)
+                W.append(wm.water.W)
+            else:
+                assert wm.n_rebuilds == 0 and wm.pressures(pushed).max() > wm.settings.E_w, cls
+    np.testing.assert_allclose(W[1], W[0], rtol=1e-12)

@@ -6,18 +6,21 @@ import numpy as np
 def report(water, walls, grains):
     """Print and return the checks of a run: the pores; the largest pore pressure U [N/m], which
     eq 32 keeps below E_w while the void areas are those of the current positions; the relative
-    water balance error; the excess water the pore rebuilds changed as a fraction of the inflow;
-    the grains (ids) whose centres left the box of the wall discs (walls: {"bottom"|"left"|"right": ids})."""
+    water balance error; the excess water the pore rebuilds changed as a fraction of the inflow,
+    all of it and the part inside the region old and new pores both cover (WaterBalance: the
+    transfer rule's own change); the grains (ids) whose centres left the box of the wall discs
+    (walls: {"bottom"|"left"|"right": ids})."""
     from yade import O
     net, U, w = water.model.water.net, water.pressures(), water.model.water
+    b, inflow = w.balance, max(w.balance.inflow, 1e-300)
     centre = {name: np.array([[O.bodies[i].state.pos[0], O.bodies[i].state.pos[2]] for i in ids])
               for name, ids in walls.items()}
     xz = np.array([[O.bodies[i].state.pos[0], O.bodies[i].state.pos[2]] for i in grains])
     outside = ((xz[:, 0] <= centre["left"][:, 0].max()) | (xz[:, 0] >= centre["right"][:, 0].min())
                | (xz[:, 1] <= centre["bottom"][:, 1].max()))
     checks = {"pores": net.n_pores, "rebuilds": water.model.n_rebuilds, "max_U": float(U.max()), "E_w": w.settings.E_w, "balance": w.balance_error(),
-              "remesh": abs(w.balance.remesh_excess_change) / max(w.balance.inflow, 1e-300),
-              "outside": int(outside.sum())}
+              "remesh": abs(b.remesh_excess_change) / inflow,
+              "remesh_inside": abs(b.remesh_excess_change - b.remesh_excess_edge) / inflow, "outside": int(outside.sum())}
     print("checks: {pores} pores ({rebuilds} rebuilds), max U {max_U:.4g} N/m (E_w {E_w:g} N/m), water balance error {balance:.1e}, "
-          "re-meshing {remesh:.1e} of the inflow, {outside} grains outside the box".format(**checks))
+          "re-meshing {remesh:.1e} of the inflow ({remesh_inside:.1e} inside), {outside} grains outside the box".format(**checks))
     return checks

@@ -60,7 +60,7 @@ O.run(6000, True)  # the cloud falls and settles dry
 # water steps and rebuilds are every step (at most 6.4e-6 m = 0.05 l_m between two, measured
 # over the default run)
 water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4), l_m=1.3e-4,
+                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4, transfer="conserving"), l_m=1.3e-4,
                     rebuild_interval=1, water_interval=1)
 O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
 O.run(args.steps, True)

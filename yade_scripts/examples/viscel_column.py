@@ -88,7 +88,7 @@ def main(argv):
     # after the InteractionLoop and before NewtonIntegrator. The pores are rebuilt when a grain
     # has moved l_m / 4 since the last build (the default rebuild_distance)
     water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                        settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), l_m=1.3e-4,
+                        settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4, transfer="conserving"), l_m=1.3e-4,
                         water_interval=args.water_interval)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
     freeze_gc()  # optional: keeps Python's garbage collector off the scene's objects (faster writes)
