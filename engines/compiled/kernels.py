@@ -299,13 +299,14 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
 # The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
 # unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack).
 WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link",
-                                   "throat_i", "throat_j", "throat_link"))
+                                   "throat_i", "throat_j", "throat_link", "wall_axis", "wall_edge", "wall_edge_wall"))
 WATER_FLOATS = Layout("WATER_FLOATS", (
     "corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained", "bottom",  # inputs
     "wp", "eps_m", "a_min", "r",
     "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",                         # measure
     "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",                                    # flows
-    "balance", "Fj", "lam", "has_q_prev", "check_areas"))                # update, forces, eq 46, rebuild trigger
+    "balance", "Fj", "lam", "has_q_prev", "check_areas",                  # update, forces, eq 46, rebuild trigger
+    "wall_position", "vertices", "F_walls"))                                              # flat walls
 
 
 @jit
@@ -345,13 +346,41 @@ def areas_in_range(void, poly):
 
 
 @jit
+def place_wall_vertices(xz, vertices, wall_axis, wall_position):
+    """Twin of engines.model.flat_walls.WallVertices.positions: vertices (V, 2) [m] gets the discs'
+    centres xz (N, 2) and the feet of the discs on each flat wall (the face's coordinate along the
+    wall's axis); its last rows, the walls' corners, are fixed and left as they are."""
+    n = len(xz)
+    for i in range(n):
+        vertices[i, 0], vertices[i, 1] = xz[i, 0], xz[i, 1]
+    for w in range(len(wall_axis)):
+        a, at = wall_axis[w], n + w * n
+        for i in range(n):
+            vertices[at + i, 0], vertices[at + i, 1] = xz[i, 0], xz[i, 1]
+            vertices[at + i, a] = wall_position[w]
+
+
+@jit
+def flat_wall_forces(wall_edge, wall_edge_wall, link_pores, U, length, F_walls):
+    """Twin of engines.model.pores.flat_wall_forces: F_walls (W,) [N/m] = sum over each wall's edges
+    (links wall_edge, of wall wall_edge_wall) of U x edge length, both sides' U (the outer one is 0)."""
+    F_walls[:] = 0.0
+    for e in range(len(wall_edge)):
+        l = wall_edge[e]
+        p0, p1 = link_pores[l, 0], link_pores[l, 1]
+        F_walls[wall_edge_wall[e]] += ((U[p0] if p0 >= 0 else 0.0) + (U[p1] if p1 >= 0 else 0.0)) * length[l]
+
+
+@jit
 def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
     n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
     throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
     arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at)
-    (Layout.pack); "lam" gets the Gershgorin bound of the first and of the last flows, "balance"
+    (Layout.pack). Flat walls ("wall_axis" not empty): the pores' vertices are the discs and the
+    walls' ("vertices", ``place_wall_vertices``; "r" holds 0 for the wall vertices) and "F_walls"
+    gets the water's force on each wall (``flat_wall_forces``). "lam" gets the Gershgorin bound of the first and of the last flows, "balance"
     the water of this step, "has_q_prev" is 1 once q_prev holds the flows of an earlier water step.
     Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); -1 - p
     when pore p would fall dry (W as after the previous sub-step); AREAS_OUT_OF_RANGE, nothing
@@ -380,9 +409,16 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     acc_i, acc_j = _part(floats, f_at, WATER_FLOATS.acc_i), _part(floats, f_at, WATER_FLOATS.acc_j)
     balance, Fj = _part(floats, f_at, WATER_FLOATS.balance), _part2(floats, f_at, WATER_FLOATS.Fj)
     lam, has_q_prev = _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev)
+    wall_axis = _part(ints, i_at, WATER_INTS.wall_axis)
 
-    measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
-            poly, sect, void, length, contact, theta, vec, rot, cross)
+    if len(wall_axis):
+        vertices = _part2(floats, f_at, WATER_FLOATS.vertices)
+        place_wall_vertices(xz, vertices, wall_axis, _part(floats, f_at, WATER_FLOATS.wall_position))
+        measure(vertices, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+                poly, sect, void, length, contact, theta, vec, rot, cross)
+    else:
+        measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
+                poly, sect, void, length, contact, theta, vec, rot, cross)
     if floats[f_at[WATER_FLOATS.check_areas]] != 0.0 and not areas_in_range(void, poly):
         return AREAS_OUT_OF_RANGE
     A = void
@@ -411,6 +447,9 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
             return -1 - bad
     pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
     pressure_forces(links, link_pores, r, U, length, vec, F_water, Fj)
+    if len(wall_axis):
+        flat_wall_forces(_part(ints, i_at, WATER_INTS.wall_edge), _part(ints, i_at, WATER_INTS.wall_edge_wall),
+                         link_pores, U, length, _part(floats, f_at, WATER_FLOATS.F_walls))
     return n_sub
 
 
@@ -657,18 +696,22 @@ def pore_pressures(W, A, E_w, U):
 @jit
 def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
     """Force of the pore pressures U on every disc, F (N, 2) [N] (eq 33); Fj (N, 2) is scratch.
-    The outer face and closed faces (link_pores = -1) have U = 0."""
+    The outer face and closed faces (link_pores = -1) have U = 0. Vertices past the N discs (the
+    flat walls', radius 0) take nothing."""
     F[:] = 0.0
     Fj[:] = 0.0
+    n = len(F)
     for l in range(len(links)):
         p0, p1 = link_pores[l, 0], link_pores[l, 1]
         s = ((U[p1] if p1 >= 0 else 0.0) - (U[p0] if p0 >= 0 else 0.0)) / length[l]
         px, pz = -vec[l, 1] * s, vec[l, 0] * s
         i, j = links[l, 0], links[l, 1]
-        F[i, 0] += r[i] * px
-        F[i, 1] += r[i] * pz
-        Fj[j, 0] += r[j] * px
-        Fj[j, 1] += r[j] * pz
+        if i < n:
+            F[i, 0] += r[i] * px
+            F[i, 1] += r[i] * pz
+        if j < n:
+            Fj[j, 0] += r[j] * px
+            Fj[j, 1] += r[j] * pz
     for a in range(len(F)):
         F[a, 0] += Fj[a, 0]
         F[a, 1] += Fj[a, 1]

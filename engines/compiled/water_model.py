@@ -1,12 +1,16 @@
 """The pores and water of N discs stepped by compiled kernels: engines.model.water_model.WaterModel
 with its pore builds and re-meshing by engines.compiled.pores (BUILD, REMESH) and its water steps by
-kernels.water_step (the pore measure, the Darcy step, eq 32, 33 in one call). No YADE."""
+kernels.water_step (the pore measure, the Darcy step, eq 32, 33 in one call). With flat walls the
+builds and the re-meshing are the NumPy ones (engines.model.pores: no compiled twins yet), the water
+steps compiled. No YADE."""
 import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled import pores as cp
 from engines.model import limits, water_model
+from engines.model import pores as pg
 from engines.model.limits import DarcyStabilityError
+from engines.model.pore_water import NUMPY_REMESH
 
 
 class WaterModel(water_model.WaterModel):
@@ -17,8 +21,10 @@ class WaterModel(water_model.WaterModel):
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
+        if flat_walls:
+            self.build_steps, self.remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH
         super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
-                         rebuild_distance, flat_walls)  # flat walls: refused by build_pores (NumPy only)
+                         rebuild_distance, flat_walls)
         self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
         self._buffers()
 
@@ -27,14 +33,20 @@ class WaterModel(water_model.WaterModel):
         net, n = self.water.net, len(self.r)
         n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
         surface, drained, bottom = self.water._boundary_masks()
+        walls = net.flat_walls
+        edge, edge_wall = pg.wall_edges(net)
         ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
                 "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
-                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link}
+                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link,
+                "wall_axis": [w.axis for w in walls], "wall_edge": edge, "wall_edge_wall": edge_wall}
         floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
                   "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
                   "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
-                  "r": self.r, "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)), "balance": np.zeros(3),
-                  "lam": np.zeros(2), "has_q_prev": 0.0, "check_areas": float(self.rebuild_distance > 0)}
+                  "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)),
+                  "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
+                  "check_areas": float(self.rebuild_distance > 0), "wall_position": [w.position for w in walls],
+                  "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: fixed
+                  "F_walls": np.zeros(len(walls))}
         # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
                             ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
@@ -45,13 +57,15 @@ class WaterModel(water_model.WaterModel):
         self._views()
 
     def _views(self):
-        """Views of the float buffer read around each water step; kernel_args built again."""
-        self._lam, self._balance, self._has_q_prev = (self._part(name) for name in ("lam", "balance", "has_q_prev"))
+        """Views of the float buffer read around each water step (F_walls among them); kernel_args
+        built again."""
+        self._lam, self._balance, self._has_q_prev, self.F_walls = (
+            self._part(name) for name in ("lam", "balance", "has_q_prev", "F_walls"))
         self._args_key = None
 
     def __getstate__(self):  # a pickle copies views: leave them out, make them again on loading
         state = dict(self.__dict__)
-        for name in ("_lam", "_balance", "_has_q_prev", "_args", "_args_key"):
+        for name in ("_lam", "_balance", "_has_q_prev", "F_walls", "_args", "_args_key"):
             state.pop(name, None)
         return state
 
@@ -75,7 +89,7 @@ class WaterModel(water_model.WaterModel):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
         n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
         void = np.empty(n_p)
-        kernels.measure(xz, self.r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
+        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
                         net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
                         np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
                         np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))

@@ -757,14 +757,19 @@ def flat_wall_forces(net, U, meas):
     positive when it pushes the wall outward (away from the discs; SPEC §2.6): the sum over the
     wall's edges of U x edge length. A wall edge lies on the face, so its outer side is the outer
     face (U = 0) and U of its pore is the sum over both sides. ``meas``: PoreMeasures."""
+    k, w = wall_edges(net)
+    Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
+    U_edge = Uo[net.link_pores[k, 0]] + Uo[net.link_pores[k, 1]]
+    return np.bincount(w, U_edge * meas.link_length[k], minlength=len(net.flat_walls))
+
+
+def wall_edges(net):
+    """The wall edges of the flat walls of ``net``: (link indices (K,), their wall (K,)), a link
+    once per wall it lies on (empty without flat walls)."""
     wv = net.wall_vertices
     if wv is None:
-        return np.zeros(0)
-    Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
-    a, b = net.links[:, 0], net.links[:, 1]
-    k, w = wv.split_bits(wv.bits[a] & wv.bits[b])
-    U_edge = Uo[net.link_pores[k, 0]] + Uo[net.link_pores[k, 1]]
-    return np.bincount(w, U_edge * meas.link_length[k], minlength=len(wv.walls))
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return wv.split_bits(wv.bits[net.links[:, 0]] & wv.bits[net.links[:, 1]])
 
 
 class WallReactions(NamedTuple):

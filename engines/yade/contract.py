@@ -3,8 +3,8 @@ naming the body id (``ContractError``), and ``set_disc_mass`` gives a sphere the
 
 The rules (docs/ENGINE.md):
 
-* every body of ``disc_ids`` exists and is a sphere (a YADE Box or Wall is refused: walls are
-  wall discs for now);
+* every body of ``disc_ids`` exists and is a sphere (a YADE Box or Wall belongs in ``flat_walls``,
+  engines.yade.walls);
 * the discs lie in one plane y = const (the median y of the discs, to 1e-6 of each radius) and stay
   there: every dynamic disc has y among its blockedDOFs, and no disc has a velocity along y;
 * the masses are per metre of thickness (SPEC §1): m = f rho pi r^2 with rho the density of the
@@ -13,7 +13,7 @@ The rules (docs/ENGINE.md):
   4/3 r [m] of that (6.7e-4 at r = 0.5 mm), the message says when the mass is that one. A disc free
   to spin about y needs I_y >= MIN_FACTOR m r^2 / 2 (the disc's m r^2/2, eq 15; YADE's sphere
   inertia 2/5 m r^2 with its 3D mass is far below);
-* q_w > 0 needs an inflow boundary: a pore with a bottom wall disc as a vertex;
+* q_w > 0 needs an inflow boundary: a pore with a bottom wall disc or an inflow flat wall as a vertex;
 * the discs build pores;
 * bodies are not added after the engine is made (refused at its next pore rebuild, ``check_added``);
   an erased disc is refused by the next read of the positions (engines.yade.yade_io), which names it.
@@ -47,8 +47,8 @@ def check_discs(bodies, ids, radii=None):
             raise ContractError(f"body {i}: not in O.bodies (disc_ids must be existing spheres)")
         shape = type(b.shape).__name__
         if shape in ("Box", "Wall"):
-            raise ContractError(f"body {i}: a YADE {shape}; the WaterEngine takes spheres only, and walls are wall "
-                                f"discs for now (spheres in disc_ids, named in walls={{'bottom': ...}})")
+            raise ContractError(f"body {i}: a YADE {shape} in disc_ids, which takes spheres only; give it as a flat "
+                                f"wall: flat_walls={{{i}: 'undrained' | 'drained' | 'inflow'}}")
         if shape != "Sphere":
             raise ContractError(f"body {i}: a {shape}, not a sphere (disc_ids must be spheres)")
         found.append(b)
@@ -94,9 +94,10 @@ def check_pores(net, settings, n_discs, l_m):
     if net.n_pores == 0:
         raise ContractError(f"no pores between the {n_discs} discs: the WaterEngine needs discs in the x-z plane that "
                             f"touch or lie within l_m = {l_m:g} m of each other")
-    if settings.q_w > 0 and not net.pore_touches["bottom"].any():
-        raise ContractError(f"q_w = {settings.q_w:g} m/s but no pore has a bottom wall disc as a vertex: the inflow "
-                            f"needs walls={{'bottom': ids}} under the discs (or q_w = 0)")
+    if settings.q_w > 0 and not (net.pore_touches["bottom"] | net.flat_wall_pores("inflow")).any():
+        raise ContractError(f"q_w = {settings.q_w:g} m/s but no pore has a bottom wall disc or an inflow flat wall as "
+                            f"a vertex: the inflow needs walls={{'bottom': ids}} under the discs or "
+                            f"flat_walls={{id: 'inflow'}} (or q_w = 0)")
 
 
 def check_added(bodies, n_bodies):

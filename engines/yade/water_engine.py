@@ -57,6 +57,9 @@ class WaterEngine:
     bodies; give them when the contact law enlarges the spheres by eps_m/2). eps_m: contact range
     of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
     dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
+    flat_walls: {body id: "undrained" | "drained" | "inflow"} of YADE Box or Wall bodies (not in
+    disc_ids) that close the pores (SPEC §2.6; engines.yade.walls takes the face the discs lie
+    against); the water's push on them is ``wall_forces``.
     rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
     farther than this from its centre at the last build or a void area is out of range
     (engines.model.water_model.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
@@ -65,14 +68,17 @@ class WaterEngine:
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
                  water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True,
-                 rebuild_distance=None):
+                 rebuild_distance=None, flat_walls=None):
         from yade import O  # YADE only here and below
 
         from engines.yade import yade_io
+        from engines.yade.walls import flat_walls as faces
 
         self.io = yade_io.Bodies(disc_ids)
         ids = self.io.ids
         radii = contract.check_discs(O.bodies, ids.tolist(), radii)
+        self.wall_ids = [int(i) for i in (flat_walls or {})]
+        walls_xz = faces(O.bodies, flat_walls or {}, self.io.positions())
         code = np.zeros(len(ids), np.int64)
         pos = {i: k for k, i in enumerate(ids.tolist())}
         for name, group in (walls or {}).items():
@@ -89,7 +95,7 @@ class WaterEngine:
         if rebuild_distance is None:
             rebuild_distance = REBUILD_FRACTION * l_m
         self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
-                           water_interval, k0=O.iter, rebuild_distance=rebuild_distance)
+                           water_interval, k0=O.iter, rebuild_distance=rebuild_distance, flat_walls=walls_xz)
         contract.check_pores(self.model.water.net, settings, len(ids), l_m)
         self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
@@ -219,3 +225,10 @@ class WaterEngine:
     def pressures(self):
         """U (Np,) [N/m] of the pores at the current positions."""
         return self.model.pressures(self.io.positions())
+
+    def wall_forces(self):
+        """{body id of flat_walls: (F_x, F_z)} [N per m thickness]: the push of the pore water on
+        each flat wall at the last water step (U x wetted length along the outward normal; the
+        discs' contacts on it are YADE's, in O.forces)."""
+        return {i: tuple(-f * wall.normal()) for i, f, wall in zip(self.wall_ids, self.model.F_walls,
+                                                                    self.model.flat_walls)}

@@ -53,8 +53,8 @@ def test_the_column_and_dense_discs_are_accepted():
     assert water.model.water.net.n_pores > 100
 
 
-@pytest.mark.parametrize("make, what", [("box", "a YADE Box; .*walls are wall discs for now"),
-                                        ("wall", "a YADE Wall; .*walls are wall discs for now"),
+@pytest.mark.parametrize("make, what", [("box", r"a YADE Box in disc_ids, .*flat_walls=\{\d+: "),
+                                        ("wall", r"a YADE Wall in disc_ids, .*flat_walls=\{\d+: "),
                                         ("facet", "a Facet, not a sphere")])
 def test_a_body_that_is_not_a_sphere_is_refused(make, what):
     from yade import O, utils

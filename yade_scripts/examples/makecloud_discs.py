@@ -65,4 +65,4 @@ water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "le
 O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
 O.run(args.steps, True)
 print(f"dt {O.dt:.3g} s, {len(grains)} grains from makeCloud, {O.iter} steps ({O.time * 1e3:.2f} ms)")
-report(water, {"bottom": bottom, "left": left, "right": right}, grains)
+report(water, grains, {"bottom": bottom, "left": left, "right": right})

@@ -99,7 +99,7 @@ def main(argv):
     print(f"{len(grains)} grains, {net.n_pores} pores after {O.iter} steps ({O.time * 1e3:.1f} ms): "
           f"mean U bottom pores {np.mean(U[net.pore_touches['bottom']]):.1f} N/m, "
           f"surface pores {np.mean(U[net.pore_surface]):.1f} N/m")
-    report(water, {"bottom": bottom, "left": left, "right": right}, grains)
+    report(water, grains, {"bottom": bottom, "left": left, "right": right})
     return water
 
 

@@ -1,0 +1,84 @@
+"""Flat walls (SPEC §2.6) on the compiled path: the compiled build refuses them in one line; the
+compiled WaterModel builds with the NumPy steps and runs its water steps by kernels.water_step,
+to the NumPy model's results."""
+import numpy as np
+import pytest
+
+from engines.compiled import kernels
+from engines.compiled import pores as kp
+from engines.compiled import water_model as cwm
+from engines.model import pores as pg
+from engines.model import water_model as wm
+from engines.model.flat_walls import FlatWall, WallVertices
+from engines.model.pore_water import WaterSettings
+from tests.layouts import random_sequential
+
+WALL = (FlatWall(1, 0.0, +1, "inflow"),)
+
+
+def row():
+    return np.column_stack([2.0 * np.arange(5), np.full(5, 1.05)]), np.ones(5)
+
+
+def test_the_compiled_build_refuses_flat_walls():
+    xz, r = row()
+    with pytest.raises(ValueError, match=r"^flat walls: the NumPy model only for now \(compiled=False\)$"):
+        pg.build_pores(xz, r, l_m=0.1, steps=kp.BUILD, flat_walls=WALL)
+    assert pg.build_pores(xz, r, l_m=0.1, flat_walls=WALL).n_pores == 4  # the NumPy build takes them
+
+
+def test_the_wall_vertices_are_placed_as_the_models():
+    rng = np.random.default_rng(1)
+    xz = rng.uniform(1.0, 9.0, (7, 2))
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1), FlatWall(0, 10.0, -1, "drained"), FlatWall(1, 10.0, -1))
+    wv = WallVertices(walls, len(xz))
+    want = wv.positions(xz)
+    got = wv.positions(xz + 5.0)  # the corners stay; the kernel overwrites the rest
+    kernels.place_wall_vertices(xz, got, np.array([w.axis for w in walls]), np.array([w.position for w in walls]))
+    assert np.array_equal(got, want)
+
+
+def boxed_discs(seed=2, size=12.0):
+    """A loose random packing in a box: an inflow bottom, a drained right side, undrained others."""
+    rng = np.random.default_rng(seed)
+    xz, r = random_sequential(rng.uniform(1.2, 2.0, 300), size - 2.0, size - 2.0, rng)
+    walls = (FlatWall(1, 0.0, +1, "inflow"), FlatWall(0, 0.0, +1), FlatWall(0, size, -1, "drained"),
+             FlatWall(1, size, -1))
+    return xz + 1.0, r, walls
+
+
+@pytest.mark.parametrize("smoothing", [False, True])
+def test_the_compiled_water_model_with_flat_walls_is_the_numpy_one(smoothing):
+    """The discs shaken for 60 steps, rebuilt every 20 (the water moves between meshes): W, the disc
+    forces and the walls' forces of the two classes agree to round-off at every step."""
+    xz0, r, walls = boxed_discs()
+    s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=50.0, q_w=0.02, smoothing=smoothing, transfer="conserving")
+    models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, rebuild_interval=20,
+                  flat_walls=walls) for cls in (wm.WaterModel, cwm.WaterModel)]
+    rng = np.random.default_rng(0)
+    for k in range(60):
+        xz = xz0 + 0.02 * np.sin(0.1 * k) * rng.standard_normal(xz0.shape) * 0.1
+        for m in models:
+            m.step(k, xz)
+        a, b = models
+        np.testing.assert_allclose(b.water.W, a.water.W, rtol=1e-12)
+        np.testing.assert_allclose(b.F, a.F, rtol=1e-10, atol=1e-12 * np.abs(a.F).max())
+        np.testing.assert_allclose(b.F_walls, a.F_walls, rtol=1e-12)
+    assert a.n_rebuilds == b.n_rebuilds == 2 and np.all(a.F_walls != 0) and a.water.balance.inflow > 0
+
+
+def test_compiled_flat_walls_keep_the_uniform_pressure_balance():
+    """A uniform U in every pore of the compiled model: no force on any disc, U x wetted length on
+    each wall (the water step's eq 33 and flat_wall_forces kernels)."""
+    xz, r, walls = boxed_discs(seed=5)
+    s = WaterSettings(E_w=240.0, k1=0.0, k2=0.0, k3=0.0, q_w=0.0)
+    m = cwm.WaterModel(s, r, np.zeros(len(r), np.int64), xz, 0.0, 0.8 * r.mean(), 1e-4, flat_walls=walls)
+    U = 30.0
+    m.water.W = pg.measure(m.water.net, xz, r).void_area * s.E_w / (s.E_w - U)  # eq 32 inverted
+    m.advance(1e-4, xz)
+    assert np.abs(m.F).max() < 1e-12 * U
+    wetted = np.zeros(len(walls))
+    net, meas = m.water.net, pg.measure(m.water.net, xz, r)
+    k, w = pg.wall_edges(net)
+    np.add.at(wetted, w, meas.link_length[k])
+    np.testing.assert_allclose(m.F_walls, U * wetted, rtol=1e-12)
