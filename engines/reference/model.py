@@ -14,15 +14,18 @@ only the pore *topology* (candidate links, faces) is decided in float64.
 
 Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/pore_dem.py):
   a. du = x_t - x_{t-dt}, dpsi = psi_t - psi_{t-dt} (zero at k = 0).
-  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``).
+  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``); with flat walls (SPEC §2.6) also
+     those of the walls on the particles, a wall acting as a fixed disc of infinite radius
+     (``wall_records``).
   c. velocity adjustment of particles that became free, eq 18-24 (``adjust_free_particles``),
      on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
      velocity replaces v before step e.
-  d. water (water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
-     k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
+  d. water (water.enabled): pores (closed by the flat walls, ``build_pores``) built at k = 0 from
+     x_0 and rebuilt at k > 0, k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
      advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
      x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
-     with the area actually used (eq 45) and held until the next water step.
+     with the area actually used (eq 45) and held until the next water step, as are the flat
+     walls' water forces (``wall_water_forces``; ``ReferenceModel.wall_reactions``).
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17).
      Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
@@ -161,8 +164,9 @@ class PairRecords:
     Record p is pair (I[p], J[p]); its force acts on element I[p] only, so the force on i is the sum
     over the records of i (the Sigma of eq 13) and Newton's third law holds only because record
     (j, i) computes the mirror value. Per record: in_contact (eq 1a, 26), e_n and e_s [N] (eq 5a,
-    9a after eq 6, 10, 11, 27), the displacement eps [m] of the elastic spring (c) (eq 25), and
-    Vn_ij [m/s], the approach velocity at collision (eq 20-21).
+    9a after eq 6, 10, 11, 27), f_n [N] (eq 7), the displacement eps [m] of the elastic spring (c)
+    (eq 25), and Vn_ij [m/s], the approach velocity at collision (eq 20-21). ``pairs`` (I, J): the
+    records given instead (the flat walls', ``wall_records``).
     """
 
     def __init__(self, s, r, mobile, dtype, sliding=None, pairs=None):

@@ -279,3 +279,19 @@ def test_flat_walls_refuse_what_they_are_not():
     with pytest.raises(ValueError, match="beyond the face"):
         ref.build_pores(np.array([[0.0, -R], [2 * R, R], [4 * R, R]]), np.full(3, R), np.zeros(3, int), 0.0, 0.1 * R,
                         flat(wall("z", 0.0, 1)))
+
+
+def test_a_disc_touching_a_flat_wall_is_not_free():
+    """Disc 0 lies on the wall z = 0 (gap 0: touching); disc 1, just clear of the wall, hits it
+    along x and rebounds. Disc 0 still touches the wall when they part, so it is not free: disc 1
+    alone is adjusted, pattern (a) of eq 22-23, not the pair by pattern (d) (eq 24)."""
+    s = make_scene(contact={"spring": "a", "separation_adjustment": True}).as_dict()
+    s["walls"] = {"flat": [wall("z", 0.0, 1)]}
+    model = ref.ReferenceModel(s, Packing(np.array([[0.0, R], [2 * R + 1e-9, R + 1e-8]]), np.full(2, R),
+                                          np.zeros(2, int), np.ones(2)))
+    model.v[1, 0] = -0.1
+    touched = False
+    while not (touched and not model.contact.in_contact.any()):
+        model.step()
+        touched |= bool(model.contact.in_contact.any())
+    assert model.wall_contact.in_contact[0] and model.counts["separation"] == {"a": 1, "b": 0, "c": 0, "d": 0}
