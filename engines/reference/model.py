@@ -21,11 +21,12 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/
      on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
      velocity replaces v before step e.
   d. water (water.enabled): pores (closed by the flat walls, ``build_pores``) built at k = 0 from
-     x_0 and rebuilt at k > 0, k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of §3.4(2); the water is
-     advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
-     x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
-     with the area actually used (eq 45) and held until the next water step, as are the flat
-     walls' water forces (``wall_water_forces``; ``ReferenceModel.wall_reactions``).
+     x_0 and rebuilt at k > 0, k % rebuild_interval == 0, pressures inherited by rules (a)-(d) of
+     §3.4(2); the water is advanced at k % water_interval == 0 by water_interval dt at the void
+     areas and link states of x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are
+     recomputed from the U of eq 32 with the area actually used (eq 45) and held until the next
+     water step, as are the flat walls' water forces (``wall_water_forces``,
+     ``ReferenceModel.wall_reactions``).
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17).
      Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
@@ -121,12 +122,6 @@ class FlatWall:
     def distance(self, x):
         """Distance (N,) [m] of the centres x (N, 2) from the face along the inward normal."""
         return self.inward * (x[:, self.axis] - x.dtype.type(self.position))
-
-    def normal(self):
-        """The inward unit normal (2,)."""
-        n = np.zeros(2)
-        n[self.axis] = self.inward
-        return n
 
 
 FLAT_WALL_KEYS = ("axis", "position", "inward", "boundary")
@@ -359,7 +354,7 @@ class Pores:
       corners corner_pore, corner_disc, corner_prev, corner_next: disc d reached from prev, left to next;
       rattlers rattler_pore, rattler_disc: unlinked discs inside (their whole area is not void);
       vertex_sets (frozenset of discs, and -1 - w for flat wall w), surface / bottom / side (bool
-    arrays), neighbours (sets).
+      arrays), neighbours (sets).
     Links (L, 2) i < j; throats (T, 2) pairs of distinct pores sharing link throat_link (T,).
     a_min: faces with void area <= a_min at build are closed (not pores); pores whose area falls
     to <= a_min later keep their water but exchange none.
@@ -865,7 +860,8 @@ class Water:
         A_pq = W[p] * W[q] / np.where(both, A[p] + A[q], 1)                 # eq 40 (W_i W_j, not W' W_j)
         i_pq = (U[p] - U[q]) / E_w                                           # eq 39
         q_t = np.where(both, k * A_pq * i_pq, zero)                          # eq 41
-        drained = (pores.side if self.s.drained else np.zeros_like(pores.side)) | pores.wall_drained   # §6.1, §2.6
+        drained = pores.side if self.s.drained else np.zeros_like(pores.side)        # §6.1
+        drained = drained | pores.wall_drained                                          # §2.6
         q_surface = np.where(open_ & pores.surface, self.k1 * W * U / E_w, zero)   # outside at U = 0
         q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)            # §6.1: outside 0, k3
         q_in = np.where(pores.bottom | pores.wall_inflow, self.q_w, zero)    # §5.1, §2.6
@@ -1060,7 +1056,9 @@ class ReferenceModel:
     dtype: x, v (N, 2) [m, m/s], psi, omega (N,) [rad, rad/s], mass, inertia (N,) [kg/m, kg m];
     ``sliding`` (N,) the side-wall discs on springs, ``ties`` (lower, upper) and ``tie_rest``
     (column_ties). ``contact`` (PairRecords), ``pores`` / ``water`` (None when dry); ``counts``:
-    re-meshing rules, separation patterns, rebuilds.
+    re-meshing rules, separation patterns, rebuilds. Flat walls (SPEC §2.6): ``flat`` (FlatWall),
+    ``wall_contact`` / ``wall_of`` (wall_records; None / [] without them), ``wall_water`` (W,) [N
+    per m of thickness] (wall_water_forces); ``wall_reactions``.
     """
 
     def __init__(self, tables, packing, dtype=np.float64):
