@@ -10,6 +10,7 @@ import pytest
 from engines.reference import model as ref
 from packing.layouts import hex_lattice
 from packing.packing import Packing
+from tests.reference.test_reference import non_overlapping_discs
 from tests.scene_helpers import make_scene
 
 R = 0.45e-3  # disc radius [m]
@@ -88,6 +89,21 @@ def test_two_walls_close_the_corner_pore():
     assert area[frozenset({0, 1, 2, 3})] == pytest.approx(R**2 * (4 - np.pi), rel=1e-12)
     bottom_only, _ = pores_of(x, r, flat(wall("z", 0.0, 1)))
     assert sorted(map(sorted, bottom_only.vertex_sets)) == [[-1, 0, 1], [0, 1, 2, 3]]
+
+
+@pytest.mark.parametrize("seed", [1, 4])
+def test_pores_tile_a_box_of_four_flat_walls(seed):
+    """120 random discs (radii 0.1-1 mm) in a box of four flat walls 1 mm beyond the square they
+    were dropped in, l_m = 1.5 mm (every disc near a wall is linked to it): the pore polygons tile
+    the box, and the void areas are the box less the discs (every disc is wrapped by its sectors)."""
+    x, r = non_overlapping_discs(seed)
+    lo, hi = -1e-3, 1.2e-2 + 1e-3
+    walls = flat(wall("x", lo, 1), wall("x", hi, -1), wall("z", lo, 1), wall("z", hi, -1))
+    pores, geo = pores_of(x, r, walls, l_m=1.5e-3)
+    box = (hi - lo) ** 2
+    assert len(pores.corner_wall) == 4 and not pores.surface.any()
+    assert np.sum(geo.polygon_area) == pytest.approx(box, rel=1e-12)
+    assert np.sum(geo.void_area) == pytest.approx(box - np.pi * np.sum(r**2), rel=1e-12)
 
 
 def test_uniform_pressure_in_a_closed_box():
