@@ -14,15 +14,19 @@ only the pore *topology* (candidate links, faces) is decided in float64.
 
 Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/pore_dem.py):
   a. du = x_t - x_{t-dt}, dpsi = psi_t - psi_{t-dt} (zero at k = 0).
-  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``).
+  b. contact forces, eq 1-13, 25-27 (``PairRecords.forces``); with flat walls (SPEC §2.6) also
+     those of the walls on the particles, a wall acting as a fixed disc of infinite radius
+     (``wall_records``).
   c. velocity adjustment of particles that became free, eq 18-24 (``adjust_free_particles``),
      on the velocities v = du/dt (eq 17: the velocity is constant over a step); the adjusted
      velocity replaces v before step e.
-  d. water (water.enabled): pores built at k = 0 from x_0 and rebuilt at k > 0,
-     k % rebuild_interval == 0 (or at the steps a run recorded, when given them: SPEC §2.6), pressures inherited by rules (a)-(d) of §3.4(2); the water is
+  d. water (water.enabled): pores (closed by the flat walls, ``build_pores``) built at k = 0 from
+     x_0 and rebuilt at k > 0, k % rebuild_interval == 0 (or at the steps a run recorded, when
+     given them: SPEC §2.6), pressures inherited by rules (a)-(d) of §3.4(2); the water is
      advanced at k % water_interval == 0 by water_interval dt at the void areas and link states of
      x_t (eq 32, 38-43, 45-46), then the pressure forces (eq 33) are recomputed from the U of eq 32
-     with the area actually used (eq 45) and held until the next water step.
+     with the area actually used (eq 45) and held until the next water step, as are the flat walls'
+     water forces (``wall_water_forces``, ``ReferenceModel.wall_reactions``).
   e. F = contact + pressure - rho f pi r^2 g (+ rho_w pi r^2 g with water, eq 34b);
      v += F/m dt, x += v dt, omega += M/I dt, psi += omega dt (eq 14-17).
      Side walls on springs ([loading] side_walls = "springs", §6.1, Fig. 27): the side-wall discs
@@ -86,6 +90,7 @@ class Settings:
     side_walls: bool        # side-wall columns on springs (Fig. 27), else fixed
     ks_wall: float          # k'_s of the ties [N/m]
     eta_s_wall: float       # eta'_s of the ties [N s/m]
+    flat_walls: tuple = ()  # FlatWall (SPEC §2.6), from tables["walls"]["flat"]
 
 
 def read_settings(tables):
@@ -99,7 +104,48 @@ def read_settings(tables):
         substep=w["substep"], loading=dict(tables["loading"]), dt=n["dt"], dt_safety=n["dt_safety"],
         rebuild_interval=n["rebuild_interval"], water_interval=n["water_interval"],
         block_z=[list(b) for b in tables["output"]["block_z"]],
-        side_walls=tables["loading"]["side_walls"] == "springs", ks_wall=c["ks_wall"], eta_s_wall=c["eta_s_wall"])
+        side_walls=tables["loading"]["side_walls"] == "springs", ks_wall=c["ks_wall"], eta_s_wall=c["eta_s_wall"],
+        flat_walls=read_flat_walls(tables))
+
+
+@dataclass(frozen=True)
+class FlatWall:
+    """A fixed axis-aligned flat wall (SPEC §2.6): the face x = position (axis 0) or z = position
+    (axis 1) [m], the discs on the side ``inward`` (+1: inward normal +e_axis, -1: -e_axis);
+    boundary "undrained", "drained" (k3, U = 0 outside) or "inflow" (q_w into each of its pores)."""
+
+    axis: int
+    position: float
+    inward: int
+    boundary: str
+
+    def distance(self, x):
+        """Distance (N,) [m] of the centres x (N, 2) from the face along the inward normal."""
+        return self.inward * (x[:, self.axis] - x.dtype.type(self.position))
+
+
+FLAT_WALL_KEYS = ("axis", "position", "inward", "boundary")
+
+
+def read_flat_walls(tables):
+    """The FlatWalls of tables["walls"]["flat"], a list of {"axis": "x" | "z", "position": [m],
+    "inward": +1 | -1, "boundary": "undrained" | "drained" | "inflow"}; none when absent.
+    Raises ValueError for anything else (moving walls among it) and for two walls facing the same
+    way on one axis (the discs would lie on the outer one's side of the inner one)."""
+    walls = []
+    for k, w in enumerate(tables.get("walls", {}).get("flat", [])):
+        if sorted(w) != sorted(FLAT_WALL_KEYS):
+            raise ValueError(f"flat wall {k}: needs exactly the keys {FLAT_WALL_KEYS} (flat walls are fixed; "
+                             f"got {sorted(w)})")
+        if w["axis"] not in ("x", "z") or w["inward"] not in (1, -1) or \
+                w["boundary"] not in ("undrained", "drained", "inflow"):
+            raise ValueError(f"flat wall {k}: axis 'x' | 'z', inward +1 | -1, boundary 'undrained' | 'drained' "
+                             f"| 'inflow' (got {w})")
+        walls.append(FlatWall("xz".index(w["axis"]), float(w["position"]), int(w["inward"]), w["boundary"]))
+    faces = [(w.axis, w.inward) for w in walls]
+    if len(set(faces)) < len(faces):
+        raise ValueError("two flat walls face the same way on one axis: at most one wall per side of the box")
+    return tuple(walls)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -113,16 +159,20 @@ class PairRecords:
     Record p is pair (I[p], J[p]); its force acts on element I[p] only, so the force on i is the sum
     over the records of i (the Sigma of eq 13) and Newton's third law holds only because record
     (j, i) computes the mirror value. Per record: in_contact (eq 1a, 26), e_n and e_s [N] (eq 5a,
-    9a after eq 6, 10, 11, 27), the displacement eps [m] of the elastic spring (c) (eq 25), and
-    Vn_ij [m/s], the approach velocity at collision (eq 20-21).
+    9a after eq 6, 10, 11, 27), f_n [N] (eq 7), the displacement eps [m] of the elastic spring (c)
+    (eq 25), and Vn_ij [m/s], the approach velocity at collision (eq 20-21). ``pairs`` (I, J): the
+    records given instead (the flat walls', ``wall_records``).
     """
 
-    def __init__(self, s, r, mobile, dtype, sliding=None):
+    def __init__(self, s, r, mobile, dtype, sliding=None, pairs=None):
         n = len(r)
         mobile = np.asarray(mobile, bool)
         sliding = np.zeros(n, bool) if sliding is None else np.asarray(sliding, bool)
         self.mobile = mobile
-        self.I, self.J = np.nonzero((mobile[:, None] & ~np.eye(n, dtype=bool)) | (sliding[:, None] & mobile[None, :]))
+        if pairs is None:
+            self.I, self.J = np.nonzero((mobile[:, None] & ~np.eye(n, dtype=bool)) | (sliding[:, None] & mobile[None, :]))
+        else:                                   # given records (I, J), I ascending: the flat walls' (wall_records)
+            self.I, self.J = (np.asarray(v, int) for v in pairs)
         self.s, self.dtype, self.n = s, dtype, n
         self.r_i, self.r_j = np.asarray(r, dtype)[self.I], np.asarray(r, dtype)[self.J]
         self.kn, self.eta_n, self.ks, self.eta_s, self.mu, self.f_max, self.eps_m = (
@@ -130,7 +180,7 @@ class PairRecords:
         self.first = np.flatnonzero(np.r_[True, self.I[1:] != self.I[:-1]]) if len(self.I) else self.I
         m = len(self.I)
         self.in_contact = np.zeros(m, bool)
-        self.e_n, self.e_s, self.eps, self.Vn_ij = (np.zeros(m, dtype) for _ in range(4))
+        self.e_n, self.e_s, self.eps, self.Vn_ij, self.f_n = (np.zeros(m, dtype) for _ in range(5))
 
     def forces(self, x, du, dpsi, dt):
         """Forces (N, 2) [N], moments Fm (N,) [N m, counter-clockwise] on the elements (eq 13), and
@@ -192,6 +242,23 @@ class PairRecords:
         """Number of elements each element touches now (fixed and driven walls: 0, they carry no
         records; a side-wall disc on springs: the particles it touches)."""
         return np.bincount(self.I[self.in_contact], minlength=self.n)
+
+
+def wall_records(s, r, mobile, walls, dtype):
+    """Contact records of the particles with the flat walls (SPEC §2.6), or (None, []) without
+    walls: one record per (particle, wall), particle by particle, the wall as a disc of infinite
+    radius: element N + k of record k is the foot point of its disc on the face, radius 0 and at
+    rest, so eq 1-13 give R_ij = the distance to the face, the normal along the wall's normal, the
+    overlap of eq 25-26 r_i + eps_m - R_ij, and eq 3b's rolling r_i dpsi_i: the law of a fixed wall
+    disc. Returns (PairRecords over the N + K elements, wall index (K,) of each record)."""
+    if not walls:
+        return None, []
+    disc = np.repeat(np.flatnonzero(mobile), len(walls))
+    wall = np.tile(np.arange(len(walls)), int(np.count_nonzero(mobile)))
+    n, k = len(r), len(disc)
+    records = PairRecords(s, np.concatenate([r, np.zeros(k, dtype)]), np.r_[mobile, np.zeros(k, bool)], dtype,
+                          pairs=(disc, n + np.arange(k)))
+    return records, wall
 
 
 # ------------------------------------------------------------------------------------------------
@@ -286,10 +353,16 @@ class Pores:
       half-edges he_pore, he_a, he_b: boundary links a -> b;
       corners corner_pore, corner_disc, corner_prev, corner_next: disc d reached from prev, left to next;
       rattlers rattler_pore, rattler_disc: unlinked discs inside (their whole area is not void);
-      vertex_sets (frozenset of discs), surface / bottom / side (bool arrays), neighbours (sets).
+      vertex_sets (frozenset of discs, and -1 - w for flat wall w), surface / bottom / side (bool
+      arrays), neighbours (sets).
     Links (L, 2) i < j; throats (T, 2) pairs of distinct pores sharing link throat_link (T,).
     a_min: faces with void area <= a_min at build are closed (not pores); pores whose area falls
     to <= a_min later keep their water but exchange none.
+    Flat walls (SPEC §2.6): ``walls`` (FlatWall); the vertices N, N + 1, ... after the N discs are
+    virtual, radius 0 (``wall_vertices``): the foot point of disc foot_disc[f] on wall foot_wall[f]
+    (F,), then the corner of walls corner_wall[c] = (x-wall, z-wall) (C, 2). he_wall (H,): the wall
+    of a half-edge on a face, -1 for the others; wall_drained / wall_inflow (Np,): pores with an
+    edge on a drained / inflow wall.
     """
 
     n_pores: int = 0
@@ -311,6 +384,50 @@ class Pores:
     vertex_sets: list = field(default_factory=list)
     neighbours: list = field(default_factory=list)
     a_min: float = 0.0
+    walls: tuple = ()
+    foot_disc: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    foot_wall: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    corner_wall: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), int))
+    he_wall: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    wall_drained: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    wall_inflow: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+
+
+def flat_wall_vertices(x, r, walls, reach):
+    """The virtual vertices of the flat walls (SPEC §2.6) for discs at x (N, 2) [m], radii r [m]:
+    disc d is linked to wall w when its gap to the face, distance - r_d, is <= reach = eps_m + l_m
+    (eq 28 with the wall as a disc of infinite radius). Returns {foot_disc, foot_wall} (F,), wall
+    by wall and along each face by the coordinate along it, and {corner_wall} (C, 2): every
+    (x-wall, z-wall) pair of which both walls have linked discs. Raises ValueError for a disc whose
+    centre is on or beyond a face."""
+    foot_disc, foot_wall = [], []
+    for w, wall in enumerate(walls):
+        h = wall.distance(x)
+        if np.any(h <= 0):
+            raise ValueError(f"flat wall {w}: disc {int(np.argmin(h))} has its centre on or beyond the face")
+        d = np.flatnonzero(h - r <= reach)
+        foot_disc += d[np.argsort(x[d, 1 - wall.axis], kind="stable")].tolist()
+        foot_wall += [w] * len(d)
+    linked = set(foot_wall)
+    corners = [(a, b) for a in sorted(linked) for b in sorted(linked) if walls[a].axis == 0 and walls[b].axis == 1]
+    return dict(foot_disc=np.array(foot_disc, int), foot_wall=np.array(foot_wall, int),
+                corner_wall=np.array(corners, int).reshape(-1, 2))
+
+
+def wall_vertices(pores, x, r):
+    """Positions (N + F + C, 2) [m] and radii of the discs followed by the virtual vertices of
+    ``pores``' flat walls, in x's dtype: the foot points (the orthogonal projections of their discs
+    on the face, moving with them) and the corners (fixed), radius 0 (no sector in eq 29, no
+    pressure force in eq 33). Without flat-wall vertices: x and r themselves."""
+    if not len(pores.foot_disc):
+        return x, r
+    t = x.dtype.type
+    feet = x[pores.foot_disc].copy()
+    for f, w in enumerate(pores.foot_wall):
+        feet[f, pores.walls[w].axis] = t(pores.walls[w].position)
+    corners = np.array([[pores.walls[a].position, pores.walls[b].position] for a, b in pores.corner_wall],
+                       x.dtype).reshape(-1, 2)
+    return np.vstack([x, feet, corners]), np.concatenate([r, np.zeros(len(feet) + len(corners), r.dtype)])
 
 
 def _direction(x, a, b):
@@ -371,23 +488,26 @@ def _crosses(p, q, a, b):
     return (_turn(p, q, a) * _turn(p, q, b) < 0) and (_turn(a, b, p) * _turn(a, b, q) < 0)
 
 
-def insert_hidden_links(x, r, tris, reach, is_link):
+def insert_hidden_links(x, r, tris, reach, is_link, n_discs=None, extra=()):
     """Add to the triangles' links every eq 28 pair (r_i + r_j + reach >= R_ij) of triangle
     vertices that is not an edge and crosses no link, by flipping the edges it crosses
     (READINGS D4). Pairs are taken from the closest gap R - r_i - r_j up, ties by index; a pair
     whose segment runs through another centre is left out. Only non-link edges are flipped, so
-    no link is lost. Returns (triangles, pairs inserted). Brute force over the edges (a
-    reference, not a fast path)."""
+    no link is lost. With flat walls the eq 28 pairs are those among the discs 0 .. n_discs - 1,
+    and ``extra`` [(gap, d, v)] adds the disc-wall links (disc d to its foot point v) to the same
+    order. Returns (triangles, pairs inserted). Brute force over the edges (a reference, not a
+    fast path)."""
     pts = [tuple(p) for p in x.tolist()]
     verts = np.array(sorted({v for t in tris for v in t}), int)
     tri_of = {}                                   # directed edge (a, b) -> the third corner c of ccw (a, b, c)
     for a, b, c in tris:
         tri_of[(a, b)], tri_of[(b, c)], tri_of[(c, a)] = c, a, b
-    xv, rv = x[verts], r[verts]
+    discs = verts if n_discs is None else verts[verts < n_discs]
+    xv, rv = x[discs], r[discs]
     gap = np.sqrt(((xv[:, None, :] - xv[None, :, :]) ** 2).sum(axis=2)) - rv[:, None] - rv[None, :]
     iu, ju = np.nonzero(np.triu(gap <= reach, 1))
-    pairs = sorted((gap[a, b], verts[a], verts[b]) for a, b in zip(iu.tolist(), ju.tolist())
-                   if (verts[a], verts[b]) not in tri_of and (verts[b], verts[a]) not in tri_of)
+    pairs = [(gap[a, b], discs[a], discs[b]) for a, b in zip(iu.tolist(), ju.tolist())] + list(extra)
+    pairs = sorted(p for p in pairs if (p[1], p[2]) not in tri_of and (p[2], p[1]) not in tri_of)
     inserted = 0
     for _, k, l in pairs:
         if (k, l) in tri_of:
@@ -419,26 +539,47 @@ def insert_hidden_links(x, r, tris, reach, is_link):
     return out, inserted
 
 
-def build_pores(x, r, group, eps_m, l_m):
-    """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], group codes.
+def build_pores(x, r, group, eps_m, l_m, walls=()):
+    """Links (eq 28) and pores (§3.1) of discs at x (N, 2) [m], radii r [m], group codes, closed
+    by the flat walls ``walls`` (FlatWall, SPEC §2.6).
 
     Candidate links: the edges of the regular triangulation, then the eq 28 pairs it hides
     (``insert_hidden_links``; READINGS D4). The topology is decided in float64. Fewer than three
-    discs or collinear centres: no pores.
+    vertices or collinear ones: no pores. With flat walls the vertices are the discs followed by
+    the walls' virtual vertices of radius 0 (``flat_wall_vertices``): a foot point per linked disc
+    and the corners. Their links are the disc-wall links (a disc to its own foot point, eq 28 with
+    the wall as a disc of infinite radius) and the wall edges (consecutive virtual vertices along a
+    face); they enter the same regular triangulation and the same insertion (READINGS F1-F3).
     """
     x = np.asarray(x, np.float64)
     r = np.asarray(r, np.float64)
     n = len(r)
     a_min = DEGENERATE_FRACTION * float(np.mean(np.pi * r**2)) if n else 0.0
-    if n < 3:
-        return Pores(a_min=a_min)
+    walls = tuple(walls)
+    frame = Pores(a_min=a_min, walls=walls, **flat_wall_vertices(x, r, walls, eps_m + l_m))
+    x_disc = x
+    x, r = wall_vertices(frame, x, r)             # the discs, then the walls' virtual vertices
+    if len(r) < 3:
+        return Pores(a_min=a_min, walls=walls)
+    on_walls = [{int(w)} for w in frame.foot_wall] + [set(map(int, c)) for c in frame.corner_wall]
+    foot_of = {n + f: int(d) for f, d in enumerate(frame.foot_disc)}
+    chain = set()                                 # wall edges: consecutive virtual vertices along a face
+    for w, wall in enumerate(walls):
+        along = sorted((x[v, 1 - wall.axis], v) for v in range(n, len(r)) if w in on_walls[v - n])
+        chain |= {(min(a, b), max(a, b)) for (_, a), (_, b) in zip(along, along[1:])}
 
-    def is_link(a, b):                            # eq 28
-        return r[a] + r[b] + eps_m + l_m >= np.hypot(*(x[b] - x[a]))
+    def is_link(a, b):
+        if a < n and b < n:                       # eq 28
+            return r[a] + r[b] + eps_m + l_m >= np.hypot(*(x[b] - x[a]))
+        if a < n or b < n:                        # a disc and its own foot point
+            return foot_of.get(max(a, b)) == min(a, b)
+        return (min(a, b), max(a, b)) in chain
 
-    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link)
+    extra = [(float(walls[w].distance(x_disc[[d]])[0] - r[d]), int(d), n + f)
+             for f, (d, w) in enumerate(zip(frame.foot_disc, frame.foot_wall))]
+    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link, n, extra)
     if not tris:
-        return Pores(a_min=a_min)
+        return Pores(a_min=a_min, walls=walls)
     edge_tri = {}                                 # directed edge -> triangle on its left
     for k, (a, b, c) in enumerate(tris):
         for e in ((a, b), (b, c), (c, a)):
@@ -465,7 +606,7 @@ def build_pores(x, r, group, eps_m, l_m):
         return find(edge_tri[(a, b)]) if (a, b) in edge_tri else outer
 
     # The paper's walk: from a -> b, go on to the neighbour of b next clockwise from a.
-    around = {d: [] for d in range(n)}
+    around = {d: [] for d in range(len(r))}
     for a, b in links:
         around[a].append(b)
         around[b].append(a)
@@ -516,13 +657,17 @@ def build_pores(x, r, group, eps_m, l_m):
     pore_of = {f: p for p, f in enumerate(open_faces)}
     n_p = len(open_faces)
 
+    def tokens(a):                                # a disc is itself; a wall is the vertex -1 - w (F4)
+        return (a,) if a < n else tuple(-1 - w for w in sorted(on_walls[a - n]))
+
     he_pore, he_a, he_b, c_pore, c_disc, c_prev, c_next, r_pore, r_disc = ([] for _ in range(9))
-    vertex_sets = []
+    he_wall, vertex_sets = [], []
     for p, f in enumerate(open_faces):
         cycles = cycles_of_face[f]
         for c in cycles:
             for a, b in c:
                 he_pore.append(p), he_a.append(a), he_b.append(b)
+                he_wall.append(min(on_walls[a - n] & on_walls[b - n]) if a >= n and b >= n else -1)
         cd, cp, cn = _corners(cycles)
         c_pore += [p] * len(cd)
         c_disc += cd.tolist()
@@ -531,13 +676,13 @@ def build_pores(x, r, group, eps_m, l_m):
         rat = rattlers_of_face.get(f, [])
         r_pore += [p] * len(rat)
         r_disc += rat
-        vertex_sets.append(frozenset(int(a) for c in cycles for a, _ in c) | frozenset(rat))
+        vertex_sets.append(frozenset(int(t) for c in cycles for a, _ in c for t in tokens(a)) | frozenset(rat))
 
     link_arr = np.array(links, int).reshape(-1, 2)
     sides = [(pore_of.get(face_left(a, b), -1), pore_of.get(face_left(b, a), -1)) for a, b in links]
     throats, throat_link = [], []
     surface = np.zeros(n_p, bool)
-    wall = np.asarray(group) != PARTICLE
+    wall = np.r_[np.asarray(group) != PARTICLE, np.ones(len(r) - n, bool)]   # virtual vertices are wall
     for l, ((a, b), (pl, pr)) in enumerate(zip(links, sides)):
         if pl >= 0 and pr >= 0 and pl != pr:
             throats.append((pl, pr))
@@ -554,14 +699,24 @@ def build_pores(x, r, group, eps_m, l_m):
         neighbours[q].add(p)
     g = np.asarray(group)
     arr = lambda v: np.array(v, int)
+    he_pore, he_wall = arr(he_pore), arr(he_wall)
+
+    def on_wall_edge(boundary):                   # pores with an edge on a wall of this boundary
+        hit = np.zeros(n_p, bool)
+        for p, w in zip(he_pore, he_wall):
+            hit[p] |= w >= 0 and walls[w].boundary == boundary
+        return hit
+
     return Pores(
-        n_pores=n_p, he_pore=arr(he_pore), he_a=arr(he_a), he_b=arr(he_b),
+        n_pores=n_p, he_pore=he_pore, he_a=arr(he_a), he_b=arr(he_b),
         corner_pore=arr(c_pore), corner_disc=arr(c_disc), corner_prev=arr(c_prev), corner_next=arr(c_next),
         rattler_pore=arr(r_pore), rattler_disc=arr(r_disc), links=link_arr,
         throats=arr(throats).reshape(-1, 2), throat_link=arr(throat_link), surface=surface,
-        bottom=np.array([any(g[v] == BOTTOM for v in vs) for vs in vertex_sets], bool).reshape(-1),
-        side=np.array([any(g[v] in (LEFT, RIGHT) for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        bottom=np.array([any(v >= 0 and g[v] == BOTTOM for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        side=np.array([any(v >= 0 and g[v] in (LEFT, RIGHT) for v in vs) for vs in vertex_sets], bool).reshape(-1),
         vertex_sets=vertex_sets, neighbours=neighbours, a_min=a_min,
+        walls=walls, foot_disc=frame.foot_disc, foot_wall=frame.foot_wall, corner_wall=frame.corner_wall,
+        he_wall=he_wall, wall_drained=on_wall_edge("drained"), wall_inflow=on_wall_edge("inflow"),
     )
 
 
@@ -588,7 +743,10 @@ class PoreGeometry:
 
 
 def measure(pores, x, r, eps_m):
-    """Areas (eq 29), corner angles and link states of ``pores`` at positions x (in x's dtype)."""
+    """Areas (eq 29), corner angles and link states of ``pores`` at positions x (in x's dtype);
+    a disc-wall link is in contact when the disc's gap to the face is <= eps_m (eq 43b with r = 0
+    at the foot point)."""
+    x, r = wall_vertices(pores, x, r)
     dtype = x.dtype.type
     n_p = pores.n_pores
     # shoelace relative to one vertex of each pore: the same area, without the cancellation of
@@ -623,7 +781,10 @@ def pressure_forces(pores, x, r, U, theta):
     counter-clockwise to alpha_2 = alpha_1 + theta (the interior angle, eq 29):
       F_x = int -U r cos(a) da = -U r (sin a2 - sin a1),  F_z = int -U r sin(a) da = U r (cos a2 - cos a1).
     Rattlers are wrapped by one pressure: no net force. No torque (the pressure acts through the centre).
+    The virtual vertices of flat walls have r = 0: the walls' share is ``wall_water_forces``.
     """
+    n = len(x)
+    x, r = wall_vertices(pores, x, r)
     d = pores.corner_disc
     a1 = _direction(x, d, pores.corner_next)
     a2 = a1 + theta
@@ -631,13 +792,29 @@ def pressure_forces(pores, x, r, U, theta):
     F = np.zeros(x.shape, x.dtype)
     np.add.at(F[:, 0], d, -u_r * (np.sin(a2) - np.sin(a1)))              # eq 33a
     np.add.at(F[:, 1], d, u_r * (np.cos(a2) - np.cos(a1)))               # eq 33b
-    return F
+    return F[:n]
 
 
-def mesh_void_fraction(x, r, group, eps_m, l_m):
-    """Void over polygon area of the pores of a network built at x (eq 28-29), nan without pores:
-    the void fraction of the pore mesh (not the window porosity that runs report)."""
-    pores = build_pores(x, r, group, eps_m, l_m)
+def wall_water_forces(pores, x, U):
+    """Normal force (W,) [N per m of thickness] of the pore pressures U (Np,) [N/m] on each flat wall
+    (SPEC §2.6): U x the length of every wall edge of a pore, positive along the inward normal (the
+    wall pushes the water in; the water pushes the wall out)."""
+    out = np.zeros(len(pores.walls), x.dtype)
+    if not len(pores.walls) or not pores.n_pores:
+        return out
+    x, _ = wall_vertices(pores, x, np.zeros(len(x), x.dtype))
+    sel = pores.he_wall >= 0
+    a, b = pores.he_a[sel], pores.he_b[sel]
+    length = np.sqrt((x[b, 0] - x[a, 0]) ** 2 + (x[b, 1] - x[a, 1]) ** 2)
+    np.add.at(out, pores.he_wall[sel], U[pores.he_pore[sel]] * length)
+    return out
+
+
+def mesh_void_fraction(x, r, group, eps_m, l_m, walls=()):
+    """Void over polygon area of the pores of a network built at x (eq 28-29), closed by the flat
+    ``walls``, nan without pores: the void fraction of the pore mesh (not the window porosity that
+    runs report)."""
+    pores = build_pores(x, r, group, eps_m, l_m, walls)
     geo = measure(pores, np.asarray(x, np.float64), np.asarray(r, np.float64), eps_m)
     total = float(np.sum(geo.polygon_area))
     return float(np.sum(geo.void_area)) / total if total > 0 else np.nan
@@ -683,10 +860,11 @@ class Water:
         A_pq = W[p] * W[q] / np.where(both, A[p] + A[q], 1)                 # eq 40 (W_i W_j, not W' W_j)
         i_pq = (U[p] - U[q]) / E_w                                           # eq 39
         q_t = np.where(both, k * A_pq * i_pq, zero)                          # eq 41
-        drained = pores.side if self.s.drained else np.zeros_like(pores.side)
+        drained = pores.side if self.s.drained else np.zeros_like(pores.side)        # §6.1
+        drained = drained | pores.wall_drained                                          # §2.6
         q_surface = np.where(open_ & pores.surface, self.k1 * W * U / E_w, zero)   # outside at U = 0
         q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)            # §6.1: outside 0, k3
-        q_in = np.where(pores.bottom, self.q_w, zero)                        # §5.1
+        q_in = np.where(pores.bottom | pores.wall_inflow, self.q_w, zero)    # §5.1, §2.6
         # explicit stability (Gershgorin): dt <= 2 / max (2 sum g + g_b) / c, c = W^2 / (E_w A)
         g = np.where(both, k * A_pq / E_w, zero)
         g_sum = np.zeros(pores.n_pores, self.dtype)
@@ -879,7 +1057,9 @@ class ReferenceModel:
     ``sliding`` (N,) the side-wall discs on springs, ``ties`` (lower, upper) and ``tie_rest``
     (column_ties). ``contact`` (PairRecords), ``pores`` / ``water`` (None when dry); ``counts``:
     re-meshing rules, separation patterns, rebuilds. ``rebuild_steps``: the steps of the pore
-    rebuilds, instead of every rebuild_interval (simulate_reference).
+    rebuilds, instead of every rebuild_interval (simulate_reference). Flat walls (SPEC §2.6):
+    ``flat`` (FlatWall), ``wall_contact`` / ``wall_of`` (wall_records; None / [] without them),
+    ``wall_water`` (W,) [N per m of thickness] (wall_water_forces); ``wall_reactions``.
     """
 
     def __init__(self, tables, packing, dtype=np.float64, rebuild_steps=None):
@@ -920,6 +1100,9 @@ class ReferenceModel:
         # the degrees of freedom integrated in e: x and z of the particles, x of the sliding walls
         self.free = np.column_stack([self.mobile | self.sliding, self.mobile])
         self.contact = PairRecords(s, self.r, self.mobile, dt_, self.sliding)
+        self.flat = s.flat_walls
+        self.wall_contact, self.wall_of = wall_records(s, self.r, self.mobile, self.flat, dt_)
+        self.wall_water = np.zeros(len(self.flat), dt_)
         accel = input_acceleration(s.loading)
         self.walls = None if accel is None else WallMotion(accel, s.dt, dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
@@ -934,7 +1117,31 @@ class ReferenceModel:
             self.water = Water(self.pores, self._measure().void_area, s, dt_)
 
     def _build(self):
-        return build_pores(self.x, self.r, self.group, self.s.eps_m, self.s.l_m)
+        return build_pores(self.x, self.r, self.group, self.s.eps_m, self.s.l_m, self.flat)
+
+    def _wall_forces(self, du, dpsi):
+        """Contact forces (N, 2) [N], moments (N,) [N m] of the flat walls on the particles and the
+        records that separated (as PairRecords.forces): record k acts on disc I[k] from the element
+        N + k, the foot point of the disc on its wall, at rest (``wall_records``)."""
+        n, m = len(self.x), len(self.wall_of)
+        feet = self.x[self.wall_contact.I].copy()
+        for w, wall in enumerate(self.flat):
+            feet[self.wall_of == w, wall.axis] = self.dtype(wall.position)
+        x = np.vstack([self.x, feet])
+        du = np.vstack([du, np.zeros((m, 2), du.dtype)])
+        dpsi = np.concatenate([dpsi, np.zeros(m, dpsi.dtype)])
+        F, M, left = self.wall_contact.forces(x, du, dpsi, self.dt)
+        return F[:n], M[:n], left
+
+    def wall_reactions(self):
+        """(normal, water): the normal force (W,) of each flat wall on the discs and the water along
+        its inward normal [N per m of thickness, positive when the wall pushes inward], and the part
+        of it from the water. normal = the f_n of its contacts at the last step (eq 7) + U x its
+        wetted length at the last water step (``wall_water_forces``, held until the next one)."""
+        contact = np.zeros(len(self.flat), self.dtype)
+        if self.wall_contact is not None:
+            np.add.at(contact, self.wall_of, self.wall_contact.f_n)
+        return contact + self.wall_water, self.wall_water.copy()
 
     def _measure(self, pores=None):
         return measure(self.pores if pores is None else pores, self.x, self.r, self.s.eps_m)
@@ -956,9 +1163,16 @@ class ReferenceModel:
         du = self.x - self.x_prev                                           # a
         dpsi = self.psi - self.psi_prev
         F, M, left = self.contact.forces(self.x, du, dpsi, dt)              # b
+        n_contacts, V = self.contact.contacts_of(), du / dt
+        if self.wall_contact is not None:                                   # b: flat walls, fixed elements at rest
+            F_w, M_w, left_w = self._wall_forces(du, dpsi)
+            F, M = F + F_w, M + M_w
+            for i, records in left_w.items():
+                left.setdefault(i, []).extend(records)
+            n_contacts = n_contacts + self.wall_contact.contacts_of()[:len(V)]
+            V = np.vstack([V, np.zeros((len(self.wall_of), 2), V.dtype)])
         if s.adjust and left:                                               # c
-            fixes = adjust_free_particles(left, self.contact.contacts_of(), du / dt, self.mass,
-                                          self.dtype(s.e), self.counts["separation"])
+            fixes = adjust_free_particles(left, n_contacts, V, self.mass, self.dtype(s.e), self.counts["separation"])
             for d, vel in fixes.items():
                 self.v[d] = vel
         if self.water is not None:                                          # d
@@ -970,6 +1184,7 @@ class ReferenceModel:
                 self.water.advance(s.water_interval * s.dt, A, geo.link_contact)
                 U = pore_pressure(self.water.W, A, self.water.E_w)
                 self.F_pressure = pressure_forces(self.pores, self.x, self.r, U, geo.corner_angle)
+                self.wall_water = wall_water_forces(self.pores, self.x, U)
         F = F + self.F_pressure + self.weight                               # e
         if self.sliding.any():                                              # Fig. 27
             F[:, 0] += tie_forces(self.x, du / dt, *self.ties, self.tie_rest, self.dtype(s.ks_wall),
