@@ -267,3 +267,45 @@ def test_flat_walls_are_checked():
         FlatWall(1, 0.0, +1, "open")
     with pytest.raises(ValueError, match="inward"):
         FlatWall(1, 0.0, 0)
+
+
+def column_with_bottom(flat, nx=8, nz=8, gap=0.1, l_m=0.3):
+    """nx x nz particles (radius R, gaps 0.1 R) between side columns of wall discs on a bottom row of
+    wall discs or, ``flat``, on an inflow flat wall at that row's inner face z = R: (net, xz, r)."""
+    s = 2 * R + gap
+    part = square_lattice(nx, nz, s, origin=(s, s))
+    sides = [np.column_stack([np.full(nz + 2, x), s * np.arange(1, nz + 3)]) for x in (0.0, (nx + 1) * s)]
+    row = [] if flat else [np.column_stack([s * np.arange(nx + 2), np.zeros(nx + 2)])]
+    xz = np.vstack([part, *row, *sides])
+    codes = [np.zeros(len(part))] + [np.full(len(b), c) for b, c in zip(row + sides, ([] if flat else [1]) + [2, 3])]
+    r = np.full(len(xz), R)
+    net = pg.build_pores(xz, r, l_m=l_m, walls=np.concatenate(codes).astype(np.int64),
+                         flat_walls=(bottom("inflow", z=R),) if flat else ())
+    return net, xz, r
+
+
+def test_a_flat_bottom_and_a_row_of_wall_discs_give_the_same_steady_bulk_pressures():
+    """Steady inflow Q [m^2/s] through the bottom (q_w = Q / the bottom pores, 9 in both), out at
+    the free surface: above the first particle row every pore is the same in both columns and, by
+    the lattice's symmetry, carries the same flux Q / 9 upwards, so its steady U is the same
+    whatever the bottom: the difference is the steady state's residual (the runs' 12 s are > 100
+    relaxation times of the column: below 1e-9 of U), while the bottom pores themselves differ (a
+    flat wall pore holds 0.74 R^2 of void, a wall-disc pore 1.27 R^2)."""
+    U, key = [], []
+    for flat in (False, True):
+        net, xz, r = column_with_bottom(flat)
+        m = pg.measure(net, xz, r)
+        inflow = net.flat_wall_pores("inflow") | net.pore_touches["bottom"]
+        w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=0.6 / inflow.sum()))
+        for _ in range(20000):
+            w.advance(6e-4, m.void_area, m.link_contact)
+        assert inflow.sum() == 9 and w.balance_error() < 1e-11
+        particles = {tuple(net.vertices_of(p)): w.pressure(m.void_area)[p] for p in range(net.n_pores)
+                     if np.all(net.vertices_of(p) < 64)}
+        U.append(particles)
+        key.append(set(particles))
+    common = sorted(key[0] & key[1])
+    assert len(common) == 49  # the 7 x 7 pores between the particles
+    a, b = (np.array([u[k] for k in common]) for u in U)
+    assert a.max() > 0.5  # N/m: a real gradient, 0.11 N/m a row
+    np.testing.assert_allclose(b, a, rtol=1e-9)
