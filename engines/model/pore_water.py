@@ -411,7 +411,8 @@ def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     W_new[matched] = np.asarray(A_new, float)[matched] + np.bincount(q, X[p] * share, minlength=n_new)[matched]
     if np.any(W_new[matched] <= 0):
         k = int(np.flatnonzero(matched & ~(W_new > 0))[0])
-        raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2); "
-                         f"use the paper's transfer (WaterSettings transfer='paper'; [water] transfer = \"paper\" "
-                         f"in a scene file)")
+        raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2): the discs "
+                         f"moved far on one mesh; rebuild by displacement (WaterEngine rebuild_distance; [numerics] "
+                         f"rebuild_distance) or use the paper's transfer (WaterSettings transfer='paper'; [water] "
+                         f"transfer = \"paper\" in a scene file)")
     return W_new, matched
