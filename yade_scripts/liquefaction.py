@@ -23,8 +23,9 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines.run import scene as scenes
-from engines.run.command_line import add_run_arguments, job_argv, run_script
+from engines.run.command_line import add_run_arguments, parse_run_arguments, run_script
 from engines.run.preflight import ArgumentParser
+from engines.studies.ensemble import SEISMIC_PERTURBATION
 
 CASES = tuple(range(1, 8))
 
@@ -36,13 +37,13 @@ def parser():
     which.add_argument("--scene", help="a scene file instead of a case preset")
     ap.add_argument("--transfer", choices=("paper", "conserving"),
                     help="water at re-meshing (default: the scene's [water] transfer)")
-    add_run_arguments(ap)
+    add_run_arguments(ap, SEISMIC_PERTURBATION)
     return ap
 
 
 def main(argv):
     ap = parser()
-    args = ap.parse_args(job_argv(ap, argv))
+    args = parse_run_arguments(ap, argv)
     if not (args.case or args.scene or args.resume):
         ap.error("one of --case, --scene or --resume is required")
 

@@ -18,8 +18,9 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines.run import scene as scenes
-from engines.run.command_line import add_run_arguments, job_argv, run_script
+from engines.run.command_line import add_run_arguments, parse_run_arguments, run_script
 from engines.run.preflight import ArgumentParser
+from engines.studies.ensemble import QUICKSAND_PERTURBATION
 
 
 def parser():
@@ -27,13 +28,13 @@ def parser():
     which = ap.add_mutually_exclusive_group()
     which.add_argument("--case", type=int, choices=(1, 2), help="Table 1 or Table 2 (default 1)")
     which.add_argument("--scene", help="a scene file instead of the case preset")
-    add_run_arguments(ap)
+    add_run_arguments(ap, QUICKSAND_PERTURBATION)
     return ap
 
 
 def main(argv):
     ap = parser()
-    args = ap.parse_args(job_argv(ap, argv))
+    args = parse_run_arguments(ap, argv)
 
     def load_scene(overrides):
         if args.scene:
