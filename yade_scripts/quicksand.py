@@ -3,12 +3,19 @@
     yade -n -x yade_scripts/quicksand.py --case {1,2} --out DIR [--duration S] [--dt S] [--scene FILE]
                                          [--set TABLE.FIELD=VALUE ...] [--vtk]
     yade -n -x yade_scripts/quicksand.py --resume DIR [--duration S]
+    yade -n -x yade_scripts/quicksand.py --case {1,2} --starts K --out DIR [--perturbation M]
+                                         [--jobs J | --scheduler tcp://HOST:PORT]
     yade-batch -j 2 yade_scripts/quicksand_sweep.table yade_scripts/quicksand.py
 
 Writes DIR/history.csv, DIR/summary.json, DIR/pressure_blocks.png (Fig. 21/23),
 DIR/snapshots.png (Fig. 22/24 at the scene's snapshot times), DIR/history_panels.png,
 DIR/checkpoint.pkl and with --vtk DIR/vtk/*.pvd. Ctrl-C (or SIGTERM) stops the run after the
 current step with a checkpoint; --resume DIR continues it.
+
+--starts K runs the scene from K starts perturbed by M (default 1e-8 m for the quick sand), each a
+run as above in DIR/start_<k>/, and writes DIR/ensemble.json (mean, standard error and 95 %
+interval of every result and history column across the starts) with its figures; --resume DIR
+continues the starts that did not complete (engines/run/ensemble.py, docs/SWEEPS.md).
 """
 import argparse
 import os

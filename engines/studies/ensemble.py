@@ -21,7 +21,7 @@ import numpy as np
 from scipy import stats
 
 SEISMIC_PERTURBATION = 1e-7     # m: the seismic box (yade_scripts/liquefaction.py)
-QUICKSAND_PERTURBATION = 1e-7   # m: the quick sand (yade_scripts/quicksand.py)
+QUICKSAND_PERTURBATION = 1e-8   # m: the quick sand (yade_scripts/quicksand.py)
 CONFIDENCE = 0.95
 
 
