@@ -9,10 +9,13 @@ Runs the same ensemble (into fresh folders under the JSON file's folder) with --
 processes; the efficiency of each is the --jobs 1 wall time over (J x its wall time): 1 when J
 processes finish the starts J times faster. The wall time is the whole command's (YADE's start,
 the checks, the starts and their figures, the statistics); the checks, the statistics and the
-ensemble figures run once, in the parent, and count against the efficiency. Not a test: it takes
-minutes at the defaults, and the machine must be otherwise idle for the efficiency to mean much.
+ensemble figures run once, in the parent, and count against the efficiency. Beside it, the
+starts' CPU over wall seconds (their job.json): near 1 when each start had a core to itself, lower
+when other work shared the cores. Not a test: it takes minutes at the defaults, and the machine
+must be otherwise idle for the efficiency to mean much.
 """
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -27,7 +30,8 @@ from engines import ROOT
 
 
 def timed(argv, out):
-    """Wall seconds of ``yade -n -x ARGV --out OUT`` (OUT replaced); exits on a failure."""
+    """(wall seconds of ``yade -n -x ARGV --out OUT`` (OUT replaced), the starts' CPU / wall
+    seconds); exits on a failure."""
     shutil.rmtree(out, ignore_errors=True)
     t0 = time.perf_counter()
     run = subprocess.run(["yade", "-n", "-x", *argv, "--out", out], capture_output=True, text=True,
@@ -35,7 +39,9 @@ def timed(argv, out):
     wall = time.perf_counter() - t0
     if run.returncode != 0:
         sys.exit(f"{' '.join(argv)}: exit {run.returncode}: {run.stdout[-500:]} {run.stderr[-500:]}")
-    return wall
+    with open(os.path.join(out, "sweep.json")) as f:
+        jobs = json.load(f)["jobs"]
+    return wall, sum(j["cpu_s"] for j in jobs) / sum(j["wall_s"] for j in jobs)
 
 
 def main(argv):
@@ -56,11 +62,13 @@ def main(argv):
         from distributed import LocalCluster
         with LocalCluster(n_workers=a.jobs, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
             walls[f"dask={a.jobs}"] = timed(base + ["--scheduler", cluster.scheduler_address], os.path.join(root, "dask"))
-    efficiency = {k: walls["jobs=1"] / (a.jobs * w) for k, w in walls.items() if k != "jobs=1"}
-    for k, w in walls.items():
-        print(f"{k:>8}: {w:7.1f} s" + (f", parallel efficiency {efficiency[k]:.2f}" if k in efficiency else ""))
+    efficiency = {k: walls["jobs=1"][0] / (a.jobs * w) for k, (w, _) in walls.items() if k != "jobs=1"}
+    for k, (w, busy) in walls.items():
+        print(f"{k:>8}: {w:7.1f} s, the starts' CPU / wall {busy:.2f}" +
+              (f", parallel efficiency {efficiency[k]:.2f}" if k in efficiency else ""))
     write_json(a.json, {"script": a.script, "case": a.case, "duration_s": a.duration, "starts": a.starts, "jobs": a.jobs,
-                        "wall_s": walls, "parallel_efficiency": efficiency})
+                        "wall_s": {k: w for k, (w, _) in walls.items()},
+                        "starts_cpu_over_wall": {k: b for k, (_, b) in walls.items()}, "parallel_efficiency": efficiency})
 
 
 if __name__ == "__main__":

@@ -173,7 +173,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     ensemble.check_options(ap, args)
     if args.resume:
         setup = ("out", "overwrite", "dt", "set", "vtk", "starts", "start", "perturbation")
-        given = [f"--{k}" for k in setup if getattr(args, k) not in (None, False, [])] + (["the scene"] if scene_given else [])
+        given = [f"--{k}" for k in setup if getattr(args, k) != ap.get_default(k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
@@ -181,7 +181,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
     try:  # bad scenes, packings, limits: one clear line, nothing written
         if args.resume and many:
-            jobs = ensemble.resume_jobs(args.resume, args.duration)
+            jobs, plan = ensemble.resume_jobs(args.resume, args.duration)
         elif args.resume:
             check_resume(args.resume, args.duration)
         else:
@@ -205,7 +205,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     out = args.resume or args.out
     announce_output(out)
     if many and args.resume:
-        sys.exit(ensemble.run_starts(jobs, args.resume, ensemble.read(args.resume), args))
+        sys.exit(ensemble.run_starts(jobs, args.resume, plan, args))
     if many:
         sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
     from engines.run import runner

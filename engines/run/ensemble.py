@@ -27,6 +27,7 @@ from engines.run.sweep import Job, run_sweep
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
 OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--out", "--overwrite")  # not passed to a start
+PLAN = ("scene", "script", "n_starts", "seeds", "perturbation_m", "perturbation", "start_argv", "starts")  # ensemble.json's plan
 PERTURBATION_TEXT = ("start k moves every particle (not the walls) by perturbation_m x N(0, 1) in x and z, "
                      "numpy Generator(k); start 0 is the scene's packing")
 INTERVAL_TEXT = (f"{100 * CONFIDENCE:g} % interval: mean -+ t({0.5 + CONFIDENCE / 2:g}, n - 1) standard_error, "
@@ -134,9 +135,11 @@ def _plain(x):
     return x
 
 
-def read(out):
+def read_plan(out):
+    """The plan (PLAN) of the ensemble in ``out``."""
     with open(os.path.join(out, ENSEMBLE)) as f:
-        return json.load(f)
+        doc = json.load(f)
+    return {k: doc[k] for k in PLAN}
 
 
 def start(ap, args, script, scene):
@@ -149,20 +152,20 @@ def start(ap, args, script, scene):
             if name.startswith("start_") and os.path.isdir(os.path.join(out, name)):
                 shutil.rmtree(os.path.join(out, name))
     os.makedirs(out, exist_ok=True)
-    plan = {"status": "running", "scene": scene.scene.name, "script": script, "n_starts": len(seeds), "seeds": seeds,
-            "perturbation_m": size, "perturbation": PERTURBATION_TEXT, "start_argv": start_argv(ap, args.argv),
-            "starts": [os.path.basename(start_dir(out, k)) for k in seeds]}
-    _write(out, plan)
+    plan = {"scene": scene.scene.name, "script": script, "n_starts": len(seeds), "seeds": seeds, "perturbation_m": size,
+            "perturbation": PERTURBATION_TEXT, "start_argv": start_argv(ap, args.argv), "starts": [f"start_{k}" for k in seeds]}
+    _write(out, {**plan, "status": "running"})
     return run_starts([_start_job(plan, k) for k in seeds], out, plan, args)
 
 
 def resume_jobs(out, duration):
-    """The jobs that continue the ensemble in ``out`` (module docstring), to ``duration`` [s] if
-    given; refuses (InputError) a start that cannot go on, before anything runs."""
+    """(the jobs that continue the ensemble in ``out``, its plan) (module docstring), to
+    ``duration`` [s] if given (then also the plan's end); refuses (InputError) a start that
+    cannot go on, before anything runs."""
     from engines.run.command_line import check_resume
     from engines.yade.checkpoint import NAME
     from postproc.run_files import read_summary
-    plan = read(out)
+    plan = read_plan(out)
     jobs = []
     for k in plan["seeds"]:
         d = start_dir(out, k)
@@ -176,7 +179,9 @@ def resume_jobs(out, duration):
             raise InputError(f"--resume {out} --duration: start {k} never began; resume without --duration first")
         else:
             jobs.append(_start_job(plan, k))
-    return jobs
+    if duration is not None:  # a start begun later runs to the new end (the last --duration counts)
+        plan = {**plan, "start_argv": plan["start_argv"] + ["--duration", repr(duration)]}
+    return jobs, plan
 
 
 def run_starts(jobs, out, plan, args):

@@ -58,14 +58,16 @@ def test_the_seismic_box_ensemble_and_the_same_numbers_again(tmp_path):
     assert (a / "ensemble_pressure_blocks.png").exists() and (a / "ensemble_history.png").exists()
 
 
-def test_quick_sand_ensemble_resumes_per_start_and_runs_the_same_on_dask(tmp_path):
-    """An ensemble continued to a later end, and one whose start never began, give the numbers of
-    the ensemble run at once; a Dask cluster's workers give them too."""
+def test_quick_sand_ensemble_on_dask_and_resumed_per_start_locally_gives_the_same_numbers(tmp_path):
+    """An ensemble continued to a later end, and then with a start that never began, gives the
+    numbers of the ensemble run at once on a Dask cluster's workers."""
     distributed = pytest.importorskip("distributed")
-    base = ["--case", "1", "--starts", "2", "--jobs", "2"]
-    run = script("quicksand.py", *base, "--duration", "0.004", "--out", "whole", cwd=tmp_path)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        run = script("quicksand.py", "--case", "1", "--starts", "2", "--duration", "0.004", "--scheduler",
+                     cluster.scheduler_address, "--out", "whole", cwd=tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
-    run = script("quicksand.py", *base, "--duration", "0.002", "--out", "parts", cwd=tmp_path)
+    run = script("quicksand.py", "--case", "1", "--starts", "2", "--jobs", "2", "--duration", "0.002", "--out", "parts",
+                 cwd=tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     run = script("quicksand.py", "--resume", "parts", "--duration", "0.004", cwd=tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
@@ -77,11 +79,6 @@ def test_quick_sand_ensemble_resumes_per_start_and_runs_the_same_on_dask(tmp_pat
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     assert "1 jobs, 0 already ok, 1 to run" in run.stdout
     assert numbers(tmp_path / "parts") == numbers(tmp_path / "whole")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        run = script("quicksand.py", "--case", "1", "--starts", "2", "--duration", "0.004", "--scheduler",
-                     cluster.scheduler_address, "--out", "dask", cwd=tmp_path)
-    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
-    assert numbers(tmp_path / "dask") == numbers(tmp_path / "whole")
 
 
 @pytest.mark.parametrize("args,match", [
@@ -106,3 +103,19 @@ def test_a_start_gets_the_scripts_arguments_without_the_ensembles():
     argv = ["--case", "1", "--starts", "3", "--jobs=2", "--pert", "1e-7", "--set", "water.k1=20", "--overwrite",
             "--out", "o", "--duration", "0.01", "--sched", "tcp://h:1"]
     assert start_argv(ap, argv) == ["--case", "1", "--set", "water.k1=20", "--duration", "0.01"]
+
+
+def test_an_ensembles_resume_is_refused_in_one_line_before_anything_runs(tmp_path, capsys):
+    out = tmp_path / "ens"
+    out.mkdir()
+    plan = {"scene": "quicksand-case1", "script": os.path.join(ROOT, "yade_scripts", "quicksand.py"), "n_starts": 2,
+            "seeds": [0, 1], "perturbation_m": 1e-8, "perturbation": "", "start_argv": ["--case", "1"],
+            "starts": ["start_0", "start_1"], "status": "running"}
+    (out / "ensemble.json").write_text(json.dumps(plan))
+    for args, match in ((["--starts", "2"], "--starts cannot be given"), (["--start", "0"], "--start cannot be given"),
+                        (["--duration", "0.01"], "start 0 never began")):
+        with pytest.raises(SystemExit) as ex:
+            quicksand.main(["--resume", str(out)] + args)
+        message = str(ex.value.code) if isinstance(ex.value.code, str) else capsys.readouterr().err
+        assert ex.value.code != 0 and match in message and len(message.strip().splitlines()) == 1, message
+    assert sorted(p.name for p in out.iterdir()) == ["ensemble.json"]
