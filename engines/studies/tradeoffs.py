@@ -3,10 +3,11 @@
 DEM runs are chaotic: two time steps, or a 1e-9 m nudge of the start, give trajectories that part
 after a few milliseconds. A setting is therefore run from ``n`` perturbed starts
 (engines.studies.ensemble.perturbed) and compared with the reference run from the same starts
-through ensemble means. The nudge must be large enough that the starts have parted before the window's events: a cloud of starts that is
-still one trajectory has a small spread (so a small floor) and a mean that any change of the step
-moves; check that the means do not depend on the size (the knob "perturbation" of CASES;
-docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
+through ensemble means. The nudge must be large enough that the starts have parted before the
+window's events: a cloud of starts that is still one trajectory has a small spread (so a small
+floor) and a mean that any change of the step moves; check that the means do not depend on the
+size (the knob "perturbation" of CASES; docs/TRADEOFFS.md: 1e-9 m was too small for the seismic
+box, 1e-7 m is not).
 
 * ``pressure_rms``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
   <.> the mean over starts of the block-mean pore pressure histories (N/m, per block and time);
