@@ -3,7 +3,7 @@
 ``figures(out_dir)`` reads OUT/ensemble.json (and the first start's summary.json for the title,
 E_w and whether the scene is wet) and draws
 
-    ensemble_pressure_blocks.png   the block-mean excess pore pressure of every block
+    ensemble_pressure_blocks.png   the block-mean excess pore pressure, a panel per block
     ensemble_history.png           the panels of a run's history_panels.png
 
 ``compare(dirs, figure, times)`` sets ensembles of one scene from starts of different sizes side
@@ -28,15 +28,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from engines.studies.tradeoffs import systematic  # noqa: E402
-from postproc.plots import BLOCK_NAMES, HISTORY_PANELS  # noqa: E402
+from postproc.plots import HISTORY_PANELS  # noqa: E402
 from postproc.run_files import read_history, read_summary  # noqa: E402
 
 
-def _band(ax, t_ms, stats, colour, label, scale=1.0):
+def _band(ax, t_ms, stats, colour, scale=1.0):
     """The mean (a line) and its 95 % interval (a band) of one column's statistics."""
     mean, lo, hi = (np.array(stats[k], float) * scale for k in ("mean", "ci95_low", "ci95_high"))
-    ax.fill_between(t_ms, lo, hi, color=colour, alpha=0.25, linewidth=0)
-    return ax.plot(t_ms, mean, color=colour, label=label)[0]
+    ax.fill_between(t_ms, lo, hi, color=colour, alpha=0.3, linewidth=0, label="95 % interval")
+    ax.plot(t_ms, mean, color=colour, label="mean")
 
 
 def read(out_dir):
@@ -49,34 +49,37 @@ def figures(out_dir):
     doc = read(out_dir)
     first = read_summary(os.path.join(out_dir, doc["starts"][0]))
     water = first.get("parameters", {}).get("water", {})
-    title = f"{doc['scene']}: mean of {doc['n_starts']} starts ({doc['perturbation_m']:g} m apart) with its 95 % band"
+    title = f"{doc['scene']}: {doc['n_starts']} starts perturbed by {doc['perturbation_m']:g} m, their mean and its 95 % interval"
     cols, t_ms = doc["history"]["columns"], np.array(doc["history"]["t"]) * 1e3
     written = []
     blocks = sorted((c for c in cols if c.startswith("U_block")), key=lambda c: int(c[len("U_block"):]))
     if len(t_ms) >= 2 and water.get("enabled", False) and blocks:
-        fig, ax = plt.subplots(figsize=(7.5, 4.9))
-        for k, name in enumerate(blocks):
-            _band(ax, t_ms, cols[name], f"C{k}", BLOCK_NAMES.get(name, name.replace("U_", "")))
-        ax.axhline(water["E_w"], color="0.5", ls="--", lw=0.8, label=f"E_w = {water['E_w']:g} N/m (bound of eq 32)")
-        ax.axhline(0.0, color="0.3", lw=0.6)
-        ax.set_xlabel("t [ms]")
-        ax.set_ylabel("block-mean excess pore pressure U [N/m]")
-        ax.set_title(title, fontsize=9)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, ncol=2)
+        # one panel per block, the surface block on top (as Fig. 35/37 stack them)
+        fig, axes = plt.subplots(len(blocks), 1, figsize=(7.5, 1.2 + 1.3 * len(blocks)), sharex=True, squeeze=False)
+        for ax, (k, name) in zip(axes[:, 0], reversed(list(enumerate(blocks)))):
+            where = " (bottom)" if k == 0 else " (surface)" if k == len(blocks) - 1 else ""
+            _band(ax, t_ms, cols[name], f"C{k}")
+            ax.axhline(0.0, color="0.3", lw=0.6)
+            ax.set_ylabel(f"U, block {k + 1}{where}\n[N/m]", fontsize=8)
+            ax.grid(alpha=0.3)
+        axes[0, 0].legend(fontsize=7, loc="upper left")
+        axes[-1, 0].set_xlabel("t [ms]")
+        fig.suptitle(f"{title}\nblock-mean excess pore pressure (E_w = {water['E_w']:g} N/m bounds it, eq 32)",
+                     fontsize=9)
         fig.tight_layout()
         written.append(os.path.join(out_dir, "ensemble_pressure_blocks.png"))
-        fig.savefig(written[-1], dpi=120)
+        fig.savefig(written[-1], dpi=110)
         plt.close(fig)
     if len(t_ms) >= 2:
         fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
         for ax, (col, label, scale) in zip(axes.ravel(), HISTORY_PANELS):
             if col in cols:
-                _band(ax, t_ms, cols[col], "C0", label, scale)
+                _band(ax, t_ms, cols[col], "C0", scale)
             ax.set_ylabel(label)
             ax.grid(alpha=0.3)
         for ax in axes[1]:
             ax.set_xlabel("t [ms]")
+        axes[0, 0].legend(fontsize=7)
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
         written.append(os.path.join(out_dir, "ensemble_history.png"))

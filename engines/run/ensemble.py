@@ -189,12 +189,7 @@ def run_starts(jobs, out, plan, args):
     from postproc import ensemble as figures
     from postproc.run_files import read_history, read_summary
     t0 = time.time()
-    try:
-        run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
-    except KeyboardInterrupt:
-        print(f"interrupted: the starts keep their checkpoints; continue with\n    yade -n -x {plan['script']} "
-              f"--resume {out}", flush=True)
-        return 130
+    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
     summaries = {k: read_summary(start_dir(out, k)) for k in plan["seeds"]}
     status = {k: s.get("status", "not started") for k, s in summaries.items()}
     doc = {**plan, "status": "completed", "start_status": {f"start_{k}": v for k, v in status.items()},
