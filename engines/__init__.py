@@ -10,9 +10,10 @@ The packages, each importing only those before it (tests/test_layers.py checks i
   yade/       everything that talks to YADE: bulk I/O, the two engines, the water engine's contract
               (checks of the bodies it is given), the coupling, checkpoints
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
-  studies/    the speed-accuracy and stability studies (their points and analysis, no YADE)
+  studies/    the speed-accuracy and stability studies (their points and analysis, no YADE); the
+              perturbed starts of an ensemble and its statistics (ensemble.py)
   run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,
-              sweeps; the cross-check's cases; the studies' runs
+              sweeps, ensembles (--starts); the cross-check's cases; the studies' runs
 
 Outside engines/: packing/ (the Packing file format, size distributions, lattices; after
 reference/), postproc/ (reads run files, draws figures; after studies/, never imports yade/ or

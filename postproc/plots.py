@@ -23,6 +23,8 @@ U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess p
 FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
 FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max
 BLOCK_NAMES = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}
+HISTORY_PANELS = [("porosity", "porosity [-]", 1.0), ("kinetic_energy", "kinetic energy [J/m]", 1.0),
+                  ("fn_bottom_mean", "mean normal force, block 1 [N]", 1.0), ("bed_top", "bed top [mm]", 1e3)]
 
 
 def nan_runs(t, y):
@@ -74,15 +76,12 @@ def block_pressure_figure(history, E_w, title):
 
 
 def plot_history_panels(history, path, title):
-    """Porosity, kinetic energy, bottom normal force and water balance error against time."""
-    panels = [("porosity", "porosity [-]"), ("kinetic_energy", "kinetic energy [J/m]"),
-              ("fn_bottom_mean", "mean normal force, block 1 [N]"), ("bed_top", "bed top [mm]")]
+    """Porosity, kinetic energy, bottom normal force and bed top against time (HISTORY_PANELS)."""
     fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
     t_ms = history["t"] * 1e3
-    for ax, (col, label) in zip(axes.ravel(), panels):
+    for ax, (col, label, scale) in zip(axes.ravel(), HISTORY_PANELS):
         if col in history:
-            y = history[col] * (1e3 if col == "bed_top" else 1.0)
-            ax.plot(t_ms, y)
+            ax.plot(t_ms, history[col] * scale)
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
     for ax in axes[1]:

@@ -4,6 +4,8 @@
                                             [--transfer paper|conserving] [--scene FILE]
                                             [--set TABLE.FIELD=VALUE ...] [--vtk]
     yade -n -x yade_scripts/liquefaction.py --resume DIR [--duration S]
+    yade -n -x yade_scripts/liquefaction.py --case N --starts K --out DIR [--perturbation M]
+                                            [--jobs J | --scheduler tcp://HOST:PORT]
 
 N = 1..7 are the cases of SPEC §2.5 (yade_scripts/scenes/liquefaction_case<N>.toml): 1 saturated
 undrained, 2 dry, 3 drained sides (spring d, cosine); 4 saturated undrained, 5 dry (elastic
@@ -14,6 +16,11 @@ snapshots, DIR/checkpoint.pkl (Ctrl-C stops with a checkpoint; --resume continue
 ParaView series in DIR/vtk/, and the figures: DIR/pressure_blocks.png and DIR/blocks.png
 (block pressures with the base input and the block positions of Fig. 35; Fig. 37/39/42/44), DIR/snapshots.png
 (velocities, normal forces and pores; Fig. 36/38/43/45) and DIR/history_panels.png.
+
+--starts K runs the case from K starts perturbed by M (default 1e-7 m for the seismic box), each
+a run as above in DIR/start_<k>/, and writes DIR/ensemble.json (mean, standard error and 95 %
+interval of every result and history column across the starts) with its figures; --resume DIR
+continues the starts that did not complete (engines/run/ensemble.py, docs/SWEEPS.md).
 """
 import argparse
 import os
@@ -23,8 +30,9 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
 from engines.run import scene as scenes
-from engines.run.command_line import add_run_arguments, job_argv, run_script
+from engines.run.command_line import add_run_arguments, parse_run_arguments, run_script
 from engines.run.preflight import ArgumentParser
+from engines.studies.ensemble import SEISMIC_PERTURBATION
 
 CASES = tuple(range(1, 8))
 
@@ -36,13 +44,13 @@ def parser():
     which.add_argument("--scene", help="a scene file instead of a case preset")
     ap.add_argument("--transfer", choices=("paper", "conserving"),
                     help="water at re-meshing (default: the scene's [water] transfer)")
-    add_run_arguments(ap)
+    add_run_arguments(ap, SEISMIC_PERTURBATION)
     return ap
 
 
 def main(argv):
     ap = parser()
-    args = ap.parse_args(job_argv(ap, argv))
+    args = parse_run_arguments(ap, argv)
     if not (args.case or args.scene or args.resume):
         ap.error("one of --case, --scene or --resume is required")
 

@@ -10,7 +10,7 @@
     yade -n -j 1 -x yade_scripts/tradeoffs.py speed --points dt=1e-06 defaults=fast --repeats 3 --out out/speed
 
 ``run`` (inside YADE) runs one setting of a preset from ``--starts`` perturbed starts
-(engines.studies.tradeoffs.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
+(engines.studies.ensemble.perturbed: start s moves the particles by ``--perturbation`` (default 1e-9 m;
 the study gives the seismic case 1e-7 m, CASES) x N(0, 1), seed s; start 0 is the preset's packing)
 for ``--window`` seconds and writes OUT/result.json: per start the block pressure, window porosity,
 particles' mean height and kinetic energy every ``--record`` seconds, the CPU and wall seconds of
@@ -50,7 +50,7 @@ def run_main(argv):
     ap.add_argument("--record", type=number(lo=0, lo_open=True, unit="s"), default=RECORD)
     ap.add_argument("--starts", type=number(int, 1), default=STARTS)
     ap.add_argument("--perturbation", type=number(lo=0, unit="m"), default=PERTURBATION,
-                    help="size of the perturbation of the starts [m] (engines.studies.tradeoffs.perturbed)")
+                    help="size of the perturbation of the starts [m] (engines.studies.ensemble.perturbed)")
     ap.add_argument("--out", type=output_dir, required=True)
     a = ap.parse_args(argv)
     over, result = run_point(a.case, a.set, a.window, a.record, a.starts, a.out, a.perturbation)

@@ -3,8 +3,10 @@ its yade-batch form.
 
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
-    add_run_arguments(ap)                         # --out --overwrite --duration --dt --set --vtk --resume
-    args = ap.parse_args(job_argv(ap, argv))      # argv, or the yade-batch job's table line
+    add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --resume
+                                                  # and the ensemble's --starts --perturbation --jobs
+                                                  # --scheduler --start (engines.run.ensemble)
+    args = parse_run_arguments(ap, argv)          # argv, or the yade-batch job's table line
     run_script(ap, args, load_scene)              # preflight, run or resume, exit status
 
 Under yade-batch (the YADE_BATCH variable names table:line) the job's line is read with
@@ -21,9 +23,11 @@ import re
 import sys
 import tomllib
 
-from engines.run.preflight import (InputError, announce_output, check_fresh_output, check_output_dir, number, output_dir,
-                                   preflight)
+from engines.run import ensemble
+from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
+                                   output_dir, preflight)
 from engines.run.sweep import JOB_DIR
+from engines.studies.ensemble import perturbed
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -47,8 +51,10 @@ def scene_setting(text):
 
 
 def resume_dir(path):
-    """argparse type of --resume: a run directory holding a checkpoint."""
+    """argparse type of --resume: a run directory holding a checkpoint, or an ensemble's."""
     from engines.yade.checkpoint import NAME, CheckpointError, read_info
+    if os.path.exists(os.path.join(path, ENSEMBLE)):
+        return path
     try:
         read_info(os.path.join(path, NAME))
     except CheckpointError as e:
@@ -56,8 +62,9 @@ def resume_dir(path):
     return path
 
 
-def add_run_arguments(ap):
-    """The options every scene script has (see the module docstring)."""
+def add_run_arguments(ap, perturbation):
+    """The options every scene script has (see the module docstring); ``perturbation`` [m]: the
+    scene's default size of an ensemble's perturbation (engines.studies.ensemble)."""
     ap.add_argument("--out", type=output_dir, help=f"output directory (required; a table's job's default: the "
                                                    f"sweep runner's job directory, or {BATCH_OUT}/<job description>)")
     ap.add_argument("--overwrite", action="store_true",
@@ -69,7 +76,18 @@ def add_run_arguments(ap):
                     help="change a scene field, e.g. --set water.k1=20 (repeatable)")
     ap.add_argument("--vtk", action="store_true", help="write a ParaView series to OUT/vtk/ ([output] vtk = true)")
     ap.add_argument("--resume", type=resume_dir, metavar="DIR",
-                    help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place")
+                    help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place "
+                         "(an ensemble's DIR: its starts that did not complete)")
+    ensemble.add_arguments(ap, perturbation)
+
+
+def parse_run_arguments(ap, argv):
+    """The parsed arguments of ``job_argv(ap, argv)``; ``args.argv`` keeps them as given (an
+    ensemble passes them on to its starts)."""
+    argv = job_argv(ap, argv)
+    args = ap.parse_args(argv)
+    args.argv = list(argv)
+    return args
 
 
 def overrides_of(args):
@@ -146,19 +164,25 @@ def job_argv(ap, argv):
 # -- running --------------------------------------------------------------------------------------
 def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None):
     """Check, then run or resume, printing one line at the end; exits non-zero on refused input
-    (one line, nothing written) and with 128 + the signal's number after an interrupt.
+    (one line, nothing written) and with 128 + the signal's number after an interrupt. With
+    --starts, or --resume of an ensemble's folder, runs the ensemble (engines.run.ensemble).
 
     ``load_scene(overrides)`` -> Scene; ``scene_given``: the script's own scene options were used
     (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
+    ensemble.check_options(ap, args)
     if args.resume:
-        given = [f"--{k}" for k in ("out", "overwrite", "dt", "set", "vtk") if getattr(args, k)] + (["the scene"] if scene_given else [])
+        setup = ("out", "overwrite", "dt", "set", "vtk", "starts", "start", "perturbation")
+        given = [f"--{k}" for k in setup if getattr(args, k) != ap.get_default(k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
         ap.error("--out is required (or --resume DIR)")
+    many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
     try:  # bad scenes, packings, limits: one clear line, nothing written
-        if args.resume:
+        if args.resume and many:
+            jobs, plan = ensemble.resume_jobs(args.resume, args.duration)
+        elif args.resume:
             check_resume(args.resume, args.duration)
         else:
             if not (args.overwrite or sweep_job_dir(args.out)):
@@ -168,17 +192,28 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
                 check(sc)
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
-            for note in preflight(sc, packing, args.out):
+            if many:
+                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args))
+            else:
+                if args.start is not None:
+                    packing = perturbed(packing, args.start, ensemble.size_of(args))
+                notes = preflight(sc, packing, args.out)
+            for note in notes:
                 print(note)
     except ValueError as e:
         sys.exit(f"error: {e}")
-    from engines.run import runner
     out = args.resume or args.out
     announce_output(out)
+    if many and args.resume:
+        sys.exit(ensemble.run_starts(jobs, args.resume, plan, args))
+    if many:
+        sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
+    from engines.run import runner
     if args.resume:
         summary = runner.resume_run(args.resume, args.duration)
     else:
-        summary = runner.run_scene(sc, packing, args.out)
+        start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
+        summary = runner.run_scene(sc, packing, args.out, start=start)
     if summary["status"] == "interrupted":
         stop = summary.get("interrupt", {})
         print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "

@@ -20,7 +20,8 @@ import tempfile
 
 from engines.yade.checkpoint import NAME as CHECKPOINT
 
-RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT)  # their presence marks a run's directory
+ENSEMBLE = "ensemble.json"  # an ensemble's statistics (engines.run.ensemble)
+RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT, ENSEMBLE)  # their presence marks a run's directory
 
 
 class InputError(ValueError):

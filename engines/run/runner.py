@@ -198,10 +198,13 @@ class Interrupts:
 class Run:
     """One run of a scene in ``out_dir``: the coupling, its recorder and the bookkeeping of the
     run's segments (a start and each resume). Pickled whole into the checkpoints; it is also the
-    coupling's last hook, which writes the periodic checkpoints."""
+    coupling's last hook, which writes the periodic checkpoints. ``start``: which start of an
+    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None."""
 
-    def __init__(self, scene, packing, out_dir, n_steps):
-        self.scene, self.out, self.n_steps = scene, out_dir, n_steps
+    start = None
+
+    def __init__(self, scene, packing, out_dir, n_steps, start=None):
+        self.scene, self.out, self.n_steps, self.start = scene, out_dir, n_steps, start
         self.cp = YadeCoupling(scene, packing)
         self.rec = Recorder(self.cp, out_dir, n_steps)
         self.cp.hooks += [self.rec, self]
@@ -294,6 +297,7 @@ class Run:
             "remesh_rules_last": w.remesh_counts if w else None,
             "contact_list_builds": cp.core.contact.list_builds if cp.core is not None else None,
             "block_bounds_m": cp.block_bounds,
+            "start": self.start,
             "results": results,
             "checkpoint": {"file": CHECKPOINT, "step": self.checkpoint_step},
             "parameters": sc.as_dict(),
@@ -315,9 +319,10 @@ def clear_outputs(out_dir):
     shutil.rmtree(os.path.join(out_dir, "vtk"), ignore_errors=True)
 
 
-def run_scene(scene, packing, out_dir, duration=None, figures=True):
+def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None):
     """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs
-    (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later).
+    (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later; ``start``:
+    the ensemble's start the packing is, recorded in summary.json).
     Returns the summary ("status": completed or interrupted); re-raises an error after writing
     the history, summary and failure state. A dt = "auto" is chosen here (engines.model.time_step; printed)."""
     from engines.model.time_step import resolve_dt
@@ -325,7 +330,7 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True):
     os.makedirs(out_dir, exist_ok=True)
     clear_outputs(out_dir)
     duration = scene.numerics.duration if duration is None else duration
-    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt))).go(scene.overrides, figures)
+    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start).go(scene.overrides, figures)
 
 
 def resume_run(out_dir, duration=None, figures=True):

@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from engines import ROOT
+from engines.studies.ensemble import perturbed
 from engines.studies.tradeoffs import (
     CASES,
     PERTURBATION,
@@ -22,7 +23,6 @@ from engines.studies.tradeoffs import (
     named_value,
     nested,
     perturbation_of,
-    perturbed,
     points,
     starts_of,
 )

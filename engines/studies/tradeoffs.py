@@ -1,12 +1,13 @@
 """Error metrics of the speed/accuracy study, on statistics of runs, not on positions.
 
 DEM runs are chaotic: two time steps, or a 1e-9 m nudge of the start, give trajectories that part
-after a few milliseconds. A setting is therefore run from ``n`` perturbed starts (``perturbed``)
-and compared with the reference run from the same starts through ensemble means. The nudge must be
-large enough that the starts have parted before the window's events: a cloud of starts that is
-still one trajectory has a small spread (so a small floor) and a mean that any change of the step
-moves; check that the means do not depend on the size (the knob "perturbation" of CASES;
-docs/TRADEOFFS.md: 1e-9 m was too small for the seismic box, 1e-7 m is not).
+after a few milliseconds. A setting is therefore run from ``n`` perturbed starts
+(engines.studies.ensemble.perturbed) and compared with the reference run from the same starts
+through ensemble means. The nudge must be large enough that the starts have parted before the
+window's events: a cloud of starts that is still one trajectory has a small spread (so a small
+floor) and a mean that any change of the step moves; check that the means do not depend on the
+size (the knob "perturbation" of CASES; docs/TRADEOFFS.md: 1e-9 m was too small for the seismic
+box, 1e-7 m is not).
 
 * ``pressure_rms``: RMS over time and blocks of (<U>_run - <U>_ref) over the RMS of <U>_ref,
   <.> the mean over starts of the block-mean pore pressure histories (N/m, per block and time);
@@ -31,21 +32,9 @@ in the order they run, their starts and perturbation sizes, their job names; eng
 gives each point its scene settings and runs it, postproc.tradeoffs draws the tables and figures.
 Plain NumPy; no YADE.
 """
-import dataclasses
-
 import numpy as np
 
-
-def perturbed(packing, seed, size=1e-9):
-    """A copy of ``packing`` whose particles (not the walls) are moved by ``size`` [m] times a
-    standard normal in x and z, drawn from numpy's Generator(seed); seed 0 is the packing itself."""
-    if seed == 0:
-        return packing
-    rng = np.random.default_rng(seed)
-    xz = packing.xz.copy()
-    mob = packing.mobile
-    xz[mob] += size * rng.standard_normal((int(mob.sum()), 2))
-    return dataclasses.replace(packing, xz=xz)
+from engines.studies.ensemble import SEISMIC_PERTURBATION
 
 
 def _on_grid(t, values, t_ref):
@@ -185,7 +174,7 @@ RECORD = 5e-4      # s between samples of the histories (a multiple of every dt 
 REBUILD_PERIOD = 1e-3  # s between pore rebuilds in the dt sweep: the paper's 1000 steps of 1e-6 s
 STARTS = 5         # perturbed starts per setting, unless the case's "starts" says more for a knob
 REFERENCE_DT = 5e-7
-PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (perturbed)
+PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (engines.studies.ensemble.perturbed)
 PAPER_DT = 1e-6
 
 # Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
@@ -195,7 +184,7 @@ PAPER_DT = 1e-6
 # PERTURBATION), large enough that the ensemble means no longer depend on it (the knob
 # "perturbation" checks that; docs/TRADEOFFS.md). "defaults" are the named settings chosen from the study.
 CASES = {
-    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5, "perturbation_size": 1e-7,
+    "liquefaction_case1": {"window": 0.04, "fast_dt": 2e-5, "perturbation_size": SEISMIC_PERTURBATION,
                            "starts": {"reference": 20, "dt": 20, "defaults": 20, "candidate": 20, "perturbation": 20},
                            "dt": [1e-6, 5e-6, 1e-5, 2e-5, 5e-5, 1e-4],
                            # the ensemble's convergence in the size of the perturbation (at fast_dt)
@@ -220,7 +209,7 @@ CASES = {
                         "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
                         "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
     # the fast setting over the whole 0.18 s against the paper's settings as the reference
-    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT, "perturbation_size": 1e-7,
+    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT, "perturbation_size": SEISMIC_PERTURBATION,
                                 "fast_dt": 2e-5, "defaults": []},
     "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
 }

@@ -1,5 +1,5 @@
 """The speed/accuracy study: its error metrics on statistics, their chaos floors,
-the Pareto front, the perturbed starts and the study's bookkeeping, on synthetic runs (no YADE)."""
+the Pareto front and the study's bookkeeping, on synthetic runs (no YADE)."""
 import json
 import os
 import warnings
@@ -9,7 +9,6 @@ import pytest
 
 from engines.run import scene as scenes
 from engines.studies import tradeoffs as tr
-from engines.yade.deposition import scene_packing
 from tests.figures import assert_drawn
 
 
@@ -122,18 +121,6 @@ def test_pareto_front():
     err = [0.5, 0.1, 0.2, 0.05, 0.3, np.nan]
     assert tr.pareto_front(cost, err) == [0, 1, 3]
     assert tr.pareto_front([1, 1], [0.2, 0.1]) == [1]  # the same cost: the lower error only
-
-
-def test_perturbed_starts_move_only_the_particles_by_about_the_size():
-    pk = scene_packing(scenes.preset("quicksand_case1"))
-    assert tr.perturbed(pk, 0) is pk
-    a, b = tr.perturbed(pk, 1), tr.perturbed(pk, 2)
-    d = a.xz - pk.xz
-    assert np.all(d[~pk.mobile] == 0) and 0.3e-9 < np.std(d[pk.mobile]) < 3e-9
-    assert not np.allclose(a.xz, b.xz, rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(tr.perturbed(pk, 1).xz, a.xz)  # reproducible
-    c = tr.perturbed(pk, 1, 1e-7)  # the same draw, scaled
-    np.testing.assert_allclose(c.xz - pk.xz, 100 * d, rtol=1e-6, atol=1e-18)
 
 
 def test_study_points_and_jobs():
