@@ -13,7 +13,9 @@ class PaperLaw(paper_law.PaperLaw):
 
     contact_class = ContactLaw
 
-    def __init__(self, settings, r, mobile, mass, inertia, dt):
+    def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
+        if flat_walls:
+            raise ValueError("flat walls with the paper's law: the NumPy law only for now (compiled=False)")
         super().__init__(settings, r, mobile, mass, inertia, dt)
         self._dpsi = np.zeros(len(self.mobile))  # omega dt, scratch of the kernel
 

@@ -64,12 +64,13 @@ class ContactLaw:
     in a kernel (the same arithmetic as the NumPy code here, which stays the readable path).
     """
 
-    def __init__(self, settings, r, mobile, skin=None):
+    def __init__(self, settings, r, mobile, skin=None, pair_filter=None):
         self.s = settings
         self.r = np.ascontiguousarray(r, float)
         self.mobile = np.asarray(mobile, bool)
         self.n = len(self.r)
         self.skin = 0.25 * self.r.min() if skin is None else skin
+        self.pair_filter = pair_filter  # (i, j) -> mask of the candidate pairs that may touch (flat walls)
         self.reach = 2 * self.r.max() + settings.eps_m
         self.i = self.j = np.zeros(0, np.int64)
         self.xz_list = None
@@ -118,6 +119,8 @@ class ContactLaw:
         near = np.hypot(d[:, 0], d[:, 1]) <= self.r[pairs[:, 0]] + self.r[pairs[:, 1]] + self.s.eps_m + self.skin
         pairs = pairs[near & (self.mobile[pairs[:, 0]] | self.mobile[pairs[:, 1]])]
         pairs.sort(axis=1)
+        if self.pair_filter is not None:
+            pairs = pairs[self.pair_filter(pairs[:, 0], pairs[:, 1])]
         key_new = pairs[:, 0] * self.n + pairs[:, 1]
         order = np.argsort(key_new)
         pairs, key_new = pairs[order], key_new[order]

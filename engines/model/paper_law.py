@@ -6,10 +6,16 @@ engine: ``PaperLaw`` is the per-step work without YADE (engines.model.contact's 
 compiled twin is engines.compiled.paper_law.PaperLaw), engines.yade.paper_law_engine.PaperLawEngine
 the YADE object that reads the centres in bulk, calls it and adds the forces. The discs' spin about y is integrated here (eq 14c, 16c); YADE only translates them.
 The side-wall springs of the seismic box (Fig. 27) are added by engines.model.pore_dem.PoreDEM.
+
+Flat walls (SPEC §2.6, READINGS F7): a particle touches a flat wall as it would a fixed wall disc of
+radius 0 at its foot on the face (engines.model.flat_walls.WallVertices), with the foot at rest:
+R is the distance to the face, the normal the wall's, eq 1-13 and 25-27 as for any pair, and for eq
+18-24 the wall is a fixed element (pattern (a)).
 """
 import numpy as np
 
 from engines.model.contact import ContactLaw, separation_adjustment
+from engines.model.flat_walls import WallVertices
 
 
 class PaperLaw:
@@ -17,16 +23,25 @@ class PaperLaw:
 
     r, mass, inertia (N,) [m, kg/m, kg m]; mobile (N,) bool; dt [s]. ``omega`` (N,) spin [rad/s]
     and ``du`` (N, 2) the last displacement increments [m] are plain arrays (saved in checkpoints).
+    flat_walls: engines.model.flat_walls.FlatWall, ... (module docstring); the contact law then runs
+    over the discs and their feet (``walls``: the WallVertices), and its pairs index those.
     """
 
     contact_class = ContactLaw  # of ``contact``
 
-    def __init__(self, settings, r, mobile, mass, inertia, dt):
+    def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
         self.settings, self.dt = settings, float(dt)
         self.mobile = np.asarray(mobile, bool)
         self.mass, self.inertia = np.asarray(mass, float), np.ascontiguousarray(inertia, float)
-        self.contact = self.contact_class(settings, r, self.mobile)
         n = len(self.mobile)
+        self.walls = WallVertices(flat_walls, n) if flat_walls else None
+        if self.walls is None:
+            self.contact = self.contact_class(settings, r, self.mobile)
+        else:  # a disc and its own feet, never two feet or another disc's (WallVertices.is_link)
+            wv, r = self.walls, np.asarray(r, float)
+            mobile = np.concatenate([self.mobile, np.zeros(wv.n_vertices - n, bool)])
+            self.contact = self.contact_class(settings, wv.radii(r), mobile, skin=0.25 * r.min(),
+                                              pair_filter=lambda i, j: wv.is_link(i, j, True))
         self.omega = np.zeros(n)
         self.du = np.zeros((n, 2))
         self.xz_prev = None
@@ -42,13 +57,27 @@ class PaperLaw:
         if not (separations and s.separation_adjustment):
             return {}
         v = self.du / self.dt if vel is None else vel
-        return separation_adjustment(separations, self.contact.touch_count(), v, self.mass, self.mobile, s.restitution)
+        mass, mobile = self.mass, self.mobile
+        if self.walls is not None:  # the feet: at rest, fixed
+            v, mass, mobile = (self._at_vertices(a) for a in (v, mass, mobile))
+        return separation_adjustment(separations, self.contact.touch_count(), v, mass, mobile, s.restitution)
+
+    def _at_vertices(self, a):
+        """The disc array a (N, ...) over the contact law's vertices: zeros for the feet."""
+        out = np.zeros((self.walls.n_vertices,) + np.shape(a)[1:], np.asarray(a).dtype)
+        out[:len(self.mobile)] = a
+        return out
 
     def _forces(self, xz):
         """(F (N, 2) [N], SeparationEvents) of the step at xz: eq 17, the contact forces, the spin."""
         dt = self.dt
         self.du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev  # eq 17
-        F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
+        if self.walls is None:
+            F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
+        else:
+            F, M, separations = self.contact.forces(self.walls.positions(xz), self._at_vertices(self.du),
+                                                    self._at_vertices(self.omega * dt), dt)
+            F, M = F[:len(xz)], M[:len(xz)]
         mob = self.mobile
         self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
         self.xz_prev = xz
@@ -59,4 +88,14 @@ class PaperLaw:
         step at xz would find them (eq 17: du = xz - xz_prev, dpsi = omega dt), its state left as it
         is (ContactLaw.touching_at; ``keep`` as there)."""
         du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev
+        if self.walls is not None:
+            raise ValueError("contact_pairs with flat walls: the wall contacts are wall_forces'")
         return self.contact.touching_at(xz, du, self.omega * self.dt, self.dt, keep)
+
+    def wall_forces(self):
+        """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the
+        last step, positive pushing the wall outward (pores.wall_reactions takes it)."""
+        c, wv = self.contact, self.walls
+        foot = c.j >= wv.n  # pairs are sorted (i < j): a foot is j
+        k, w = wv.split_bits(wv.bits[c.j[foot]])
+        return np.bincount(w, c.f_n[foot][k], minlength=len(wv.walls))

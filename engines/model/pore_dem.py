@@ -58,15 +58,16 @@ def moving_walls(scene, packing):
     return np.isin(packing.group, groups)
 
 
-def water_model(scene, packing, cls=WaterModel):
+def water_model(scene, packing, cls=WaterModel, flat_walls=()):
     """The scene's WaterModel (``cls``: engines.model.water_model.WaterModel or its compiled twin) on
-    the packing's discs (true radii), or None for a dry scene."""
+    the packing's discs (true radii) and the flat walls, or None for a dry scene."""
     settings = scene.water_settings()
     if settings is None:
         return None
     num = scene.numerics
     return cls(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
-               num.dt, num.rebuild_interval, num.water_interval, rebuild_distance=num.rebuild_distance)
+               num.dt, num.rebuild_interval, num.water_interval, rebuild_distance=num.rebuild_distance,
+               flat_walls=flat_walls)
 
 
 def pore_state(water_model, xz):
@@ -116,11 +117,13 @@ class PoreDEM:
     ``law``: the paper's contact law (engines.model.paper_law.PaperLaw); ``water_model``: the pores and
     water (engines.model.water_model.WaterModel) or None for a dry scene: the readable NumPy path of
     both. Its compiled twin engines.compiled.pore_dem.PoreDEM (tested against it) runs the compiled
-    law and water and offers the whole step as one kernel call."""
+    law and water and offers the whole step as one kernel call. ``flat_walls``:
+    engines.model.flat_walls.FlatWall, ... (SPEC §2.6): the law's contacts with them and the pores
+    they close (the NumPy classes only for now)."""
 
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
 
-    def __init__(self, scene, packing):
+    def __init__(self, scene, packing, flat_walls=()):
         self.scene, self.packing = scene, packing
         self.r = packing.r
         self.mobile = packing.mobile
@@ -128,14 +131,15 @@ class PoreDEM:
         self.dt = scene.numerics.dt
         num = scene.numerics
         limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], scene.contact.kn)
-        self.law = self.law_class(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt)
+        self.law = self.law_class(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt,
+                                  flat_walls)
         self.k = 0
         accel = ground_motion.input_acceleration(scene)
         self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
         self.ties = side_wall_ties(scene, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
-        self.water_model = water_model(scene, packing, self.water_class)
+        self.water_model = water_model(scene, packing, self.water_class, flat_walls)
 
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""

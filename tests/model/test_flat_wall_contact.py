@@ -1,0 +1,87 @@
+"""The paper's law against flat walls (engines.model.paper_law, SPEC §2.6, READINGS F7): a particle
+touches a flat wall as a fixed wall disc of radius 0 at its foot, at rest."""
+import numpy as np
+import pytest
+
+from engines.model.contact import ContactSettings
+from engines.model.flat_walls import FlatWall
+from engines.model.paper_law import PaperLaw
+
+R, RHO, DT = 0.45e-3, 2650.0, 1e-6
+M = RHO * np.pi * R**2
+
+
+def law(radii, flat=(), spring="d", mu=0.5, spin=1.0):
+    """The paper's law for disc 0 (mobile; inertia ``spin`` x m r^2 / 2) and fixed discs of
+    ``radii`` after it, and flat walls."""
+    s = ContactSettings(spring=spring, kn=1.4e5, eta_n=2.6, ks=3.5e4, eta_s=0.6, mu=mu, f_max=1.5, eps_m=2e-5,
+                        restitution=0.3)
+    r = np.array([R, *radii])
+    return PaperLaw(s, r, np.arange(len(r)) == 0, np.full(len(r), M), np.full(len(r), spin * M * R**2 / 2), DT,
+                    flat_walls=flat)
+
+
+def drop(lw, z_of, steps, x_of=lambda k: 0.0, extra=()):
+    """Step the law with disc 0 at (x_of(k), z_of(k)) (and fixed discs ``extra``): forces, fixes."""
+    out = []
+    for k in range(steps):
+        xz = np.array([[x_of(k), z_of(k)], *extra])
+        F, fixes = lw.step(xz)
+        out.append((F[0].copy(), lw.omega[0], dict(fixes)))
+    return out
+
+
+@pytest.mark.parametrize("spring", ["b", "d"])
+def test_a_disc_on_a_flat_wall_is_a_disc_on_a_wall_disc_below_it(spring):
+    """Moving along the normal only, a disc meets a flat face z = 0 as it meets a fixed wall disc
+    of any radius right below it (the same R - r sums, normal and increments): the same forces at
+    every step of a press and release, and the same eq 18-24 adjustment (pattern (a)) on leaving."""
+    path = lambda k: R + 2e-5 - 1e-8 * k if k < 300 else R + 2e-5 - 3e-6 + 2e-8 * (k - 300)  # in, then out
+    flat = drop(law([], (FlatWall(1, 0.0, +1),), spring), path, 600)
+    Rw = 5 * R
+    disc = drop(law([Rw], spring=spring), path, 600, extra=([0.0, -Rw],))
+    f = np.array([a[0] for a in flat])
+    g = np.array([a[0] for a in disc])
+    np.testing.assert_allclose(f, g, rtol=1e-12, atol=1e-15)
+    assert f[:, 1].max() > 0.1  # pressed: the wall pushes up [N]
+    fixed_flat = [a[2] for a in flat if a[2]]
+    fixed_disc = [a[2] for a in disc if a[2]]
+    assert len(fixed_flat) == len(fixed_disc) == 1
+    np.testing.assert_allclose(fixed_flat[0][0], fixed_disc[0][0], rtol=1e-12)
+
+
+def test_a_disc_dragged_on_a_flat_wall_slides_at_coulomb_friction_or_rolls():
+    """Pressed into z = 0 by a fixed overlap and dragged along x at 1 cm/s: with its spin held (a
+    huge inertia) the tangential spring reaches the Coulomb limit -mu f_n (eq 11); free to spin, the
+    friction's moment turns it clockwise (eq 13c: rolling towards +x)."""
+    z = R + 2e-5 - 2e-6  # overlap 2 um (with eps_m 20 um)
+    held = law([], (FlatWall(1, 0.0, +1),), spring="b", mu=0.5, spin=1e12)
+    Fx, Fz = drop(held, lambda k: z, 1000, x_of=lambda k: 1e-8 * k)[-1][0]
+    assert Fz == pytest.approx(1.4e5 * 2e-6, rel=1e-9)  # f_n = kn u_n, no approach
+    assert Fx == pytest.approx(-0.5 * Fz, rel=1e-9)
+    np.testing.assert_allclose(held.wall_forces(), [Fz], rtol=1e-12)
+    free = law([], (FlatWall(1, 0.0, +1),), spring="b", mu=0.5)
+    out = drop(free, lambda k: z, 50, x_of=lambda k: 1e-8 * k)
+    assert out[-1][1] < 0 and out[-1][0][0] < 0
+
+
+def test_a_disc_touches_only_its_own_foot():
+    """Two walls at a corner and a disc near each: every contact pair is a disc and its own foot."""
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1))
+    s = ContactSettings(spring="b", kn=1.4e5, eps_m=2e-5)
+    lw = PaperLaw(s, np.full(2, R), np.ones(2, bool), np.full(2, M), np.full(2, M * R**2 / 2), DT, flat_walls=walls)
+    xz = np.array([[R - 1e-6, 5 * R], [5 * R, R - 1e-6]])  # disc 0 on the left wall, disc 1 on the bottom
+    F, _ = lw.step(xz)
+    c, wv = lw.contact, lw.walls
+    touching = c.touching
+    pairs = set(zip(c.i[touching].tolist(), c.j[touching].tolist()))
+    assert pairs == {(0, int(wv.foot(1, 0))), (1, int(wv.foot(0, 1)))}
+    assert F[0, 0] > 0 and F[1, 1] > 0 and abs(F[0, 1]) < 1e-12 and abs(F[1, 0]) < 1e-12
+    np.testing.assert_allclose(lw.wall_forces(), [F[1, 1], F[0, 0]], rtol=1e-12)
+
+
+def test_the_compiled_law_refuses_flat_walls():
+    from engines.compiled.paper_law import PaperLaw as CompiledPaperLaw
+    with pytest.raises(ValueError, match=r"^flat walls with the paper's law: the NumPy law only for now"):
+        CompiledPaperLaw(ContactSettings(), np.full(1, R), np.ones(1, bool), np.full(1, M), np.full(1, M), DT,
+                         flat_walls=(FlatWall(1, 0.0, +1),))
