@@ -110,6 +110,12 @@ class Packing:
                              f"{overlap[k]:.3g} m ({overlap[k] / min(self.r[i[k]], self.r[j[k]]):.1%} of the smaller "
                              f"radius), deeper than {tolerance} = {max_overlap:.3g} m")
 
+    def particles(self):
+        """The packing of the particles alone (the wall discs left out; no file: its refusals name
+        the discs by their new index)."""
+        m = self.mobile
+        return Packing(self.xz[m], self.r[m], self.group[m], self.density_factor[m])
+
     @property
     def mobile(self):
         return self.group == WALL_NONE
@@ -128,10 +134,12 @@ class Packing:
         m = self.mobile
         return float(np.max(self.xz[m, 1] + self.r[m]))
 
-    def block_bounds(self, block_z):
-        """Absolute [z0, z1) of pressure blocks given as fractions of the bed height [m]."""
-        h = self.bed_top - self.bed_bottom
-        return [(self.bed_bottom + a * h, self.bed_bottom + b * h) for a, b in block_z]
+    def block_bounds(self, block_z, bottom=None):
+        """Absolute [z0, z1) of pressure blocks given as fractions of the bed height [m] above
+        ``bottom`` [m] (default bed_bottom)."""
+        bottom = self.bed_bottom if bottom is None else bottom
+        h = self.bed_top - bottom
+        return [(bottom + a * h, bottom + b * h) for a, b in block_z]
 
     def save(self, path):
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)

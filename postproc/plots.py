@@ -111,7 +111,8 @@ def draw_snapshot(ax, snap, U_norm=None, velocity_scale=None, force_scale=None):
         if U_norm is None:
             u = max(np.abs(U).max(), 1e-9)
             U_norm = Normalize(-u, u)
-        polys = PolyCollection(xz[snap["tri"]], array=U, cmap=U_CMAP, norm=U_norm, edgecolors="face",
+        vertices = snap["vertices"] * 1e3 if "vertices" in snap else xz  # with flat walls: discs, then wall vertices
+        polys = PolyCollection(vertices[snap["tri"]], array=U, cmap=U_CMAP, norm=U_norm, edgecolors="face",
                                linewidths=0.2, zorder=0)
         ax.add_collection(polys)
     circles = [Circle(p, rr) for p, rr in zip(xz, r)]

@@ -23,7 +23,7 @@ def snapshot_files(run_dir):
 
 def read_snapshot(path):
     """One snapshot as a dict of arrays (t, xz, r, group, density_factor, vel, pairs, f_n, f_s
-    and, with water, tri, tri_pore, U, W, A, rule; engines.run.runner.snapshot_data)."""
+    and, with water, tri, tri_pore, U, W, A, rule, with flat walls vertices; engines.run.runner.snapshot_data)."""
     with np.load(path, allow_pickle=False) as z:
         return dict(z)
 

@@ -213,13 +213,14 @@ def snapshot_frame(snap):
     pores = None
     if "tri" in snap and len(snap["tri"]):
         polygons, owner = outlines_from_triangles(snap["tri"], snap["tri_pore"])
-        area = np.array([signed_area(xz, poly) for poly in polygons])
+        vertices = snap["vertices"] if "vertices" in snap else xz  # with flat walls: discs, then wall vertices
+        area = np.array([signed_area(vertices, poly) for poly in polygons])
         outer = {}  # per pore, the orientation of its largest cycle; cycles turning the other way are islands
         for k in np.argsort(-np.abs(area)):
             outer.setdefault(owner[k], np.sign(area[k]))
         keep = [k for k in range(len(polygons)) if np.sign(area[k]) == outer[owner[k]]]
         owner = owner[keep]
-        pores = dict(polygons=[polygons[k] for k in keep], pore=owner)
+        pores = dict(xz=vertices, polygons=[polygons[k] for k in keep], pore=owner)
         for name in ("U", "W", "A", "rule"):
             if name in snap:
                 pores[name] = np.asarray(snap[name])[owner]

@@ -8,16 +8,16 @@ pore mesh (whose area jumps when the mesh is rebuilt):
 over the particles (wall discs excluded), with each disc-rectangle area in closed form
 (``disc_rectangle_area``). Overlapping discs are counted twice, as the pore areas of eq 29 neglect
 overlaps. The window (``box_window``) spans x between the inner faces of the side walls and z from
-the top of the bottom wall (``Packing.bed_bottom``) up to a stated fraction of the initial bed
-height (the scene's ``output.porosity_window``, [0, 0.8] by default: it stops about two grain
-diameters below the initial surface, so the loose top grains do not count). In a shaken box the
+the top of the bottom wall (``Packing.inner_faces``, or the faces of the flat walls) up to a stated
+fraction of the initial bed height (the scene's ``output.porosity_window``, [0, 0.8] by default: it
+stops about two grain diameters below the initial surface, so the loose top grains do not count). In a shaken box the
 window moves with the base: ``Window.shifted(base displacement)``.
 """
 from dataclasses import dataclass
 
 import numpy as np
 
-from engines.model.pores import WALL_LEFT, WALL_RIGHT
+from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 
 
 def _chord_primitive(x, r):
@@ -74,18 +74,18 @@ class Window:
         return Window(self.x0 + dx, self.x1 + dx, self.z0, self.z1)
 
 
-def box_window(packing, z_fractions):
-    """The porosity window of a box packing: x between the inner faces of the side-wall columns,
-    z from the top of the bottom wall to bed_bottom + f * (bed_top - bed_bottom) for
-    ``z_fractions`` = [f0, f1] of the initial bed height."""
-    g, xz, r = packing.group, packing.xz, packing.r
-    left, right = g == WALL_LEFT, g == WALL_RIGHT
-    if not (left.any() and right.any()):
+def box_window(packing, z_fractions, faces=None):
+    """The porosity window of a box packing: x between the inner faces of the side walls, z from
+    the bottom wall's face to bottom + f * (bed_top - bottom) for ``z_fractions`` = [f0, f1] of the
+    initial bed height. ``faces``: {wall code: position [m]} of the box's walls (default: the wall
+    discs' inner faces, Packing.inner_faces; without a bottom wall: Packing.bed_bottom)."""
+    faces = packing.inner_faces() if faces is None else faces
+    if not (WALL_LEFT in faces and WALL_RIGHT in faces):
         raise ValueError("porosity window: the packing has no left and right wall columns")
-    h = packing.bed_top - packing.bed_bottom
+    bottom = faces.get(WALL_BOTTOM, packing.bed_bottom)
+    h = packing.bed_top - bottom
     f0, f1 = z_fractions
-    return Window(float(np.max(xz[left, 0] + r[left])), float(np.min(xz[right, 0] - r[right])),
-                  packing.bed_bottom + f0 * h, packing.bed_bottom + f1 * h)
+    return Window(faces[WALL_LEFT], faces[WALL_RIGHT], bottom + f0 * h, bottom + f1 * h)
 
 
 def porosity(xz, r, window):

@@ -29,6 +29,7 @@ import numpy as np
 
 from engines.model import ground_motion, limits
 from engines.model import pores as pg
+from engines.model.flat_walls import FlatWall
 from engines.model.observe import block_means, box_window, porosity
 from engines.model.paper_law import PaperLaw
 from engines.model.side_walls import SideWallTies
@@ -56,6 +57,28 @@ def moving_walls(scene, packing):
         return np.zeros(len(packing.r), bool)
     groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[scene.loading.moves]
     return np.isin(packing.group, groups)
+
+
+def scene_flat_walls(scene, packing):
+    """{wall code: FlatWall} of [walls] kind = "flat", {} for kind = "discs": each wall-disc group of
+    the packing replaced by a flat wall at its inner face (Packing.inner_faces), moved back to the
+    outermost particle where one reaches past it (a particle resting in the dip between two wall
+    discs would start overlapping the face); the bottom lets in q_w when [water] q_w > 0, the sides
+    drain when [water] sides = "drained", else undrained."""
+    if scene.walls.kind != "flat":
+        return {}
+    w = scene.water
+    side = "drained" if w.sides == "drained" else "undrained"
+    # (axis, inward, boundary): the bottom a face z = const below the discs, the left and right x = const
+    kinds = {pg.WALL_BOTTOM: (1, 1, "inflow" if w.q_w > 0 else "undrained"), pg.WALL_LEFT: (0, 1, side),
+             pg.WALL_RIGHT: (0, -1, side)}
+    m = packing.mobile
+    walls = {}
+    for code, face in sorted(packing.inner_faces().items()):
+        axis, inward, boundary = kinds[code]
+        reach = float(np.min(inward * packing.xz[m, axis] - packing.r[m]))  # the outermost particle, inward * its edge
+        walls[code] = FlatWall(axis, inward * min(inward * face, reach), inward, boundary)
+    return walls
 
 
 def water_model(scene, packing, cls=WaterModel, flat_walls=()):
@@ -88,12 +111,14 @@ def block_pressures(water_model, xz, bounds):
     return block_means(pg.pore_centroids(net, xz)[:, 1], U, bounds)
 
 
-def porosity_window(scene, packing):
+def porosity_window(scene, packing, faces=None):
     """The fixed rectangle whose void fraction is the reported porosity ([output] porosity_window,
-    engines.model.observe.box_window), or None for a packing without both side-wall columns."""
-    if not (np.any(packing.group == pg.WALL_LEFT) and np.any(packing.group == pg.WALL_RIGHT)):
+    engines.model.observe.box_window) in the box of ``faces`` {wall code: position [m]} (default: the
+    wall discs' inner faces, Packing.inner_faces), or None for a box without both side walls."""
+    faces = packing.inner_faces() if faces is None else faces
+    if not (pg.WALL_LEFT in faces and pg.WALL_RIGHT in faces):
         return None
-    return box_window(packing, scene.output.porosity_window)
+    return box_window(packing, scene.output.porosity_window, faces)
 
 
 def window_porosity(packing, window, xz, base_disp=0.0):

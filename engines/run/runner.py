@@ -27,6 +27,7 @@ from glob import glob
 import numpy as np
 from yade import O
 
+from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
@@ -55,7 +56,8 @@ class Recorder:
         self.columns = (["t"] + [f"U_block{b + 1}" for b in range(self.n_blocks)] +
                         ["porosity", "kinetic_energy", "water_balance_error", "total_water", "n_pores",
                          "fn_bottom_mean", "bed_top", "base_acc", "base_vel", "base_disp", "side_left_dx",
-                         "side_right_dx", "remesh_change"])
+                         "side_right_dx", "remesh_change"] +
+                        [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")])
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
         self.snapshot_steps = []  # steps whose snapshot file was written
         self.vtk = None
@@ -128,7 +130,8 @@ class Recorder:
                   [cp.porosity(xz), cp.kinetic_energy(), w.balance_error() if w else 0.0,
                    w.total_water() if w else 0.0, w.net.n_pores if w else 0,
                    cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))] +
-                  list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0])
+                  list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0] +
+                  [f for load in cp.wall_loads().values() for f in load])
         self.writer.writerow([f"{v:.9g}" for v in values])
         self.file.flush()
         self.rows += 1
@@ -140,7 +143,8 @@ class Recorder:
 
 def snapshot_data(cp, xz, k):
     """The arrays of a snapshot at step k (positions xz): discs, touching pairs with their normal
-    and elastic shear forces and, with water, the pores as triangles with U, W, A and rule."""
+    and elastic shear forces and, with water, the pores as triangles with U, W, A and rule (with
+    flat walls, ``vertices``: the positions tri indexes)."""
     pairs, fn, fs = cp.contact_pairs(xz)
     pk = cp.packing
     snap = dict(t=k * cp.scene.numerics.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
@@ -149,6 +153,8 @@ def snapshot_data(cp, xz, k):
     if state is not None:
         net, A, U = state
         snap.update(tri=net.tri, tri_pore=net.tri_pore, U=U, W=cp.water.W.copy(), A=A, rule=cp.water.rule)
+        if net.wall_vertices is not None:  # tri indexes the discs, then the flat walls' vertices
+            snap["vertices"] = pg.vertex_positions(net, xz)
     return snap
 
 
@@ -225,7 +231,8 @@ class Run:
     def save_checkpoint(self):
         self.checkpoint_step = O.iter
         checkpoint.save(os.path.join(self.out, CHECKPOINT), self,
-                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name})
+                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name,
+                         "walls": self.scene.walls.kind})
         self._last_checkpoint = time.time()
 
     def reopen(self, out_dir, duration=None):

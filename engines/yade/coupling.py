@@ -13,6 +13,9 @@ in YADE (blockedDOFs 'yXZ'). The WaterEngine (engines.yade.water_engine; pressur
 held as permanent forces) is called before O.step() every water_interval steps (WaterEngine.drive),
 the work its PyRunner would do, without the PyRunner's dispatch. A dry scene runs no Python at all
 (O.run, ``run_blocking``).
+With [walls] kind = "flat" (law = "yade" only) the packing's wall discs are left out and fixed YADE
+boxes of the discs' material stand at their inner faces (``wall_boxes``; Ig2_Box_Sphere_ScGeom):
+the WaterEngine's flat walls (engines.model.pore_dem.scene_flat_walls), whose loads ``wall_loads`` reads.
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
@@ -27,9 +30,11 @@ import time
 import numpy as np
 from yade import O, utils
 from yade.wrapper import (
+    Bo1_Box_Aabb,
     Bo1_Sphere_Aabb,
     ForceResetter,
     FrictMat,
+    Ig2_Box_Sphere_ScGeom,
     Ig2_Sphere_Sphere_ScGeom,
     InsertionSortCollider,
     InteractionLoop,
@@ -48,6 +53,7 @@ from engines.model.pore_water import buoyancy
 from engines.reference.trajectory import Trajectory
 from engines.yade import yade_io
 from engines.yade.paper_law_engine import PaperLawEngine
+from engines.yade.walls import PLANE_AXES
 from engines.yade.water_engine import WaterEngine
 
 PER_STEP_CHUNK = 1000  # steps between the run loop's checks of a per-step run (errors, stop)
@@ -110,13 +116,41 @@ def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=No
     return np.asarray(ids, np.int64)
 
 
+def wall_boxes(walls, packing, material):
+    """Fixed YADE boxes of ``material`` whose inner faces are the flat walls {wall code: FlatWall}
+    around the discs of ``packing``; returns {wall code: body id}. Each is 2 max(r) thick along its
+    normal, 4 max(r) along y and 4 x the packing's size along its face, centred on the packing: it
+    reaches past the other walls and 1.5 x the packing's size above the packing's top."""
+    h = 2 * float(packing.r.max())
+    lo = (packing.xz - packing.r[:, None]).min(axis=0)
+    hi = (packing.xz + packing.r[:, None]).max(axis=0)
+    centre, size = 0.5 * (lo + hi), float((hi - lo).max())
+    ids = {}
+    for code, wall in walls.items():
+        along = 1 - wall.axis  # the in-plane axis along the face
+        pos, half = np.zeros(3), np.full(3, h)
+        pos[PLANE_AXES[wall.axis]] = wall.position - wall.inward * 0.5 * h
+        half[PLANE_AXES[wall.axis]] = 0.5 * h
+        pos[PLANE_AXES[along]], half[PLANE_AXES[along]] = centre[along], 2 * size
+        ids[code] = O.bodies.append(utils.box(tuple(pos), tuple(half), fixed=True, material=material,
+                                              color=(0.4, 0.4, 0.6)))
+    return ids
+
+
 class YadeCoupling:
     """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
     between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
     or the water engine's model by compiled kernels, else their NumPy classes (engines.model)."""
 
     def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
-        self.scene, self.packing = scene, packing
+        self.scene = scene
+        self.flat_walls = pore_dem.scene_flat_walls(scene, packing)  # {wall code: FlatWall}, {} with wall discs
+        # the blocks and the porosity window in the box of the flat walls, else of the wall discs' inner faces
+        faces = {code: wall.position for code, wall in self.flat_walls.items()} or packing.inner_faces()
+        self.block_bounds = packing.block_bounds(scene.output.block_z, faces.get(pg.WALL_BOTTOM))
+        self.window = pore_dem.porosity_window(scene, packing, faces)
+        self.packing = packing = packing.particles() if self.flat_walls else packing
+        self.wall_ids = {}  # {wall code: YADE body id} of the flat walls
         self.law = scene.contact.law
         self.mass, self.inertia = disc_masses(scene, packing)
         g = scene.material.g
@@ -137,23 +171,26 @@ class YadeCoupling:
         else:
             limits.check_contact(scene.numerics.dt, scene.numerics.dt_safety, self.mass[packing.mobile],
                                  scene.contact.kn)
-            self.ids = build_bodies(scene, packing, yade_law_material(scene), 0.5 * scene.contact.eps_m, spin=True)
-            loop = [InsertionSortCollider([Bo1_Sphere_Aabb()]),
-                    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
-                                    [Law2_ScGeom_ViscElPhys_Basic()])]
+            material = yade_law_material(scene)
+            self.ids = build_bodies(scene, packing, material, 0.5 * scene.contact.eps_m, spin=True)
+            self.wall_ids = wall_boxes(self.flat_walls, packing, material)
+            boxes = bool(self.wall_ids)
+            loop = [InsertionSortCollider([Bo1_Sphere_Aabb()] + ([Bo1_Box_Aabb()] if boxes else [])),
+                    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()] + ([Ig2_Box_Sphere_ScGeom()] if boxes else []),
+                                    [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()])]
             if wet:  # called before O.step on its steps (see _advance), not as a PyRunner
                 num = scene.numerics
                 walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
                 self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
                                                 scene.contact.eps_m, packing.r, num.rebuild_interval,
                                                 num.water_interval, True, scene.material.rho_w, g, compiled,
-                                                rebuild_distance=num.rebuild_distance)
+                                                rebuild_distance=num.rebuild_distance,
+                                                flat_walls={i: self.flat_walls[code].boundary
+                                                            for code, i in self.wall_ids.items()})
         self.io = yade_io.Bodies(self.ids)
         self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()
         O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
-        self.block_bounds = packing.block_bounds(scene.output.block_z)
-        self.window = pore_dem.porosity_window(scene, packing)
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
         self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
@@ -309,6 +346,19 @@ class YadeCoupling:
             return pairs, fn, fs
         sel = keep(pairs[:, 0], pairs[:, 1])
         return pairs[sel], fn[sel], fs[sel]
+
+    def wall_loads(self):
+        """{wall name: (contact, water)} of the flat walls [N per m thickness]: the sum of the normal
+        forces of YADE's contacts on each (as contact_pairs reads them; a box contact's normal is the
+        face's) and the pore water's push on it (WaterEngine.wall_forces), both positive when they
+        push the wall away from the discs; {} with wall discs."""
+        pushed = self.water_engine.wall_forces() if self.water_engine is not None else {}
+        loads = {}
+        for code, i in self.wall_ids.items():
+            contact = sum(inter.phys.normalForce.norm() for inter in O.interactions.withBody(i) if inter.isReal)
+            water = float(np.dot(pushed[i], -self.flat_walls[code].normal())) if i in pushed else 0.0
+            loads[pg.WALL_NAMES[code]] = (float(contact), water)
+        return loads
 
     def bottom_normal_force(self, xz):
         """Mean normal force [N] of the touching pairs whose midpoint lies in the first block (0 if none)."""

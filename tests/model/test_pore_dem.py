@@ -8,6 +8,7 @@ import pytest
 from engines.compiled.pore_dem import PoreDEM
 from engines.model import pore_dem
 from engines.model import pores as pg
+from engines.model.flat_walls import FlatWall
 from engines.model.pore_dem import disc_masses, moving_walls
 from packing.layouts import hex_lattice
 from packing.packing import Packing
@@ -406,3 +407,38 @@ def test_an_isolated_pair_separating_keeps_its_momentum():
     assert set(fixes) == {0, 1}
     assert m[0] * fixes[0][0] + m[1] * fixes[1][0] == pytest.approx(m @ vel[:, 0], rel=1e-9)
     assert fixes[1][0] - fixes[0][0] == pytest.approx(s.contact.restitution * 0.1, rel=1e-6)
+
+
+def test_flat_walls_of_a_scene_stand_at_the_wall_discs_inner_faces():
+    """[walls] kind = "flat": the bottom at max(z + r) of the bottom discs, the sides at max(x + r)
+    and min(x - r) of theirs; the boundaries from [water] q_w and sides; the porosity window in
+    their box."""
+    grid = np.array([(i, j) for j in range(6) for i in range(7)], float) * 2 * R  # a square box, particles of 0.9 R
+    col, row = np.arange(len(grid)) % 7, np.arange(len(grid)) // 7
+    group = np.where(row == 0, pg.WALL_BOTTOM, np.where(col == 0, pg.WALL_LEFT, np.where(col == 6, pg.WALL_RIGHT, 0)))
+    pk = Packing(grid, np.where(group == 0, 0.9 * R, R), group, np.ones(len(grid)))
+    flat = {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "a"}}
+    walls = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 1e-4, "sides": "drained"}), pk)
+    left, right, bottom = (pk.group == g for g in (pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM))
+    assert walls == {pg.WALL_BOTTOM: FlatWall(1, float(np.max(pk.xz[bottom, 1] + R)), 1, "inflow"),
+                     pg.WALL_LEFT: FlatWall(0, float(np.max(pk.xz[left, 0] + R)), 1, "drained"),
+                     pg.WALL_RIGHT: FlatWall(0, float(np.min(pk.xz[right, 0] - R)), -1, "drained")}
+    closed = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 0.0}), pk)
+    assert [w.boundary for w in closed.values()] == ["undrained"] * 3
+    assert pore_dem.scene_flat_walls(scene(), pk) == {}  # kind = "discs"
+    faces = {code: w.position for code, w in walls.items()}
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 0.5]}), pk.particles(), faces)
+    h = pk.bed_top - faces[pg.WALL_BOTTOM]
+    assert (window.x0, window.x1, window.z0, window.z1) == (faces[pg.WALL_LEFT], faces[pg.WALL_RIGHT],
+                                                            faces[pg.WALL_BOTTOM], faces[pg.WALL_BOTTOM] + 0.5 * h)
+
+
+def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face():
+    """A particle resting in the dip between two bottom wall discs (its bottom below their tops)
+    puts the flat bottom at its own bottom, so that it starts touching the wall, not overlapping it."""
+    rw, r = R, 0.6 * R
+    dz = np.sqrt((rw + r) ** 2 - rw**2)  # the particle on the two discs at x = 0, 2 rw
+    xz = np.array([[0.0, 0.0], [2 * rw, 0.0], [rw, dz]])
+    pk = Packing(xz, [rw, rw, r], [pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0], np.ones(3))
+    walls = pore_dem.scene_flat_walls(scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"}), pk)
+    assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0

@@ -34,6 +34,7 @@ def _write(tmp_path, text):
     ('[packing]\nn_particles = 3\n', r"\[scene\] name"),
     ('[scene]\nname = "x"\n[output]\nblock_z = [[0.5, 0.1]]\n', "block_z"),
     ('[scene]\nname = x\n', "not valid TOML"),
+    ('[scene]\nname = "x"\n[walls]\nkind = "boxes"\n', r"\[walls\] kind"),
 ])
 def test_bad_scene_files_name_the_field(tmp_path, text, field):
     with pytest.raises(scenes.SceneError, match=field):
@@ -114,3 +115,20 @@ def test_the_scene_readme_table_is_the_schema():
     with open(os.path.join(scenes.SCENE_DIR, "README.md"), encoding="utf-8") as f:
         rows = [line.rstrip("\n") for line in f if line.startswith("|")]
     assert rows == scenes.schema_markdown().splitlines()
+
+
+def test_walls_are_discs_unless_flat_is_asked_for_with_yades_law():
+    assert scenes.preset("quicksand_case1").walls.kind == "discs"
+    flat = scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "b"}})
+    assert flat.walls.kind == "flat"
+
+
+@pytest.mark.parametrize("over,message", [
+    ({}, r"^\[walls\] kind = 'flat' needs \[contact\] law = 'yade' \(the paper's law has no disc-flat-wall contact\)$"),
+    ({"contact": {"law": "yade", "spring": "b"}, "loading": {"type": "cosine"}},
+     r"^\[walls\] kind = 'flat': the flat walls are fixed, \[loading\] type = 'cosine' would move them"),
+])
+def test_flat_walls_with_the_papers_law_or_a_loading_are_refused_in_one_line(over, message):
+    with pytest.raises(scenes.SceneError, match=message) as e:
+        scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}, **over})
+    assert "\n" not in str(e.value)

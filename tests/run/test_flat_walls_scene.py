@@ -1,0 +1,90 @@
+"""The quick-sand box with [walls] kind = "flat": YADE boxes in place of the wall discs, the pores
+closed by them, their loads in history.csv; kind = "discs" as before. Short runs."""
+import numpy as np
+import pytest
+import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
+
+from engines.model import pores as pg
+from engines.run import scene as scenes
+from engines.run.command_line import check_resume
+from engines.run.preflight import InputError
+from engines.run.runner import Run
+from engines.yade.deposition import scene_packing
+from postproc.run_files import read_history, read_snapshot, snapshot_files
+
+WALL_COLUMNS = [f"wall_{w}_{part}" for w in ("bottom", "left", "right") for part in ("contact", "water")]
+STEPS, EVERY = 400, 50
+
+
+def quicksand(kind):
+    return scenes.preset("quicksand_case1", {"contact": {"law": "yade", "spring": "b"}, "walls": {"kind": kind},
+                                             "output": {"history_interval": EVERY, "snapshot_times": [0.0]}})
+
+
+class MaxU:
+    """Coupling hook: the largest U of the pores at each call (a class: the run's checkpoints pickle it)."""
+
+    def __init__(self):
+        self.seen = []
+
+    def __call__(self, cp):
+        self.seen.append(float(cp.water_engine.pressures().max()))
+
+
+def run(kind, out, figures=False):
+    """A quick-sand run of STEPS steps; returns (the Run, max U of the pores at each history step)."""
+    sc = quicksand(kind)
+    r = Run(sc, scene_packing(sc), str(out), STEPS)
+    max_U = MaxU()
+    r.cp.hooks.insert(0, max_U)
+    r.go(figures=figures)
+    return r, np.array(max_U.seen)
+
+
+def test_the_quick_sand_in_a_box_of_flat_walls_runs_physically(tmp_path):
+    r, max_U = run("flat", tmp_path, figures=True)
+    cp, sc = r.cp, r.scene
+    summary = r.summarise("completed", [])
+    assert summary["n_walls"] == 0 and len(cp.ids) == 45 and len(cp.wall_ids) == 3  # 45 spheres, 3 boxes
+    assert summary["n_pores"] > 0 and summary["water_balance_error"] <= 1e-12
+    assert len(max_U) == STEPS // EVERY + 1 and np.all(max_U <= sc.water.E_w)  # eq 32 at every history step
+    xz = cp.positions()
+    for wall in cp.flat_walls.values():  # no grain through a wall
+        assert np.all(wall.gap(xz, 0.0) > 0)
+    h = read_history(str(tmp_path / "history.csv"))
+    assert all(c in h for c in WALL_COLUMNS)
+    rest = slice(1, None)  # after the first step: the row at t = 0 precedes every contact and water step
+    load = h["wall_bottom_contact"][rest] + h["wall_bottom_water"][rest]
+    assert np.all(load > 0) and h["wall_bottom_contact"][1] > 0  # the lowest particle starts on the flat bottom
+    faces = {code: w.position for code, w in cp.flat_walls.items()}
+    width = faces[pg.WALL_RIGHT] - faces[pg.WALL_LEFT]
+    assert np.all(h["wall_bottom_water"][rest] > 0)  # the inflow raises U on the bottom wall's edges ...
+    assert np.all(h["wall_bottom_water"] <= sc.water.E_w * width)  # ... each U <= E_w over at most its width
+    # the snapshot's pores index the discs and the walls' vertices, which it stores
+    snap = read_snapshot(snapshot_files(str(tmp_path))[0])
+    assert snap["tri"].max() < len(snap["vertices"]) and len(snap["xz"]) == 45
+    assert (tmp_path / "snapshots.png").exists()
+    with pytest.raises(InputError, match=r"^--resume .*: a run with \[walls\] kind = 'flat' cannot be resumed yet"):
+        check_resume(str(tmp_path), 2 * STEPS * sc.numerics.dt)
+
+
+def test_wall_discs_give_no_boxes_and_no_wall_columns(tmp_path):
+    r, max_U = run("discs", tmp_path)
+    h = read_history(str(tmp_path / "history.csv"))
+    assert r.cp.wall_ids == {} and len(r.cp.ids) == len(r.cp.packing.r) == 76
+    assert not any(c.startswith("wall_") for c in h) and r.rec.columns[-1] == "remesh_change"
+    assert np.all(max_U <= r.scene.water.E_w)
+
+
+@pytest.mark.parametrize("kind", ["discs", "flat"])
+def test_the_blocks_start_at_the_bottom_of_the_box(kind):
+    """The pressure blocks and the porosity window stand on the bottom wall's face, the wall discs'
+    inner face or the flat bottom (moved back to the lowest particle)."""
+    from engines.yade.coupling import YadeCoupling
+    sc = quicksand(kind)
+    pk = scene_packing(sc)
+    cp = YadeCoupling(sc, pk)
+    bottom = cp.flat_walls[pg.WALL_BOTTOM].position if kind == "flat" else pk.inner_faces()[pg.WALL_BOTTOM]
+    mob = pk.mobile
+    assert cp.block_bounds[0][0] == cp.window.z0 == bottom
+    assert (bottom == np.min(pk.xz[mob, 1] - pk.r[mob])) == (kind == "flat")
