@@ -57,6 +57,12 @@ class FlatWall:
         return n
 
 
+def as_tables(walls):
+    """The FlatWalls as the tables' list [{"axis": "x" | "z", "position", "inward", "boundary"}]
+    (the reference's input, engines.reference.model.read_flat_walls)."""
+    return [{"axis": "xz"[w.axis], "position": w.position, "inward": w.inward, "boundary": w.boundary} for w in walls]
+
+
 class WallVertices:
     """The wall vertices of ``walls`` (FlatWall, ...) for N discs (module docstring).
 
@@ -130,6 +136,11 @@ class WallVertices:
         wa, wb = a >= self.n, b >= self.n
         wall_wall = (self.bits[a] & self.bits[b]) != 0
         return np.where(wa | wb, np.where(wa & wb, wall_wall, self.owner[a] == self.owner[b]), eq28)
+
+    def may_touch(self, a, b):
+        """Can the vertices (a, b) be a contact pair of the paper's law: two discs, or a disc and
+        its own foot (engines.model.paper_law)?"""
+        return self.is_link(a, b, True)
 
     def split_bits(self, bits):
         """The set bits of ``bits`` (M,) (as in ``self.bits``): index (K,) and wall (K,), one pair

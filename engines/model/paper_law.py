@@ -41,7 +41,7 @@ class PaperLaw:
             wv, r = self.walls, np.asarray(r, float)
             mobile = np.concatenate([self.mobile, np.zeros(wv.n_vertices - n, bool)])
             self.contact = self.contact_class(settings, wv.radii(r), mobile, skin=0.25 * r.min(),
-                                              pair_filter=lambda i, j: wv.is_link(i, j, True))
+                                              pair_filter=wv.may_touch)
         self.omega = np.zeros(n)
         self.du = np.zeros((n, 2))
         self.xz_prev = None
@@ -86,11 +86,19 @@ class PaperLaw:
     def contact_pairs(self, xz, keep=None):
         """(pairs (K, 2), f_n (K,), e_s (K,) [N]) of the pairs touching at centres xz, as this law's
         step at xz would find them (eq 17: du = xz - xz_prev, dpsi = omega dt), its state left as it
-        is (ContactLaw.touching_at; ``keep`` as there)."""
+        is (ContactLaw.touching_at; ``keep`` as there); with flat walls the pairs of two discs only."""
         du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev
-        if self.walls is not None:
-            raise ValueError("contact_pairs with flat walls: the wall contacts are wall_forces'")
-        return self.contact.touching_at(xz, du, self.omega * self.dt, self.dt, keep)
+        if self.walls is None:
+            return self.contact.touching_at(xz, du, self.omega * self.dt, self.dt, keep)
+        n = len(xz)
+
+        def discs(i, j):  # the pairs of two discs (the walls' contacts: wall_forces), those ``keep`` takes
+            sel = j < n
+            if keep is not None:
+                sel[sel] = keep(i[sel], j[sel])
+            return sel
+        return self.contact.touching_at(self.walls.positions(xz), self._at_vertices(du),
+                                        self._at_vertices(self.omega * self.dt), self.dt, discs)
 
     def wall_forces(self):
         """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the

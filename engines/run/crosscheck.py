@@ -16,6 +16,8 @@ Feature cases (1,050-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
   quicksand_displacement   the same inflow, the pores rebuilt by displacement (5 um, SPEC §2.6): the
                            reference is handed the rebuild steps of the YADE run
+  flat_walls_box           the same inflow in a box of flat walls (SPEC §2.6) in place of the wall
+                           discs: an inflow bottom, drained sides (k3); the paper's law against them
   shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
                            eps_m > 0, water_interval 2, smoothing
   elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
@@ -33,6 +35,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from engines.model.flat_walls import as_tables
+from engines.model.pore_dem import scene_flat_walls
 from engines.reference.model import mesh_void_fraction, simulate_reference
 from engines.reference.trajectory import Trajectory
 from engines.run import scene as sc
@@ -309,6 +313,9 @@ def feature_cases():
                                                            numerics={"rebuild_interval": 100}), 2100, 50),
         FeatureCase("quicksand_displacement", quicksand_build(
             water={"q_w": 5e-3}, numerics={"rebuild_interval": 10**6, "rebuild_distance": 5e-6}), 2100, 10),
+        FeatureCase("flat_walls_box", quicksand_build(
+            walls={"kind": "flat"}, water={"q_w": 5e-3, "sides": "drained", "k3": 400.0},
+            numerics={"rebuild_interval": 100}), 2100, 5),
         FeatureCase("shaken_drained_wet_d", quicksand_build(
             water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
             contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
@@ -322,11 +329,24 @@ def feature_cases():
     ]
 
 
+def reference_inputs(scene, packing):
+    """(tables, packing) of the reference for a scene and its packing: with [walls] kind = "flat",
+    its flat walls (engines.model.pore_dem.scene_flat_walls) as the tables' list and the particles
+    alone (the YADE side replaces the wall discs so); else the scene and packing as they are."""
+    walls = scene_flat_walls(scene, packing)
+    if not walls:
+        return scene, packing
+    tables = scene.as_dict()
+    tables["walls"] = {"flat": as_tables(walls.values())}
+    return tables, packing.particles()
+
+
 def features_of(scene):
     """What a scene exercises, for crosscheck.json."""
     w, c, n, ld = scene.water, scene.contact, scene.numerics, scene.loading
     out = {"spring": c.spring, "eps_m": c.eps_m, "separation_adjustment": c.separation_adjustment,
-           "water": w.enabled, "rebuild_interval": n.rebuild_interval, "rebuild_distance": n.rebuild_distance}
+           "water": w.enabled, "rebuild_interval": n.rebuild_interval, "rebuild_distance": n.rebuild_distance,
+           "walls": scene.walls.kind}
     if w.enabled:
         out.update(inflow_q_w=w.q_w, smoothing_eq45_46=w.smoothing, sides=w.sides,
                    k3=w.k3 if w.sides == "drained" else None, water_interval=n.water_interval)
@@ -426,20 +446,21 @@ def run_feature_case(case, yade_simulate, ref_simulate):
     """One FeatureCase: YADE, the reference and the reference perturbed."""
     out = {"name": case.name, "passed": False, "why": FEATURE_WHY}
     try:
-        scene, pk = case.build()
-        mean_r = float(np.mean(pk.r[pk.mobile]))
+        scene, full = case.build()
+        mean_r = float(np.mean(full.r[full.mobile]))
         hook, ycounts = yade_remesh_counter()
         t0 = time.time()
-        ty = yade_simulate(scene, pk, case.n_steps, case.record_every, hooks=[hook])
+        ty = yade_simulate(scene, full, case.n_steps, case.record_every, hooks=[hook])
         t1 = time.time()
+        tables, pk = reference_inputs(scene, full)
         ycounts = ty.info.get("counts", ycounts)   # a stand-in implementation may report its own
         # rebuilds by displacement (SPEC §2.6): the reference rebuilds at the steps the YADE run did
         steps = {"rebuild_steps": [k for k, _ in ycounts["history"]]} if scene.numerics.rebuild_distance > 0 else {}
-        tr = ref_simulate(scene, pk, case.n_steps, case.record_every, **steps)
+        tr = ref_simulate(tables, pk, case.n_steps, case.record_every, **steps)
         t2 = time.time()
         moved = pk.xz.copy()
         moved[pk.mobile] += PERTURBATION * mean_r
-        tp = ref_simulate(scene, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
+        tp = ref_simulate(tables, Packing(moved, pk.r, pk.group, pk.density_factor), case.n_steps, case.record_every,
                           **steps)
         t3 = time.time()
         rcounts = tr.info["counts"]

@@ -156,8 +156,11 @@ class YadeCoupling:
         g = scene.material.g
         wet = scene.water.enabled
         self.core = self.water_engine = None
-        if self.law == "paper":
+        if self.law == "paper" and self.flat_walls:  # the law's flat-wall contacts: NumPy only for now
+            self.core = PoreDEM(scene, packing, tuple(self.flat_walls.values()))
+        elif self.law == "paper":
             self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene, packing)
+        if self.law == "paper":
             ties = self.core.ties
             x_only = ties.moving if ties is not None else None
             self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
@@ -352,6 +355,11 @@ class YadeCoupling:
         forces of YADE's contacts on each (as contact_pairs reads them; a box contact's normal is the
         face's) and the pore water's push on it (WaterEngine.wall_forces), both positive when they
         push the wall away from the discs; {} with wall discs."""
+        if self.core is not None and self.flat_walls:  # the paper's law: its own contacts and water
+            wm = self.core.water_model
+            water = wm.F_walls if wm is not None else np.zeros(len(self.flat_walls))
+            return {pg.WALL_NAMES[code]: (float(c), float(u))
+                    for code, c, u in zip(self.flat_walls, self.core.law.wall_forces(), water)}
         pushed = self.water_engine.wall_forces() if self.water_engine is not None else {}
         loads = {}
         for code, i in self.wall_ids.items():

@@ -8,7 +8,7 @@ import pytest
 from engines.compiled.pore_dem import PoreDEM
 from engines.model import pore_dem
 from engines.model import pores as pg
-from engines.model.flat_walls import FlatWall
+from engines.model.flat_walls import FlatWall, as_tables
 from engines.model.pore_dem import disc_masses, moving_walls
 from packing.layouts import hex_lattice
 from packing.packing import Packing
@@ -442,3 +442,45 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
     pk = Packing(xz, [rw, rw, r], [pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0], np.ones(3))
     walls = pore_dem.scene_flat_walls(scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"}), pk)
     assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0
+
+
+def test_flat_walls_steps_match_the_reference_without_yade():
+    """The NumPy PoreDEM with flat walls (the law's wall contacts, the pores they close, the inflow
+    and drained walls) driven as in test_steps_match_the_reference_without_yade follows the
+    reference, written independently from SPEC §2.6, disc by disc: the wet box's particles settling
+    under 1000 m/s^2 on an inflow bottom face, between an undrained left and a drained right face."""
+    from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
+    from engines.reference import model as ref
+    water = {"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, "l_m": 1.3e-4, "q_w": 2e-3, "k3": 500.0}
+    s = scene(material={"g": 1000.0}, numerics={"dt": 1e-6, "rebuild_interval": 25},
+              water=water, contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
+    pk = wet_box(seed=5, jitter=0.05).particles()
+    x0, x1, z0 = pk.xz[:, 0].min() - pk.r.max() - 1e-5, pk.xz[:, 0].max() + pk.r.max() + 1e-5, pk.xz[:, 1].min() - pk.r.max() - 1e-5
+    walls = (FlatWall(1, z0, +1, "inflow"), FlatWall(0, x0, +1, "undrained"), FlatWall(0, x1, -1, "drained"))
+    core = NumpyPoreDEM(s, pk, walls)
+    tables = s.as_dict()
+    tables["walls"] = {"flat": as_tables(walls)}
+    model = ref.ReferenceModel(tables, pk)
+    m, _ = disc_masses(s, pk)
+    dt, g = s.numerics.dt, s.material.g
+    up = s.material.rho_w * np.pi * pk.r**2 * g
+    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
+    moved = 0.0
+    for _ in range(400):
+        F, fixes = core.step(x.copy())
+        for d, vel in fixes.items():
+            v[d] = vel
+        v[:, 0] += F[:, 0] / m * dt
+        v[:, 1] += ((F[:, 1] + up) / m - g) * dt
+        x += v * dt
+        model.step()
+        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
+        moved = max(moved, np.abs(x - pk.xz).max())
+    np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
+    assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
+    normal, water_push = model.wall_reactions()
+    np.testing.assert_allclose(core.water_model.F_walls, water_push, rtol=1e-9)
+    contact = core.law.wall_forces()
+    np.testing.assert_allclose(contact, normal - water_push, rtol=1e-9, atol=1e-12)
+    assert contact[0] > 0 and water_push[0] > 0  # the bed rests on the bottom face, the water pushes it
+    assert core.water.balance.inflow > 0 and core.water.balance.side_outflow > 0

@@ -16,8 +16,8 @@ WALL_COLUMNS = [f"wall_{w}_{part}" for w in ("bottom", "left", "right") for part
 STEPS, EVERY = 400, 50
 
 
-def quicksand(kind):
-    return scenes.preset("quicksand_case1", {"contact": {"law": "yade", "spring": "b"}, "walls": {"kind": kind},
+def quicksand(kind, law="yade"):
+    return scenes.preset("quicksand_case1", {"contact": {"law": law, "spring": "b"}, "walls": {"kind": kind},
                                              "output": {"history_interval": EVERY, "snapshot_times": [0.0]}})
 
 
@@ -28,12 +28,13 @@ class MaxU:
         self.seen = []
 
     def __call__(self, cp):
-        self.seen.append(float(cp.water_engine.pressures().max()))
+        U = cp.water_engine.pressures() if cp.water_engine else cp.water_model.pressures(cp.positions())
+        self.seen.append(float(U.max()))
 
 
-def run(kind, out, figures=False):
+def run(kind, out, figures=False, law="yade"):
     """A quick-sand run of STEPS steps; returns (the Run, max U of the pores at each history step)."""
-    sc = quicksand(kind)
+    sc = quicksand(kind, law)
     r = Run(sc, scene_packing(sc), str(out), STEPS)
     max_U = MaxU()
     r.cp.hooks.insert(0, max_U)
@@ -66,6 +67,22 @@ def test_the_quick_sand_in_a_box_of_flat_walls_runs_physically(tmp_path):
     assert (tmp_path / "snapshots.png").exists()
     with pytest.raises(InputError, match=r"^--resume .*: a run with \[walls\] kind = 'flat' cannot be resumed yet"):
         check_resume(str(tmp_path), 2 * STEPS * sc.numerics.dt)
+
+
+def test_the_quick_sand_on_flat_walls_runs_with_the_papers_law(tmp_path):
+    """The paper's law meets the flat walls itself (its NumPy classes: engines.model.paper_law; no
+    YADE boxes): the same physical checks, its own wall loads in history.csv."""
+    r, max_U = run("flat", tmp_path, law="paper")
+    cp, sc = r.cp, r.scene
+    summary = r.summarise("completed", [])
+    assert cp.wall_ids == {} and summary["n_pores"] > 0 and summary["water_balance_error"] <= 1e-12
+    assert np.all(max_U <= sc.water.E_w)
+    xz = cp.positions()
+    assert all(np.all(wall.gap(xz, 0.0) > 0) for wall in cp.flat_walls.values())
+    h = read_history(str(tmp_path / "history.csv"))
+    rest = slice(1, None)
+    assert np.all(h["wall_bottom_contact"][rest] + h["wall_bottom_water"][rest] > 0)
+    assert np.all(h["wall_bottom_water"][rest] > 0)
 
 
 def test_wall_discs_give_no_boxes_and_no_wall_columns(tmp_path):
