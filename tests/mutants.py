@@ -33,13 +33,14 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODULES = ["engines/model/pore_water.py", "engines/model/pores.py", "engines/model/contact.py", "engines/model/pore_dem.py"]
-EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/model/limits.py",
-         "engines/model/fields.py", "engines/compiled/contact.py", "engines/compiled/paper_law.py",
-         "engines/compiled/water_model.py", "engines/compiled/pore_dem.py"]
+EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/model/flat_walls.py",
+         "engines/model/limits.py", "engines/model/fields.py", "engines/compiled/contact.py",
+         "engines/compiled/paper_law.py", "engines/compiled/water_model.py", "engines/compiled/pore_dem.py"]
 TESTS = ["tests/model/test_pore_water.py", "tests/model/test_pores.py", "tests/model/test_contact.py",
          "tests/model/test_pore_dem.py", "tests/run/test_scene.py", "tests/model/test_pore_candidates.py",
          "tests/model/test_remesh_transfer.py", "tests/compiled/test_kernels.py",
-         "tests/model/test_limits.py", "tests/model/test_fields.py"]
+         "tests/model/test_limits.py", "tests/model/test_fields.py", "tests/model/test_water_model.py",
+         "tests/model/test_flat_walls.py", "tests/model/test_flat_wall_contact.py", "tests/compiled/test_flat_walls.py"]
 COPY = ["engines", "packing", "yade_scripts", "tests"]
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_mutants.txt")
 KILLED = {"killed", "timeout", "segfault"}

@@ -37,7 +37,7 @@ class PaperLaw:
         self.walls = WallVertices(flat_walls, n) if flat_walls else None
         if self.walls is None:
             self.contact = self.contact_class(settings, r, self.mobile)
-        else:  # a disc and its own feet, never two feet or another disc's (WallVertices.is_link)
+        else:  # pairs of two discs or a disc and its own foot (WallVertices.may_touch)
             wv, r = self.walls, np.asarray(r, float)
             mobile = np.concatenate([self.mobile, np.zeros(wv.n_vertices - n, bool)])
             self.contact = self.contact_class(settings, wv.radii(r), mobile, skin=0.25 * r.min(),

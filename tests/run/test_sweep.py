@@ -58,10 +58,22 @@ def test_local_sweep_reports_failures_and_resumes(tmp_path):
     _check_sweep(str(tmp_path / "local"))
 
 
+ENV_JOB = "import json, os, sys; json.dump(dict(os.environ), open(os.path.join(sys.argv[1], 'env.json'), 'w'))"
+
+
 def test_dask_local_cluster_sweep(tmp_path):
+    """The sweep on a Dask cluster as on the local pool; its jobs see the environment of the sweep,
+    not the Dask nanny's MALLOC_TRIM_THRESHOLD_ (which the worker itself holds)."""
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         _check_sweep(str(tmp_path / "dask"), scheduler=cluster.scheduler_address)
+        with distributed.Client(cluster) as client:
+            assert "MALLOC_TRIM_THRESHOLD_" in client.submit(lambda: dict(os.environ)).result()
+        run_sweep([Job("env", (sys.executable, "-c", ENV_JOB, "{out}"))], str(tmp_path / "env"),
+                  scheduler=cluster.scheduler_address, log=None)
+    with open(tmp_path / "env" / "env" / "env.json") as f:
+        env = json.load(f)
+    assert "MALLOC_TRIM_THRESHOLD_" not in env and env["SWEEP_JOB_DIR"] == str(tmp_path / "env" / "env")
 
 
 def test_bad_jobs_are_refused(tmp_path):
