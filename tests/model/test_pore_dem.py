@@ -233,6 +233,32 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
 
 
+def step_beside_the_reference(core, model, s, pk, moving, n=400):
+    """n steps of the PoreDEM ``core`` driven by a plain Python stand-in for YADE's NewtonIntegrator
+    (v += (F/m + g) dt, x += v dt, the ``moving`` walls at the input velocity, adjusted velocities
+    set before) beside those of the reference ``model``: positions equal to 1e-10 R and spins to
+    1e-9 at every step. Returns the largest displacement [m]."""
+    m, _ = disc_masses(s, pk)
+    mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
+    up = s.material.rho_w * np.pi * pk.r**2 * g
+    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
+    moved = 0.0
+    for _ in range(n):
+        F, fixes = core.step(x.copy())
+        for d, vel in fixes.items():
+            v[d] = vel
+        v[mob, 0] += F[mob, 0] / m[mob] * dt
+        v[mob, 1] += ((F[mob, 1] + up[mob]) / m[mob] - g) * dt
+        v[moving] = [core.wall_velocity, 0.0]
+        step = mob | moving
+        x[step] += v[step] * dt
+        model.step()
+        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
+        np.testing.assert_allclose(core.omega[mob], model.omega[mob], rtol=1e-9, atol=1e-9 * np.abs(model.omega).max())
+        moved = max(moved, np.abs(x - pk.xz).max())
+    return moved
+
+
 @pytest.mark.parametrize("variant", ["inflow_smoothing", "shaken_drained_d"])
 def test_steps_match_the_reference_without_yade(variant):
     """PoreDEM driven by a plain Python stand-in for YADE's NewtonIntegrator (v += (F/m + g) dt,
@@ -253,26 +279,8 @@ def test_steps_match_the_reference_without_yade(variant):
               **tables)
     pk = wet_box(seed=5, jitter=0.05)
     core = PoreDEM(s, pk)
-    moving = moving_walls(s, pk)
     model = ref.ReferenceModel(s.as_dict(), pk)   # the paper's readings, walls included (READINGS D1)
-    m, _ = disc_masses(s, pk)
-    mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
-    up = s.material.rho_w * np.pi * pk.r**2 * g
-    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
-    moved = 0.0
-    for _ in range(400):
-        F, fixes = core.step(x.copy())
-        for d, vel in fixes.items():
-            v[d] = vel
-        v[mob, 0] += F[mob, 0] / m[mob] * dt
-        v[mob, 1] += ((F[mob, 1] + up[mob]) / m[mob] - g) * dt
-        v[moving] = [core.wall_velocity, 0.0]
-        step = mob | moving
-        x[step] += v[step] * dt
-        model.step()
-        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
-        np.testing.assert_allclose(core.omega[mob], model.omega[mob], rtol=1e-9, atol=1e-9 * np.abs(model.omega).max())
-        moved = max(moved, np.abs(x - pk.xz).max())
+    moved = step_beside_the_reference(core, model, s, pk, moving_walls(s, pk))
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
     assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
@@ -446,8 +454,7 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
 
 def test_flat_walls_steps_match_the_reference_without_yade():
     """The NumPy PoreDEM with flat walls (the law's wall contacts, the pores they close, the inflow
-    and drained walls) driven as in test_steps_match_the_reference_without_yade follows the
-    reference, written independently from SPEC §2.6, disc by disc: the wet box's particles settling
+    and drained walls) follows the reference (step_beside_the_reference), written independently from SPEC §2.6, disc by disc: the wet box's particles settling
     under 1000 m/s^2 on an inflow bottom face, between an undrained left and a drained right face."""
     from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
     from engines.reference import model as ref
@@ -455,27 +462,14 @@ def test_flat_walls_steps_match_the_reference_without_yade():
     s = scene(material={"g": 1000.0}, numerics={"dt": 1e-6, "rebuild_interval": 25},
               water=water, contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
     pk = wet_box(seed=5, jitter=0.05).particles()
-    x0, x1, z0 = pk.xz[:, 0].min() - pk.r.max() - 1e-5, pk.xz[:, 0].max() + pk.r.max() + 1e-5, pk.xz[:, 1].min() - pk.r.max() - 1e-5
+    lo, hi = pk.xz.min(axis=0) - pk.r.max() - 1e-5, pk.xz.max(axis=0) + pk.r.max() + 1e-5  # 10 um off the discs
+    x0, x1, z0 = lo[0], hi[0], lo[1]
     walls = (FlatWall(1, z0, +1, "inflow"), FlatWall(0, x0, +1, "undrained"), FlatWall(0, x1, -1, "drained"))
     core = NumpyPoreDEM(s, pk, walls)
     tables = s.as_dict()
     tables["walls"] = {"flat": as_tables(walls)}
     model = ref.ReferenceModel(tables, pk)
-    m, _ = disc_masses(s, pk)
-    dt, g = s.numerics.dt, s.material.g
-    up = s.material.rho_w * np.pi * pk.r**2 * g
-    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
-    moved = 0.0
-    for _ in range(400):
-        F, fixes = core.step(x.copy())
-        for d, vel in fixes.items():
-            v[d] = vel
-        v[:, 0] += F[:, 0] / m * dt
-        v[:, 1] += ((F[:, 1] + up) / m - g) * dt
-        x += v * dt
-        model.step()
-        np.testing.assert_allclose(x, model.x, rtol=0, atol=1e-10 * R)
-        moved = max(moved, np.abs(x - pk.xz).max())
+    moved = step_beside_the_reference(core, model, s, pk, np.zeros(len(pk.r), bool))
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
     assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     normal, water_push = model.wall_reactions()
