@@ -480,7 +480,7 @@ def _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv):
     """build_pores with the flat walls of the flat_walls.WallVertices ``wv``: the network of the
     discs and the wall vertices (flat_walls module docstring), whose vertex sets count each wall
     as one vertex (``_wall_vertex_sets``)."""
-    if steps is not NUMPY_BUILD:
+    if steps != NUMPY_BUILD:  # equal, not the same object, after a checkpoint's pickle
         raise ValueError(fw.NUMPY_ONLY)
     wv.check_inside(xz)
     n, reach = wv.n, eps_m + l_m

@@ -236,9 +236,6 @@ def check_resume(run_dir, duration):
     from engines.yade.checkpoint import NAME, read_info, resume_end
     check_output_dir(run_dir, "--resume")
     info = read_info(os.path.join(run_dir, NAME))
-    if info.get("walls") == "flat":  # the water model's NumPy pore builds do not survive the checkpoint's pickle yet
-        raise InputError(f"--resume {run_dir}: a run with [walls] kind = 'flat' cannot be resumed yet; run it again "
-                         f"with the whole --duration")
     try:
         resume_end(info["step"], info["n_steps"], info["dt"], duration)
     except ValueError as e:

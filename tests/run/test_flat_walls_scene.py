@@ -6,8 +6,6 @@ import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs 
 
 from engines.model import pores as pg
 from engines.run import scene as scenes
-from engines.run.command_line import check_resume
-from engines.run.preflight import InputError
 from engines.run.runner import Run
 from engines.yade.deposition import scene_packing
 from postproc.run_files import read_history, read_snapshot, snapshot_files
@@ -65,8 +63,6 @@ def test_the_quick_sand_in_a_box_of_flat_walls_runs_physically(tmp_path):
     snap = read_snapshot(snapshot_files(str(tmp_path))[0])
     assert snap["tri"].max() < len(snap["vertices"]) and len(snap["xz"]) == 45
     assert (tmp_path / "snapshots.png").exists()
-    with pytest.raises(InputError, match=r"^--resume .*: a run with \[walls\] kind = 'flat' cannot be resumed yet"):
-        check_resume(str(tmp_path), 2 * STEPS * sc.numerics.dt)
 
 
 def test_the_quick_sand_on_flat_walls_runs_with_the_papers_law(tmp_path):

@@ -101,6 +101,8 @@ def test_a_resumed_run_matches_the_uninterrupted_one(packing, full_run, tmp_path
      1001, False),
     ("yade law, dry, O.run chunks", {"contact": {"law": "yade", "spring": "a"}, "water": {"enabled": False},
                                      "output": {"history_interval": 1500, "vtk": False}}, 700, False),
+    ("flat walls, paper law", {"walls": {"kind": "flat"}, "contact": {"spring": "b"}}, 777, True),
+    ("flat walls, yade law", {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "b"}}, 777, False),
 ])
 def test_other_engines_resume_too(packing, tmp_path, monkeypatch, name, over, k, exact):  # noqa: ARG001
     sc = scenes.preset("quicksand_case1", scenes._merge(BASE, over))
