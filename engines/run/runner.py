@@ -231,8 +231,7 @@ class Run:
     def save_checkpoint(self):
         self.checkpoint_step = O.iter
         checkpoint.save(os.path.join(self.out, CHECKPOINT), self,
-                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name,
-                         "walls": self.scene.walls.kind})
+                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name})
         self._last_checkpoint = time.time()
 
     def reopen(self, out_dir, duration=None):
