@@ -10,8 +10,8 @@ class ContactLaw(contact.ContactLaw):
     """engines.model.contact.ContactLaw, stepped by kernels.contact_forces; the F, M that ``forces``
     returns are buffers reused by the next call."""
 
-    def __init__(self, settings, r, mobile, skin=None):
-        super().__init__(settings, r, mobile, skin)
+    def __init__(self, settings, r, mobile, skin=None, pair_filter=None):
+        super().__init__(settings, r, mobile, skin, pair_filter)
         self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
         self._spring = kernels.SPRING_CODE[settings.spring]
         self._prm = kernels.contact_params(settings, np.nan)  # refreshed when dt changes

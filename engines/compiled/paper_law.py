@@ -1,5 +1,7 @@
 """The paper's law per step compiled: engines.model.paper_law.PaperLaw stepped by kernels.law_step
-(eq 17, the contact forces, the spin in one call) on engines.compiled.contact.ContactLaw. No YADE."""
+(eq 17, the contact forces, the spin in one call) on engines.compiled.contact.ContactLaw. With flat
+walls the step is the NumPy law's (the feet placed, the increments extended) around the compiled
+contact loop (kernels.contact_forces). No YADE."""
 import numpy as np
 
 from engines.compiled import kernels
@@ -14,13 +16,13 @@ class PaperLaw(paper_law.PaperLaw):
     contact_class = ContactLaw
 
     def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
-        if flat_walls:
-            raise ValueError("flat walls with the paper's law: the NumPy law only for now (compiled=False)")
-        super().__init__(settings, r, mobile, mass, inertia, dt)
+        super().__init__(settings, r, mobile, mass, inertia, dt, flat_walls)
         self._dpsi = np.zeros(len(self.mobile))  # omega dt, scratch of the kernel
 
     def _forces(self, xz):
         """kernels.law_step: the same arithmetic as engines.model.paper_law.PaperLaw._forces."""
+        if self.walls is not None:
+            return super()._forces(xz)
         if self.xz_prev is None:  # du = 0 at the first step
             self.xz_prev = np.array(xz, float)
             self.contact._update_list(xz)

@@ -13,17 +13,17 @@ class PoreDEM(pore_dem.PoreDEM):
 
     law_class, water_class = PaperLaw, WaterModel
 
-    def __init__(self, scene, packing):
-        super().__init__(scene, packing)
+    def __init__(self, scene, packing, flat_walls=()):
+        super().__init__(scene, packing, flat_walls)
         self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
 
     def kernel_step_args(self, rows, held):
         """The arguments of kernels.dem_step after (xz, F_out) (kernels.DEM_STEP) for step k, the
         forces to write F[rows] + held, or None when this step needs the general ``step`` (the
-        first step, a rebuild of the pores, and every step with a rebuild_distance: the positions
-        it checks are read inside the kernel call)."""
+        first step, a rebuild of the pores, every step with a rebuild_distance: the positions
+        it checks are read inside the kernel call, and every step with flat walls)."""
         law, wm = self.law, self.water_model
-        if law.xz_prev is None:
+        if law.xz_prev is None or law.walls is not None:
             return None
         if wm is None:
             return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)

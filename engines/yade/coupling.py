@@ -156,11 +156,9 @@ class YadeCoupling:
         g = scene.material.g
         wet = scene.water.enabled
         self.core = self.water_engine = None
-        if self.law == "paper" and self.flat_walls:  # the law's flat-wall contacts: NumPy only for now
-            self.core = PoreDEM(scene, packing, tuple(self.flat_walls.values()))
-        elif self.law == "paper":
-            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene, packing)
         if self.law == "paper":
+            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene, packing,
+                                                                             tuple(self.flat_walls.values()))
             ties = self.core.ties
             x_only = ties.moving if ties is not None else None
             self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)

@@ -78,10 +78,3 @@ def test_a_disc_touches_only_its_own_foot():
     assert pairs == {(0, int(wv.foot(1, 0))), (1, int(wv.foot(0, 1)))}
     assert F[0, 0] > 0 and F[1, 1] > 0 and abs(F[0, 1]) < 1e-12 and abs(F[1, 0]) < 1e-12
     np.testing.assert_allclose(lw.wall_forces(), [F[1, 1], F[0, 0]], rtol=1e-12)
-
-
-def test_the_compiled_law_refuses_flat_walls():
-    from engines.compiled.paper_law import PaperLaw as CompiledPaperLaw
-    with pytest.raises(ValueError, match=r"^flat walls with the paper's law: the NumPy law only for now"):
-        CompiledPaperLaw(ContactSettings(), np.full(1, R), np.ones(1, bool), np.full(1, M), np.full(1, M), DT,
-                         flat_walls=(FlatWall(1, 0.0, +1),))

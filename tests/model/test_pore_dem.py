@@ -478,3 +478,30 @@ def test_flat_walls_steps_match_the_reference_without_yade():
     np.testing.assert_allclose(contact, normal - water_push, rtol=1e-9, atol=1e-12)
     assert contact[0] > 0 and water_push[0] > 0  # the bed rests on the bottom face, the water pushes it
     assert core.water.balance.inflow > 0 and core.water.balance.side_outflow > 0
+
+
+def test_the_compiled_pore_dem_with_flat_walls_is_the_numpy_one():
+    """engines.compiled.pore_dem.PoreDEM with flat walls (its law's contact loop and its water steps
+    compiled, the builds NumPy) gives the NumPy PoreDEM's forces to round-off at every one of 400
+    steps of the settling box of test_flat_walls_steps_match_the_reference_without_yade."""
+    from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
+    water = {"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, "l_m": 1.3e-4, "q_w": 2e-3, "k3": 500.0}
+    s = scene(material={"g": 1000.0}, numerics={"dt": 1e-6, "rebuild_interval": 25},
+              water=water, contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
+    pk = wet_box(seed=5, jitter=0.05).particles()
+    lo, hi = pk.xz.min(axis=0) - pk.r.max() - 1e-5, pk.xz.max(axis=0) + pk.r.max() + 1e-5
+    walls = (FlatWall(1, lo[1], +1, "inflow"), FlatWall(0, lo[0], +1, "undrained"), FlatWall(0, hi[0], -1, "drained"))
+    cores = [cls(s, pk, walls) for cls in (NumpyPoreDEM, PoreDEM)]
+    m, _ = disc_masses(s, pk)
+    x, v = pk.xz.copy(), np.zeros_like(pk.xz)
+    for _ in range(400):
+        (Fa, fa), (Fb, fb) = (core.step(x.copy()) for core in cores)
+        np.testing.assert_allclose(Fb, Fa, rtol=1e-9, atol=1e-12 * np.abs(Fa).max())
+        assert fa.keys() == fb.keys()
+        for d, vel in fa.items():
+            v[d] = vel
+        v += (Fa / m[:, None] + [0.0, -s.material.g]) * s.numerics.dt
+        x += v * s.numerics.dt
+    assert cores[1].law.walls is not None and cores[1].kernel_step_args(np.arange(3), np.zeros((3, 2))) is None
+    np.testing.assert_allclose(cores[1].law.wall_forces(), cores[0].law.wall_forces(), rtol=1e-9)
+    np.testing.assert_allclose(cores[1].water.W, cores[0].water.W, rtol=1e-12)
