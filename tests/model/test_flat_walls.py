@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from engines.model import pores as pg
-from engines.model.flat_walls import FlatWall
+from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import PoreWater, WaterSettings, pressures_by_rule, rule_counts
 from engines.model.water_model import WaterModel
 from tests.layouts import random_sequential, square_lattice
@@ -309,3 +309,24 @@ def test_a_flat_bottom_and_a_row_of_wall_discs_give_the_same_steady_bulk_pressur
     a, b = (np.array([u[k] for k in common]) for u in U)
     assert a.max() > 0.5  # N/m: a real gradient, 0.11 N/m a row
     np.testing.assert_allclose(b, a, rtol=1e-9)
+
+
+def test_wall_vertices_link_along_a_common_wall_and_exist_within_reach():
+    """WallVertices: two wall vertices are linked only when they lie on a common wall (two feet on
+    the bottom, a foot and the corner of its wall; not feet on two walls); a disc's foot is a vertex
+    of the build when its gap to the face is <= reach (eq 28, the equality included), a corner only
+    when both its walls have one."""
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1))
+    xz = np.array([[5.0, 1.5], [8.0, 1.2], [1.4, 6.0]])
+    wv = WallVertices(walls, len(xz))
+    corner = wv.foot(2, 0)
+    feet_b, feet_l = wv.foot(0, np.arange(3)), wv.foot(1, np.arange(3))
+    pairs = np.array([[feet_b[0], feet_b[1]], [feet_b[0], feet_l[2]], [feet_l[2], corner], [feet_b[1], corner],
+                      [0, feet_b[0]], [0, feet_b[1]]])
+    assert wv.is_link(pairs[:, 0], pairs[:, 1], np.zeros(len(pairs), bool)).tolist() == [True, False, True, True,
+                                                                                       True, False]
+    r = np.ones(3)
+    active = set(wv.active(xz, r, 0.5).tolist())  # gaps to the bottom 0.5, 0.2, 5; to the left 4, 7, 0.4
+    assert {feet_b[0], feet_b[1], feet_l[2], corner} <= active and not {feet_b[2], feet_l[0], feet_l[1]} & active
+    far = xz + [2.0, 0.0]  # now no disc within reach of the left wall: no corner either
+    assert set(wv.active(far, r, 0.5).tolist()) == {0, 1, 2, feet_b[0], feet_b[1]}
