@@ -198,10 +198,15 @@ class WaterEngine:
         h = m.water_interval * O.dt
         xz = self.io.positions() if m.rebuild_distance > 0 else None
         rebuild = m.rebuild_due(self.k, xz)
-        if self.compiled and not rebuild:  # read, water, write: one compiled call
+        if self.compiled and not rebuild:
             args = m.kernel_args(h)
-            _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
-                                        self._forces_step_args(args))
+            if xz is None:  # read, water, write: one compiled call
+                _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
+                                            self._forces_step_args(args))
+            else:  # the positions the displacement check read: water, then write (no second read)
+                n_sub = kernels.water_step(xz, *args)
+                if n_sub > 0:
+                    self.write_forces()
             if n_sub != kernels.AREAS_OUT_OF_RANGE:
                 m.finish_kernel_step(h, n_sub)
                 return
