@@ -68,6 +68,11 @@ class PaperLaw:
         out[:len(self.mobile)] = a
         return out
 
+    def _on_vertices(self, xz, du):
+        """(positions, increments du, dpsi) of the contact law's vertices at disc centres xz with
+        increments du: the discs', then their feet, at rest."""
+        return self.walls.positions(xz), self._at_vertices(du), self._at_vertices(self.omega * self.dt)
+
     def _forces(self, xz):
         """(F (N, 2) [N], SeparationEvents) of the step at xz: eq 17, the contact forces, the spin."""
         dt = self.dt
@@ -75,8 +80,7 @@ class PaperLaw:
         if self.walls is None:
             F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
         else:
-            F, M, separations = self.contact.forces(self.walls.positions(xz), self._at_vertices(self.du),
-                                                    self._at_vertices(self.omega * dt), dt)
+            F, M, separations = self.contact.forces(*self._on_vertices(xz, self.du), dt)
             F, M = F[:len(xz)], M[:len(xz)]
         mob = self.mobile
         self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
@@ -97,8 +101,7 @@ class PaperLaw:
             if keep is not None:
                 sel[sel] = keep(i[sel], j[sel])
             return sel
-        return self.contact.touching_at(self.walls.positions(xz), self._at_vertices(du),
-                                        self._at_vertices(self.omega * self.dt), self.dt, discs)
+        return self.contact.touching_at(*self._on_vertices(xz, du), self.dt, discs)
 
     def wall_forces(self):
         """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the
