@@ -21,6 +21,7 @@ from postproc.run_files import read_history, read_snapshot, read_summary, snapsh
 GROUP_COLOURS = {code: "0.85" if code == WALL_NONE else "0.35" for code in GROUP_NAMES}  # particles light
 U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess pressure
 FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
+FLAT_WALL_COLOUR = "dimgrey"  # a flat wall's face in the snapshots
 FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max
 BLOCK_NAMES = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}
 HISTORY_PANELS = [("porosity", "porosity [-]", 1.0), ("kinetic_energy", "kinetic energy [J/m]", 1.0),
@@ -115,6 +116,8 @@ def draw_snapshot(ax, snap, U_norm=None, velocity_scale=None, force_scale=None):
         polys = PolyCollection(vertices[snap["tri"]], array=U, cmap=U_CMAP, norm=U_norm, edgecolors="face",
                                linewidths=0.2, zorder=0)
         ax.add_collection(polys)
+    for axis, position, _ in snap.get("flat_walls", ()):  # a face x = position (axis 0) or z = position
+        (ax.axvline if axis == 0 else ax.axhline)(position * 1e3, color=FLAT_WALL_COLOUR, linewidth=3, zorder=1)
     circles = [Circle(p, rr) for p, rr in zip(xz, r)]
     ax.add_collection(PatchCollection(circles, facecolor=[GROUP_COLOURS[g] for g in group], edgecolor="k",
                                       linewidth=0.4, alpha=0.55, zorder=1))
@@ -202,14 +205,17 @@ def snapshot_figure(snaps, title, blocks=None):
             ax.set_ylabel("")
             ax.tick_params(labelleft=False)
     if colour_source is not None:
-        fig.colorbar(colour_source, ax=axes, label="pore excess pressure U [N/m] (0 = hydrostatic)",
+        fig.colorbar(colour_source, ax=axes, label="pore excess pressure U [N/m]\n(0 = hydrostatic)",
                      shrink=0.85, pad=0.01)
     dense = max(s["density_factor"].max() for s in snaps)
     key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
     if dense > 1:
         key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
                          label=f"dense top particle (density x {dense:g})"))
-    key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
+    if any((s["group"] != 0).any() for s in snaps):
+        key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
+    if any("flat_walls" in s for s in snaps):
+        key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
     key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N")
             for f in (f_max / 4, f_max)]
     if blocks:
@@ -221,7 +227,7 @@ def snapshot_figure(snaps, title, blocks=None):
         axes[0].quiverkey(quiver, box.x0 + 0.84 * box.width, box.y0 + 0.5 * box.height, v_key,
                           f"particle velocity {v_key:g} m/s", labelpos="E", coordinates="figure",
                           color=ARROW_COLOUR, fontproperties={"size": 8})
-    fig.suptitle(title + ": pores coloured by U, normal forces (line width), particle velocities (arrows)")
+    fig.suptitle(title + ":\npores coloured by U, normal forces (line width), particle velocities (arrows)")
     return fig
 
 

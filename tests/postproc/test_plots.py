@@ -77,6 +77,18 @@ def test_snapshot_panels_share_a_centred_scale_and_limits_and_title_their_own_ma
     assert v_max / 10 <= key.U <= v_max and mantissa == pytest.approx(round(mantissa)) and round(mantissa) in (1, 2, 5)
 
 
+def test_snapshots_draw_flat_walls_and_key_only_what_is_there(snaps):
+    """A scene of flat walls and no wall discs: each face drawn (a line at its position [mm]), the
+    key names the flat wall and no wall disc."""
+    flat = [dict(s, group=np.zeros_like(s["group"]), flat_walls=np.array([[1, 0.0, 1], [0, -1e-3, 1]])) for s in snaps]
+    fig = plots.snapshot_figure(flat, "test")
+    labels = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert "flat wall" in labels and "wall disc" not in labels
+    panel = next(ax for ax in fig.axes if ax.get_title().startswith("t = "))
+    lines = [ln.get_xydata() for ln in panel.get_lines()]
+    assert any(np.allclose(xy[:, 1], 0.0) for xy in lines) and any(np.allclose(xy[:, 0], -1.0) for xy in lines)
+
+
 def test_nan_runs():
     t = np.arange(10.0)
     y = np.array([0, 1, np.nan, np.nan, 4, 5, np.nan, 7, 8, np.nan])
