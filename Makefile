@@ -83,6 +83,8 @@ bench-before-after: deps
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
+	$(YADE) -n -x yade_scripts/deposit.py --scene yade_scripts/scenes/quicksand_case1_flat.toml \
+	  --from $(OUT)/packings/quicksand-case1.csv --out $(OUT)/packings/quicksand-case1-flat.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
 

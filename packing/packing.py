@@ -87,11 +87,12 @@ class Packing:
         out |= z <= faces.get(WALL_BOTTOM, -np.inf)
         return np.flatnonzero(out & self.mobile)
 
-    def check_fit(self, max_overlap, tolerance="the tolerance"):
+    def check_fit(self, max_overlap, tolerance="the tolerance", wall_discs=True):
         """Refuse (ValueError naming the file and line) a particle outside the walls' box
         (``outside_box``) and two discs (not both wall discs) overlapping by more than
-        ``max_overlap`` [m] (named ``tolerance``)."""
-        out = self.outside_box()
+        ``max_overlap`` [m] (named ``tolerance``). ``wall_discs`` False: the wall discs are not
+        there (flat walls stand in their place): two particles only."""
+        out = self.outside_box() if wall_discs else []
         if len(out):
             i = out[0]
             faces = ", ".join(f"{GROUP_NAMES[c]} {'z' if c == WALL_BOTTOM else 'x'} = {f:.6g}"
@@ -102,7 +103,7 @@ class Packing:
         pairs = cKDTree(self.xz).query_pairs(2 * self.r.max(), output_type="ndarray")
         i, j = pairs.T
         overlap = self.r[i] + self.r[j] - np.linalg.norm(self.xz[i] - self.xz[j], axis=1)
-        bad = (overlap > max_overlap) & (m[i] | m[j])
+        bad = (overlap > max_overlap) & ((m[i] | m[j]) if wall_discs else (m[i] & m[j]))
         if bad.any():
             k = np.flatnonzero(bad)
             k = k[np.lexsort((j[k], i[k]))[0]]  # the first disc in the file, then its first partner

@@ -252,20 +252,27 @@ def figures_of_run(run_dir):
     return written
 
 
-def plot_packing(packing, path, title):
-    """A packing: particles light, walls dark, denser particles outlined (Fig. 15, 18)."""
+def plot_packing(packing, path, title, flat_walls=()):
+    """A packing: particles light, walls dark, denser particles outlined (Fig. 15, 18); with
+    ``flat_walls`` ((axis, position [m]), ...: faces x = position for axis 0, z = position for axis
+    1) the faces as lines and the particles alone."""
+    if flat_walls:
+        packing = packing.particles()
     fig, ax = plt.subplots(figsize=(8, 6))
+    for axis, position in flat_walls:
+        (ax.axvline if axis == 0 else ax.axhline)(position * 1e3, color=FLAT_WALL_COLOUR, linewidth=3, zorder=0)
     xz, r = packing.xz * 1e3, packing.r * 1e3
     circles = [Circle(p, rr) for p, rr in zip(xz, r)]
     colours = [GROUP_COLOURS[g] for g in packing.group]
     widths = np.where(packing.density_factor > 1, 1.2, 0.3)
     ax.add_collection(PatchCollection(circles, facecolor=colours, edgecolor="k", linewidths=widths))
     ax.set_aspect("equal")
-    ax.set_xlim(xz[:, 0].min() - r.max(), xz[:, 0].max() + r.max())
-    ax.set_ylim(xz[:, 1].min() - r.max(), xz[:, 1].max() + r.max())
+    ax.set_xlim(xz[:, 0].min() - 1.5 * r.max(), xz[:, 0].max() + 1.5 * r.max())
+    ax.set_ylim(xz[:, 1].min() - 1.5 * r.max(), xz[:, 1].max() + 1.5 * r.max())
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("z [mm]")
-    ax.set_title(f"{title}: {int(packing.mobile.sum())} particles, {int((~packing.mobile).sum())} wall discs")
+    bounds = f"{len(flat_walls)} flat walls" if flat_walls else f"{int((~packing.mobile).sum())} wall discs"
+    ax.set_title(f"{title}: {int(packing.mobile.sum())} particles, {bounds}")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -1,7 +1,10 @@
 """Deposit a scene's packing in YADE and save it as CSV (x, z, r, group, density_factor), with the
 size distribution (Fig. 14) and a drawing of the packing (Fig. 15) beside it.
 
-    yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE | --replace]
+    yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE | --replace] [--from CSV]
+
+``--from CSV``: instead of a fresh deposit, the packing of CSV settled again against the scene's
+flat walls ([walls] kind = "flat": quicksand_case1_flat's packing is case 1's, settled on them).
 
 By default the packing goes to out/packings/<scene name>.csv; ``--replace`` overwrites the
 packing file the scene names (a tracked preset file: check the diff before committing it).
@@ -13,9 +16,11 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+from engines.model.pore_dem import scene_flat_walls
 from engines.run import scene as scenes
 from engines.run.preflight import ArgumentParser, InputError, check_output_dir
-from engines.yade.deposition import deposit
+from engines.yade.deposition import deposit, settle_on_flat_walls
+from packing.packing import Packing
 from packing.psd import plot_distribution
 from postproc.plots import plot_packing
 
@@ -26,6 +31,8 @@ def main(argv):
     where = ap.add_mutually_exclusive_group()
     where.add_argument("--out", help="CSV path (default: out/packings/<scene name>.csv)")
     where.add_argument("--replace", action="store_true", help="overwrite the packing file the scene names")
+    ap.add_argument("--from", dest="source", metavar="CSV",
+                    help="settle this packing against the scene's flat walls instead of depositing one")
     args = ap.parse_args(argv)
     try:
         sc = scenes.load(args.scene) if args.scene.endswith(".toml") else scenes.preset(args.scene)
@@ -33,15 +40,20 @@ def main(argv):
             raise InputError("--replace: the scene names no [packing] file")
         out = sc.packing.file if args.replace else args.out or os.path.join("out", "packings", sc.scene.name + ".csv")
         check_output_dir(os.path.dirname(os.path.abspath(out)), "--out")
+        if args.source and sc.walls.kind != "flat":
+            raise InputError(f"--from: the scene's [walls] kind is {sc.walls.kind!r}; a packing is settled again only "
+                             f"against flat walls")
+        source = Packing.load(args.source) if args.source else None
     except ValueError as e:
         sys.exit(f"error: {e}")
-    pk = deposit(sc)
+    pk = settle_on_flat_walls(sc, source) if source is not None else deposit(sc)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     pk.save(out)
     p = sc.packing
     stem = os.path.splitext(out)[0]
     plot_distribution(2 * pk.r[pk.mobile], p.mean_diameter, p.std_diameter, p.d_min, p.d_max, stem + "_fig14_diameters.png")
-    plot_packing(pk, stem + "_fig15_packing.png", sc.scene.name)
+    faces = [(w.axis, w.position) for w in scene_flat_walls(sc, pk).values()]  # none with wall discs
+    plot_packing(pk, stem + "_fig15_packing.png", sc.scene.name, faces)
     print(f"deposited {int(pk.mobile.sum())} particles + {int((~pk.mobile).sum())} wall discs -> {out} "
           f"(figures {stem}_fig14_diameters.png, {stem}_fig15_packing.png)")
     if sc.packing.file and not args.replace:

@@ -44,8 +44,9 @@ class WaterModel(water_model.WaterModel):
                   "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
                   "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)),
                   "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
-                  "check_areas": float(self.rebuild_distance > 0), "wall_position": [w.position for w in walls],
-                  "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: fixed
+                  "check_areas": float(self.rebuild_distance > 0),
+                  "wall_position": self.wall_vertices.faces() if walls else [],
+                  "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
                   "F_walls": np.zeros(len(walls))}
         # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
@@ -84,6 +85,15 @@ class WaterModel(water_model.WaterModel):
     def rebuild(self, xz, k=None):
         super().rebuild(xz, k)
         self._buffers()
+
+    def move_walls(self, shift):
+        """As engines.model.water_model.WaterModel.move_walls, into the kernels' buffers: the faces
+        the feet are placed on, and the corners (kernels.place_wall_vertices leaves them)."""
+        super().move_walls(shift)
+        wv = self.wall_vertices
+        self._part("wall_position")[:] = wv.faces()
+        corners = wv.foot(len(wv.walls), 0)
+        self._part("vertices").reshape(-1, 2)[corners:] = wv.positions(self.xz_built)[corners:]
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""

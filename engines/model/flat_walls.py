@@ -10,6 +10,11 @@ to it when its gap to the face is <= eps_m + l_m (eq 28), in contact when the ga
 * the *corner* of two walls of different axes (vertex N + W N + c, W walls), where the two faces
   meet, when both walls have a linked disc.
 
+A wall may translate (the seismic base): WallVertices.shift (W, 2) [m] is each wall's displacement
+from its FlatWall; the face moves with its normal component, and the feet, projections, with the
+face. Along the face a translation moves no vertex; it is the feet's material motion, which the
+paper's law feels (engines.model.paper_law).
+
 Two wall vertices on a common wall are linked (the *wall edge*, along the face); a disc is linked
 to its own feet only. With radius 0, a wall vertex has no sector (eq 29) and takes no pressure force
 (eq 33), so polygon areas, sectors, link states and the arc forces are those of engines.model.pores
@@ -57,17 +62,21 @@ class FlatWall:
         return n
 
 
-def as_tables(walls):
-    """The FlatWalls as the tables' list [{"axis": "x" | "z", "position", "inward", "boundary"}]
-    (the reference's input, engines.reference.model.read_flat_walls)."""
-    return [{"axis": "xz"[w.axis], "position": w.position, "inward": w.inward, "boundary": w.boundary} for w in walls]
+def as_tables(walls, moving=None):
+    """The FlatWalls as the tables' list [{"axis": "x" | "z", "position", "inward", "boundary",
+    "moves"}] (the reference's input, engines.reference.model.read_flat_walls); ``moving`` (W,) bool:
+    the walls that follow the input acceleration (default none)."""
+    moving = np.zeros(len(walls), bool) if moving is None else moving
+    return [{"axis": "xz"[w.axis], "position": w.position, "inward": w.inward, "boundary": w.boundary,
+             "moves": bool(m)} for w, m in zip(walls, moving)]
 
 
 class WallVertices:
     """The wall vertices of ``walls`` (FlatWall, ...) for N discs (module docstring).
 
     owner (V,): the disc of each vertex (itself for a disc, -1 for a corner); bits (V,): bit w set
-    when the vertex lies on wall w (0 for a disc); corners (C, 2): the wall pairs of the corners.
+    when the vertex lies on wall w (0 for a disc); corners (C, 2): the wall pairs of the corners;
+    shift (W, 2) [m]: the walls' displacements (module docstring; ``move``), zero at the start.
     """
 
     def __init__(self, walls, n):
@@ -87,6 +96,23 @@ class WallVertices:
         bit = np.int64(1) << np.arange(n_w, dtype=np.int64)
         self.bits = np.concatenate([np.zeros(n, np.int64), np.repeat(bit, n),
                                     bit[self.corners[:, 0]] | bit[self.corners[:, 1]]])
+        self.shift = np.zeros((n_w, 2))
+
+    def move(self, shift):
+        """Set the walls' displacements ``shift`` (W, 2) [m] from their FlatWall positions."""
+        shift = np.asarray(shift, float)
+        if shift.shape != self.shift.shape or not np.all(np.isfinite(shift)):
+            raise ValueError(f"flat walls: shift must be finite, of shape {self.shift.shape} [m], got {shift!r}")
+        self.shift = shift.copy()
+
+    def faces(self):
+        """The faces' positions (W,) [m]: each wall's position moved by its shift along its axis."""
+        return np.array([w.position + self.shift[k, w.axis] for k, w in enumerate(self.walls)])
+
+    def gaps(self, w, xz, r):
+        """Gaps (N,) [m] of discs at xz (N, 2) with radii r (N,) to the face of wall w (< 0: overlap)."""
+        wall = self.walls[w]
+        return wall.gap(xz, r) - wall.inward * self.shift[w, wall.axis]
 
     def foot(self, w, i):
         """The vertex id of the foot of disc(s) i on wall w."""
@@ -94,15 +120,15 @@ class WallVertices:
 
     def positions(self, xz):
         """Positions (V, 2) [m] of all vertices: the discs at xz (N, 2), their feet, the corners."""
-        n, out = self.n, np.empty((self.n_vertices, 2))
+        n, out, faces = self.n, np.empty((self.n_vertices, 2)), self.faces()
         out[:n] = xz
         for w, wall in enumerate(self.walls):
             feet = out[self.foot(w, 0):self.foot(w, n)]
             feet[:] = xz
-            feet[:, wall.axis] = wall.position
+            feet[:, wall.axis] = faces[w]
         for c, (a, b) in enumerate(self.corners.tolist(), self.foot(len(self.walls), 0)):
-            for wall in (self.walls[a], self.walls[b]):
-                out[c, wall.axis] = wall.position
+            for w in (a, b):
+                out[c, self.walls[w].axis] = faces[w]
         return out
 
     def radii(self, r):
@@ -111,16 +137,16 @@ class WallVertices:
 
     def check_inside(self, xz):
         """Refuse a disc centre at xz (N, 2) [m] on the face or on the outer side of a wall."""
-        for w, wall in enumerate(self.walls):
-            out = np.flatnonzero(wall.gap(xz, 0.0) <= 0)
+        for w, (wall, face) in enumerate(zip(self.walls, self.faces())):
+            out = np.flatnonzero(self.gaps(w, xz, 0.0) <= 0)
             if len(out):
-                raise ValueError(f"flat wall {w} ({'xz'[wall.axis]} = {wall.position:g} m, inward {wall.inward:+d}): "
+                raise ValueError(f"flat wall {w} ({'xz'[wall.axis]} = {face:g} m, inward {wall.inward:+d}): "
                                  f"disc {out[0]} has its centre at {xz[out[0], wall.axis]:g} m, not inside")
 
     def active(self, xz, r, reach):
         """Ids of the vertices of a build: the discs, the feet of the discs within ``reach`` =
         eps_m + l_m of their wall (eq 28), the corners of two walls that both have a foot."""
-        feet = [self.foot(w, np.flatnonzero(wall.gap(xz, r) <= reach)) for w, wall in enumerate(self.walls)]
+        feet = [self.foot(w, np.flatnonzero(self.gaps(w, xz, r) <= reach)) for w in range(len(self.walls))]
         has = np.array([len(f) > 0 for f in feet], bool)
         corner = self.foot(len(self.walls), np.flatnonzero(has[self.corners].all(axis=1)))
         return np.concatenate([np.arange(self.n), *feet, corner]).astype(np.int64)

@@ -7,10 +7,12 @@ compiled twin is engines.compiled.paper_law.PaperLaw), engines.yade.paper_law_en
 the YADE object that reads the centres in bulk, calls it and adds the forces. The discs' spin about y is integrated here (eq 14c, 16c); YADE only translates them.
 The side-wall springs of the seismic box (Fig. 27) are added by engines.model.pore_dem.PoreDEM.
 
-Flat walls (SPEC §2.6, READINGS F7): a particle touches a flat wall as it would a fixed wall disc of
-radius 0 at its foot on the face (engines.model.flat_walls.WallVertices), with the foot at rest:
-R is the distance to the face, the normal the wall's, eq 1-13 and 25-27 as for any pair, and for eq
-18-24 the wall is a fixed element (pattern (a)).
+Flat walls (SPEC §2.6, READINGS F7): a particle touches a flat wall as it would a wall disc of
+radius 0 at its foot on the face (engines.model.flat_walls.WallVertices), the foot moving with its
+wall (at rest for a fixed wall; with a translated wall, ``move_walls``, its du is the wall's
+displacement in the step, as a driven wall disc's): R is the distance to the face, the normal the
+wall's, eq 1-13 and 25-27 as for any pair, and for eq 18-24 the wall is an element that is not
+free (pattern (a)) moving at its velocity.
 """
 import numpy as np
 
@@ -45,6 +47,13 @@ class PaperLaw:
         self.omega = np.zeros(n)
         self.du = np.zeros((n, 2))
         self.xz_prev = None
+        if self.walls is not None:  # the walls' shift at the last step and its increment (eq 17 of a wall)
+            self.shift_prev, self.wall_du = self.walls.shift.copy(), np.zeros_like(self.walls.shift)
+
+    def move_walls(self, shift):
+        """Translate the flat walls to ``shift`` (W, 2) [m] from their FlatWall positions
+        (flat_walls.WallVertices.move): their positions at the next step."""
+        self.walls.move(shift)
 
     def step(self, xz, vel=None):
         """Forces (N, 2) [N] at centres xz (N, 2) of this step and {disc: new velocity (2,)} of the
@@ -58,20 +67,27 @@ class PaperLaw:
             return {}
         v = self.du / self.dt if vel is None else vel
         mass, mobile = self.mass, self.mobile
-        if self.walls is not None:  # the feet: at rest, fixed
-            v, mass, mobile = (self._at_vertices(a) for a in (v, mass, mobile))
+        if self.walls is not None:  # the feet: not free, at their wall's velocity
+            v = self._at_vertices(v, self.wall_du / self.dt)
+            mass, mobile = self._at_vertices(mass), self._at_vertices(mobile)
         return separation_adjustment(separations, self.contact.touch_count(), v, mass, mobile, s.restitution)
 
-    def _at_vertices(self, a):
-        """The disc array a (N, ...) over the contact law's vertices: zeros for the feet."""
-        out = np.zeros((self.walls.n_vertices,) + np.shape(a)[1:], np.asarray(a).dtype)
-        out[:len(self.mobile)] = a
+    def _at_vertices(self, a, per_wall=None):
+        """The disc array a (N, ...) over the contact law's vertices: zeros for the feet, or
+        per_wall[w] (W, ...) for the feet on wall w."""
+        wv, n = self.walls, len(self.mobile)
+        out = np.zeros((wv.n_vertices,) + np.shape(a)[1:], np.asarray(a).dtype)
+        out[:n] = a
+        if per_wall is not None:
+            out[n:wv.foot(len(wv.walls), 0)] = np.repeat(per_wall, n, axis=0)
         return out
 
-    def _on_vertices(self, xz, du):
+    def _on_vertices(self, xz, du, wall_du):
         """(positions, increments du, dpsi) of the contact law's vertices at disc centres xz with
-        increments du: the discs', then their feet, at rest."""
-        return self.walls.positions(xz), self._at_vertices(du), self._at_vertices(self.omega * self.dt)
+        increments du: the discs', then their feet, which move by their wall's increment wall_du
+        (W, 2) [m] and do not turn."""
+        return (self.walls.positions(xz), self._at_vertices(du, wall_du),
+                self._at_vertices(self.omega * self.dt))
 
     def _forces(self, xz):
         """(F (N, 2) [N], SeparationEvents) of the step at xz: eq 17, the contact forces, the spin."""
@@ -80,7 +96,9 @@ class PaperLaw:
         if self.walls is None:
             F, M, separations = self.contact.forces(xz, self.du, self.omega * dt, dt)
         else:
-            F, M, separations = self.contact.forces(*self._on_vertices(xz, self.du), dt)
+            self.wall_du = self.walls.shift - self.shift_prev  # eq 17 of the walls
+            self.shift_prev = self.walls.shift.copy()
+            F, M, separations = self.contact.forces(*self._on_vertices(xz, self.du, self.wall_du), dt)
             F, M = F[:len(xz)], M[:len(xz)]
         mob = self.mobile
         self.omega[mob] += M[mob] / self.inertia[mob] * dt  # eq 14c, 16c
@@ -101,7 +119,8 @@ class PaperLaw:
             if keep is not None:
                 sel[sel] = keep(i[sel], j[sel])
             return sel
-        return self.contact.touching_at(*self._on_vertices(xz, du), self.dt, discs)
+        wall_du = self.walls.shift - self.shift_prev
+        return self.contact.touching_at(*self._on_vertices(xz, du, wall_du), self.dt, discs)
 
     def wall_forces(self):
         """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the

@@ -17,7 +17,10 @@ contract shared with the reference (engines/reference/model.py):
      it lives in the law, computed in b's call and independent of d)
   f. moving walls: the base motion (engines.model.ground_motion.BaseMotion, constant average
      acceleration) is advanced from t to t + dt; ``wall_velocity`` = (u(t + dt) - u(t)) / dt is the
-     velocity the caller gives the driven walls for this step, so x += v dt lands them on u(t + dt)
+     velocity the caller gives the driven walls for this step, so x += v dt lands them on u(t + dt).
+     Flat walls that follow the input (``moving_flat_walls``) are translated to u(t + dt) in x
+     (the law's and the pores' walls: PaperLaw.move_walls, WaterModel.move_walls), where the
+     caller's driven walls land
 Side walls on springs ([loading] side_walls = "springs", Fig. 27): the side-wall discs move in x
 under the contact forces, the pore pressure forces of eq 33 (they bound pores like any disc) and
 the ties of engines.model.side_walls (added to the law's forces in b, with the tie velocities du/dt of
@@ -57,6 +60,16 @@ def moving_walls(scene, packing):
         return np.zeros(len(packing.r), bool)
     groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[scene.loading.moves]
     return np.isin(packing.group, groups)
+
+
+def moving_flat_walls(scene, flat_walls):
+    """(W,) bool: the flat walls (FlatWall, ...) that follow the input acceleration ([loading]
+    moves = "bottom": the bottom face, z = const below the discs; "box": every wall)."""
+    if scene.loading.type == "none":
+        return np.zeros(len(flat_walls), bool)
+    if scene.loading.moves == "box":
+        return np.ones(len(flat_walls), bool)
+    return np.array([w.axis == 1 and w.inward == 1 for w in flat_walls], bool)
 
 
 def scene_flat_walls(scene, packing):
@@ -162,6 +175,7 @@ class PoreDEM:
         accel = ground_motion.input_acceleration(scene)
         self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
+        self.moving_flat = moving_flat_walls(scene, tuple(flat_walls)) if self.base is not None else None
         self.ties = side_wall_ties(scene, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
         self.water_model = water_model(scene, packing, self.water_class, flat_walls)
@@ -204,7 +218,18 @@ class PoreDEM:
         self._move_walls()
         return F, fixes
 
+    def _shift_flat_walls(self):
+        """Translate the flat walls that follow the input to the base displacement in x."""
+        if self.moving_flat is None or not self.moving_flat.any():
+            return
+        shift = np.zeros((len(self.moving_flat), 2))
+        shift[self.moving_flat, 0] = self.base.disp
+        self.law.move_walls(shift)
+        if self.water_model is not None:
+            self.water_model.move_walls(shift)
+
     def _move_walls(self):
         if self.base is not None:                                       # f
             self.wall_velocity = self.base.step()
+            self._shift_flat_walls()
         self.k += 1

@@ -430,8 +430,9 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     ``walls``: optional (N,) int wall code per disc (WALL_NONE, WALL_BOTTOM, WALL_LEFT, WALL_RIGHT).
     An edge between two wall discs is a wall element, not a free surface. The candidate links are
     the regular triangulation plus the eq 28 pairs it hides (module docstring).
-    ``flat_walls``: flat_walls.FlatWall, ... (SPEC §2.6): the triangulation is that of the discs
-    and the wall vertices of the build (flat_walls.WallVertices.active); NumPy steps only.
+    ``flat_walls``: flat_walls.FlatWall, ... (SPEC §2.6), or their flat_walls.WallVertices (with its
+    shift: translated walls): the triangulation is that of the discs and the wall vertices of the
+    build (flat_walls.WallVertices.active); NumPy steps only.
     ``steps``: the BuildSteps, by default NUMPY_BUILD, the readable NumPy functions (``_lifted_points``,
     ``_faces``, ``_links_and_corners``, ...); engines.compiled.pores.BUILD: everything but qhull by
     compiled kernels, the same network (tests/compiled/test_pores.py).
@@ -451,7 +452,8 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     steps = steps or NUMPY_BUILD
     if flat_walls:
-        return _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, fw.WallVertices(flat_walls, n))
+        wv = flat_walls if isinstance(flat_walls, fw.WallVertices) else fw.WallVertices(flat_walls, n)
+        return _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv)
     tri = regular_triangulation(xz, r, steps)
     if tri is None:
         return _empty_network(n, a_min, eps_m, l_m)

@@ -20,6 +20,7 @@ interval is then an upper bound.
 """
 import numpy as np
 
+from engines.model import flat_walls as fw
 from engines.model import pores as pg
 from engines.model.pore_water import NUMPY_REMESH, PoreWater
 
@@ -68,6 +69,8 @@ class WaterModel:
         self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
         self.flat_walls = tuple(flat_walls)
         self.r = np.ascontiguousarray(r, float)
+        # one WallVertices for every build, so that the walls' shift (move_walls) holds across rebuilds
+        self.wall_vertices = fw.WallVertices(self.flat_walls, len(self.r)) if self.flat_walls else None
         self.walls = np.asarray(walls, np.int64)
         self.dt, self.rebuild_interval, self.water_interval = float(dt), int(rebuild_interval), int(water_interval)
         if self.rebuild_interval < 1 or self.water_interval < 1:
@@ -89,7 +92,12 @@ class WaterModel:
 
     def _build(self, xz):
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps,
-                              flat_walls=self.flat_walls)
+                              flat_walls=self.wall_vertices or ())
+
+    def move_walls(self, shift):
+        """Translate the flat walls to the displacements ``shift`` (W, 2) [m] from their FlatWall
+        positions (flat_walls.WallVertices.move): the faces of the next measure and build."""
+        self.wall_vertices.move(shift)
 
     # -- per step ---------------------------------------------------------------------------------
     def rebuild_due(self, k, xz=None):

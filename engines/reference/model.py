@@ -34,12 +34,14 @@ Step k = 0 .. n_steps - 1 at time t = k dt (the order shared with engines/model/
      pressures and the ties of their column (``column_ties``, ``tie_forces``; velocities du/dt of a).
   f. moving walls follow the input acceleration (§6.1: velocity and displacement by the
      constant-(average-)acceleration method, ``WallMotion``): x_w += v_w dt + a_bar dt^2/2,
-     v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2.
+     v_w += a_bar dt with a_bar = (a(t_k) + a(t_k+1)) / 2; a flat wall that moves (``moves``)
+     translates by the same x_w: the face of an x-wall with it, a z-wall along its face (its foot
+     points, projections of the discs, stay; as contact elements they move by the wall's du).
   g. after the step, when (k + 1) % record_every == 0, a sample at t = (k + 1) dt: positions,
      block-mean U (eq 32 with the current W and the areas at the recorded positions), total water
      and the relative water-balance error.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay, QhullError
@@ -110,38 +112,40 @@ def read_settings(tables):
 
 @dataclass(frozen=True)
 class FlatWall:
-    """A fixed axis-aligned flat wall (SPEC §2.6): the face x = position (axis 0) or z = position
+    """An axis-aligned flat wall (SPEC §2.6): the face x = position (axis 0) or z = position
     (axis 1) [m], the discs on the side ``inward`` (+1: inward normal +e_axis, -1: -e_axis);
-    boundary "undrained", "drained" (k3, U = 0 outside) or "inflow" (q_w into each of its pores)."""
+    boundary "undrained", "drained" (k3, U = 0 outside) or "inflow" (q_w into each of its pores);
+    ``moves``: it follows the input acceleration in x (step f), else it is fixed."""
 
     axis: int
     position: float
     inward: int
     boundary: str
+    moves: bool = False
 
     def distance(self, x):
         """Distance (N,) [m] of the centres x (N, 2) from the face along the inward normal."""
         return self.inward * (x[:, self.axis] - x.dtype.type(self.position))
 
 
-FLAT_WALL_KEYS = ("axis", "position", "inward", "boundary")
+FLAT_WALL_KEYS = ("axis", "position", "inward", "boundary", "moves")
 
 
 def read_flat_walls(tables):
     """The FlatWalls of tables["walls"]["flat"], a list of {"axis": "x" | "z", "position": [m],
-    "inward": +1 | -1, "boundary": "undrained" | "drained" | "inflow"}; none when absent.
-    Raises ValueError for anything else (moving walls among it) and for two walls facing the same
-    way on one axis (the discs would lie on the outer one's side of the inner one)."""
+    "inward": +1 | -1, "boundary": "undrained" | "drained" | "inflow", "moves": true | false}; none
+    when absent. Raises ValueError for anything else and for two walls facing the same way on one
+    axis (the discs would lie on the outer one's side of the inner one)."""
     walls = []
     for k, w in enumerate(tables.get("walls", {}).get("flat", [])):
         if sorted(w) != sorted(FLAT_WALL_KEYS):
-            raise ValueError(f"flat wall {k}: needs exactly the keys {FLAT_WALL_KEYS} (flat walls are fixed; "
-                             f"got {sorted(w)})")
+            raise ValueError(f"flat wall {k}: needs exactly the keys {FLAT_WALL_KEYS} (got {sorted(w)})")
         if w["axis"] not in ("x", "z") or w["inward"] not in (1, -1) or \
-                w["boundary"] not in ("undrained", "drained", "inflow"):
+                w["boundary"] not in ("undrained", "drained", "inflow") or not isinstance(w["moves"], bool):
             raise ValueError(f"flat wall {k}: axis 'x' | 'z', inward +1 | -1, boundary 'undrained' | 'drained' "
-                             f"| 'inflow' (got {w})")
-        walls.append(FlatWall("xz".index(w["axis"]), float(w["position"]), int(w["inward"]), w["boundary"]))
+                             f"| 'inflow', moves true | false (got {w})")
+        walls.append(FlatWall("xz".index(w["axis"]), float(w["position"]), int(w["inward"]), w["boundary"],
+                              w["moves"]))
     faces = [(w.axis, w.inward) for w in walls]
     if len(set(faces)) < len(faces):
         raise ValueError("two flat walls face the same way on one axis: at most one wall per side of the box")
@@ -247,10 +251,10 @@ class PairRecords:
 def wall_records(s, r, mobile, walls, dtype):
     """Contact records of the particles with the flat walls (SPEC §2.6), or (None, []) without
     walls: one record per (particle, wall), particle by particle, the wall as a disc of infinite
-    radius: element N + k of record k is the foot point of its disc on the face, radius 0 and at
-    rest, so eq 1-13 give R_ij = the distance to the face, the normal along the wall's normal, the
-    overlap of eq 25-26 r_i + eps_m - R_ij, and eq 3b's rolling r_i dpsi_i: the law of a fixed wall
-    disc. Returns (PairRecords over the N + K elements, wall index (K,) of each record)."""
+    radius: element N + k of record k is the foot point of its disc on the face, radius 0, moving
+    with its wall (at rest when fixed), so eq 1-13 give R_ij = the distance to the face, the normal
+    along the wall's normal, the overlap of eq 25-26 r_i + eps_m - R_ij, and eq 3b's rolling
+    r_i dpsi_i: the law of a wall disc. Returns (PairRecords over the N + K elements, wall index (K,) of each record)."""
     if not walls:
         return None, []
     disc = np.repeat(np.flatnonzero(mobile), len(walls))
@@ -1103,6 +1107,7 @@ class ReferenceModel:
         self.flat = s.flat_walls
         self.wall_contact, self.wall_of = wall_records(s, self.r, self.mobile, self.flat, dt_)
         self.wall_water = np.zeros(len(self.flat), dt_)
+        self.flat_du = np.zeros((len(self.flat), 2), dt_)   # each flat wall's displacement in the last step f
         accel = input_acceleration(s.loading)
         self.walls = None if accel is None else WallMotion(accel, s.dt, dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
@@ -1122,13 +1127,13 @@ class ReferenceModel:
     def _wall_forces(self, du, dpsi):
         """Contact forces (N, 2) [N], moments (N,) [N m] of the flat walls on the particles and the
         records that separated (as PairRecords.forces): record k acts on disc I[k] from the element
-        N + k, the foot point of the disc on its wall, at rest (``wall_records``)."""
+        N + k, the foot point of the disc on its wall, which moved with its wall (``wall_records``)."""
         n, m = len(self.x), len(self.wall_of)
         feet = self.x[self.wall_contact.I].copy()
         for w, wall in enumerate(self.flat):
             feet[self.wall_of == w, wall.axis] = self.dtype(wall.position)
         x = np.vstack([self.x, feet])
-        du = np.vstack([du, np.zeros((m, 2), du.dtype)])
+        du = np.vstack([du, self.flat_du[self.wall_of]])
         dpsi = np.concatenate([dpsi, np.zeros(m, dpsi.dtype)])
         F, M, left = self.wall_contact.forces(x, du, dpsi, self.dt)
         return F[:n], M[:n], left
@@ -1164,13 +1169,13 @@ class ReferenceModel:
         dpsi = self.psi - self.psi_prev
         F, M, left = self.contact.forces(self.x, du, dpsi, dt)              # b
         n_contacts, V = self.contact.contacts_of(), du / dt
-        if self.wall_contact is not None:                                   # b: flat walls, fixed elements at rest
+        if self.wall_contact is not None:                                   # b: flat walls, elements not free
             F_w, M_w, left_w = self._wall_forces(du, dpsi)
             F, M = F + F_w, M + M_w
             for i, records in left_w.items():
                 left.setdefault(i, []).extend(records)
             n_contacts = n_contacts + self.wall_contact.contacts_of()[:len(V)]
-            V = np.vstack([V, np.zeros((len(self.wall_of), 2), V.dtype)])
+            V = np.vstack([V, self.flat_du[self.wall_of] / dt])
         if s.adjust and left:                                               # c
             fixes = adjust_free_particles(left, n_contacts, V, self.mass, self.dtype(s.e), self.counts["separation"])
             for d, vel in fixes.items():
@@ -1197,8 +1202,21 @@ class ReferenceModel:
         self.x[free] += step_x[free]
         self.psi[m] += step_psi
         if self.walls is not None:                                          # f
-            self.x[self.moving, 0] += self.walls.step(k)
+            step_w = self.walls.step(k)
+            self.x[self.moving, 0] += step_w
+            self._move_flat_walls(step_w)
         self.k += 1
+
+    def _move_flat_walls(self, step_w):
+        """Translate the flat walls that move by step_w [m] in x (step f): an x-wall's face moves."""
+        moves = np.array([w.moves for w in self.flat], bool)
+        if not moves.any():
+            return
+        self.flat_du[moves, 0] = step_w
+        self.flat = tuple(replace(w, position=w.position + step_w) if w.moves and w.axis == 0 else w
+                          for w in self.flat)
+        if self.pores is not None:
+            self.pores.walls = self.flat
 
     def block_pressures(self):
         """Mean U [N/m] of the pores whose polygon centroid z lies in each block [z0, z1) (nan if none),

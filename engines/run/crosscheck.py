@@ -16,8 +16,11 @@ Feature cases (1,050-5,000 steps, >= 20 pore rebuilds each; chaotic, see FEATURE
   quicksand_smoothing      the quick-sand column with 10x inflow and eq 45-46 smoothing
   quicksand_displacement   the same inflow, the pores rebuilt by displacement (5 um, SPEC §2.6): the
                            reference is handed the rebuild steps of the YADE run
-  flat_walls_box           the same inflow in a box of flat walls (SPEC §2.6) in place of the wall
-                           discs: an inflow bottom, drained sides (k3); the paper's law against them
+  flat_walls_box           the column in a box of flat walls (SPEC §2.6) in place of the wall discs
+                           (quicksand_case1_flat: the bed settled on them): an inflow bottom (4x case
+                           1's), drained sides (k3); the paper's law against them
+  flat_walls_shaken        that box with case 1's inflow shaken by the cosine as one (moves = box):
+                           the side faces translate, the bottom slides under the bed; drained sides
   shaken_drained_wet_d     the column shaken by a cosine, drained sides with k3 (!= k1), spring d with
                            eps_m > 0, water_interval 2, smoothing
   elcentro_column          the column shaken by the El Centro record (time x 0.001, amplitude x 5)
@@ -36,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engines.model.flat_walls import as_tables
-from engines.model.pore_dem import scene_flat_walls
+from engines.model.pore_dem import moving_flat_walls, scene_flat_walls
 from engines.reference.model import mesh_void_fraction, simulate_reference
 from engines.reference.trajectory import Trajectory
 from engines.run import scene as sc
@@ -313,9 +316,12 @@ def feature_cases():
                                                            numerics={"rebuild_interval": 100}), 2100, 50),
         FeatureCase("quicksand_displacement", quicksand_build(
             water={"q_w": 5e-3}, numerics={"rebuild_interval": 10**6, "rebuild_distance": 5e-6}), 2100, 10),
-        FeatureCase("flat_walls_box", quicksand_build(
-            walls={"kind": "flat"}, water={"q_w": 5e-3, "sides": "drained", "k3": 400.0},
+        FeatureCase("flat_walls_box", preset_build(
+            "quicksand_case1_flat", water={"q_w": 2e-3, "sides": "drained", "k3": 400.0},
             numerics={"rebuild_interval": 100}), 2100, 5),
+        FeatureCase("flat_walls_shaken", preset_build(
+            "quicksand_case1_flat", water={"sides": "drained", "k3": 400.0},
+            numerics={"rebuild_interval": 100}, **shaken), 2100, 5),
         FeatureCase("shaken_drained_wet_d", quicksand_build(
             water={"q_w": 0.0, "sides": "drained", "k1": 1000.0, "k2": 100.0, "k3": 400.0, "smoothing": True},
             contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5},
@@ -337,7 +343,8 @@ def reference_inputs(scene, packing):
     if not walls:
         return scene, packing
     tables = scene.as_dict()
-    tables["walls"] = {"flat": as_tables(walls.values())}
+    walls = tuple(walls.values())
+    tables["walls"] = {"flat": as_tables(walls, moving_flat_walls(scene, walls))}
     return tables, packing.particles()
 
 

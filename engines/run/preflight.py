@@ -127,9 +127,11 @@ def max_overlap(contact):
 
 
 def check_packing(scene, packing):
-    """Particles inside the walls' box, no overlap deeper than ``max_overlap`` (Packing.check_fit)."""
+    """Particles inside the walls' box, no overlap deeper than ``max_overlap`` (Packing.check_fit);
+    with [walls] kind = "flat" between particles only (the flat walls refuse a particle beyond a
+    face when the pores are built)."""
     try:
-        packing.check_fit(max_overlap(scene.contact), "[contact] f_max / kn")
+        packing.check_fit(max_overlap(scene.contact), "[contact] f_max / kn", scene.walls.kind != "flat")
     except ValueError as e:
         raise InputError(str(e)) from None
 

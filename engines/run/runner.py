@@ -145,13 +145,14 @@ def snapshot_data(cp, xz, k):
     """The arrays of a snapshot at step k (positions xz): discs, touching pairs with their normal
     and elastic shear forces and, with water, the pores as triangles with U, W, A and rule (with
     flat walls, ``vertices``: the positions tri indexes, and ``flat_walls`` (W, 3): axis, position
-    [m], inward of each)."""
+    [m] now, inward of each)."""
     pairs, fn, fs = cp.contact_pairs(xz)
     pk = cp.packing
     snap = dict(t=k * cp.scene.numerics.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
                 vel=cp.velocities(), pairs=pairs, f_n=fn, f_s=fs)
     if cp.flat_walls:
-        snap["flat_walls"] = np.array([[w.axis, w.position, w.inward] for w in cp.flat_walls.values()])
+        snap["flat_walls"] = np.array([[w.axis, face, w.inward] for w, face in zip(cp.flat_walls.values(),
+                                                                                 cp.flat_wall_faces())])
     state = pore_state(cp.water_model, xz)
     if state is not None:
         net, A, U = state

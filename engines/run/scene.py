@@ -56,7 +56,7 @@ SCHEMA = {
         "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
     },
     "walls": {
-        "kind": (str, "discs", ("discs", "flat"), "discs: the packing's wall discs (groups bottom, left, right) bound the box; flat: they are replaced by YADE Box bodies at their inner faces (bottom: max z + r, left: max x + r, right: min x - r; moved back to a particle that reaches past one), the pores' flat walls: the bottom one lets in q_w (if > 0), the sides drain when [water] sides = drained (no [loading]; with [contact] law = paper the law and water run by the NumPy classes)"),
+        "kind": (str, "discs", ("discs", "flat"), "discs: the packing's wall discs (groups bottom, left, right) bound the box; flat: they are replaced by YADE Box bodies at their inner faces (bottom: max z + r, left: max x + r, right: min x - r; moved back to a particle that reaches past one), the pores' flat walls: the bottom one lets in q_w (if > 0), the sides drain when [water] sides = drained; with [loading] they follow the base as [loading] moves says, not on springs; with [contact] law = paper the law and water run by the NumPy classes)"),
     },
     "material": {
         "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),
@@ -206,9 +206,9 @@ def _cross_checks(t, path):
                          "use [contact] law = 'paper'")
     if t["loading"]["side_walls"] == "springs" and t["loading"]["moves"] != "bottom":
         raise SceneError("[loading] side_walls = 'springs' needs moves = 'bottom' (the box moving as one has no springs)")
-    if t["walls"]["kind"] == "flat" and t["loading"]["type"] != "none":
-        raise SceneError(f"[walls] kind = 'flat': the flat walls are fixed, [loading] type = {t['loading']['type']!r} "
-                         f"would move them; use [walls] kind = 'discs'")
+    if t["walls"]["kind"] == "flat" and t["loading"]["side_walls"] == "springs":
+        raise SceneError("[walls] kind = 'flat': [loading] side_walls = 'springs' ties side-wall discs; flat side "
+                         "walls are fixed or follow the base (use [walls] kind = 'discs')")
     if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):
         raise SceneError(f"[output] snapshot_times: expected times >= 0, got {t['output']['snapshot_times']!r}")
     _resolve_paths(t, os.path.dirname(path) if path else SCENE_DIR)

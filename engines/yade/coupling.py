@@ -202,17 +202,22 @@ class YadeCoupling:
         """A TranslationEngine moving the walls that follow the input ([loading] moves) at the
         velocity of the base motion for each step (engines.model.ground_motion.BaseMotion, the one input
         path): set by the paper's law's step (PoreDEM), or with law = 'yade' before each O.step."""
-        moving = pore_dem.moving_walls(self.scene, self.packing)
         self.wall_engine = self.base = None
-        if not moving.any():
+        if self.scene.loading.type == "none":
             return []
-        self.wall_engine = TranslationEngine(ids=self.ids[moving].tolist(), translationAxis=(1, 0, 0), velocity=0.0)
-        if self.law == "paper":
+        if self.law == "paper":  # the core moves its own flat walls (PoreDEM)
             self.base = self.core.base
-            self.engine.hooks.append(WallVelocity(self.wall_engine, self.core))
         else:
             self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene), self.scene.numerics.dt)
             self.per_step = True  # Python sets the velocity before each O.step
+        flat = pore_dem.moving_flat_walls(self.scene, tuple(self.flat_walls.values()))
+        ids = (self.ids[pore_dem.moving_walls(self.scene, self.packing)].tolist()
+               + [self.wall_ids[code] for code, m in zip(self.flat_walls, flat) if m and code in self.wall_ids])
+        if not ids:
+            return []
+        self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
+        if self.law == "paper":
+            self.engine.hooks.append(WallVelocity(self.wall_engine, self.core))
         return [self.wall_engine]
 
     # -- running ------------------------------------------------------------------------------------
@@ -303,6 +308,16 @@ class YadeCoupling:
     def porosity(self, xz):
         """Void fraction of the fixed porosity window moved with the base (engines.model.observe)."""
         return pore_dem.window_porosity(self.packing, self.window, xz, self.base.disp if self.base else 0.0)
+
+    def flat_wall_faces(self):
+        """The positions (W,) [m] of the flat walls' faces now: where they started, the x faces of
+        those that follow the input ([loading] moves) carried by the base displacement."""
+        walls = tuple(self.flat_walls.values())
+        faces = np.array([w.position for w in walls])
+        if self.base is not None and walls:
+            carried = pore_dem.moving_flat_walls(self.scene, walls) & np.array([w.axis == 0 for w in walls])
+            faces = faces + self.base.disp * carried
+        return faces
 
     def base_motion(self):
         """(acceleration [m/s^2], velocity [m/s], displacement [m]) of the driven base at O.iter dt."""

@@ -66,18 +66,22 @@ def loose_grid(diameters, x_left, x_right, z_bottom, rng):
     return np.column_stack([x + jitter, z])
 
 
-def settle(scene, packing, duration=None):
-    """Let ``packing`` settle in YADE under the packing law; returns the settled Packing."""
+def settle(scene, packing, duration=None, walls="discs"):
+    """Let ``packing`` settle in YADE under the packing law; returns the settled Packing. ``walls``
+    ([walls] kind): "discs", against its wall discs; "flat", against the flat walls at their inner
+    faces (engines.model.pore_dem.scene_flat_walls; the wall discs stay in the Packing, unmoved)."""
     from engines.yade.coupling import YadeCoupling  # YADE only here
 
     p = scene.packing
     dep = scene.with_overrides({
         "contact": {"spring": "a", "ks": p.settle_ks, "eta_s": 0.0, "separation_adjustment": False},
-        "water": {"enabled": False}, "loading": {"type": "none"},
+        "water": {"enabled": False}, "loading": {"type": "none"}, "walls": {"kind": walls},
         "numerics": {"dt": p.settle_dt}})
     cp = YadeCoupling(dep, packing, newton_damping=SETTLE_DAMPING)
     cp.run(int(round((duration or p.settle_time) / p.settle_dt)))
-    return Packing(cp.positions(), packing.r, packing.group, packing.density_factor)
+    xz = packing.xz.copy()
+    xz[packing.mobile if walls == "flat" else slice(None)] = cp.positions()
+    return Packing(xz, packing.r, packing.group, packing.density_factor)
 
 
 def mark_dense_top(packing, depth, factor, count=0, wall_factor=1.0):
@@ -110,7 +114,9 @@ def deposit(scene):
     then re-settled: a scene cut out of a deposit, with a flat surface as in the paper (§4.2).
     The dense top is marked afterwards; with ``settle_loaded`` > 0 the packing settles once more
     with its masses, so that a run starts at rest (else the bed compacts under the added weight).
-    Raises ValueError if a particle ends outside the box (``check_inside_box``).
+    With [walls] kind = "flat" the particles settle once more against the flat walls that replace
+    the wall discs (``settle_on_flat_walls``). Raises ValueError if a particle ends outside the box
+    (``check_inside_box``).
     """
     p = scene.packing
     rng = np.random.default_rng(p.seed)
@@ -140,7 +146,17 @@ def deposit(scene):
     if p.settle_loaded > 0:  # the dense top was settled at density 1: let the bed take its weight
         cut = settle(scene, cut, duration=p.settle_loaded)
         check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
-    return cut
+    return settle_on_flat_walls(scene, cut) if scene.walls.kind == "flat" else cut
+
+
+def settle_on_flat_walls(scene, packing):
+    """The particles of ``packing`` settled again, with their masses, against the flat walls that
+    replace its wall discs ([walls] kind = "flat"), for settle_loaded or else half of settle_time:
+    a run on the flat walls then starts at rest."""
+    p = scene.packing
+    out = settle(scene, packing, duration=p.settle_loaded or 0.5 * p.settle_time, walls="flat")
+    check_inside_box(out, "packing settled on the flat walls")
+    return out
 
 
 def scene_packing(scene):

@@ -3,7 +3,8 @@ of an axis-aligned ``Box`` (utils.box, utils.aabbWalls) that the discs lie again
 engines.model.flat_walls.FlatWall. Refused in one line naming the body (ContractError): a body that
 is not a Box or Wall (a Facet), a rotated box, a wall facing along y (out of the discs' x-z plane:
 leave aabbWalls' front and back boxes out), a box or two-sided wall with discs on more than one
-side, a wall that moves or spins.
+side, a wall that spins or has turned. A wall may translate (a TranslationEngine, its velocity):
+``WallMotion`` reads how far each has moved since the start, in the x-z plane.
 """
 import numpy as np
 
@@ -27,9 +28,7 @@ def flat_wall(bodies, i, boundary, xz):
     shape = type(b.shape).__name__
     if boundary not in BOUNDARIES:
         raise ContractError(f"body {i}: boundary {boundary!r} in flat_walls; one of {', '.join(BOUNDARIES)}")
-    if b.state.vel.norm() > 0 or b.state.angVel.norm() > 0:
-        raise ContractError(f"body {i}: a {shape} that moves (velocity {b.state.vel}, angular velocity "
-                            f"{b.state.angVel}); flat walls are fixed for now")
+    _check_not_turning(i, b)
     if shape == "Wall":
         return _wall(i, b, boundary, xz)
     if shape == "Box":
@@ -76,3 +75,31 @@ def _box_face(i, b, boundary, xz):
         raise ContractError(f"body {i}: a Box that bounds the discs from no single side: {why}; leave it out of "
                             f"flat_walls or make one box per side")
     return faces[0]
+
+
+def _check_not_turning(i, b):
+    """Refuse body i (b) when it spins."""
+    if b.state.angVel.norm() > 0:
+        raise ContractError(f"body {i}: a {type(b.shape).__name__} that turns (angular velocity {b.state.angVel}); "
+                            f"flat walls may translate, not rotate")
+
+
+class WallMotion:
+    """The translations of the flat-wall bodies ``ids`` of O.bodies (in the order of flat_walls)
+    since they were read: ``shift()`` (W, 2) [m] in (x, z), the WallVertices' shift
+    (engines.model.flat_walls); refuses a body that spins. Holds no YADE object (it pickles with a
+    run's checkpoint)."""
+
+    def __init__(self, ids):
+        from yade import O
+        self.ids = [int(i) for i in ids]
+        self.start = self._positions(O.bodies)
+
+    def _positions(self, bodies):
+        return np.array([[bodies[i].state.pos[a] for a in PLANE_AXES] for i in self.ids]).reshape(-1, 2)
+
+    def shift(self):
+        from yade import O
+        for i in self.ids:
+            _check_not_turning(i, O.bodies[i])
+        return self._positions(O.bodies) - self.start

@@ -59,7 +59,8 @@ class WaterEngine:
     dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
     flat_walls: {body id: "undrained" | "drained" | "inflow"} of YADE Box or Wall bodies (not in
     disc_ids) that close the pores (SPEC §2.6; engines.yade.walls takes the face the discs lie
-    against); the water's push on them is ``wall_forces``.
+    against); the water's push on them is ``wall_forces``. A flat wall may translate (a
+    TranslationEngine or a velocity of its body): each water step reads where it is.
     rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
     farther than this from its centre at the last build or a void area is out of range
     (engines.model.water_model.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
@@ -72,6 +73,7 @@ class WaterEngine:
         from yade import O  # YADE only here and below
 
         from engines.yade import yade_io
+        from engines.yade.walls import WallMotion
         from engines.yade.walls import flat_walls as faces
 
         self.io = yade_io.Bodies(disc_ids)
@@ -79,6 +81,7 @@ class WaterEngine:
         radii = contract.check_discs(O.bodies, ids.tolist(), radii)
         self.wall_ids = [int(i) for i in (flat_walls or {})]
         walls_xz = faces(O.bodies, flat_walls or {}, self.io.positions())
+        self.wall_motion = WallMotion(self.wall_ids) if self.wall_ids else None
         code = np.zeros(len(ids), np.int64)
         pos = {i: k for k, i in enumerate(ids.tolist())}
         for name, group in (walls or {}).items():
@@ -134,7 +137,7 @@ class WaterEngine:
         from engines.yade import yade_io
         n, done = int(n), 0
         fast = (stop is None and self.compiled and yade_io.BACKEND == "yadebulk"
-                and not any(isinstance(e, PyRunner) for e in O.engines))
+                and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move())
         due, errors = self.due, yade_io.ERRORS
         while done < n:
             m = min(n - done, self._steps_before_rebuild(O.iter), self._chunk) if fast else 0
@@ -152,6 +155,24 @@ class WaterEngine:
             done += 1
             if errors or (stop is not None and stop()):
                 break
+
+    def _walls_may_move(self):
+        """Can a flat wall move in the next steps: its body has a velocity, or a kinematic engine
+        (a TranslationEngine) drives it? Then each water step is made here, where it reads the walls."""
+        from yade import O
+        from yade.wrapper import KinematicEngine
+        if self.wall_motion is None:
+            return False
+        ids = set(self.wall_ids)
+        return (any(O.bodies[i].state.vel.norm() > 0 for i in ids)
+                or any(isinstance(e, KinematicEngine) and ids & set(e.ids) for e in O.engines))
+
+    def _follow_walls(self):
+        """Move the model's flat walls to where their bodies are now (engines.yade.walls.WallMotion)."""
+        if self.wall_motion is not None:
+            shift = self.wall_motion.shift()
+            if not np.array_equal(shift, self.model.wall_vertices.shift):
+                self.model.move_walls(shift)
 
     def _steps_before_rebuild(self, k):
         """Steps from step k to the first water step whose call rebuilds the pores."""
@@ -196,6 +217,7 @@ class WaterEngine:
         m = self.model
         self.k = O.iter
         h = m.water_interval * O.dt
+        self._follow_walls()
         xz = self.io.positions() if m.rebuild_distance > 0 else None
         rebuild = m.rebuild_due(self.k, xz)
         if self.compiled and not rebuild:

@@ -78,3 +78,33 @@ def test_a_disc_touches_only_its_own_foot():
     assert pairs == {(0, int(wv.foot(1, 0))), (1, int(wv.foot(0, 1)))}
     assert F[0, 0] > 0 and F[1, 1] > 0 and abs(F[0, 1]) < 1e-12 and abs(F[1, 0]) < 1e-12
     np.testing.assert_allclose(lw.wall_forces(), [F[1, 1], F[0, 0]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("spin", [1.0, 1e12])
+def test_a_wall_sliding_under_a_disc_is_the_disc_sliding_over_the_wall(spin):
+    """PaperLaw.move_walls: the bottom face translated by +d(k) in x (its feet moving with it) gives
+    the disc the contact forces and spin that the disc moved by -d(k) over a fixed face gets: only
+    the relative motion enters eq 1-13 (Galilean invariance). A foot left at rest would give no
+    tangential force at all. A side face translated inwards by s(k) presses as the disc moved
+    outwards by s(k)."""
+    z = R + 2e-5 - 2e-6  # pressed 2 um into the face
+    d = lambda k: 2e-9 * k + 1e-10 * k * k
+    moving = law([], (FlatWall(1, 0.0, +1),), spring="d", mu=0.5, spin=spin)
+    got = []
+    for k in range(400):
+        moving.move_walls([[d(k), 0.0]])
+        F, _ = moving.step(np.array([[0.0, z]]))
+        got.append((*F[0], moving.omega[0]))
+    want = [(*a[0], a[1]) for a in drop(law([], (FlatWall(1, 0.0, +1),), spring="d", mu=0.5, spin=spin),
+                                         lambda k: z, 400, x_of=lambda k: -d(k))]
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-18)
+    assert np.abs(np.array(got)[:, 0]).max() > 0.01  # the dragging force [N]
+    x0 = R + 2e-5 + 1e-6  # 1 um off contact (eps_m = 20 um): touched after 50 steps
+    side = law([], (FlatWall(0, 0.0, +1),), spring="d")
+    pressed = []
+    for k in range(200):
+        side.move_walls([[2e-8 * k, 0.0]])
+        pressed.append(side.step(np.array([[x0, 0.0]]))[0][0])
+    still = drop(law([], (FlatWall(0, 0.0, +1),), spring="d"), lambda k: 0.0, 200, x_of=lambda k: x0 - 2e-8 * k)
+    np.testing.assert_allclose(pressed, [a[0] for a in still], rtol=1e-9, atol=1e-15)  # x0 - s and s: round-off
+    assert np.array(pressed)[-1, 0] > 0.1  # pushed away from the face [N]

@@ -330,3 +330,40 @@ def test_wall_vertices_link_along_a_common_wall_and_exist_within_reach():
     assert {feet_b[0], feet_b[1], feet_l[2], corner} <= active and not {feet_b[2], feet_l[0], feet_l[1]} & active
     far = xz + [2.0, 0.0]  # now no disc within reach of the left wall: no corner either
     assert set(wv.active(far, r, 0.5).tolist()) == {0, 1, 2, feet_b[0], feet_b[1]}
+
+
+def test_a_translated_wall_closes_the_pores_where_it_stands():
+    """WallVertices.move: a wall translated by (dx, dz) closes the pores as a FlatWall built at its
+    new face: the same network and areas with the right wall moved out by 0.1 R and the top in by
+    0.3 R; a translation along a face (the bottom by 0.7 R in x) moves no vertex."""
+    xz, r, walls = random_box(3)
+    moved = (walls[0], walls[1], FlatWall(0, walls[2].position + 0.1, -1), FlatWall(1, walls[3].position - 0.3, -1))
+    wv = WallVertices(walls, len(r))
+    wv.move([[0.7, 0.0], [0.0, 0.0], [0.1, 0.0], [0.0, -0.3]])
+    np.testing.assert_array_equal(wv.faces(), [w.position for w in moved])
+    a, b = (pg.build_pores(xz, r, l_m=0.3, flat_walls=f) for f in (wv, moved))
+    assert a.n_pores == b.n_pores > 10
+    for name in ("links", "pore_vertex_idx", "corner_pore", "throat_conns"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    np.testing.assert_array_equal(pg.vertex_positions(a, xz), pg.vertex_positions(b, xz))
+    np.testing.assert_allclose(pg.measure(a, xz, r).void_area, pg.measure(b, xz, r).void_area, rtol=1e-15)
+    with pytest.raises(ValueError, match="shift must be finite, of shape"):
+        wv.move([[0.0, 0.0]])
+
+
+def test_a_water_model_measures_at_its_moved_walls_and_rebuilds_there():
+    """WaterModel.move_walls: after the right wall moves out by 0.2 R the void areas are those of
+    the network at the new face, and a rebuild builds against it (water conserved)."""
+    xz, r, walls = random_box(4)
+    s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, transfer="conserving")
+    model = WaterModel(s, r, np.zeros(len(r), np.int64), xz, 0.0, 0.3, 1e-4, flat_walls=walls)
+    before = model.void_area(xz)
+    shift = np.zeros((4, 2))
+    shift[2, 0] = 0.2
+    model.move_walls(shift)
+    right = model.water.net.pore_walls[2]
+    after = model.void_area(xz)
+    assert right.sum() > 3 and np.all(after[right] > before[right]) and np.array_equal(after[~right], before[~right])
+    model.rebuild(xz)
+    assert np.allclose(model.water.net.wall_vertices.faces()[2], walls[2].position + 0.2)
+    assert model.water.balance_error() < 1e-13

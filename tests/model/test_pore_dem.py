@@ -452,24 +452,41 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
     assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0
 
 
-def test_flat_walls_steps_match_the_reference_without_yade():
+SHAKEN = {"type": "cosine", "amplitude": 150.0, "frequency": 500.0}  # 15 um of base displacement in 400 steps
+
+
+@pytest.mark.parametrize("moves", [None, "bottom", "box"])
+def test_flat_walls_steps_match_the_reference_without_yade(moves):
     """The NumPy PoreDEM with flat walls (the law's wall contacts, the pores they close, the inflow
-    and drained walls) follows the reference (step_beside_the_reference), written independently from SPEC §2.6, disc by disc: the wet box's particles settling
-    under 1000 m/s^2 on an inflow bottom face, between an undrained left and a drained right face."""
+    and drained walls) follows the reference (step_beside_the_reference), written independently
+    from SPEC §2.6, disc by disc: the wet box's particles settling under 1000 m/s^2 on an inflow
+    bottom face, between an undrained left and a drained right face; fixed, or shaken by a cosine:
+    the bottom sliding under the bed (moves = bottom), or the whole box, its side faces moving
+    (moves = box). Were the feet of a moving wall at rest in either, or a face left behind, the
+    positions would part."""
     from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
     from engines.reference import model as ref
     water = {"enabled": True, "E_w": 240.0, "k1": 200.0, "k2": 2.0, "l_m": 1.3e-4, "q_w": 2e-3, "k3": 500.0}
+    loading = {"loading": {**SHAKEN, "moves": moves}} if moves else {}
     s = scene(material={"g": 1000.0}, numerics={"dt": 1e-6, "rebuild_interval": 25},
-              water=water, contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True})
+              water=water, contact={"spring": "d", "eps_m": 2e-5, "f_max": 1.5, "separation_adjustment": True},
+              **loading)
     pk = wet_box(seed=5, jitter=0.05).particles()
     lo, hi = pk.xz.min(axis=0) - pk.r.max() - 1e-5, pk.xz.max(axis=0) + pk.r.max() + 1e-5  # 10 um off the discs
     x0, x1, z0 = lo[0], hi[0], lo[1]
     walls = (FlatWall(1, z0, +1, "inflow"), FlatWall(0, x0, +1, "undrained"), FlatWall(0, x1, -1, "drained"))
     core = NumpyPoreDEM(s, pk, walls)
     tables = s.as_dict()
-    tables["walls"] = {"flat": as_tables(walls)}
+    moving = pore_dem.moving_flat_walls(s, walls)
+    assert moving.tolist() == {None: [False] * 3, "bottom": [True, False, False], "box": [True] * 3}[moves]
+    tables["walls"] = {"flat": as_tables(walls, moving)}
     model = ref.ReferenceModel(tables, pk)
     moved = step_beside_the_reference(core, model, s, pk, np.zeros(len(pk.r), bool))
+    if moves:
+        assert core.base.disp > 1e-5  # the walls moved by more than 10 um
+        np.testing.assert_allclose(core.law.walls.shift[moving, 0], core.base.disp, rtol=1e-15)
+        np.testing.assert_allclose([w.position for w in model.flat], core.water_model.wall_vertices.faces(),
+                                   rtol=1e-12)
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
     assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     normal, water_push = model.wall_reactions()

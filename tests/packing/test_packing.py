@@ -131,6 +131,9 @@ def test_an_overlap_deeper_than_the_tolerance_is_refused_and_a_shallower_one_pas
     on_wall = Packing.load(_file_with(tmp_path, f"1.1e-3,{2 * R - 1.1 * tol},{R},0,1"))  # on line 5, a bottom wall disc
     with pytest.raises(ValueError, match=r", line 3: overlaps line 5 by 1.1e-06 m"):
         on_wall.check_fit(tol)
+    on_wall.check_fit(tol, wall_discs=False)  # flat walls in the wall discs' place: particles only
+    with pytest.raises(ValueError, match=r", line 2: overlaps line 3 by 1.1e-06 m"):
+        deep.check_fit(tol, wall_discs=False)
 
 
 def test_overlapping_wall_discs_are_not_refused():

@@ -17,7 +17,7 @@ R = 0.45e-3  # disc radius [m]
 
 
 def wall(axis, position, inward, boundary="undrained"):
-    return {"axis": axis, "position": position, "inward": inward, "boundary": boundary}
+    return {"axis": axis, "position": position, "inward": inward, "boundary": boundary, "moves": False}
 
 
 def flat(*walls):
@@ -286,8 +286,10 @@ def test_a_flat_wall_is_a_fixed_wall_disc_of_infinite_radius(adjust):
 
 
 def test_flat_walls_refuse_what_they_are_not():
-    with pytest.raises(ValueError, match="fixed"):
+    with pytest.raises(ValueError, match="exactly the keys"):
         flat({**wall("z", 0.0, 1), "velocity": 0.1})
+    with pytest.raises(ValueError, match="moves true"):
+        flat({**wall("z", 0.0, 1), "moves": 1})
     with pytest.raises(ValueError, match="axis"):
         flat(wall("y", 0.0, 1))
     with pytest.raises(ValueError, match="same way"):

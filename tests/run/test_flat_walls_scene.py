@@ -101,3 +101,35 @@ def test_the_blocks_start_at_the_bottom_of_the_box(kind):
     mob = pk.mobile
     assert cp.block_bounds[0][0] == cp.window.z0 == bottom
     assert (bottom == np.min(pk.xz[mob, 1] - pk.r[mob])) == (kind == "flat")
+
+
+@pytest.mark.parametrize("law", ["yade", "paper"])
+def test_a_shaken_box_of_flat_walls_moves_its_walls_with_the_base(law, tmp_path):
+    """[walls] kind = "flat" with a cosine [loading] moving the box: with YADE's law the boxes follow
+    the base (the TranslationEngine) and the WaterEngine reads them every water step; with the
+    paper's law its core moves its walls itself. Either way the pores' faces stand where the base
+    has carried the walls, every U <= E_w, water conserved."""
+    sc = scenes.preset("quicksand_case1", {
+        "contact": {"law": law, "spring": "b"}, "walls": {"kind": "flat"},
+        "loading": {"type": "cosine", "moves": "box", "amplitude": 15.0, "frequency": 50.0},
+        "output": {"history_interval": EVERY, "snapshot_times": [0.0]}})
+    from yade import O
+    r = Run(sc, scene_packing(sc), str(tmp_path), STEPS)
+    max_U = MaxU()
+    r.cp.hooks.insert(0, max_U)
+    cp = r.cp
+    boxes = {i: O.bodies[i].state.pos[0] for i in cp.wall_ids.values()}
+    r.go(figures=False)
+    disp = cp.base_motion()[2]
+    assert disp > 1e-7  # the cosine has moved the base by 1.2 um in 0.4 ms (15/2 t^2)
+    for i, x0 in boxes.items():
+        assert O.bodies[i].state.pos[0] - x0 == pytest.approx(disp, rel=1e-9)
+    if law == "yade":  # the engine read the boxes at its last water step, before the last step moved them
+        wm, disp = cp.water_engine.model, disp - cp.wall_engine.velocity * sc.numerics.dt
+    else:  # the core moved its walls at the end of the step (f)
+        wm = cp.core.water_model
+    start = np.array([w.position for w in cp.flat_walls.values()])
+    x_walls = np.array([w.axis == 0 for w in cp.flat_walls.values()])
+    np.testing.assert_allclose(wm.wall_vertices.faces(), start + disp * x_walls, rtol=0, atol=1e-15)
+    summary = r.summarise("completed", [])
+    assert summary["water_balance_error"] <= 1e-12 and np.all(np.array(max_U.seen) <= sc.water.E_w)

@@ -123,9 +123,11 @@ def test_walls_are_discs_unless_flat_is_asked_for():
     assert flat.walls.kind == "flat"
 
 
-def test_flat_walls_with_a_loading_are_refused_in_one_line():
-    with pytest.raises(scenes.SceneError, match=r"^\[walls\] kind = 'flat': the flat walls are fixed, \[loading\] "
-                                                r"type = 'cosine' would move them") as e:
-        scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}, "loading": {"type": "cosine"}})
+def test_flat_walls_follow_a_loading_but_are_not_on_springs():
+    shaken = scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}, "loading": {"type": "cosine"}})
+    assert shaken.walls.kind == "flat" and shaken.loading.type == "cosine"
+    with pytest.raises(scenes.SceneError, match=r"^\[walls\] kind = 'flat': \[loading\] side_walls = 'springs' ties "
+                                                r"side-wall discs") as e:
+        scenes.preset("liquefaction_case1", {"walls": {"kind": "flat"}})
     assert "\n" not in str(e.value)
     assert scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}}).walls.kind == "flat"  # the paper's law too

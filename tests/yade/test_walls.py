@@ -58,9 +58,9 @@ def test_each_wall_the_engine_cannot_take_is_refused_in_one_line():
     tilted = utils.box((W / 2, 0, -R), (W, 2 * R, R / 2))
     tilted.state.ori = Quaternion(Vector3(0, 1, 0), 0.1)
     assert "rotated Box" in refused(lambda: O.bodies.append(tilted))
-    moving = utils.box((W / 2, 0, -R), (W, 2 * R, R / 2))
-    moving.state.vel = Vector3(1e-3, 0, 0)
-    assert "moves" in refused(lambda: O.bodies.append(moving))
+    turning = utils.box((W / 2, 0, -R), (W, 2 * R, R / 2))
+    turning.state.angVel = Vector3(0, 1.0, 0)
+    assert "turns" in refused(lambda: O.bodies.append(turning))
     corner = utils.box((-R, 0, -R), (R / 2, 2 * R, R / 2))
     assert "two of its faces" in refused(lambda: O.bodies.append(corner))
     assert "a Facet" in refused(lambda: O.bodies.append(utils.facet([(0, 0, -1e-3), (1e-3, 0, -1e-3), (0, 0, -2e-3)])))
@@ -94,3 +94,33 @@ def test_the_engine_with_flat_walls_is_the_same_by_runner_compiled_drive_and_num
     assert np.array_equal(runs[1][0], runs[0][0]) and np.array_equal(runs[1][1], runs[0][1])
     np.testing.assert_allclose(runs[2][0], runs[0][0], rtol=0, atol=1e-12)
     np.testing.assert_allclose(runs[2][1], runs[0][1], rtol=1e-9)
+
+
+def test_the_engine_follows_a_wall_that_a_translation_engine_moves():
+    """aabb_box's scene with its right box driven outwards at 1 cm/s by a TranslationEngine: each
+    water step the pores' right face is where the box's inner face is (drive then takes the
+    Python steps, which read it); the pores next to it grow, and a box that starts to spin is
+    refused in one line."""
+    from yade import O, Vector3
+    from yade.wrapper import TranslationEngine
+
+    from engines.model.pore_water import WaterSettings
+    from engines.yade.water_engine import WaterEngine
+    from yade_scripts.examples import aabb_box as ex
+    bottom, left, right, grains = ex.build_box()
+    water = WaterEngine(grains, {}, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4), l_m=1.3e-4,
+                        flat_walls={bottom: "inflow", left: "undrained", right: "undrained"})
+    face0 = water.model.wall_vertices.faces()[2]
+    x0 = O.bodies[right].state.pos[0]
+    O.engines = O.engines[:-1] + [TranslationEngine(ids=[right], translationAxis=(1, 0, 0), velocity=1e-2),
+                                  O.engines[-1]]
+    assert water._walls_may_move()
+    water.drive(200)
+    moved = O.bodies[right].state.pos[0] - x0
+    assert moved == pytest.approx(200 * 1e-2 * O.dt, rel=1e-9)
+    # the last water step read the box before the last O.step moved it by 1e-2 dt
+    assert water.model.wall_vertices.faces()[2] - face0 == pytest.approx(moved - 1e-2 * O.dt, rel=1e-9)
+    assert water.model.water.balance_error() < 1e-12
+    O.bodies[right].state.angVel = Vector3(0, 0.5, 0)
+    with pytest.raises(ContractError, match=rf"^body {right}: a Box that turns"):
+        water()
