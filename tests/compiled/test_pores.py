@@ -113,12 +113,48 @@ PACKINGS = {
 }
 
 
+# flat walls (SPEC §2.6)
+def _boxed(seed, eps_m, l_m):
+    """_loose's packing in a box of four flat walls at the discs' extremes (the outermost discs touch
+    them, the others at gaps of all sizes)."""
+    xz, r, _, _, _ = _loose(seed, eps_m, l_m)
+    lo, hi = (xz - r[:, None]).min(axis=0), (xz + r[:, None]).max(axis=0)
+    walls = (FlatWall(1, lo[1], +1, "inflow"), FlatWall(0, lo[0], +1), FlatWall(0, hi[0], -1, "drained"),
+             FlatWall(1, hi[1], -1))
+    return xz, r, eps_m, l_m, walls
+
+
+def _hex_on_a_wall():
+    """A hexagonal bed of touching discs resting on a flat bottom (cocircular ties, collinear feet);
+    the rows above the first are out of the wall's reach."""
+    return hex_lattice(9, 6, 2.0, origin=(1.0, 1.0)), np.ones(54), 0.0, 0.1, (FlatWall(1, 0.0, +1),)
+
+
+def _square_in_a_box():
+    """A square lattice of touching discs touching the four walls of its box (its corners)."""
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1), FlatWall(0, 14.0, -1), FlatWall(1, 12.0, -1))
+    return square_lattice(7, 6, 2.0, origin=(1.0, 1.0)), np.ones(42), 0.0, 0.1, walls
+
+
+FLAT = {
+    "box-quicksand": lambda: _boxed(1, 0.0, 1.3e-4),
+    "box-reach": lambda: _boxed(0, 2e-4, 3.5e-4),  # eps_m, l_m > 0: discs near a wall beyond its reach
+    "box-long-lm": lambda: _boxed(2, 0.0, 1e-3),    # disc-foot links the regular triangulation hides
+    "hex-on-a-wall": _hex_on_a_wall,
+    "square-in-a-box": _square_in_a_box,
+}
+
+
 def _build(name, **kw):
+    """The network of PACKINGS[name] (wall discs by code) or of FLAT[name] (flat walls)."""
+    if name in FLAT:
+        xz, r, eps_m, l_m, flat_walls = FLAT[name]()
+        return pg.build_pores(xz, r, eps_m, l_m, flat_walls=flat_walls, **kw)
     xz, r, walls, eps_m, l_m = PACKINGS[name]()
     return pg.build_pores(xz, r, eps_m, l_m, walls=walls, **kw)
 
 
-@pytest.mark.parametrize("name", PACKINGS)
+@pytest.mark.parametrize("name", [*PACKINGS, *FLAT])
 def test_compiled_build_gives_the_same_network(name):
     assert_same_network(_build(name, steps=kp.BUILD), _build(name))
 
@@ -246,52 +282,10 @@ def test_a_wall_code_out_of_range_is_refused():
             pg.build_pores(xz, r, eps_m, l_m, walls=walls, steps=steps)
 
 
-# -- flat walls (SPEC §2.6) ---------------------------------------------------------------------------
-def _boxed(seed, eps_m, l_m):
-    """_loose's packing in a box of four flat walls at the discs' extremes (the outermost discs touch
-    them, the others at gaps of all sizes)."""
-    xz, r, _, _, _ = _loose(seed, eps_m, l_m)
-    lo, hi = (xz - r[:, None]).min(axis=0), (xz + r[:, None]).max(axis=0)
-    walls = (FlatWall(1, lo[1], +1, "inflow"), FlatWall(0, lo[0], +1), FlatWall(0, hi[0], -1, "drained"),
-             FlatWall(1, hi[1], -1))
-    return xz, r, eps_m, l_m, walls
-
-
-def _hex_on_a_wall():
-    """A hexagonal bed of touching discs resting on a flat bottom (cocircular ties, collinear feet);
-    the rows above the first are out of the wall's reach."""
-    return hex_lattice(9, 6, 2.0, origin=(1.0, 1.0)), np.ones(54), 0.0, 0.1, (FlatWall(1, 0.0, +1),)
-
-
-def _square_in_a_box():
-    """A square lattice of touching discs touching the four walls of its box (its corners)."""
-    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1), FlatWall(0, 14.0, -1), FlatWall(1, 12.0, -1))
-    return square_lattice(7, 6, 2.0, origin=(1.0, 1.0)), np.ones(42), 0.0, 0.1, walls
-
-
-FLAT = {
-    "box-quicksand": lambda: _boxed(1, 0.0, 1.3e-4),
-    "box-reach": lambda: _boxed(0, 2e-4, 3.5e-4),  # eps_m, l_m > 0: discs near a wall beyond its reach
-    "box-long-lm": lambda: _boxed(2, 0.0, 1e-3),    # disc-foot links the regular triangulation hides
-    "hex-on-a-wall": _hex_on_a_wall,
-    "square-in-a-box": _square_in_a_box,
-}
-
-
-def _build_flat(name, **kw):
-    xz, r, eps_m, l_m, walls = FLAT[name]()
-    return pg.build_pores(xz, r, eps_m, l_m, flat_walls=walls, **kw)
-
-
-@pytest.mark.parametrize("name", FLAT)
-def test_compiled_build_with_flat_walls_gives_the_same_network(name):
-    assert_same_network(_build_flat(name, steps=kp.BUILD), _build_flat(name))
-
-
 def test_the_flat_wall_packings_exercise_every_branch():
     """Corners, wall pores of exact lattices, discs beyond the reach of a wall but within twice it
     (no foot), hidden disc-foot links put in by flips."""
-    nets = {name: _build_flat(name) for name in FLAT}
+    nets = {name: _build(name) for name in FLAT}
     on_walls = nets["square-in-a-box"].pore_walls
     # along a wall of n discs: n - 1 pores between their feet and the two corner pores
     assert on_walls.sum(axis=1).tolist() == [8, 7, 7, 8] and (on_walls.sum(axis=0) == 2).sum() == 4
@@ -348,4 +342,4 @@ def test_a_wrong_link_rule_in_the_kernels_gives_another_network(name, wrong):
 
     steps = kp.BUILD._replace(missing_pairs=missing_pairs, faces=faces)
     with pytest.raises(AssertionError):
-        assert_same_network(_build_flat(name, steps=steps), _build_flat(name))
+        assert_same_network(_build(name, steps=steps), _build(name))
