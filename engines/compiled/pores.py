@@ -662,8 +662,8 @@ def _near_vertex_sets(old_net, U_old, old_valid, new_net, todo):
 
 
 def _pore_overlaps(old_net, new_net, xz):
-    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, pg.vertex_positions(old_net, xz),
-                         new_net.n_pores)
+    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore,
+                         pg.vertex_positions(old_net, xz), new_net.n_pores)
 
 
 BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, links_and_corners)
