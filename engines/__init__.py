@@ -25,7 +25,7 @@ the YADE law skips a-c and e):
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24
   d. pores: build, measure, re-mesh rules a-d         model/pores.py, model/pore_water.py  eq 28-31
-     flat walls as pore boundaries (SPEC §2.6)        model/flat_walls.py (NumPy only)
+     flat walls as pore boundaries (SPEC §2.6)        model/flat_walls.py
      water: pressure, Darcy flows, update, forces    model/pore_water.py, model/water_model.py
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c

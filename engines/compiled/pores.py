@@ -18,6 +18,9 @@ to 1e-12 relative):
   pore_overlaps      model.pores.pore_overlaps            overlap areas of old and new pores (clipping
                                                           as model.pores._clip_areas)
 
+Flat walls (engines.model.flat_walls): the kernels run over the discs and the wall vertices, with
+the links of flat_walls.WallVertices.is_link (``_is_link``, from the vertices' owner and bits).
+
 Numbering follows the NumPy functions (pores in the order of their first triangle, links by (i, j),
 half-edges sorted by disc then angle), so the networks are the same array for array. Sorting is by
 counting sort over discs or pores and insertion sort of the few entries of each (the sorts of the
@@ -35,7 +38,8 @@ from engines.model import pore_water
 from engines.model import pores as pg
 
 jit = nb.njit(cache=True, nogil=True)
-OUTER = pg.OUTER
+OUTER, WALL_RIGHT = pg.OUTER, pg.WALL_RIGHT
+NO_WALL_VERTICES = np.zeros(0, np.int64)  # owner and bits of _is_link without flat walls
 
 
 @jit
@@ -146,17 +150,30 @@ def _grid(x, z, cell):
 
 
 @jit
-def missing_pairs(xz, r, reach, tri):
-    """The disc pairs (M, 2), i < j, with r_i + r_j + reach >= R_ij (eq 28) that are no edge of the
-    triangles, both discs being vertices; in no particular order. A grid of cells of side
-    2 max(r) + reach finds the pairs."""
+def _is_link(xz, r, reach, a, b, owner, bits, n_discs):
+    """engines.model.flat_walls.WallVertices.is_link of the vertices a, b: two discs (< n_discs) by
+    eq 28 (reach = eps_m + l_m); a disc and a wall vertex when it is the disc's foot (owner: the
+    disc of each vertex); two wall vertices when they lie on a common wall (bits: the walls of each
+    vertex). Without flat walls n_discs = len(r) and owner, bits are not read."""
+    if a >= n_discs or b >= n_discs:
+        if a >= n_discs and b >= n_discs:
+            return (bits[a] & bits[b]) != 0
+        return owner[a] == owner[b]
+    return r[a] + r[b] + reach >= np.hypot(xz[b, 0] - xz[a, 0], xz[b, 1] - xz[a, 1])  # eq 28
+
+
+@jit
+def missing_pairs(xz, r, reach, tri, owner, bits, n_discs):
+    """The linked pairs (M, 2), i < j, at least one a disc (``_is_link``: eq 28 or a disc and its
+    foot), that are no edge of the triangles, both being vertices; in no particular order. A grid of
+    cells of side 2 max(r) + reach finds them (a disc's foot in the build is within r + reach of it)."""
     n = len(r)
     a, b = _half_edges(tri)
     ptr, order = _groups(a, n)
     x0, z0, cell, nx, nz, start, in_cell = _grid(xz[:, 0], xz[:, 1], 2.0 * r.max() + reach)
     out = np.empty((16 * n + 16, 2), np.int64)
     m = 0
-    for i in range(n):
+    for i in range(n_discs):  # the pairs of a disc i and a vertex j > i
         if ptr[i] == ptr[i + 1]:
             continue  # not a vertex
         cx, cz = int((xz[i, 0] - x0) / cell), int((xz[i, 1] - z0) / cell)
@@ -167,7 +184,7 @@ def missing_pairs(xz, r, reach, tri):
                     j = in_cell[s]
                     if j <= i or ptr[j] == ptr[j + 1]:
                         continue
-                    if not r[i] + r[j] + reach >= np.hypot(xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]):  # eq 28
+                    if not _is_link(xz, r, reach, i, j, owner, bits, n_discs):
                         continue
                     edge = False
                     for e in range(ptr[i], ptr[i + 1]):
@@ -203,9 +220,9 @@ def _find(parent, x):
 
 
 @jit
-def faces(xz, r, tri, reach, a_min):
+def faces(xz, r, tri, reach, a_min, owner, bits, n_discs):
     """engines.model.pores._faces compiled: (nb (3T,), is_link (3T,), tri_pore (T,), bounded (T,), n_pores,
-    n_closed, off_mesh)."""
+    n_closed, off_mesh); the links by ``_is_link``."""
     t_count, n = len(tri), len(r)
     m = 3 * t_count
     a, b = _half_edges(tri)
@@ -217,8 +234,7 @@ def faces(xz, r, tri, reach, a_min):
         twin = _twin(a, b, ptr, order, h)
         if twin >= 0:
             nb_[h] = twin // 3
-        dx, dz = xz[b[h], 0] - xz[a[h], 0], xz[b[h], 1] - xz[a[h], 1]
-        is_link[h] = r[a[h]] + r[b[h]] + reach >= np.hypot(dx, dz)  # eq 28
+        is_link[h] = _is_link(xz, r, reach, a[h], b[h], owner, bits, n_discs)
         if not is_link[h]:  # triangles joined across non-link edges; a non-link hull edge joins the outer face
             u, v = _find(parent, h // 3), _find(parent, nb_[h] if nb_[h] >= 0 else t_count)
             if u != v:
@@ -338,7 +354,7 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
         ptr[p + 1] = c
     pv_pore, pv_disc = pv_pore[:c].copy(), pv_disc[:c].copy()
     signature = np.zeros(n_pores, np.uint64)
-    touches = np.zeros((4, n_pores), np.bool_)
+    touches = np.zeros((max(WALL_RIGHT, walls.max()) + 1, n_pores), np.bool_)
     for s in range(c):
         signature[pv_pore[s]] += _mix64(pv_disc[s])
         touches[walls[pv_disc[s]], pv_pore[s]] = True
@@ -422,14 +438,15 @@ def _subset_or_superset(x, y):
 
 
 @jit
-def near_vertex_sets(old_ptr, old_idx, old_valid, new_ptr, new_idx, todo, U_old, n_discs):
+def near_vertex_sets(old_ptr, old_idx, old_valid, new_ptr, new_idx, todo, U_old, n_vertices):
     """Rule (b) of pore_water.pressures_by_rule: for each new pore in todo, the mean U_old of the
-    valid old pores whose vertex set contains or is contained in its own (nan: none)."""
+    valid old pores whose vertex set (of vertices < n_vertices) contains or is contained in its own
+    (nan: none)."""
     n_old = len(old_ptr) - 1
     owner = np.empty(len(old_idx), np.int64)
     for q in range(n_old):
         owner[old_ptr[q]:old_ptr[q + 1]] = q
-    v_ptr, by_disc = _groups(old_idx, n_discs)  # the old pores of each disc
+    v_ptr, by_disc = _groups(old_idx, n_vertices)  # the old pores of each vertex
     seen = np.full(n_old, -1, np.int64)
     U = np.full(len(todo), np.nan)
     for s in range(len(todo)):
@@ -622,18 +639,32 @@ def _lower_triangles(hull, n, xz):
     return tri if len(tri) else None
 
 
-def _missing_pairs(xz, r, reach, tri):
-    return missing_pairs(xz, r, float(reach), tri)
+def _wall_rule(wall_vertices, n):
+    """The arguments (owner, bits, n_discs) of ``_is_link`` for the flat_walls.WallVertices of n
+    vertices (None: n discs)."""
+    if wall_vertices is None:
+        return NO_WALL_VERTICES, NO_WALL_VERTICES, n
+    return wall_vertices.owner, wall_vertices.bits, wall_vertices.n
+
+
+def _missing_pairs(xz, r, reach, tri, wall_vertices=None):
+    return missing_pairs(xz, r, float(reach), tri, *_wall_rule(wall_vertices, len(r)))
+
+
+def _faces(xz, r, tri, reach, a_min, wall_vertices=None):
+    return faces(xz, r, tri, float(reach), a_min, *_wall_rule(wall_vertices, len(r)))
 
 
 def _near_vertex_sets(old_net, U_old, old_valid, new_net, todo):
+    n_vertices = new_net.n_discs + len(new_net.flat_walls)  # flat wall w is vertex N + w of the sets
     return near_vertex_sets(old_net.pore_vertex_ptr, old_net.pore_vertex_idx, np.asarray(old_valid, bool),
-                            new_net.pore_vertex_ptr, new_net.pore_vertex_idx, todo, U_old, new_net.n_discs)
+                            new_net.pore_vertex_ptr, new_net.pore_vertex_idx, todo, U_old, n_vertices)
 
 
 def _pore_overlaps(old_net, new_net, xz):
-    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore, xz, new_net.n_pores)
+    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore,
+                         pg.vertex_positions(old_net, xz), new_net.n_pores)
 
 
-BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, faces, links_and_corners)
+BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, links_and_corners)
 REMESH = pore_water.RemeshSteps(_pore_overlaps, _near_vertex_sets, spread_to_neighbours)

@@ -1,8 +1,7 @@
 """The pores and water of N discs stepped by compiled kernels: engines.model.water_model.WaterModel
 with its pore builds and re-meshing by engines.compiled.pores (BUILD, REMESH) and its water steps by
-kernels.water_step (the pore measure, the Darcy step, eq 32, 33 in one call). With flat walls the
-builds and the re-meshing are the NumPy ones (engines.model.pores: no compiled twins yet), the water
-steps compiled. No YADE."""
+kernels.water_step (the pore measure, the Darcy step, eq 32, 33 in one call), with flat walls too.
+No YADE."""
 import numpy as np
 
 from engines.compiled import kernels
@@ -10,7 +9,6 @@ from engines.compiled import pores as cp
 from engines.model import limits, water_model
 from engines.model import pores as pg
 from engines.model.limits import DarcyStabilityError
-from engines.model.pore_water import NUMPY_REMESH
 
 
 class WaterModel(water_model.WaterModel):
@@ -21,8 +19,6 @@ class WaterModel(water_model.WaterModel):
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
-        if flat_walls:
-            self.build_steps, self.remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH
         super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
                          rebuild_distance, flat_walls)
         self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])

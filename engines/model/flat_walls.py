@@ -26,7 +26,6 @@ from dataclasses import dataclass
 import numpy as np
 
 BOUNDARIES = ("undrained", "drained", "inflow")
-NUMPY_ONLY = "flat walls: the NumPy model only for now (compiled=False)"
 
 
 @dataclass(frozen=True)

@@ -157,7 +157,8 @@ class PoreDEM:
     both. Its compiled twin engines.compiled.pore_dem.PoreDEM (tested against it) runs the compiled
     law and water and offers the whole step as one kernel call. ``flat_walls``:
     engines.model.flat_walls.FlatWall, ... (SPEC §2.6): the law's contacts with them and the pores
-    they close (the NumPy classes only for now)."""
+    they close (the compiled twin runs them too, each step by ``step``, not one kernel call); those
+    that follow the input move with the base (f)."""
 
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
 

@@ -374,8 +374,7 @@ def insert_missing_links(xz, r, tri, reach, steps=None, wall_vertices=None):
     (default NUMPY_BUILD); ``wall_vertices``: the flat_walls.WallVertices of xz, r (their links).
     """
     wv = wall_vertices
-    missing = (steps or NUMPY_BUILD).missing_pairs(xz, r, reach, tri) if wv is None else \
-        _missing_pairs(xz, r, reach, tri, wv)
+    missing = (steps or NUMPY_BUILD).missing_pairs(xz, r, reach, tri, wv)
     if not len(missing):
         return tri, 0
     d = xz[missing[:, 1]] - xz[missing[:, 0]]  # closest gap first (of two crossing pairs, the nearer is linked)
@@ -432,7 +431,7 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     the regular triangulation plus the eq 28 pairs it hides (module docstring).
     ``flat_walls``: flat_walls.FlatWall, ... (SPEC §2.6), or their flat_walls.WallVertices (with its
     shift: translated walls): the triangulation is that of the discs and the wall vertices of the
-    build (flat_walls.WallVertices.active); NumPy steps only.
+    build (flat_walls.WallVertices.active).
     ``steps``: the BuildSteps, by default NUMPY_BUILD, the readable NumPy functions (``_lifted_points``,
     ``_faces``, ``_links_and_corners``, ...); engines.compiled.pores.BUILD: everything but qhull by
     compiled kernels, the same network (tests/compiled/test_pores.py).
@@ -482,8 +481,6 @@ def _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv):
     """build_pores with the flat walls of the flat_walls.WallVertices ``wv``: the network of the
     discs and the wall vertices (flat_walls module docstring), whose vertex sets count each wall
     as one vertex (``_wall_vertex_sets``)."""
-    if steps != NUMPY_BUILD:  # equal, not the same object, after a checkpoint's pickle
-        raise ValueError(fw.NUMPY_ONLY)
     wv.check_inside(xz)
     n, reach = wv.n, eps_m + l_m
     points, radii = wv.positions(xz), wv.radii(r)
@@ -496,10 +493,10 @@ def _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv):
         codes = np.concatenate([walls, np.full(wv.n_vertices - n, FLAT_VERTEX)])
 
         def faces(*args):  # the wall vertices that are no vertex of the build are no rattlers
-            *out, off_mesh = _faces(*args, wall_vertices=wv)
+            *out, off_mesh = steps.faces(*args, wall_vertices=wv)
             return *out, off_mesh[off_mesh < n]
 
-        net = _network(points, radii, codes, tri, n_inserted, eps_m, l_m, a_min, faces, _links_and_corners)
+        net = _network(points, radii, codes, tri, n_inserted, eps_m, l_m, a_min, faces, steps.links_and_corners)
     net.n_discs, net.wall_vertices = n, wv
     net.pore_vertex_ptr, net.pore_vertex_idx, net.pore_signature, net.pore_walls = _wall_vertex_sets(
         wv, net.pore_vertex_ptr, net.pore_vertex_idx)
@@ -643,7 +640,7 @@ class BuildSteps(NamedTuple):
 
     lifted_points: Callable      # (xz, r) -> the hull's points (N + 1, 3), or None
     lower_triangles: Callable    # (hull, n, xz) -> the lower facets, counter-clockwise (T, 3), or None
-    missing_pairs: Callable      # (xz, r, reach, tri) -> the eq 28 pairs (M, 2) that are no edge
+    missing_pairs: Callable      # as _missing_pairs
     faces: Callable              # as _faces
     links_and_corners: Callable  # as _links_and_corners
 

@@ -56,7 +56,7 @@ SCHEMA = {
         "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
     },
     "walls": {
-        "kind": (str, "discs", ("discs", "flat"), "discs: the packing's wall discs (groups bottom, left, right) bound the box; flat: they are replaced by YADE Box bodies at their inner faces (bottom: max z + r, left: max x + r, right: min x - r; moved back to a particle that reaches past one), the pores' flat walls: the bottom one lets in q_w (if > 0), the sides drain when [water] sides = drained; with [loading] they follow the base as [loading] moves says, not on springs; with [contact] law = paper the law and water run by the NumPy classes)"),
+        "kind": (str, "discs", ("discs", "flat"), "discs: the packing's wall discs (groups bottom, left, right) bound the box; flat: they are replaced by YADE Box bodies at their inner faces (bottom: max z + r, left: max x + r, right: min x - r; moved back to a particle that reaches past one), the pores' flat walls: the bottom one lets in q_w (if > 0), the sides drain when [water] sides = drained; with [loading] they follow the base as [loading] moves says, not on springs; with [contact] law = paper the paper's law meets them itself)"),
     },
     "material": {
         "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),

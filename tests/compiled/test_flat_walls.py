@@ -1,6 +1,6 @@
-"""Flat walls (SPEC §2.6) on the compiled path: the compiled build refuses them in one line; the
-compiled WaterModel builds with the NumPy steps and runs its water steps by kernels.water_step,
-to the NumPy model's results."""
+"""Flat walls (SPEC §2.6) on the compiled path: the compiled WaterModel builds and re-meshes its pores
+by the compiled steps (engines.compiled.pores, tests/compiled/test_pores.py) and runs its water steps
+by kernels.water_step, to the NumPy model's results."""
 import numpy as np
 import pytest
 
@@ -11,20 +11,8 @@ from engines.model import pores as pg
 from engines.model import water_model as wm
 from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import WaterSettings
+from tests.compiled.test_pores import assert_same_network
 from tests.layouts import random_sequential
-
-WALL = (FlatWall(1, 0.0, +1, "inflow"),)
-
-
-def row():
-    return np.column_stack([2.0 * np.arange(5), np.full(5, 1.05)]), np.ones(5)
-
-
-def test_the_compiled_build_refuses_flat_walls():
-    xz, r = row()
-    with pytest.raises(ValueError, match=r"^flat walls: the NumPy model only for now \(compiled=False\)$"):
-        pg.build_pores(xz, r, l_m=0.1, steps=kp.BUILD, flat_walls=WALL)
-    assert pg.build_pores(xz, r, l_m=0.1, flat_walls=WALL).n_pores == 4  # the NumPy build takes them
 
 
 def test_the_wall_vertices_are_placed_as_the_models():
@@ -49,22 +37,30 @@ def boxed_discs(seed=2, size=12.0):
 
 @pytest.mark.parametrize("smoothing", [False, True])
 def test_the_compiled_water_model_with_flat_walls_is_the_numpy_one(smoothing):
-    """The discs shaken for 60 steps, rebuilt every 20 (the water moves between meshes): W, the disc
-    forces and the walls' forces of the two classes agree to round-off at every step."""
+    """The discs drifting and shaken for 60 steps, rebuilt every 20 (the water moves between meshes):
+    the compiled class builds and re-meshes by the compiled steps, the same networks and re-meshing
+    rules as the NumPy one; W, the disc forces and the walls' forces agree to round-off at every step."""
     xz0, r, walls = boxed_discs()
     s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=50.0, q_w=0.02, smoothing=smoothing, transfer="conserving")
     models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, rebuild_interval=20,
                   flat_walls=walls) for cls in (wm.WaterModel, cwm.WaterModel)]
     rng = np.random.default_rng(0)
+    drift = 0.2 * rng.standard_normal(xz0.shape)  # [m] by the end: pores split and merge (rule b)
     for k in range(60):
-        xz = xz0 + 0.02 * np.sin(0.1 * k) * rng.standard_normal(xz0.shape) * 0.1
+        xz = xz0 + k / 60 * drift + 0.02 * np.sin(0.1 * k) * rng.standard_normal(xz0.shape) * 0.1
         for m in models:
             m.step(k, xz)
         a, b = models
         np.testing.assert_allclose(b.water.W, a.water.W, rtol=1e-12)
         np.testing.assert_allclose(b.F, a.F, rtol=1e-10, atol=1e-12 * np.abs(a.F).max())
-        np.testing.assert_allclose(b.F_walls, a.F_walls, rtol=1e-12)
+        # U to round-off of E_w (eq 32 divides W - A by W ~ A) along a wall of 12 m
+        np.testing.assert_allclose(b.F_walls, a.F_walls, rtol=1e-12, atol=1e-14 * s.E_w * 12.0)
+        if k % 20 == 0:
+            assert_same_network(b.water.net, a.water.net)
+            assert np.array_equal(b.water.rule, a.water.rule)
+    assert (b.build_steps, b.remesh_steps) == (kp.BUILD, kp.REMESH)
     assert a.n_rebuilds == b.n_rebuilds == 2 and np.all(a.F_walls != 0) and a.water.balance.inflow > 0
+    assert a.water.remesh_counts["b"] > 0 and a.water.remesh_counts["a"] > 0
 
 
 def test_compiled_flat_walls_keep_the_uniform_pressure_balance():

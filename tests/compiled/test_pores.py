@@ -2,7 +2,9 @@
 arrays equal, floats to 1e-12 relative) and the same re-meshing, on packings that exercise every
 branch: lattices (cocircular ties), random packings with walls, holes (dangling links, pinches),
 rattlers in and off the triangulation, a hidden eq 28 pair put in by flips, closed faces, and inputs
-without pores."""
+without pores; and with flat walls (SPEC §2.6): a random packing in a box, lattices resting on
+walls, discs beyond the walls' reach, hidden disc-foot links."""
+import copy
 import dataclasses
 
 import numpy as np
@@ -10,6 +12,7 @@ import pytest
 
 from engines.compiled import pores as kp
 from engines.model import pores as pg
+from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import PoreWater, WaterSettings, pressure, pressures_by_rule
 from packing.layouts import hex_lattice, random_discs
 from packing.psd import sample_diameters
@@ -31,7 +34,11 @@ def assert_same(a, b, what):
 def assert_same_network(a, b):
     for f in dataclasses.fields(pg.PoreNetwork):
         x, y = getattr(a, f.name), getattr(b, f.name)
-        if isinstance(x, dict):
+        if isinstance(x, WallVertices):
+            assert x.walls == y.walls and x.n == y.n, f.name
+            for k in ("owner", "bits", "corners"):
+                assert_same(getattr(x, k), getattr(y, k), f"{f.name}.{k}")
+        elif isinstance(x, dict):
             assert x.keys() == y.keys(), f.name
             for k in x:
                 assert_same(x[k], y[k], f"{f.name}[{k}]")
@@ -106,12 +113,48 @@ PACKINGS = {
 }
 
 
+# flat walls (SPEC §2.6)
+def _boxed(seed, eps_m, l_m):
+    """_loose's packing in a box of four flat walls at the discs' extremes (the outermost discs touch
+    them, the others at gaps of all sizes)."""
+    xz, r, _, _, _ = _loose(seed, eps_m, l_m)
+    lo, hi = (xz - r[:, None]).min(axis=0), (xz + r[:, None]).max(axis=0)
+    walls = (FlatWall(1, lo[1], +1, "inflow"), FlatWall(0, lo[0], +1), FlatWall(0, hi[0], -1, "drained"),
+             FlatWall(1, hi[1], -1))
+    return xz, r, eps_m, l_m, walls
+
+
+def _hex_on_a_wall():
+    """A hexagonal bed of touching discs resting on a flat bottom (cocircular ties, collinear feet);
+    the rows above the first are out of the wall's reach."""
+    return hex_lattice(9, 6, 2.0, origin=(1.0, 1.0)), np.ones(54), 0.0, 0.1, (FlatWall(1, 0.0, +1),)
+
+
+def _square_in_a_box():
+    """A square lattice of touching discs touching the four walls of its box (its corners)."""
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1), FlatWall(0, 14.0, -1), FlatWall(1, 12.0, -1))
+    return square_lattice(7, 6, 2.0, origin=(1.0, 1.0)), np.ones(42), 0.0, 0.1, walls
+
+
+FLAT = {
+    "box-quicksand": lambda: _boxed(1, 0.0, 1.3e-4),
+    "box-reach": lambda: _boxed(0, 2e-4, 3.5e-4),  # eps_m, l_m > 0: discs near a wall beyond its reach
+    "box-long-lm": lambda: _boxed(2, 0.0, 1e-3),    # disc-foot links the regular triangulation hides
+    "hex-on-a-wall": _hex_on_a_wall,
+    "square-in-a-box": _square_in_a_box,
+}
+
+
 def _build(name, **kw):
+    """The network of PACKINGS[name] (wall discs by code) or of FLAT[name] (flat walls)."""
+    if name in FLAT:
+        xz, r, eps_m, l_m, flat_walls = FLAT[name]()
+        return pg.build_pores(xz, r, eps_m, l_m, flat_walls=flat_walls, **kw)
     xz, r, walls, eps_m, l_m = PACKINGS[name]()
     return pg.build_pores(xz, r, eps_m, l_m, walls=walls, **kw)
 
 
-@pytest.mark.parametrize("name", PACKINGS)
+@pytest.mark.parametrize("name", [*PACKINGS, *FLAT])
 def test_compiled_build_gives_the_same_network(name):
     assert_same_network(_build(name, steps=kp.BUILD), _build(name))
 
@@ -147,22 +190,28 @@ def test_missing_pairs_are_those_of_the_numpy_search(name):
     edges = {tuple(sorted(e)) for t in tri.tolist() for e in zip(t, t[1:] + t[:1])}
     vertex = np.isin(np.arange(len(r)), tri)
     expected = sorted(tuple(p) for p in pairs.tolist() if tuple(p) not in edges and vertex[p].all())
-    assert sorted(map(tuple, kp.missing_pairs(xz, r, eps_m + l_m, tri).tolist())) == expected
+    assert sorted(map(tuple, kp._missing_pairs(xz, r, eps_m + l_m, tri).tolist())) == expected
 
 
-def _moved(seed, jitter):
-    """An old network of a loose packing and a new one after every disc moved by ~jitter radii."""
-    xz, r, walls, eps_m, l_m = _loose(seed, 2e-4, 3.5e-4)
+def _moved(seed, jitter, flat=False):
+    """An old network of a loose packing and a new one after every disc moved by ~jitter radii;
+    ``flat``: in _boxed's box of flat walls, a centre moved out of it reflected back in."""
+    xz, r, eps_m, l_m, walls = _boxed(seed, 2e-4, 3.5e-4)
     rng = np.random.default_rng(seed)
     xz2 = xz + jitter * r.mean() * rng.standard_normal(xz.shape)
-    old = pg.build_pores(xz, r, eps_m, l_m, walls=walls)
-    new = pg.build_pores(xz2, r, eps_m, l_m, walls=walls)
+    if flat:
+        lo, hi = (xz - r[:, None]).min(axis=0), (xz + r[:, None]).max(axis=0)  # _boxed's walls
+        xz2 = hi - np.abs(hi - (lo + np.abs(xz2 - lo)))
+    flat_walls = walls if flat else ()
+    old = pg.build_pores(xz, r, eps_m, l_m, flat_walls=flat_walls)
+    new = pg.build_pores(xz2, r, eps_m, l_m, flat_walls=flat_walls)
     return old, new, xz2, r, rng
 
 
+@pytest.mark.parametrize("flat", [False, True])
 @pytest.mark.parametrize("seed,jitter", [(0, 0.02), (1, 0.1), (2, 0.3)])
-def test_compiled_rules_give_the_same_pressures(seed, jitter):
-    old, new, xz2, r, rng = _moved(seed, jitter)
+def test_compiled_rules_give_the_same_pressures(seed, jitter, flat):
+    old, new, xz2, r, rng = _moved(seed, jitter, flat)
     U_old = rng.standard_normal(old.n_pores)
     valid = rng.random(old.n_pores) > 0.2  # pinched old pores pass on nothing
     U, rule = pressures_by_rule(old, U_old, valid, new)
@@ -170,6 +219,8 @@ def test_compiled_rules_give_the_same_pressures(seed, jitter):
     assert_same(rule_c, rule, "rule")
     assert_same(Uc, U, "U")
     assert set(np.unique(rule)) >= {1, 2, 3}
+    if flat:  # rules (a) and (b) on vertex sets with a wall in them
+        assert {1, 2} <= set(rule[new.pore_walls.any(axis=0)].tolist())
 
 
 def test_spread_reaches_pores_far_from_any_known_one_in_rounds():
@@ -182,9 +233,10 @@ def test_spread_reaches_pores_far_from_any_known_one_in_rounds():
         assert np.isnan(U[4]) and rule.tolist() == [0, 3, 3, 3, 0]
 
 
+@pytest.mark.parametrize("flat", [False, True])
 @pytest.mark.parametrize("jitter", [0.0, 0.02, 0.3, 3.0])
-def test_compiled_overlaps_are_the_same(jitter):
-    old, new, xz2, r, _ = _moved(3, jitter)
+def test_compiled_overlaps_are_the_same(jitter, flat):
+    old, new, xz2, r, _ = _moved(3, jitter, flat)
     for got, want in zip(kp.REMESH.pore_overlaps(old, new, xz2), pg.pore_overlaps(old, new, xz2)):
         assert_same(got, want, "overlaps")
 
@@ -200,9 +252,10 @@ def test_compiled_clip_areas_of_triangles_in_all_positions():
     assert_same([kp._clip_area(P, P, *scratch) for P in subj], np.abs(pg._signed_area(subj)), "a triangle with itself")
 
 
+@pytest.mark.parametrize("flat", [False, True])
 @pytest.mark.parametrize("transfer", ["paper", "conserving"])
-def test_compiled_remesh_moves_the_same_water(transfer):
-    old, new, xz2, r, rng = _moved(4, 0.05)
+def test_compiled_remesh_moves_the_same_water(transfer, flat):
+    old, new, xz2, r, rng = _moved(4, 0.05, flat)
     A_old, A_new = pg.measure(old, xz2, r).void_area, pg.measure(new, xz2, r).void_area
     W0 = A_old * (1 + 0.1 * rng.random(old.n_pores))
     waters = []
@@ -227,3 +280,66 @@ def test_a_wall_code_out_of_range_is_refused():
     for steps in (None, kp.BUILD):
         with pytest.raises(ValueError, match="walls: codes must be 0-3, got 7"):
             pg.build_pores(xz, r, eps_m, l_m, walls=walls, steps=steps)
+
+
+def test_the_flat_wall_packings_exercise_every_branch():
+    """Corners, wall pores of exact lattices, discs beyond the reach of a wall but within twice it
+    (no foot), hidden disc-foot links put in by flips."""
+    nets = {name: _build(name) for name in FLAT}
+    on_walls = nets["square-in-a-box"].pore_walls
+    # along a wall of n discs: n - 1 pores between their feet and the two corner pores
+    assert on_walls.sum(axis=1).tolist() == [8, 7, 7, 8] and (on_walls.sum(axis=0) == 2).sum() == 4
+    xz, r, eps_m, l_m, walls = FLAT["box-reach"]()
+    net, reach = nets["box-reach"], eps_m + l_m
+    w, i = np.nonzero([(wall.gap(xz, r) > reach) & (wall.gap(xz, r) < 2 * reach) for wall in walls])
+    assert len(i) > 5 and not np.isin(net.wall_vertices.foot(w, i), net.tri).any()
+    net, missing = nets["box-long-lm"], _missing_with_flat_walls("box-long-lm", pg._missing_pairs)[1]
+    feet = missing[missing[:, 1] >= net.n_discs]  # a disc and its own foot, not in the regular triangulation
+    m = net.wall_vertices.n_vertices
+    assert len(feet) and np.isin(feet @ [m, 1], net.links @ [m, 1]).any()
+
+
+def _missing_with_flat_walls(name, missing_pairs):
+    """The missing pairs of the regular triangulation of FLAT[name]'s build, by missing_pairs, and
+    the NumPy ones."""
+    xz, r, eps_m, l_m, walls = FLAT[name]()
+    wv, reach = WallVertices(walls, len(r)), eps_m + l_m
+    points, radii, active = wv.positions(xz), wv.radii(r), wv.active(xz, r, reach)
+    tri = active[pg.regular_triangulation(points[active], radii[active])]
+    return missing_pairs(points, radii, reach, tri, wv), pg._missing_pairs(points, radii, reach, tri, wv)
+
+
+@pytest.mark.parametrize("name", ["box-reach", "box-long-lm"])
+def test_missing_pairs_with_flat_walls_are_those_of_numpy(name):
+    got, want = _missing_with_flat_walls(name, kp._missing_pairs)
+    assert sorted(map(tuple, got.tolist())) == sorted(map(tuple, want.tolist())) and len(want)
+
+
+def _owner_shifted(wv):
+    """``wv`` with each foot given to the next disc: a rule that links a disc to another disc's foot."""
+    bad = copy.copy(wv)
+    bad.owner = np.where((wv.owner >= 0) & (np.arange(wv.n_vertices) >= wv.n), (wv.owner + 1) % wv.n, wv.owner)
+    return bad
+
+
+def _off_the_walls(wv):
+    """``wv`` with no wall vertex on a wall: a rule that links no two wall vertices (no wall edge)."""
+    bad = copy.copy(wv)
+    bad.bits = np.zeros_like(wv.bits)
+    return bad
+
+
+@pytest.mark.parametrize("name,wrong", [("hex-on-a-wall", _owner_shifted), ("box-long-lm", _owner_shifted),
+                                        ("square-in-a-box", _off_the_walls), ("box-long-lm", _off_the_walls)])
+def test_a_wrong_link_rule_in_the_kernels_gives_another_network(name, wrong):
+    """The comparisons above can fail: the kernels given the vertices' owner or bits of a wrong
+    link rule build a network other than the NumPy one."""
+    def missing_pairs(xz, r, reach, tri, wall_vertices):
+        return kp._missing_pairs(xz, r, reach, tri, wrong(wall_vertices))
+
+    def faces(*args, wall_vertices):
+        return kp._faces(*args, wall_vertices=wrong(wall_vertices))
+
+    steps = kp.BUILD._replace(missing_pairs=missing_pairs, faces=faces)
+    with pytest.raises(AssertionError):
+        assert_same_network(_build(name, steps=steps), _build(name))
