@@ -119,8 +119,8 @@ class PaperLaw:
             if keep is not None:
                 sel[sel] = keep(i[sel], j[sel])
             return sel
-        wall_du = self.walls.shift - self.shift_prev
-        return self.contact.touching_at(*self._on_vertices(xz, du, wall_du), self.dt, discs)
+        # the feet's increments do not matter: only pairs of two discs are evaluated
+        return self.contact.touching_at(*self._on_vertices(xz, du, self.wall_du), self.dt, discs)
 
     def wall_forces(self):
         """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the

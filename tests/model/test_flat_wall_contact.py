@@ -3,7 +3,7 @@ touches a flat wall as a fixed wall disc of radius 0 at its foot, at rest."""
 import numpy as np
 import pytest
 
-from engines.model.contact import ContactSettings
+from engines.model.contact import E_S, ContactSettings
 from engines.model.flat_walls import FlatWall
 from engines.model.paper_law import PaperLaw
 
@@ -11,11 +11,11 @@ R, RHO, DT = 0.45e-3, 2650.0, 1e-6
 M = RHO * np.pi * R**2
 
 
-def law(radii, flat=(), spring="d", mu=0.5, spin=1.0):
+def law(radii, flat=(), spring="d", mu=0.5, spin=1.0, adjust=True):
     """The paper's law for disc 0 (mobile; inertia ``spin`` x m r^2 / 2) and fixed discs of
-    ``radii`` after it, and flat walls."""
+    ``radii`` after it, and flat walls; ``adjust``: eq 18-24 on."""
     s = ContactSettings(spring=spring, kn=1.4e5, eta_n=2.6, ks=3.5e4, eta_s=0.6, mu=mu, f_max=1.5, eps_m=2e-5,
-                        restitution=0.3)
+                        restitution=0.3, separation_adjustment=adjust)
     r = np.array([R, *radii])
     return PaperLaw(s, r, np.arange(len(r)) == 0, np.full(len(r), M), np.full(len(r), spin * M * R**2 / 2), DT,
                     flat_walls=flat)
@@ -108,3 +108,74 @@ def test_a_wall_sliding_under_a_disc_is_the_disc_sliding_over_the_wall(spin):
     still = drop(law([], (FlatWall(0, 0.0, +1),), spring="d"), lambda k: 0.0, 200, x_of=lambda k: x0 - 2e-8 * k)
     np.testing.assert_allclose(pressed, [a[0] for a in still], rtol=1e-9, atol=1e-15)  # x0 - s and s: round-off
     assert np.array(pressed)[-1, 0] > 0.1  # pushed away from the face [N]
+
+
+def test_a_disc_leaving_a_moving_face_is_adjusted_as_one_leaving_a_fixed_face():
+    """Eq 18-24 with a translated wall (pattern (a), the wall at its velocity): a disc pressed into
+    a face rising at 2 mm/s and leaving it gets the adjusted velocity of the same relative motion
+    against a fixed face plus the face's velocity; with the feet's velocity taken as zero, or as
+    du dt, the adjustment would differ."""
+    V = 2e-3  # m/s, the face's speed along its normal
+    top = R + 2e-5 + 1e-6  # 1 um off contact: it touches at 1 cm/s (the approach velocity of eq 21)
+    path = lambda k: top - 1e-8 * k if k < 300 else top - 3e-6 + 2e-8 * (k - 300)  # in, then out
+    fixed = [a[2] for a in drop(law([], (FlatWall(1, 0.0, +1),), spring="b"), path, 600) if a[2]]
+    lw, moving = law([], (FlatWall(1, 0.0, +1),), spring="b"), []
+    for k in range(600):
+        lw.move_walls([[0.0, V * DT * k]])
+        _, fixes = lw.step(np.array([[0.0, path(k) + V * DT * k]]))
+        if fixes:
+            moving.append(fixes)
+    assert len(fixed) == len(moving) == 1 and 0 < fixed[0][0][1] < 0.5 * 2e-8 / DT  # slowed from 2 cm/s
+    np.testing.assert_allclose(moving[0][0], fixed[0][0] + [0.0, V], rtol=1e-6)
+    assert not any(a[2] for a in drop(law([], (FlatWall(1, 0.0, +1),), spring="b", adjust=False), path, 600))
+
+
+def test_two_discs_parting_beside_a_wall_keep_their_momentum():
+    """Eq 24 (pattern (d)) in a law with flat walls: two free discs that collided and fly apart too
+    fast, near but not touching a wall, get the adjustment of the law without walls."""
+    s = ContactSettings(spring="a", kn=1.4e5, eta_n=0.0, restitution=0.3)
+    r, m = np.array([R, 0.7 * R]), np.array([M, 0.49 * M])
+    laws = [PaperLaw(s, r, np.ones(2, bool), m, m * r**2 / 2, DT, flat_walls=f) for f in ((), (FlatWall(1, 0.0, +1),))]
+    z = 3 * R  # 2 R above the face
+    got = []
+    for lw in laws:
+        for gap in (5e-9, -5e-9):  # approach at 10 mm/s: contact
+            lw.step(np.array([[0.0, z], [r.sum() + gap, z]]))
+        _, fixes = lw.step(np.array([[0.0, z], [r.sum() + 5e-9, z]]), vel=np.array([[-0.3, 0.0], [0.5, 0.0]]))
+        got.append(fixes)
+    assert set(got[0]) == set(got[1]) == {0, 1}
+    for d in (0, 1):
+        np.testing.assert_allclose(got[1][d], got[0][d], rtol=1e-12)
+
+
+def test_contact_pairs_are_the_disc_pairs_the_next_step_finds():
+    """PaperLaw.contact_pairs with flat walls: the pairs of two discs touching at xz, with the
+    normal and elastic shear forces the next step computes there (eq 17: du and dpsi = omega dt
+    of that step; the spin set so that it matters), the disc-foot pairs left out, ``keep``
+    applied; without walls the same pairs."""
+    s = ContactSettings(spring="b", kn=1.4e5, ks=3.5e4, mu=0.5, eps_m=2e-5)
+    r = np.full(3, R)
+    xz0 = np.array([[R, R], [3 * R - 1e-6, R], [5 * R - 2e-6, R]])  # a row on the bottom face, pressed together
+    xz1 = xz0 + [[1e-8, -1e-7], [0.0, -1e-7], [-1e-8, -1e-7]]
+    for walls in ((), (FlatWall(1, 0.0, +1),)):
+        lw = PaperLaw(s, r, np.ones(3, bool), np.full(3, M), np.full(3, M * R**2 / 2), DT, flat_walls=walls)
+        assert lw.contact_pairs(xz0)[0].tolist() == [[0, 1], [1, 2]]  # before any step, as a run's first snapshot
+        lw.step(xz0)
+        lw.omega[:] = [50.0, -30.0, 10.0]
+        pairs, fn, es = lw.contact_pairs(xz1)
+        kept = lw.contact_pairs(xz1, keep=lambda i, j: (i == 1) & (j == 2))[0]
+        lw.step(xz1)
+        c = lw.contact
+        t = c.touching & (c.j < 3)
+        assert pairs.tolist() == np.column_stack([c.i[t], c.j[t]]).tolist() == [[0, 1], [1, 2]]
+        np.testing.assert_allclose(fn, c.f_n[t], rtol=1e-12)
+        np.testing.assert_allclose(es, c.state[t, E_S], rtol=1e-12)
+        assert np.all(np.abs(es) > 0) and kept.tolist() == [[1, 2]]
+
+
+def test_wall_forces_has_a_row_for_every_wall():
+    """A wall no disc touches pushes with 0: wall_forces is (W,) in the walls' order."""
+    lw = law([], (FlatWall(1, 0.0, +1), FlatWall(0, -5 * R, +1)), spring="b")
+    lw.step(np.array([[0.0, R + 2e-5 - 2e-6]]))
+    f = lw.wall_forces()
+    assert f.shape == (2,) and f[0] > 0 and f[1] == 0.0

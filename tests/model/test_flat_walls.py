@@ -367,3 +367,46 @@ def test_a_water_model_measures_at_its_moved_walls_and_rebuilds_there():
     model.rebuild(xz)
     assert np.allclose(model.water.net.wall_vertices.faces()[2], walls[2].position + 0.2)
     assert model.water.balance_error() < 1e-13
+
+
+def test_the_wall_vertices_of_a_box_are_numbered_as_documented():
+    """WallVertices of a box (bottom, left, right, top) for 3 discs: the feet N + w N + i, then one
+    corner per pair of walls of different axes, owner -1 and both walls' bits; radii 0 for all of
+    them; the links disc - foot of the active vertices, exactly."""
+    walls = box(10.0, 10.0)
+    wv = WallVertices(walls, 3)
+    assert wv.corners.tolist() == [[0, 1], [0, 2], [1, 3], [2, 3]]
+    assert wv.n_vertices == 3 + 4 * 3 + 4
+    assert wv.owner.tolist() == [0, 1, 2] * 5 + [-1] * 4
+    assert wv.bits.tolist() == [0] * 3 + [1] * 3 + [2] * 3 + [4] * 3 + [8] * 3 + [3, 5, 10, 12]
+    np.testing.assert_array_equal(wv.radii([1.0, 2.0, 3.0]), [1.0, 2.0, 3.0] + [0.0] * 16)
+    xz = np.array([[1.5, 1.2], [5.0, 1.2], [5.0, 5.0]])
+    active = wv.active(xz, np.ones(3), 0.5)  # disc 0 in the corner (0.5 from the left: reach), disc 1 on the bottom
+    assert active.tolist() == [0, 1, 2, 3, 4, 6, 15]
+    assert wv.disc_feet(active).tolist() == [[0, 3], [1, 4], [0, 6]]
+
+
+def test_bad_wall_sets_and_discs_on_a_face_are_refused_in_one_line():
+    xz, r = lifted_row(0.0)
+    with pytest.raises(ValueError, match=r"^flat wall 0 \(z = 0 m, inward \+1\): disc 2 has its centre at 0 m, not inside$"):
+        xz_on = xz.copy()
+        xz_on[2, 1] = 0.0  # on the face: refused, not only beyond it
+        pg.build_pores(xz_on, r, l_m=0.1, flat_walls=(bottom(),))
+    for a, b in ((FlatWall(0, 10.0, +1), FlatWall(0, 0.0, -1)), (FlatWall(0, 5.0, +1), FlatWall(0, 5.0, -1))):
+        with pytest.raises(ValueError, match="parallel walls must face each other"):  # facing away; one plane
+            WallVertices((a, b), 3)
+    WallVertices((FlatWall(0, 0.0, +1), FlatWall(0, 10.0, -1)), 3)  # facing each other: taken
+    with pytest.raises(TypeError, match="^flat_walls: expected FlatWall instances$"):
+        WallVertices(({"axis": 0},), 3)
+    with pytest.raises(ValueError, match=r"^FlatWall: axis must be 0 \(x = position\) or 1 \(z = position\), got 2$"):
+        FlatWall(2, 0.0, +1)
+    with pytest.raises(ValueError, match=r"^FlatWall: position must be finite \[m\], got nan$"):
+        FlatWall(1, float("nan"), +1)
+
+
+def test_the_tables_of_flat_walls_say_which_move():
+    from engines.model.flat_walls import as_tables
+    walls = box(10.0, 10.0)
+    assert [w["moves"] for w in as_tables(walls)] == [False] * 4
+    assert [w["moves"] for w in as_tables(walls, np.array([True, False, False, True]))] == [True, False, False, True]
+    assert as_tables(walls)[2] == {"axis": "x", "position": 10.0, "inward": -1, "boundary": "undrained", "moves": False}
