@@ -125,9 +125,9 @@ def disc_dt_bound(r, c, contacts=CONTACTS_PER_DISC):
     rotation: every disc turns by θ in the same sense; each shear spring is stretched by
     r θ + r θ = 2 r θ (two neighbours turning alike move their contact points oppositely), so in
     the coordinate r θ a disc has the stiffness (Z/2)(2²) k_s = 2 Z k_s and the mass I/r² = m/2:
-    ω_rot² = 4 Z k_s / m, c_rot = 2 Z c_s. Against one fixed neighbour the same disc has
-    ω² = 3 k_s/m (translation and rotation coupled), between two 4 k_s/m: the rotation is √2–2
-    times faster than the translation k_s/m of the same shear springs;
+    ω_rot² = 4 Z k_s / m, c_rot = 2 Z c_s. Against one fixed neighbour a disc has ω² = 3 k_s/m
+    (translation and rotation coupled), between two fixed ones 4 k_s/m: √3 and √2 times the
+    translation on the same shear springs (k_s/m, 2 k_s/m);
 
     translation: neighbours moving oppositely (the alternating mode, an upper bound of every
     translational mode by Gershgorin's splitting of each contact's energy, δ² <= 2 δ_i² + 2 δ_j²):
@@ -156,12 +156,12 @@ def stable_dt(r, c):
 
     The scaling is the fastest mode's, the rotation of the lightest discs damped by the shear
     dashpots (disc_dt_bound), so it goes as √(ρ r_min / (kn f_w · ks/kn)) for ks/kn above ≈ 1/9.
-    Checked against the exact limit 4 M − dt² K − 2 dt C >= 0 of the contact networks of
-    1000-disc packings at rest (docs/BIAXIAL.md): 5.15e-5 s at Table 2's constants (the critical
+    Checked against the exact limit 4 M − dt² K − 2 dt C >= 0 of the contact network of a
+    1000-disc packing at rest (docs/BIAXIAL.md): 5.15e-5 s at Table 2's constants (the critical
     mode is > 90 % rotation), 3.66e-5 at ks/kn = 0.5, 2.59e-5 at ks/kn = 1, 3.64e-5 at kn × 2 or
-    f_w = 2, 7.2e-5 at ks/kn = 0.125: the rule (5.00, 3.54, 2.51, 3.54, 3.54e-5 s, and 5e-5)
-    stays 3 % below each, and every one comes to rest at it (yade_scripts/biaxial_stability.py);
-    the former factor √(1 + 4 ks/kn) gave 4.08e-5 s at ks/kn = 0.5, above the limit, and rang."""
+    f_w = 2, 7.2e-5 at ks/kn = 0.125: the rule (5.00, 3.54, 2.50, 3.54, 5.00e-5 s) stays at
+    least 3 % below each, and every one comes to rest at it (yade_scripts/biaxial_stability.py);
+    the former scaling 1/√(kn (1 + 4 ks/kn)) gave 4.08e-5 s at ks/kn = 0.5, above the limit, and rang."""
     return PAPER_DT * min(1.0, disc_dt_bound(r, c) / disc_dt_bound(TABLE1_RMIN, CemContact()))
 
 

@@ -198,6 +198,26 @@ def servo_rates(r, contact, settings):
     return rates
 
 
+def rest_servo(rates, depth, tolerance, unbalanced, state):
+    """A PyRunner callback servoing both directions of the cell on state["target"] [Pa] with
+    ``rates`` (servo_rates) until σx, σz are within ``tolerance`` of it and the unbalanced-force
+    ratio is below ``unbalanced``: then the cell stops, state["done"] is set and YADE pauses.
+    state["sigma"] holds the last (σx, σz)."""
+    from yade import O, utils
+    from yade.minieigenHP import Matrix3
+
+    def servo():
+        target = state["target"]
+        sx, sz = state["sigma"] = yade_cell_stress(depth)
+        r = rates(target, (sx, sz))
+        if max(abs(sx - target), abs(sz - target)) < tolerance * target and utils.unbalancedForce() < unbalanced:
+            state["done"] = True
+            r = (0.0, 0.0)
+            O.pause()
+        O.cell.velGrad = Matrix3(-r[0], 0, 0, 0, 0, 0, 0, 0, -r[1])
+    return servo
+
+
 def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     """Pack discs r (radii [m]) in a periodic cell with YADE (resets the YADE scene) to each
     confining stress of ``sigma3`` [Pa] in turn, lowest first: one random placement, shrunk to
@@ -209,7 +229,6 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     ``settings.max_time`` (simulated seconds per target).
     """
     from yade import O, utils
-    from yade.minieigenHP import Matrix3
 
     from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
 
@@ -226,20 +245,9 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     O.periodic = True
     O.cell.setBox(cell[0], depth, cell[1])
     add_discs(xz, r, contact, y=depth / 2)
-    rate = servo_rates(r, contact, s)
     state = {"sigma": (0.0, 0.0), "target": None, "done": False}
-
-    def servo():
-        target = state["target"]
-        sx, sz = state["sigma"] = yade_cell_stress(depth)
-        rates = rate(target, (sx, sz))
-        if max(abs(sx - target), abs(sz - target)) < s.tolerance * target and utils.unbalancedForce() < s.unbalanced:
-            state["done"] = True
-            rates = (0.0, 0.0)
-            O.pause()
-        O.cell.velGrad = Matrix3(-rates[0], 0, 0, 0, 0, 0, 0, 0, -rates[1])
-
-    O.engines = yade_engines([py_runner(servo, s.check_every)])
+    O.engines = yade_engines([py_runner(rest_servo(servo_rates(r, contact, s), depth, s.tolerance, s.unbalanced, state),
+                                        s.check_every)])
     O.dt = s.dt
     blocks = {}
     for target in sorted(set(targets)):
@@ -296,21 +304,11 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     O.cell.setBox(block.cell[0], depth, block.cell[1])
     add_discs(block.xz, block.r, contact, y=depth / 2)
     pack = PackingSettings(dt=s.dt)
-    rate = servo_rates(block.r, contact, pack)
-    st = {"done": False, "sigma": (0.0, 0.0)}
+    st = {"done": False, "sigma": (0.0, 0.0), "target": s.sigma3}
     rec = {k: [] for k in ("strain", "sigma1", "sigma3_applied", "lateral_strain")}
     size = lambda: (float(O.cell.hSize[0, 0]), float(O.cell.hSize[2, 2]))  # noqa: E731
-
-    def equilibrium():
-        sx, sz = st["sigma"] = yade_cell_stress(depth)
-        rates = rate(s.sigma3, (sx, sz))
-        if max(abs(sx - s.sigma3), abs(sz - s.sigma3)) < s.tolerance * s.sigma3 and utils.unbalancedForce() < s.unbalanced:
-            st["done"] = True
-            rates = (0.0, 0.0)
-            O.pause()
-        O.cell.velGrad = Matrix3(-rates[0], 0, 0, 0, 0, 0, 0, 0, -rates[1])
-
-    O.engines = yade_engines([py_runner(equilibrium, pack.check_every)])
+    O.engines = yade_engines([py_runner(rest_servo(servo_rates(block.r, contact, pack), depth, s.tolerance,
+                                                   s.unbalanced, st), pack.check_every)])
     O.dt = s.dt
     O.run(int(s.max_equilibrium_time / s.dt), True)
     sx, sz = st["sigma"]
@@ -350,7 +348,5 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     curve = Curve(s.sigma3, a["strain"], a["sigma1"], a["sigma1"], a["sigma3_applied"], a["lateral_strain"])
     res = BiaxialResult(curve, s, eq, O.iter, time.time() - t0)
     if log:
-        eps_f, q_f = curve.peak()
-        log(f"  sigma3 = {s.sigma3:g} Pa: peak deviator {q_f:.1f} Pa at strain {100 * eps_f:.2f} %, "
-            f"E50 {curve.e50():.4g} Pa; {O.iter} steps in {res.wall_s:.1f} s")
+        log(res.describe())
     return res
