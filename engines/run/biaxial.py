@@ -96,6 +96,8 @@ def check(args, ap):
 
     contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho,
                          width_factor=args.width_factor, rotation=args.rotation)
+    if args.specimen == "periodic" and args.side_load != "exposed":
+        ap.error("--side-load: the test on the periodic cell has no side bands to load (σ3 is the cell's stress)")
     r = table1_radii(args.n_discs)
     args.dt = args.dt or stable_dt(r, contact)
     args.packing_dt = args.packing_dt or args.dt

@@ -47,9 +47,8 @@ HYPOTHESES = {
     "width_diameter": ({"width_factor": 2.0}, (15.0,)),
 }
 HYP_STRAIN = 5.0                              # % (the main grid's)
-HYP_SIZE = (250, 1000)                        # discs of the size-effect rows, φe = 15°, σ3 = 200 Pa
+HYP_SMALL = 250                               # discs of the size-effect runs (against 1000), φe = 15°, σ3 = 200 Pa
 HYP_SIZE_VARIANTS = ("reference", "periodic_cell")  # do the bands make the size effect?
-HYP_PAPER = {"phi_star_deg": {15.0: 27.4}, "peak_deviator_200_pa": PAPER["peak_deviator_200_pa"]}
 
 
 def hypothesis_name(variant, phi_e, sigma3, seed, n_discs=1000):
@@ -68,9 +67,8 @@ def hypothesis_points(seeds):
                     for p in phis for s3 in SIGMA3]
     for s in seeds:
         for variant in HYP_SIZE_VARIANTS:
-            n = HYP_SIZE[0]
-            out.append((hypothesis_name(variant, 15.0, 200.0, s, n),
-                        dict(phi_e=15.0, sigma3=200.0, max_strain=HYP_STRAIN, seed=s, n_discs=n, **HYPOTHESES[variant][0])))
+            out.append((hypothesis_name(variant, 15.0, 200.0, s, HYP_SMALL), dict(
+                phi_e=15.0, sigma3=200.0, max_strain=HYP_STRAIN, seed=s, n_discs=HYP_SMALL, **HYPOTHESES[variant][0])))
     return out
 
 
@@ -225,7 +223,7 @@ def analyse_hypotheses(runs, seeds):
     """The hypotheses table's numbers: per variant and φe, over the packing seeds whose four σ3
     finished: φ*, c* (Mohr–Coulomb over the four circles), and over the finished σ3 = 200 Pa jobs:
     peak q, E50, the porosity after packing (1 − solid fraction); the disc-count dependence
-    q_f(200 Pa) at HYP_SIZE[0] over that at 1000 discs (seed by seed); a verdict against the
+    q_f(200 Pa) at HYP_SMALL over that at 1000 discs (seed by seed); a verdict against the
     reference at the same φe; the jobs done and failed."""
     rows, done, failed = [], 0, []
     for variant, (opts, phis) in HYPOTHESES.items():
@@ -258,15 +256,15 @@ def analyse_hypotheses(runs, seeds):
         size = []
         if row["variant"] in HYP_SIZE_VARIANTS and row["phi_e_deg"] == 15.0:
             for s in seeds:
-                small, _ = read_run(runs, hypothesis_name(row["variant"], 15.0, 200.0, s, HYP_SIZE[0]))
+                small, _ = read_run(runs, hypothesis_name(row["variant"], 15.0, 200.0, s, HYP_SMALL))
                 large, _ = read_run(runs, hypothesis_name(row["variant"], 15.0, 200.0, s))
+                done += int(bool(small) and "error" not in small)
                 if small and large and "error" not in small and "error" not in large:
-                    done += 1
                     size.append(small["per_sigma3"][0]["peak_deviator_pa"] / large["per_sigma3"][0]["peak_deviator_pa"])
         row["size_ratio"] = mean_sd(size)
         ref = next(r for r in rows if r["variant"] == "reference" and r["phi_e_deg"] == row["phi_e_deg"])
         row["verdict"] = "reference" if row is ref else verdict(
-            row, ref, HYP_PAPER["phi_star_deg"].get(row["phi_e_deg"]), HYP_PAPER["peak_deviator_200_pa"].get(row["phi_e_deg"]))
+            row, ref, PAPER["phi_star_deg"].get(row["phi_e_deg"]), PAPER["peak_deviator_200_pa"].get(row["phi_e_deg"]))
     return {"seeds": list(seeds), "rows": rows, "jobs_done": done, "jobs_failed": sorted(failed),
             "jobs_total": len(hypothesis_points(seeds))}
 
@@ -279,14 +277,14 @@ def write_hypotheses(res, json_path, md_path):
              f"{HYP_STRAIN:g} % strain; mean ± s.d. over packings; {res['jobs_done']} of {res['jobs_total']} jobs done"
              + (f", {len(res['jobs_failed'])} failed" if res["jobs_failed"] else "") + "):", "",
              "| variant | options | φe | φ* | c* [Pa] | peak q at 200 Pa | E50 at 200 Pa | porosity after packing | "
-             f"q_f({HYP_SIZE[0]} discs) / q_f(1000) | verdict against the reference |", "|---|---|---|---|---|---|---|---|---|---|"]
+             f"q_f({HYP_SMALL} discs) / q_f(1000) | verdict against the reference |", "|---|---|---|---|---|---|---|---|---|---|"]
     for r in res["rows"]:
         opts = ", ".join(f"{k} = {v}" for k, v in r["options"].items()) or "defaults"
         lines.append(f"| {r['variant']} | {opts} | {r['phi_e_deg']:g}° | {_ms(r['phi_star_deg'], unit='°')} | "
                      f"{_ms(r['c_star_pa'])} | {_ms(r['peak_200_pa'], '{:.0f}')} | {_ms(r['e50_200_pa'], '{:.3g}')} | "
                      f"{_ms(r['porosity'], '{:.4f}')} | {_ms(r['size_ratio'], '{:.2f}')} | {r['verdict']} |")
-    lines += ["", f"Paper: φ* = {HYP_PAPER['phi_star_deg'][15.0]}° at φe = 15°; peak q at 200 Pa ≈ "
-              + ", ".join(f"{v:g} Pa (φe = {k:g}°)" for k, v in HYP_PAPER["peak_deviator_200_pa"].items()) + "."]
+    lines += ["", f"Paper: φ* = {PAPER['phi_star_deg'][15.0]}° at φe = 15°; peak q at 200 Pa ≈ "
+              + ", ".join(f"{v:g} Pa (φe = {k:g}°)" for k, v in PAPER["peak_deviator_200_pa"].items()) + "."]
     with open(md_path, "w") as f:
         f.write("\n".join(lines) + "\n")
     return "\n".join(lines)
