@@ -235,7 +235,7 @@ def test_hypotheses_table_from_synthetic_runs(tmp_path):
     assert ref["phi_star_deg"]["mean"] == pytest.approx(22.0, abs=1e-6) and ref["phi_star_deg"]["n"] == 3
     assert abs(ref["c_star_pa"]["mean"]) < 1e-6
     assert ref["e50_200_pa"]["mean"] == pytest.approx(1e4, rel=1e-3)
-    assert ref["porosity"]["mean"] == pytest.approx(0.17)
+    assert ref["porosity"]["mean"] == pytest.approx(0.17) and ref["sigma3_applied_ratio"]["mean"] == pytest.approx(1.0)
     q = lambda deg: 400 * math.sin(math.radians(deg)) / (1 - math.sin(math.radians(deg)))  # noqa: E731
     assert ref["size_ratio"]["mean"] == pytest.approx(np.mean([q(d + 0.3) / q(d) for d in (21.5, 22, 22.5)]))
     assert locked["verdict"].startswith(f"φ* +4.0 ± {1.96 * math.sqrt(2 * 0.25 / 3):.1f}°, "

@@ -222,13 +222,15 @@ def verdict(row, ref, paper_phi, paper_q):
 def analyse_hypotheses(runs, seeds):
     """The hypotheses table's numbers: per variant and φe, over the packing seeds whose four σ3
     finished: φ*, c* (Mohr–Coulomb over the four circles), and over the finished σ3 = 200 Pa jobs:
-    peak q, E50, the porosity after packing (1 − solid fraction); the disc-count dependence
+    peak q, E50, the porosity after packing (1 − solid fraction), the confining stress applied
+    during the test over the nominal σ3 (the side loads over the covered height, the cell's σx);
+    the disc-count dependence
     q_f(200 Pa) at HYP_SMALL over that at 1000 discs (seed by seed); a verdict against the
     reference at the same φe; the jobs done and failed."""
     rows, done, failed = [], 0, []
     for variant, (opts, phis) in HYPOTHESES.items():
         for p in phis:
-            phi, c_star, q200, e200, poro = [], [], [], [], []
+            phi, c_star, q200, e200, poro, side = [], [], [], [], [], []
             for s in seeds:
                 peaks = {}
                 for s3 in SIGMA3:
@@ -245,13 +247,14 @@ def analyse_hypotheses(runs, seeds):
                         q200.append(peaks[s3])
                         e200.append(c.e50())
                         poro.append(1 - summary["packings"][0]["solid_fraction"])
+                        side.append(float(np.mean(c.sigma3_applied)) / s3)
                 if len(peaks) == len(SIGMA3):
                     f = mohr_coulomb_fit(list(peaks), [s3 + q for s3, q in peaks.items()])
                     phi.append(f[0])
                     c_star.append(f[1])
             rows.append({"variant": variant, "options": opts, "phi_e_deg": p, "phi_star_deg": mean_sd(phi),
                          "c_star_pa": mean_sd(c_star), "peak_200_pa": mean_sd(q200), "e50_200_pa": mean_sd(e200),
-                         "porosity": mean_sd(poro)})
+                         "porosity": mean_sd(poro), "sigma3_applied_ratio": mean_sd(side)})
     for row in rows:
         size = []
         if row["variant"] in HYP_SIZE_VARIANTS and row["phi_e_deg"] == 15.0:
@@ -277,12 +280,14 @@ def write_hypotheses(res, json_path, md_path):
              f"{HYP_STRAIN:g} % strain; mean ± s.d. over packings; {res['jobs_done']} of {res['jobs_total']} jobs done"
              + (f", {len(res['jobs_failed'])} failed" if res["jobs_failed"] else "") + "):", "",
              "| variant | options | φe | φ* | c* [Pa] | peak q at 200 Pa | E50 at 200 Pa | porosity after packing | "
-             f"q_f({HYP_SMALL} discs) / q_f(1000) | verdict against the reference |", "|---|---|---|---|---|---|---|---|---|---|"]
+             f"σ3 applied / nominal | q_f({HYP_SMALL} discs) / q_f(1000) | verdict against the reference |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in res["rows"]:
         opts = ", ".join(f"{k} = {v}" for k, v in r["options"].items()) or "defaults"
         lines.append(f"| {r['variant']} | {opts} | {r['phi_e_deg']:g}° | {_ms(r['phi_star_deg'], unit='°')} | "
                      f"{_ms(r['c_star_pa'])} | {_ms(r['peak_200_pa'], '{:.0f}')} | {_ms(r['e50_200_pa'], '{:.3g}')} | "
-                     f"{_ms(r['porosity'], '{:.4f}')} | {_ms(r['size_ratio'], '{:.2f}')} | {r['verdict']} |")
+                     f"{_ms(r['porosity'], '{:.4f}')} | {_ms(r['sigma3_applied_ratio'], '{:.3f}')} | "
+                     f"{_ms(r['size_ratio'], '{:.2f}')} | {r['verdict']} |")
     lines += ["", f"Paper: φ* = {PAPER['phi_star_deg'][15.0]}° at φe = 15°; peak q at 200 Pa ≈ "
               + ", ".join(f"{v:g} Pa (φe = {k:g}°)" for k, v in PAPER["peak_deviator_200_pa"].items()) + "."]
     with open(md_path, "w") as f:
