@@ -161,7 +161,9 @@ def stable_dt(r, c):
     mode is > 90 % rotation), 3.66e-5 at ks/kn = 0.5, 2.59e-5 at ks/kn = 1, 3.64e-5 at kn × 2 or
     f_w = 2, 7.2e-5 at ks/kn = 0.125: the rule (5.00, 3.54, 2.50, 3.54, 5.00e-5 s) stays at
     least 3 % below each, and every one comes to rest at it (yade_scripts/biaxial_stability.py);
-    the former scaling 1/√(kn (1 + 4 ks/kn)) gave 4.08e-5 s at ks/kn = 0.5, above the limit, and rang."""
+    the former scaling 1/√(kn (1 + 4 ks/kn)) gave 4.08e-5 s at ks/kn = 0.5, above the limit, and rang.
+    The margin holds for the default packing protocol (Z = 3.3–3.7): a packing made without
+    friction (Z = 4.06) has its limit at 4.96e-5 s, just below the paper's step."""
     return PAPER_DT * min(1.0, disc_dt_bound(r, c) / disc_dt_bound(TABLE1_RMIN, CemContact()))
 
 
