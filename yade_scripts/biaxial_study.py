@@ -1,7 +1,7 @@
 """`make biaxial`: seed 003's study (Murakami et al. §3) through the sweep runner.
 
     /usr/bin/python3 yade_scripts/biaxial_study.py --out out/biaxial [--workers 2] [--scheduler ADDR]
-                     [--parts main,calibration,stiffness,discs,rate,dt,stability] [--seeds 1,2,3]
+                     [--parts main,calibration,stiffness,discs,rate,dt,stability,hypotheses] [--seeds 1,2,3]
                      [--estimate] [--analyse-only] [--quick]
 
 Runs yade_scripts/biaxial.py jobs (one directory each under OUT/runs/, resumable) with Table 2's
@@ -17,8 +17,12 @@ packings (seeds), in this order (the judged comparisons first):
     rate        axial strain rate 25, 50, 100 %/min (the paper's three) on 1000 discs (Fig. 5)
     stability   time steps and contact widths at which a packed specimen stays at rest
                 (yade_scripts/biaxial_stability.py on the 1000-disc reference packing of the first seed)
-    sideload    (not in the default) φe = 15° with σ3 on every side disc's diameter (the paper's words
-                read literally), 1000 discs
+    hypotheses  (not in the default) the readings of the paper that may change strength, each against
+                the reference on 3 packings, one job per σ3 = 100–400 Pa, 1000 discs, 5 %: rotation
+                locked, the side load on every side disc's diameter, the test on the periodic cell,
+                a denser packing (φe = 0.5° while packing), the contact width = the diameter; at
+                φe = 15° (and 5° for rotation and packing); the size effect (250 against 1000 discs)
+                of the block and of the periodic cell -> OUT/hypotheses.json, hypotheses.md
 then writes into OUT: study.json (every number, the CPU cost), fit.json (the eq 2/4 curves calibrate.py
 reads), table.md (side by side with the paper, and the time steps) and the figures
 fig05_strain_rate.png, fig06_dt.png, fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png,
@@ -44,7 +48,7 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
     ap.add_argument("--scheduler", help="Dask scheduler address: run the jobs on that cluster")
     ap.add_argument("--parts", default=",".join(DEFAULT_PARTS),
-                    help=f"comma-separated parts of the study, of {', '.join(PARTS)} (default: all but sideload)")
+                    help=f"comma-separated parts of the study, of {', '.join(PARTS)} (default: all but hypotheses)")
     ap.add_argument("--seeds", default="1,2,3", help="packings per point (placement seeds)")
     ap.add_argument("--estimate", action="store_true", help="print the predicted CPU cost of what is to run, and stop")
     ap.add_argument("--analyse-only", action="store_true", help="do not run anything, analyse what is there")

@@ -27,6 +27,7 @@ import numpy as np
 
 from engines.run.command_line import batch_out
 from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.seeds.biaxial.cem_contact import ROTATIONS
 
 PERCENT_PER_MIN = 1.0 / 6000.0  # 1 %/min in 1/s
 
@@ -76,6 +77,14 @@ def parser():
     ap.add_argument("--side-load", choices=("exposed", "diameter"), default="exposed",
                     help="σ3 on the exposed projection of the side discs, or on every side disc's diameter")
     ap.add_argument("--aspect", type=number(float, 0.25, 4), default=1.0, help="specimen height / width [-]")
+    ap.add_argument("--rotation", choices=ROTATIONS, default="free",
+                    help="discs turn under the contact moments (free) or not (locked)")
+    ap.add_argument("--specimen", choices=("block", "periodic"), default="block",
+                    help="the block out of its cell with bands (2)-(5) (Fig. 2), or the test on the periodic cell itself")
+    ap.add_argument("--packing-phi-e", type=friction_angle,
+                    help="φe while packing [deg] (default: --phi-e; small = a denser packing), then --phi-e in the test")
+    ap.add_argument("--width-factor", type=number(float, 0, lo_open=True), default=1.0,
+                    help="contact width w over the harmonic mean of the radii (1; 2 = the diameter)")
     return ap
 
 
@@ -85,7 +94,10 @@ def check(args, ap):
     from engines.seeds.biaxial.cem_contact import CemContact, check_dt, stable_dt
     from engines.seeds.biaxial.periodic import table1_radii
 
-    contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho)
+    contact = CemContact(kn=args.kn, ks_ratio=args.ks_ratio, phi_e_deg=args.phi_e, rho=args.rho,
+                         width_factor=args.width_factor, rotation=args.rotation)
+    if args.specimen == "periodic" and args.side_load != "exposed":
+        ap.error("--side-load: the test on the periodic cell has no side bands to load (σ3 is the cell's stress)")
     r = table1_radii(args.n_discs)
     args.dt = args.dt or stable_dt(r, contact)
     args.packing_dt = args.packing_dt or args.dt
@@ -145,7 +157,8 @@ def write_outputs(out, args, contact, blocks, results, wall_s, error=None):
         "phi_star_deg": phi, "c_star_pa": c_star, "phi_star_fit": fit, "per_sigma3": per,
         "parameters": {k: (v if not isinstance(v, list) else list(v)) for k, v in vars(args).items()},
         "contact": {"kn_pa_per_m": contact.kn, "ks_ratio": contact.ks_ratio, "phi_e_deg": contact.phi_e_deg,
-                    "rho": contact.rho, "damping_ratio": contact.damping_ratio},
+                    "rho": contact.rho, "damping_ratio": contact.damping_ratio, "width_factor": contact.width_factor,
+                    "rotation": contact.rotation},
         "packings": [{"sigma3_pa": b.info["sigma3_pa"], "sigma_x_pa": b.sigma[0], "sigma_z_pa": b.sigma[1],
                       "solid_fraction": b.solid_fraction, "cell_m": list(b.cell), "steps": b.info["steps"]}
                      for b in blocks],
@@ -166,14 +179,18 @@ def run_test(args, contact):
     on each and write the outputs into args.out (module docstring). Returns (summary.json's
     record, None), or (None, message) when the packing failed (nothing more written), or
     (the record of the tests done or None, message) when a test failed."""
-    from engines.seeds.biaxial.periodic import PackingSettings, pack_periodic, table1_radii
+    from dataclasses import replace
+
+    from engines.seeds.biaxial.periodic import PackingSettings, pack_periodic, run_periodic_biaxial, table1_radii
     from engines.seeds.biaxial.specimen import BiaxialSettings, run_biaxial
 
     t0 = time.time()
     os.makedirs(args.out, exist_ok=True)
     log = lambda msg: print(msg, flush=True)  # noqa: E731
+    packing_contact = replace(contact, phi_e_deg=args.packing_phi_e) if args.packing_phi_e else contact
+    test = run_periodic_biaxial if args.specimen == "periodic" else run_biaxial
     try:
-        blocks = pack_periodic(table1_radii(args.n_discs), contact, args.sigma3,
+        blocks = pack_periodic(table1_radii(args.n_discs), packing_contact, args.sigma3,
                                PackingSettings(dt=args.packing_dt, aspect=args.aspect), np.random.default_rng(args.seed),
                                log=log)
     except (RuntimeError, ValueError) as e:
@@ -183,7 +200,7 @@ def run_test(args, contact):
     results = []
     try:
         for b in blocks:
-            results.append(run_biaxial(b, contact, BiaxialSettings(
+            results.append(test(b, contact, BiaxialSettings(
                 sigma3=b.info["sigma3_pa"], dt=args.dt, strain_rate=args.strain_rate * PERCENT_PER_MIN,
                 max_strain=args.max_strain / 100, side_load=args.side_load), log=log))
     except RuntimeError as e:  # keep what was done

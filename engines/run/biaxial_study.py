@@ -25,15 +25,17 @@ from engines.seeds.biaxial.study import (
     SENS_STRAIN,
     SIGMA3,
     SMALL_DISCS,
+    analyse_hypotheses,
     analyse_main,
     analyse_sensitivity,
     calibration_from,
     calibration_target,
-    ks_dt,
+    hypothesis_points,
     mean_sd,
     read_run,
     sensitivity_name,
     summarise,
+    write_hypotheses,
     write_table,
 )
 
@@ -79,7 +81,7 @@ def sensitivity_jobs(parts, seeds, quick=False):
         jobs += [sens(s, **small) for s in seeds]
     if "stiffness" in parts:
         jobs += [sens(s, kn=k, **small) for k in KNS for s in seeds]
-        jobs += [sens(s, ks_ratio=k, **ks_dt(k), **small) for k in KSS for s in seeds]
+        jobs += [sens(s, ks_ratio=k, **small) for k in KSS for s in seeds]
     if parts & {"discs", "rate", "stability"}:
         jobs += [sens(s) for s in seeds]
     if "discs" in parts:
@@ -88,10 +90,13 @@ def sensitivity_jobs(parts, seeds, quick=False):
         jobs += [sens(s, strain_rate=r) for r in RATES for s in seeds]
     if "dt" in parts:
         jobs += [sens(s, dt=dt, packing_dt=5e-5, **small) for dt in sorted(DTS, reverse=True) for s in seeds]
-    if "sideload" in parts:
-        jobs += [biaxial_job(f"sideload_diameter_seed{s}", quick=quick, phi_e=15.0, sigma3=(100.0, 400.0),
-                             max_strain=5.0, side_load="diameter", seed=s) for s in seeds]
     return jobs
+
+
+def hypothesis_jobs(seeds, quick=False):
+    """The hypotheses study (engines.seeds.biaxial.study.HYPOTHESES): one biaxial.py job per
+    variant, φe, σ3 and packing seed, and the size-effect runs."""
+    return [biaxial_job(name, quick=quick, **opts) for name, opts in hypothesis_points(seeds)]
 
 
 def stability_job(runs, seed):
@@ -114,13 +119,14 @@ def predicted_cpu_s(job):
     from engines.seeds.biaxial.periodic import table1_radii
     from engines.seeds.biaxial.specimen import BiaxialSettings
     from engines.run.biaxial import parser
-    from engines.seeds.biaxial.stability import CASES, REST_TIME
+    from engines.seeds.biaxial.stability import REST_TIME, cases
 
     script = job.argv[job.argv.index("-x") + 1]
     if script == STABILITY:
-        return sum(REST_TIME / dt for *_, dt in CASES) * MS_PER_STEP_1000 / 1000
+        return sum(REST_TIME / dt for _, dt in cases(table1_radii(1000), SENS_PHI)) * MS_PER_STEP_1000 / 1000
     a = parser().parse_args([x.replace("{out}", ".") for x in job.argv[job.argv.index("-x") + 2:]])
-    dt = a.dt or stable_dt(table1_radii(a.n_discs), CemContact(kn=a.kn, ks_ratio=a.ks_ratio, phi_e_deg=a.phi_e))
+    dt = a.dt or stable_dt(table1_radii(a.n_discs), CemContact(kn=a.kn, ks_ratio=a.ks_ratio, phi_e_deg=a.phi_e,
+                                                               width_factor=a.width_factor, rotation=a.rotation))
     scale = 5e-5 / (a.packing_dt or dt), 5e-5 / dt
     steps = (PACK_STEPS[0] + PACK_STEPS[1] * (len(a.sigma3) - 1)) * scale[0]
     steps += len(a.sigma3) * (EQUILIBRIUM_STEPS * scale[1] + (a.max_strain / 100) / (a.strain_rate / 6000) / dt
@@ -230,8 +236,15 @@ def run_study(out, parts, seeds, workers=2, scheduler=None, estimate_only=False,
     if estimate_only:
         jobs = (main_jobs(seeds, quick) if "main" in parts else []) + sensitivity_jobs(parts, seeds, quick)
         jobs += calibration_jobs(cal, seeds, quick)[2] if "calibration" in parts else []
+        jobs += hypothesis_jobs(seeds, quick) if "hypotheses" in parts else []
         estimate(jobs + ([stability_job(runs, seeds[0])] if "stability" in parts else []), runs)
         return None
+    if "hypotheses" in parts:
+        run(hypothesis_jobs(seeds, quick))
+        hyp = write_hypotheses(analyse_hypotheses(runs, seeds), os.path.join(out, "hypotheses.json"),
+                               os.path.join(out, "hypotheses.md"))
+        if parts == {"hypotheses"}:
+            return hyp
     if "main" in parts:
         run(main_jobs(seeds, quick))
         main_res = analyse_main(runs, seeds)

@@ -155,11 +155,28 @@ def test_cohesionless_contacts_give_no_cohesion(specimens):
     assert abs(c_star) < 0.2 * min(s3)
 
 
+def test_the_test_on_the_periodic_cell_holds_sigma3_and_loads_sigma1(blocks):
+    """The cell itself as the specimen: at rest at σ3 both ways, then compressed in z (400 %/min
+    to 1 %) with σx servoed on σ3: σ1 starts at σ3 and rises, σx stays at σ3, the strain is
+    the cell's shortening."""
+    from engines.seeds.biaxial.periodic import run_periodic_biaxial
+
+    b = blocks[1]
+    res = run_periodic_biaxial(b, CONTACT, BiaxialSettings(sigma3=300.0, strain_rate=4 / 60, max_strain=0.01))
+    c = res.curve
+    assert abs(res.equilibrium["sigma1_pa"] / 300 - 1) < 0.01 and res.equilibrium["unbalanced"] < 0.002
+    assert abs(c.sigma1[0] / 300 - 1) < 0.01 and c.peak()[1] > 0.3 * 300
+    assert np.all(np.abs(c.sigma3_applied[len(c.strain) // 4:] / 300 - 1) < 0.05)
+    assert c.strain[-1] == pytest.approx(0.01, abs=2e-4) and np.all(np.diff(c.strain) > 0)
+
+
 @pytest.mark.parametrize("args,needle", [
     (["--phi-e", "15", "--sigma3", "100,-200"], "--sigma3"),
     (["--phi-e", "90", "--sigma3", "100"], "--phi-e"),
     (["--phi-e", "0", "--sigma3", "100"], "--phi-e"),
     (["--phi-e", "15", "--sigma3", "100", "--dt", "1e-3"], "--dt"),
+    (["--phi-e", "15", "--sigma3", "100", "--specimen", "periodic", "--side-load", "diameter"], "--side-load"),
+    (["--phi-e", "15", "--sigma3", "100", "--rotation", "rolling"], "--rotation"),
 ])
 def test_bad_input_is_refused_in_one_line_before_anything_is_written(tmp_path, capsys, args, needle):
     from yade_scripts import biaxial
@@ -181,3 +198,45 @@ def test_an_unwritable_out_is_refused(tmp_path, capsys):
         biaxial.main(["--phi-e", "15", "--out", str(blocker / "run")])
     err = capsys.readouterr().err.strip()
     assert "--out" in err and len(err.splitlines()) == 1
+
+
+def test_a_disc_between_two_fixed_discs_turns_at_the_frequency_of_its_shear_springs():
+    """A disc between two fixed ones (contacts along x): its rotation feels both shear springs at
+    its radius, r θ each, with the inertia m r²/2, so it oscillates at ω² = 2 k_s r² / (m r²/2)
+    = 4 k_s / m, √2 times the z translation's 2 k_s / m; with the critical dashpots the leapfrog
+    limit of that mode (leapfrog_dt(2 k_s, 2 c_s, m/2)) separates decay from growth (which
+    friction caps: the disc then rings)."""
+    from yade import O
+
+    from engines.seeds.biaxial.cem_contact import disc_mass, leapfrog_dt
+
+    r = 1.4e-3
+
+    def spin(contact, dt, steps):
+        O.reset()
+        ids = add_discs([[-2 * r + 1e-6, 0.0], [0.0, 0.0], [2 * r - 1e-6, 0.0]], [r] * 3, contact)
+        for i in (ids[0], ids[2]):
+            O.bodies[i].state.blockedDOFs = "xyzXYZ"
+        O.engines = yade_engines()
+        O.dt = dt
+        O.bodies[ids[1]].state.angVel = (0, 1.0, 0)
+        w = []
+        for _ in range(steps):
+            O.step()
+            w.append(O.bodies[ids[1]].state.angVel[1])
+        return np.array(w)
+
+    elastic = CemContact(damping_ratio=1e-6)
+    _, ks, _, _ = pair_constants(r, r, elastic)
+    m = float(disc_mass(r, elastic.rho))
+    omega = math.sqrt(4 * ks / m)
+    dt = 2 * math.pi / omega / 400
+    w = spin(elastic, dt, 2000)  # five periods
+    up = np.nonzero((w[:-1] < 0) & (w[1:] >= 0))[0]
+    period = np.mean(np.diff(up)) * dt
+    assert period == pytest.approx(2 * math.pi / omega, rel=0.01)
+    _, ks, _, cs = pair_constants(r, r, CONTACT)
+    limit = leapfrog_dt(2 * ks, 2 * cs, m / 2)  # 2.1e-4 s; the translation's (mass m) is 3.9e-4 s
+    assert abs(spin(CONTACT, 0.97 * limit, 400)[-1]) < 1e-6
+    ringing = spin(CONTACT, 1.03 * limit, 400)  # grows until the contacts slip, then rings
+    assert abs(ringing[5]) > abs(ringing[0]) and abs(ringing[-1]) > 0.1

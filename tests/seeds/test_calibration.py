@@ -192,3 +192,57 @@ def test_study_cost_estimate_follows_steps_and_discs(tmp_path):
     done.mkdir()
     (done / "job.json").write_text(json.dumps({"status": "ok", "command": jobs[0].command(str(done)), "env": {}}))
     assert st.estimate(jobs, str(tmp_path), log=None) == pytest.approx(ref)
+
+
+def fake_run(runs, name, sigma3, q_f, e50_pa, solid_fraction):
+    """A finished biaxial.py job as the sweep runner leaves it: a linear rise at the slope E50 to
+    q_f, flat to 5 %."""
+    import json
+    import os
+
+    d = os.path.join(runs, name)
+    os.makedirs(d)
+    strain = np.linspace(0, 0.05, 251)
+    q = np.minimum(e50_pa * strain, q_f)
+    np.savetxt(os.path.join(d, "curves.csv"), np.column_stack([np.full_like(strain, sigma3), strain, q, sigma3 + q,
+               sigma3 + q, np.full_like(strain, sigma3), strain]), delimiter=",", header="h", comments="")
+    with open(os.path.join(d, "summary.json"), "w") as f:
+        json.dump({"per_sigma3": [{"sigma3_pa": sigma3, "peak_deviator_pa": q_f}],
+                   "packings": [{"solid_fraction": solid_fraction}]}, f)
+    with open(os.path.join(d, "job.json"), "w") as f:
+        json.dump({"status": "ok"}, f)
+
+
+def test_hypotheses_table_from_synthetic_runs(tmp_path):
+    """Cohesionless synthetic runs with a known φ per variant and packing (q_f = 2 σ3 sin φ /
+    (1 − sin φ)): the table gives back φ*, c* = 0, the peak and E50 at 200 Pa, the porosity, the
+    size ratio; a variant 4° stronger is a change with its share of the gap to 27.4°, one within
+    the scatter is not; missing packings say so."""
+    from engines.seeds.biaxial.study import HYPOTHESES, analyse_hypotheses, hypothesis_points, write_hypotheses
+
+    phi = {"reference": 22.0, "rotation_locked": 26.0}
+    jitter = {1: -0.5, 2: 0.0, 3: 0.5}
+    for name, opts in hypothesis_points([1, 2, 3]):
+        variant = next(v for v in HYPOTHESES if name.startswith(f"hyp_{v}_"))
+        if variant == "periodic_cell" and opts["seed"] > 1:
+            continue  # one packing only: too few for a verdict
+        p = math.radians(phi.get(variant, 22.0) + jitter[opts["seed"]] + (0.3 if opts.get("n_discs") else 0.0))
+        s3 = opts["sigma3"]
+        fake_run(str(tmp_path), name, s3, 2 * s3 * math.sin(p) / (1 - math.sin(p)), 50 * s3, 0.83)
+    res = analyse_hypotheses(str(tmp_path), [1, 2, 3])
+    rows = {(r["variant"], r["phi_e_deg"]): r for r in res["rows"]}
+    ref, locked = rows["reference", 15.0], rows["rotation_locked", 15.0]
+    assert ref["phi_star_deg"]["mean"] == pytest.approx(22.0, abs=1e-6) and ref["phi_star_deg"]["n"] == 3
+    assert abs(ref["c_star_pa"]["mean"]) < 1e-6
+    assert ref["e50_200_pa"]["mean"] == pytest.approx(1e4, rel=1e-3)
+    assert ref["porosity"]["mean"] == pytest.approx(0.17) and ref["sigma3_applied_ratio"]["mean"] == pytest.approx(1.0)
+    q = lambda deg: 400 * math.sin(math.radians(deg)) / (1 - math.sin(math.radians(deg)))  # noqa: E731
+    assert ref["size_ratio"]["mean"] == pytest.approx(np.mean([q(d + 0.3) / q(d) for d in (21.5, 22, 22.5)]))
+    assert locked["verdict"].startswith(f"φ* +4.0 ± {1.96 * math.sqrt(2 * 0.25 / 3):.1f}°, "
+                                        f"{100 * 4 / (27.4 - 22):.0f} % of the gap")
+    assert "unchanged within the scatter" in rows["side_load_diameter", 15.0]["verdict"]
+    assert "too few packings" in rows["periodic_cell", 15.0]["verdict"]
+    assert rows["periodic_cell", 15.0]["phi_star_deg"]["n"] == 1
+    assert res["jobs_total"] == len(hypothesis_points([1, 2, 3])) and res["jobs_failed"] == []
+    table = write_hypotheses(res, str(tmp_path / "h.json"), str(tmp_path / "h.md"))
+    assert "| rotation_locked | rotation = locked | 15° | 26.0 ± 0.5° (n = 3) |" in table

@@ -32,6 +32,9 @@ from dataclasses import dataclass
 import numpy as np
 
 
+ROTATIONS = ("free", "locked")
+
+
 @dataclass(frozen=True)
 class CemContact:
     """Contact constants of seed 003 (Table 2 defaults).
@@ -43,6 +46,8 @@ class CemContact:
         rho: disc density [kg/m³] (mass per unit thickness ρ π r²).
         damping_ratio: ζn = ζs, 1 = critical [-].
         width_factor: f_w, the contact width over the harmonic mean of the radii [-] (module doc).
+        rotation: "free" (the discs turn under the shear forces' moments) or "locked" (they do
+            not turn: CEM as the paper describes it never mentions moments).
     """
 
     kn: float = 1.0e8
@@ -51,8 +56,11 @@ class CemContact:
     rho: float = 2500.0
     damping_ratio: float = 1.0
     width_factor: float = 1.0
+    rotation: str = "free"
 
     def __post_init__(self):
+        if self.rotation not in ROTATIONS:
+            raise ValueError(f"rotation must be one of {', '.join(ROTATIONS)}, got {self.rotation!r}")
         for name, ok, limit in [("kn", self.kn > 0, "> 0 Pa/m"), ("ks_ratio", self.ks_ratio >= 0, ">= 0"),
                                 ("phi_e_deg", 0 < self.phi_e_deg < 90, "in (0, 90) degrees"),
                                 ("rho", self.rho > 0, "> 0 kg/m^3"), ("damping_ratio", self.damping_ratio >= 0, ">= 0"),
@@ -88,30 +96,75 @@ def pair_constants(r1, r2, c):
     return tuple(series(x, y) for x, y in zip(a, b))
 
 
+def leapfrog_dt(k, c, m):
+    """Largest time step [s] at which one mode of stiffness k, dashpot c and mass m stays stable
+    under YADE's leapfrog, whose dashpot acts on the previous half-step's velocity:
+    x_{n+1} − 2 x_n + x_{n−1} = −(k/m) dt² x_n − (c/m) dt (x_n − x_{n−1}) is stable while
+    dt² k/m + 2 dt c/m <= 4, i.e. dt = (√(c² + 4 m k) − c) / k (2 √(m/k) undamped, 2 m / c for a
+    dashpot alone). For many degrees of freedom the same holds with 4 M − dt² K − 2 dt C >= 0."""
+    return 2 * m / c if k == 0 else (math.sqrt(c * c + 4 * m * k) - c) / k
+
+
 def single_contact_dt_limit(r, c):
-    """Largest stable dt [s] of the lightest pair alone (normal spring, leapfrog, ζ): a time step
-    above it diverges for sure; a dense packing's modes are stiffer and diverge earlier.
-    Leapfrog with the dashpot on the previous half-step velocity is stable for one spring while
-    (ω dt)² + 4 ζ ω dt <= 4, i.e. ω dt <= 2 (√(1 + ζ²) − ζ): 0.83 at ζ = 1 (2 undamped)."""
+    """Largest stable dt [s] of the lightest pair alone (normal spring and dashpot on the reduced
+    mass): a time step above it diverges for sure; a packing's modes are stiffer and diverge
+    earlier. 2 (√(1 + ζ²) − ζ)/ω: 0.83/ω at ζ = 1, 2/ω undamped."""
     rmin = float(np.min(r))
-    kn = pair_constants(rmin, rmin, c)[0]
-    omega = math.sqrt(kn / series(disc_mass(rmin, c.rho), disc_mass(rmin, c.rho)))
-    z = c.damping_ratio
-    return 2 * (math.sqrt(1 + z * z) - z) / omega
+    kn, _, cn, _ = pair_constants(rmin, rmin, c)
+    return leapfrog_dt(kn, cn, series(disc_mass(rmin, c.rho), disc_mass(rmin, c.rho)))
+
+
+CONTACTS_PER_DISC = 4  # Z of stable_dt's disc: the coordination of the packings at rest is 3.3–3.7
+
+
+def disc_dt_bound(r, c, contacts=CONTACTS_PER_DISC):
+    """Leapfrog limit [s] of the fastest modes of an assembly of the lightest discs (r_min) with
+    ``contacts`` = Z contacts each, springs and dashpots of the equal pair (k_n, k_s, c_n, c_s),
+    mass m, moment of inertia m r²/2; the smaller of the two (``leapfrog_dt``):
+
+    rotation: every disc turns by θ in the same sense; each shear spring is stretched by
+    r θ + r θ = 2 r θ (two neighbours turning alike move their contact points oppositely), so in
+    the coordinate r θ a disc has the stiffness (Z/2)(2²) k_s = 2 Z k_s and the mass I/r² = m/2:
+    ω_rot² = 4 Z k_s / m, c_rot = 2 Z c_s. Against one fixed neighbour a disc has ω² = 3 k_s/m
+    (translation and rotation coupled), between two fixed ones 4 k_s/m: √3 and √2 times the
+    translation on the same shear springs (k_s/m, 2 k_s/m);
+
+    translation: neighbours moving oppositely (the alternating mode, an upper bound of every
+    translational mode by Gershgorin's splitting of each contact's energy, δ² <= 2 δ_i² + 2 δ_j²):
+    ω_tr² = Z (k_n + k_s)/m, c_tr = Z (c_n + c_s) (an isotropic disc: Σ n nᵀ = Σ t tᵀ = Z/2 I).
+
+    With critical dashpots the dashpot term 2 dt c/m dominates dt² k/m (ω dt ≈ 0.3 at the limit),
+    and c_s = 2 √(m* k_s) is large next to c_n because of the rotation's small mass: the rotation
+    decides for ks/kn above ≈ 1/9 (3 c_s > c_n), and its limit goes as 1/√(k_s), not as
+    1/√(k_n + 4 k_s). Table 1–2's constants, Z = 4: 5.69e-5 s (rotation; translation 7.34e-5 s).
+    With the rotation locked only the translation is left."""
+    rmin = float(np.min(r))
+    kn, ks, cn, cs = pair_constants(rmin, rmin, c)
+    m = float(disc_mass(rmin, c.rho))
+    z = contacts
+    translation = leapfrog_dt(z * (kn + ks), z * (cn + cs), m)
+    return translation if c.rotation == "locked" else min(leapfrog_dt(2 * z * ks, 2 * z * cs, m / 2), translation)
 
 
 PAPER_DT = 5e-5  # s, Table 2's constants (Fig. 6)
+TABLE1_RMIN = 1.4e-3  # m, Table 1's smallest radius
 
 
 def stable_dt(r, c):
     """Time step [s] for seed 003's packings: the paper's 0.5e-4 s for its constants (Table 1–2),
-    scaled as 1/ω for others, never above it. Measured on a 1000-disc packing at rest
-    (yade_scripts/biaxial_stability.py): kn = 1e8, ks/kn = 0.25 rings at 7e-5 s, not at 5e-5 s;
-    kn = 2e8 at 5e-5 s, not at 3.5e-5 s: the highest mode goes as √(kn f_w (1 + 4 ks/kn) / (ρ r_min)).
-    Known defect: at ks/kn = 0.5 the 4.08e-5 s it gives still rings (docs/BIAXIAL.md)."""
-    stiff = c.kn * c.width_factor * (1 + 4 * c.ks_ratio) / (c.rho * float(np.min(r)))
-    paper = 1e8 * (1 + 4 * 0.25) / (2500.0 * 1.4e-3)
-    return PAPER_DT * min(1.0, math.sqrt(paper / stiff))
+    scaled by disc_dt_bound(r, c) / disc_dt_bound(Table 1, Table 2), never above the paper's.
+
+    The scaling is the fastest mode's, the rotation of the lightest discs damped by the shear
+    dashpots (disc_dt_bound), so it goes as √(ρ r_min / (kn f_w · ks/kn)) for ks/kn above ≈ 1/9.
+    Checked against the exact limit 4 M − dt² K − 2 dt C >= 0 of the contact network of a
+    1000-disc packing at rest (docs/BIAXIAL.md): 5.15e-5 s at Table 2's constants (the critical
+    mode is > 90 % rotation), 3.66e-5 at ks/kn = 0.5, 2.59e-5 at ks/kn = 1, 3.64e-5 at kn × 2 or
+    f_w = 2, 7.2e-5 at ks/kn = 0.125: the rule (5.00, 3.54, 2.50, 3.54, 5.00e-5 s) stays at
+    least 3 % below each, and every one comes to rest at it (yade_scripts/biaxial_stability.py);
+    the former scaling 1/√(kn (1 + 4 ks/kn)) gave 4.08e-5 s at ks/kn = 0.5, above the limit, and rang.
+    The margin holds for the default packing protocol (Z = 3.3–3.7): a packing made without
+    friction (Z = 4.06) has its limit at 4.96e-5 s, just below the paper's step."""
+    return PAPER_DT * min(1.0, disc_dt_bound(r, c) / disc_dt_bound(TABLE1_RMIN, CemContact()))
 
 
 def check_dt(dt, r, c):
@@ -144,8 +197,9 @@ def yade_engines(extra=()):
 
 
 def add_discs(xz, r, c, y=0.0):
-    """Discs as YADE spheres in the x–z plane (blockedDOFs 'yXZ'), per-unit-thickness mass
-    ρ π r² and inertia m r²/2, one ViscElMat per distinct radius. Returns the body ids."""
+    """Discs as YADE spheres in the x–z plane (blockedDOFs 'yXZ', and 'Y' with c.rotation
+    "locked"), per-unit-thickness mass ρ π r² and inertia m r²/2, one ViscElMat per distinct
+    radius. Returns the body ids."""
     from yade import O, utils
     from yade.wrapper import ViscElMat
 
@@ -162,7 +216,7 @@ def add_discs(xz, r, c, y=0.0):
         b.state.mass = float(m)
         inertia = 0.5 * float(m) * float(ri) ** 2
         b.state.inertia = (inertia, inertia, inertia)
-        b.state.blockedDOFs = "yXZ"
+        b.state.blockedDOFs = "yXYZ" if c.rotation == "locked" else "yXZ"
         bodies.append(b)
     return O.bodies.append(bodies)
 

@@ -179,6 +179,45 @@ def yade_cell_stress(depth, shear=False):
     return (*normal, -0.5 * float(s[0, 2] + s[2, 0]) * depth) if shear else normal
 
 
+def servo_rates(r, contact, settings):
+    """The cell's stress servo (eq 1 in rate form, each direction on its own stress error):
+    a function of (target [Pa], stresses (σ, ...) [Pa]) giving the shrinking rates [1/s]
+    (σ3 − σ)/(K τ), K = affine_modulus of the current contacts, capped at settings.max_rate."""
+    from yade import O, utils
+
+    from engines.seeds.biaxial.cem_contact import pair_constants
+
+    r = np.asarray(r, float)
+    k_median = float(pair_constants(np.median(r), np.median(r), contact)[0])
+
+    def rates(target, sigmas):
+        h = O.cell.hSize
+        modulus = affine_modulus(utils.avgNumInteractions(), r, k_median, float(h[0, 0] * h[2, 2]))
+        return [float(np.clip((target - sig) / (modulus * settings.servo_time), -settings.max_rate, settings.max_rate))
+                for sig in sigmas]
+    return rates
+
+
+def rest_servo(rates, depth, tolerance, unbalanced, state):
+    """A PyRunner callback servoing both directions of the cell on state["target"] [Pa] with
+    ``rates`` (servo_rates) until σx, σz are within ``tolerance`` of it and the unbalanced-force
+    ratio is below ``unbalanced``: then the cell stops, state["done"] is set and YADE pauses.
+    state["sigma"] holds the last (σx, σz)."""
+    from yade import O, utils
+    from yade.minieigenHP import Matrix3
+
+    def servo():
+        target = state["target"]
+        sx, sz = state["sigma"] = yade_cell_stress(depth)
+        r = rates(target, (sx, sz))
+        if max(abs(sx - target), abs(sz - target)) < tolerance * target and utils.unbalancedForce() < unbalanced:
+            state["done"] = True
+            r = (0.0, 0.0)
+            O.pause()
+        O.cell.velGrad = Matrix3(-r[0], 0, 0, 0, 0, 0, 0, 0, -r[1])
+    return servo
+
+
 def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     """Pack discs r (radii [m]) in a periodic cell with YADE (resets the YADE scene) to each
     confining stress of ``sigma3`` [Pa] in turn, lowest first: one random placement, shrunk to
@@ -190,9 +229,8 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     ``settings.max_time`` (simulated seconds per target).
     """
     from yade import O, utils
-    from yade.minieigenHP import Matrix3
 
-    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, pair_constants, py_runner, yade_engines
+    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
 
     s = settings
     r = np.asarray(r, float)
@@ -207,24 +245,9 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     O.periodic = True
     O.cell.setBox(cell[0], depth, cell[1])
     add_discs(xz, r, contact, y=depth / 2)
-    k_median = float(pair_constants(np.median(r), np.median(r), contact)[0])
     state = {"sigma": (0.0, 0.0), "target": None, "done": False}
-
-    def servo():
-        target = state["target"]
-        sx, sz = state["sigma"] = yade_cell_stress(depth)
-        h = O.cell.hSize
-        modulus = affine_modulus(utils.avgNumInteractions(), r, k_median, float(h[0, 0] * h[2, 2]))
-        # eq 1 in rate form, each direction on its own stress error
-        rates = [float(np.clip((target - sig) / (modulus * s.servo_time), -s.max_rate, s.max_rate))
-                 for sig in (sx, sz)]
-        if max(abs(sx - target), abs(sz - target)) < s.tolerance * target and utils.unbalancedForce() < s.unbalanced:
-            state["done"] = True
-            rates = (0.0, 0.0)
-            O.pause()
-        O.cell.velGrad = Matrix3(-rates[0], 0, 0, 0, 0, 0, 0, 0, -rates[1])
-
-    O.engines = yade_engines([py_runner(servo, s.check_every)])
+    O.engines = yade_engines([py_runner(rest_servo(servo_rates(r, contact, s), depth, s.tolerance, s.unbalanced, state),
+                                        s.check_every)])
     O.dt = s.dt
     blocks = {}
     for target in sorted(set(targets)):
@@ -246,3 +269,84 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
             log(f"packed {len(r)} discs to sigma3 = {target:g} Pa: sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa "
                 f"after {O.iter - start} steps, solid fraction {blocks[target].solid_fraction:.4f}")
     return [blocks[t] for t in targets]
+
+
+# ---- YADE: the biaxial test on the cell itself ----------------------------------------------
+
+TEST_SERVO_TIME = 1e-3  # s: τ of the σx servo in the test; the error it leaves is ≈ ε̇ K τ (K <= the
+                        # affine modulus), 1 % of σ3 = 100 Pa at 100 %/min; the servo updates every
+                        # 10 steps with a loop gain <= 10 dt / τ = 0.5 at dt = 5e-5 s
+
+
+def run_periodic_biaxial(block, contact, settings, log=None):
+    """The biaxial test on the periodic cell itself: no bands ②–⑤ and no side loads, σ3 is the
+    cell's own stress. The block is rebuilt in its cell (contacts rebuilt, as for the specimen
+    taken out of it), both directions are servoed on σ3 (``servo_rates``) until σx, σz are within
+    settings.tolerance and the unbalanced-force ratio is below settings.unbalanced (the
+    preliminary equilibrium), then z shrinks at the strain rate (reached linearly over
+    settings.ramp_time) while x stays servoed on σ3 (τ = TEST_SERVO_TIME). Records: σ1 = σz, the axial strain
+    1 − Lz/Lz0, sigma3_applied = σx, lateral strain −(Lx/Lx0 − 1). A specimen.BiaxialResult;
+    RuntimeError if the equilibrium is not reached within settings.max_equilibrium_time."""
+    import time
+
+    from yade import O, utils
+    from yade.minieigenHP import Matrix3
+
+    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
+    from engines.seeds.biaxial.specimen import BiaxialResult, Curve
+
+    t0 = time.time()
+    s = settings
+    check_dt(s.dt, block.r, contact)
+    depth = block.info["depth_m"]
+    O.reset()
+    O.periodic = True
+    O.cell.setBox(block.cell[0], depth, block.cell[1])
+    add_discs(block.xz, block.r, contact, y=depth / 2)
+    pack = PackingSettings(dt=s.dt)
+    st = {"done": False, "sigma": (0.0, 0.0), "target": s.sigma3}
+    rec = {k: [] for k in ("strain", "sigma1", "sigma3_applied", "lateral_strain")}
+    size = lambda: (float(O.cell.hSize[0, 0]), float(O.cell.hSize[2, 2]))  # noqa: E731
+    O.engines = yade_engines([py_runner(rest_servo(servo_rates(block.r, contact, pack), depth, s.tolerance,
+                                                   s.unbalanced, st), pack.check_every)])
+    O.dt = s.dt
+    O.run(int(s.max_equilibrium_time / s.dt), True)
+    sx, sz = st["sigma"]
+    if not st["done"]:
+        raise RuntimeError(f"periodic equilibrium not reached in {s.max_equilibrium_time} s (dt = {s.dt:g} s): sigma_x = "
+                           f"{sx:.2f}, sigma_z = {sz:.2f} Pa for sigma3 = {s.sigma3:g} Pa, unbalanced force ratio "
+                           f"{utils.unbalancedForce():.3g} (at rest below {s.unbalanced})")
+    eq = {"sigma1_pa": sz, "sigma1_bottom_pa": sz, "sigma3_applied_pa": sx, "unbalanced": utils.unbalancedForce(),
+          "moves": 0, "steps": O.iter, "time_s": O.time}
+    if log:
+        log(f"  sigma3 = {s.sigma3:g} Pa: periodic equilibrium sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa after {O.iter} steps")
+    lx0, lz0 = size()
+    t_start = O.time
+
+    fast = servo_rates(block.r, contact, PackingSettings(dt=s.dt, servo_time=TEST_SERVO_TIME))
+
+    def control():
+        sx, sz = yade_cell_stress(depth)
+        rx = fast(s.sigma3, (sx,))[0]
+        rz = s.strain_rate * min(1.0, (O.time - t_start) / s.ramp_time)
+        O.cell.velGrad = Matrix3(-rx, 0, 0, 0, 0, 0, 0, 0, -rz)
+
+    def record():
+        lx, lz = size()
+        sx, sz = yade_cell_stress(depth)
+        for k, v in zip(rec, (1 - lz / lz0, sz, sx, -(lx / lx0 - 1))):
+            rec[k].append(v)
+        if rec["strain"][-1] >= s.max_strain:
+            O.pause()
+
+    every = max(1, int(round(s.record_strain / (s.strain_rate * s.dt))))
+    record()
+    O.engines = yade_engines([py_runner(control, pack.check_every), py_runner(record, every)])
+    O.run(int(1.5 * s.max_strain / s.strain_rate / s.dt) + every + int(s.ramp_time / s.dt), True)
+    O.cell.velGrad = Matrix3(0, 0, 0, 0, 0, 0, 0, 0, 0)
+    a = {k: np.array(v) for k, v in rec.items()}
+    curve = Curve(s.sigma3, a["strain"], a["sigma1"], a["sigma1"], a["sigma3_applied"], a["lateral_strain"])
+    res = BiaxialResult(curve, s, eq, O.iter, time.time() - t0)
+    if log:
+        log(res.describe())
+    return res

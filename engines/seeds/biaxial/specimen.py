@@ -205,6 +205,12 @@ class BiaxialResult:
     steps: int = 0
     wall_s: float = 0.0
 
+    def describe(self):
+        """The log line of a finished test."""
+        eps_f, q_f = self.curve.peak()
+        return (f"  sigma3 = {self.settings.sigma3:g} Pa: peak deviator {q_f:.1f} Pa at strain {100 * eps_f:.2f} %, "
+                f"E50 {self.curve.e50():.4g} Pa; {self.steps} steps in {self.wall_s:.1f} s")
+
     def summary(self):
         eps_f, q_f = self.curve.peak()
         return {"sigma3_pa": self.settings.sigma3, "peak_deviator_pa": q_f, "peak_strain": eps_f,
@@ -408,8 +414,6 @@ def run_biaxial(block, contact, settings, log=None):
     curve = sp.compress(log)
     res = BiaxialResult(curve, settings, eq, O.iter, time.time() - t0)
     if log:
-        eps_f, q_f = curve.peak()
-        log(f"  sigma3 = {settings.sigma3:g} Pa: peak deviator {q_f:.1f} Pa at strain {100 * eps_f:.2f} %, "
-            f"E50 {curve.e50():.4g} Pa; {O.iter} steps in {res.wall_s:.1f} s")
+        log(res.describe())
     return res
 

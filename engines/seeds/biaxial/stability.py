@@ -14,13 +14,25 @@ import os
 from engines.seeds.biaxial.cem_contact import CemContact, add_discs, stable_dt, yade_engines
 from engines.seeds.biaxial.periodic import yade_cell_stress
 
-# (contact width factor f_w, kn [Pa/m], ks/kn, dt [s]); the paper's constants are (1, 1e8, 0.25)
+# (contact width factor f_w, kn [Pa/m], ks/kn, dt [s], None = stable_dt's); the paper's constants
+# are (1, 1e8, 0.25), where stable_dt is 5e-5 s
 CASES = [(1.0, 1e8, 0.25, 2.5e-5), (1.0, 1e8, 0.25, 5e-5), (1.0, 1e8, 0.25, 7e-5), (1.0, 1e8, 0.25, 1e-4),
-         (2.0, 1e8, 0.25, 2.5e-5), (2.0, 1e8, 0.25, 5e-5),
-         (1.0, 1e8, 0.5, 4e-5), (1.0, 1e8, 0.5, 5e-5), (1.0, 2e8, 0.25, 3.5e-5), (1.0, 2e8, 0.25, 5e-5),
-         (1.0, 1e8, 0.125, 5e-5)]
+         (2.0, 1e8, 0.25, 2.5e-5), (2.0, 1e8, 0.25, None), (2.0, 1e8, 0.25, 5e-5),
+         (1.0, 1e8, 0.5, None), (1.0, 1e8, 0.5, 4e-5), (1.0, 1e8, 0.5, 5e-5),
+         (1.0, 1e8, 1.0, None), (1.0, 1e8, 1.0, 2.9e-5),
+         (1.0, 2e8, 0.25, 3.5e-5), (1.0, 2e8, 0.25, None), (1.0, 2e8, 0.25, 5e-5),
+         (1.0, 1e8, 0.125, 5e-5), (1.0, 1e8, 0.1, None)]
 REST_TIME = 0.2        # s
 AT_REST = 0.01         # unbalanced-force ratio of a specimen at rest (the packing's criterion)
+
+
+def cases(r, phi_e):
+    """(contact, dt [s]) of each of CASES for discs r at the inter-element friction φe [deg]."""
+    out = []
+    for fw, kn, ks, dt in CASES:
+        c = CemContact(kn=kn, ks_ratio=ks, phi_e_deg=phi_e, width_factor=fw)
+        out.append((c, dt or stable_dt(r, c)))
+    return out
 
 
 def relax(block, contact, dt):
@@ -47,11 +59,11 @@ def run_cases(block, name, out):
     one line per case; writes OUT/stability.json."""
     phi_e = block.info["contact"]["phi_e_deg"]
     rows = []
-    for fw, kn, ks, dt in CASES:
-        c = CemContact(kn=kn, ks_ratio=ks, phi_e_deg=phi_e, width_factor=fw)
+    for c, dt in cases(block.r, phi_e):
+        fw, kn, ks = c.width_factor, c.kn, c.ks_ratio
         unbalanced, change = relax(block, c, dt)
         rows.append({"width_factor": fw, "kn_pa_per_m": kn, "ks_ratio": ks, "dt_s": dt,
-                     "stable_dt_s": stable_dt(block.r, c) if fw == 1.0 else None, "unbalanced": unbalanced,
+                     "stable_dt_s": stable_dt(block.r, c), "unbalanced": unbalanced,
                      "stress_change": change, "outcome": "at rest" if unbalanced < AT_REST else "rings"})
         r = rows[-1]
         print(f"f_w {fw:g}, kn {kn:.0e}, ks/kn {ks:g}, dt {dt:.2e} s: unbalanced {unbalanced:.2g}, "

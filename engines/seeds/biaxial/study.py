@@ -13,7 +13,7 @@ import numpy as np
 from engines.seeds.biaxial.calibration import Calibration, eq4_e50, fit_eq4
 from engines.seeds.biaxial.specimen import Curve, mohr_coulomb_fit
 
-PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "sideload")
+PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "hypotheses")
 DEFAULT_PARTS = PARTS[:-1]
 PHI_E = (5.0, 10.0, 15.0)
 SIGMA3 = (100.0, 200.0, 300.0, 400.0)
@@ -25,7 +25,6 @@ DTS = (2.5e-5, 1e-4)                                     # s, besides the refere
 DISCS = (125, 250, 500)                                  # besides the reference 1000
 KNS = (0.5e8, 2e8)
 KSS = (0.125, 0.5)
-KS_DT = {0.5: 3.5e-5}  # s: at stable_dt (4.08e-5 s) the 500-disc specimen did not come to rest (docs/BIAXIAL.md)
 SMALL_DISCS = 500  # the specimen of the stiffness and dt sensitivities (docs/BIAXIAL.md: the budget)
 PAPER = {"phi_star_deg": {15.0: 27.4}, "c_star_pa": {15.0: 0.4}, "peak_deviator_200_pa": {5.0: 140.0, 10.0: 240.0, 15.0: 330.0}}
 CALIBRATION_TARGET_SIGMA3 = 250.0  # Pa: between the study's σ3, so the round trip interpolates in σ3 too
@@ -36,9 +35,41 @@ def sensitivity_name(seed, **changes):
     return f"sens_{label}_seed{seed}"
 
 
-def ks_dt(ks_ratio):
-    """The time step option of a ks/kn sensitivity run: KS_DT's, else none (stable_dt)."""
-    return {"dt": KS_DT[ks_ratio]} if ks_ratio in KS_DT else {}
+# The readings of the paper that may change strength, each an option of yade_scripts/biaxial.py
+# against the reference (every option at its default): name -> (options, the φe it runs at)
+DENSE_PACKING_PHI = 0.5  # deg: φe while packing for the denser protocol (friction nearly off, then φe)
+HYPOTHESES = {
+    "reference": ({}, (15.0, 5.0)),
+    "rotation_locked": ({"rotation": "locked"}, (15.0, 5.0)),
+    "side_load_diameter": ({"side_load": "diameter"}, (15.0,)),
+    "periodic_cell": ({"specimen": "periodic"}, (15.0,)),
+    "dense_packing": ({"packing_phi_e": DENSE_PACKING_PHI}, (15.0, 5.0)),
+    "width_diameter": ({"width_factor": 2.0}, (15.0,)),
+}
+HYP_STRAIN = 5.0                              # % (the main grid's)
+HYP_SMALL = 250                               # discs of the size-effect runs (against 1000), φe = 15°, σ3 = 200 Pa
+HYP_SIZE_VARIANTS = ("reference", "periodic_cell")  # do the bands make the size effect?
+
+
+def hypothesis_name(variant, phi_e, sigma3, seed, n_discs=1000):
+    size = "" if n_discs == 1000 else f"_n{n_discs}"
+    return f"hyp_{variant}_phi{phi_e:g}_s3{sigma3:g}{size}_seed{seed}"
+
+
+def hypothesis_points(seeds):
+    """(job name, biaxial.py options) of the hypotheses study, one per variant, φe, σ3, packing
+    seed; seed by seed (every variant gets its first packing before any its second), then the
+    size-effect runs."""
+    out = []
+    for s in seeds:
+        for variant, (opts, phis) in HYPOTHESES.items():
+            out += [(hypothesis_name(variant, p, s3, s), dict(phi_e=p, sigma3=s3, max_strain=HYP_STRAIN, seed=s, **opts))
+                    for p in phis for s3 in SIGMA3]
+    for s in seeds:
+        for variant in HYP_SIZE_VARIANTS:
+            out.append((hypothesis_name(variant, 15.0, 200.0, s, HYP_SMALL), dict(
+                phi_e=15.0, sigma3=200.0, max_strain=HYP_STRAIN, seed=s, n_discs=HYP_SMALL, **HYPOTHESES[variant][0])))
+    return out
 
 
 def read_run(runs, name):
@@ -117,7 +148,7 @@ def analyse_sensitivity(runs, seeds):
     groups = {"strain_rate_pct_min": ("strain_rate", RATES, 100.0, lambda v: {}, {}),
               "dt_s": ("dt", DTS, 5e-5, lambda v: {"packing_dt": 5e-5}, small),
               "n_discs": ("n_discs", DISCS, 1000, lambda v: {}, {}),
-              "kn_pa_per_m": ("kn", KNS, KN, lambda v: {}, small), "ks_ratio": ("ks_ratio", KSS, KS, ks_dt, small)}
+              "kn_pa_per_m": ("kn", KNS, KN, lambda v: {}, small), "ks_ratio": ("ks_ratio", KSS, KS, lambda v: {}, small)}
     out = {}
     for label, (opt, values, ref, extra, base) in groups.items():
         res = {}
@@ -157,6 +188,111 @@ def calibration_target(cal):
     phi_star = 0.5 * (cal.phi_star[-2] + cal.phi_star[-1])
     A, m = cal.eq4_at(cal.phi_e_for(phi_star))
     return phi_star, float(eq4_e50(CALIBRATION_TARGET_SIGMA3, 1.5e8, A, m)), CALIBRATION_TARGET_SIGMA3
+
+
+def _difference(a, b):
+    """(mean a − mean b, its 95 % half-width from the two standard errors (1.96 √(s_a²/n_a + s_b²/n_b)))
+    of two mean_sd records, or None when either has fewer than two values."""
+    if a["n"] < 2 or b["n"] < 2:
+        return None
+    return a["mean"] - b["mean"], 1.96 * math.sqrt(a["sd"] ** 2 / a["n"] + b["sd"] ** 2 / b["n"])
+
+
+def verdict(row, ref, paper_phi, paper_q):
+    """One line: what a variant does to φ* and to the peak at 200 Pa against the reference
+    (a change counts when it exceeds its 95 % interval), and which share of the gap to the
+    paper it closes."""
+    parts = []
+    for key, label, unit, paper in (("phi_star_deg", "φ*", "°", paper_phi), ("peak_200_pa", "q_f(200 Pa)", " Pa", paper_q)):
+        d = _difference(row[key], ref[key])
+        if d is None:
+            parts.append(f"{label}: too few packings yet (n = {row[key]['n']}, reference {ref[key]['n']})")
+            continue
+        delta, half = d
+        share = None if paper is None else delta / (paper - ref[key]["mean"])
+        gap = "" if share is None else (f", {100 * share:.0f} % of the gap to the paper" if share >= 0
+                                         else ", away from the paper")
+        if abs(delta) > half:
+            parts.append(f"{label} {delta:+.1f} ± {half:.1f}{unit}{gap}")
+        else:
+            parts.append(f"{label} unchanged within the scatter ({delta:+.1f} ± {half:.1f}{unit})")
+    return "; ".join(parts)
+
+
+def analyse_hypotheses(runs, seeds):
+    """The hypotheses table's numbers: per variant and φe, over the packing seeds whose four σ3
+    finished: φ*, c* (Mohr–Coulomb over the four circles), and over the finished σ3 = 200 Pa jobs:
+    peak q, E50, the porosity after packing (1 − solid fraction), the confining stress applied
+    during the test over the nominal σ3 (the side loads over the covered height, the cell's σx);
+    the disc-count dependence
+    q_f(200 Pa) at HYP_SMALL over that at 1000 discs (seed by seed); a verdict against the
+    reference at the same φe; the jobs done and failed."""
+    rows, done, failed = [], 0, []
+    for variant, (opts, phis) in HYPOTHESES.items():
+        for p in phis:
+            phi, c_star, q200, e200, poro, side = [], [], [], [], [], []
+            for s in seeds:
+                peaks = {}
+                for s3 in SIGMA3:
+                    name = hypothesis_name(variant, p, s3, s)
+                    summary, curves = read_run(runs, name)
+                    if summary is None or "error" in summary:
+                        if job_status(runs, name)["status"] == "failed":
+                            failed.append(name)
+                        continue
+                    done += 1
+                    c = curves[s3]
+                    peaks[s3] = c.peak()[1]
+                    if s3 == 200.0:
+                        q200.append(peaks[s3])
+                        e200.append(c.e50())
+                        poro.append(1 - summary["packings"][0]["solid_fraction"])
+                        side.append(float(np.mean(c.sigma3_applied)) / s3)
+                if len(peaks) == len(SIGMA3):
+                    f = mohr_coulomb_fit(list(peaks), [s3 + q for s3, q in peaks.items()])
+                    phi.append(f[0])
+                    c_star.append(f[1])
+            rows.append({"variant": variant, "options": opts, "phi_e_deg": p, "phi_star_deg": mean_sd(phi),
+                         "c_star_pa": mean_sd(c_star), "peak_200_pa": mean_sd(q200), "e50_200_pa": mean_sd(e200),
+                         "porosity": mean_sd(poro), "sigma3_applied_ratio": mean_sd(side)})
+    for row in rows:
+        size = []
+        if row["variant"] in HYP_SIZE_VARIANTS and row["phi_e_deg"] == 15.0:
+            for s in seeds:
+                small, _ = read_run(runs, hypothesis_name(row["variant"], 15.0, 200.0, s, HYP_SMALL))
+                large, _ = read_run(runs, hypothesis_name(row["variant"], 15.0, 200.0, s))
+                done += int(bool(small) and "error" not in small)
+                if small and large and "error" not in small and "error" not in large:
+                    size.append(small["per_sigma3"][0]["peak_deviator_pa"] / large["per_sigma3"][0]["peak_deviator_pa"])
+        row["size_ratio"] = mean_sd(size)
+        ref = next(r for r in rows if r["variant"] == "reference" and r["phi_e_deg"] == row["phi_e_deg"])
+        row["verdict"] = "reference" if row is ref else verdict(
+            row, ref, PAPER["phi_star_deg"].get(row["phi_e_deg"]), PAPER["peak_deviator_200_pa"].get(row["phi_e_deg"]))
+    return {"seeds": list(seeds), "rows": rows, "jobs_done": done, "jobs_failed": sorted(failed),
+            "jobs_total": len(hypothesis_points(seeds))}
+
+
+def write_hypotheses(res, json_path, md_path):
+    """hypotheses.json and the markdown table of analyse_hypotheses; returns the table."""
+    with open(json_path, "w") as f:
+        json.dump(res, f, indent=1)
+    lines = [f"Hypotheses (1000 discs, σ3 = {', '.join(f'{v:g}' for v in SIGMA3)} Pa, one packing per σ3 and seed, "
+             f"{HYP_STRAIN:g} % strain; mean ± s.d. over packings; {res['jobs_done']} of {res['jobs_total']} jobs done"
+             + (f", {len(res['jobs_failed'])} failed" if res["jobs_failed"] else "") + "):", "",
+             "| variant | options | φe | φ* | c* [Pa] | peak q at 200 Pa | E50 at 200 Pa | porosity after packing | "
+             f"σ3 applied / nominal | q_f({HYP_SMALL} discs) / q_f(1000) | verdict against the reference |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in res["rows"]:
+        opts = ", ".join(f"{k} = {v}" for k, v in r["options"].items()) or "defaults"
+        lines.append(f"| {r['variant']} | {opts} | {r['phi_e_deg']:g}° | {_ms(r['phi_star_deg'], unit='°')} | "
+                     f"{_ms(r['c_star_pa'])} | {_ms(r['peak_200_pa'], '{:.0f}')} | {_ms(r['e50_200_pa'], '{:.3g}')} | "
+                     f"{_ms(r['porosity'], '{:.4f}')} | {_ms(r['sigma3_applied_ratio'], '{:.3f}')} | "
+                     f"{_ms(r['size_ratio'], '{:.2f}')} | {r['verdict']} |")
+    lines += ["", f"Paper: φ* = {PAPER['phi_star_deg'][15.0]}° at φe = 15°; peak q at 200 Pa ≈ "
+              + ", ".join(f"{v:g} Pa (φe = {k:g}°)" for k, v in PAPER["peak_deviator_200_pa"].items()) + "."]
+    with open(md_path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return "\n".join(lines)
 
 
 def summarise(main, sens, seeds):
