@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
-from postproc.plots import GROUP_COLOURS  # noqa: E402
+from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
 from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402
 
 PERIOD = 0.02        # the cosine's period [s] (50 Hz): the averaging window of the end values
@@ -101,9 +101,8 @@ def blocks_figure(history, title, bounds=None, snap0=None):
         a.axhline(0.0, color="0.3", lw=0.6)
         a.set_ylim(-lim, lim)
         ok = np.isfinite(y)
-        where = " (surface)" if b == n - 1 else " (bottom)" if b == 0 else ""
         stats = f"mean {np.mean(y[ok]):.0f}, max {np.max(y[ok]):.0f} N/m" if ok.any() else "no pore"
-        a.text(0.005, 0.93, f"block {b + 1}{where}: {stats}", transform=a.transAxes, fontsize=7.5, va="top")
+        a.text(0.005, 0.93, f"{block_label(b, n, bounds)}: {stats}", transform=a.transAxes, fontsize=7.5, va="top")
         a.set_ylabel("U [N/m]")
         a.grid(alpha=0.3)
         if a is not axes[-1]:
