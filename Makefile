@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
+.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -118,6 +118,15 @@ liquefaction: deps
 # runs it on a Dask cluster) -> $(OUT)/tradeoffs/{tradeoffs.json,table.md,tradeoffs_*.png}.
 tradeoffs: deps
 	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --out $(OUT)/tradeoffs $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+
+# The fast setting validated where it is offered (docs/TRADEOFFS.md, "Validation"): on every preset
+# scene (quick sand 1-2, liquefaction 1-7) over its whole duration, 20 starts at the scene's
+# perturbation each, the fast setting against the paper's numerics (dt = 1e-6 s, rebuilds every 1000
+# steps, water every step), one job at a time (about 90 CPU-minutes; resumable: a re-run skips the
+# finished jobs; SCHEDULER as above) -> $(OUT)/validation/{validation.json,validation.md};
+# docs/tradeoffs/validation.json is its copy, which the tests read.
+validation: deps
+	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --validation --out $(OUT)/validation $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 # The stability map: ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
 # (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.

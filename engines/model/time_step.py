@@ -25,6 +25,12 @@ from engines.model.pore_dem import disc_masses, side_wall_ties
 from engines.model.pore_water import PoreWater
 
 AUTO = "auto"
+# The default dt_auto_factor and the scenes on which it, with the pores rebuilt every 50 steps and the
+# water every step (the fast setting), is within 5 % of the paper's numerics (dt = 1e-6 s, rebuilds
+# every 1000 steps) on every judged statistic over the whole run: docs/TRADEOFFS.md, "Validation";
+# tests/studies/test_tradeoffs.py ties this list to docs/tradeoffs/validation.json.
+VALIDATED_FACTOR = 0.36
+VALIDATED_ON = ("liquefaction_case1",)
 
 
 def start_pores(scene, packing):
@@ -99,11 +105,22 @@ def describe(dt, lims, name, n_sub, factor):
     shown = ", ".join(f"{k} {v:.3g} s" for k, v in lims.items())
     text = (f"dt = auto: {dt:.3g} s, bound by the {name} limit"
             + ("" if name == "darcy_check" else f" x dt_auto_factor {factor:g}") + f" (limits at the start: {shown})")
+    text += "\n" + validation_note(factor)
     if n_sub > 1:
         text += (f"\nwater: {n_sub} sub-steps per water step at the start (substep = true, Gershgorin Darcy limit "
                  f"{lims['darcy_check']:.3g} s per DEM step); each costs about {lim.SUBSTEP_COST:.0%} of a water step, "
                  f"so the water costs about {lim.substep_cost(n_sub):.2g}x a water step without sub-steps")
     return text
+
+
+def validation_note(factor):
+    """Where the automatic time step's factor was validated (VALIDATED_ON)."""
+    where = ", ".join(VALIDATED_ON)
+    if factor != VALIDATED_FACTOR:
+        return (f"dt_auto_factor {factor:g} is not validated; the default {VALIDATED_FACTOR:g} is (with rebuild_interval "
+                f"50, water_interval 1) on: {where} (docs/TRADEOFFS.md)")
+    return (f"dt_auto_factor {factor:g} with rebuild_interval 50 and water_interval 1 is validated against the paper's "
+            f"numerics on: {where}; not on other scenes (docs/TRADEOFFS.md)")
 
 
 def resolve_dt(scene, packing, log=print):
