@@ -327,6 +327,12 @@ def _wet(runs):
     return [k for k, (_, s, _) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
 
 
+def _drawn(run, col):
+    """The values a figure draws of a column of ``run`` (history, summary, band): the line and its band."""
+    history, _, band = run
+    return np.concatenate([history[col], *(band[col] if band is not None else ())])
+
+
 def porosity_figure(runs, title, n_lim=None, u_lim=None):
     """Porosity of the cases together (top), then the block pressures of each wet case; ``runs``
     {case: (history, summary, band)}: an ensemble's history is its means over the starts, drawn with
@@ -350,7 +356,7 @@ def porosity_figure(runs, title, n_lim=None, u_lim=None):
     axes[0].set_title(title)
     if n_lim:
         axes[0].set_ylim(*n_lim)
-    lim = u_lim or max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
+    lim = u_lim or max([np.nanmax(np.abs(_drawn(runs[k], c))) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
     for ax, k in zip(axes[1:], wet):
         h, _, band = runs[k]
         ax.set_ylim(-1.05 * lim, 1.05 * lim)  # one scale for the wet cases, centred on U = 0
@@ -444,10 +450,10 @@ def study(root):
     with open(path, "w") as f:
         f.write(trends_markdown(rows))
     written.append(path)
-    n_all = np.concatenate([h["porosity"] for h, _, _ in runs.values()]) if runs else np.zeros(1)
+    n_all = np.concatenate([_drawn(r, "porosity") for r in runs.values()]) if runs else np.zeros(1)
     pad = 0.05 * (np.nanmax(n_all) - np.nanmin(n_all) + 1e-9)
     n_lim = (np.nanmin(n_all) - pad, np.nanmax(n_all) + pad)  # Fig. 40, 41, 46 on the same axes
-    u_lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in _wet(runs) for c in block_columns(runs[k][0])] + [1e-9])
+    u_lim = max([np.nanmax(np.abs(_drawn(runs[k], c))) for k in _wet(runs) for c in block_columns(runs[k][0])] + [1e-9])
     for name, (title, ks) in STUDY_FIGURES.items():
         have = {k: runs[k] for k in ks if k in runs}
         if have:
