@@ -5,11 +5,13 @@ block pressures the way Fig. 35 and 37 present them (``blocks.png``: the blocks 
 packing, the base input, then the block-mean U from the surface block 6 down to block 1 on one
 scale centred on 0); its snapshots (Fig. 36/38/43/45) and history panels are drawn by
 postproc.plots when the run ends. ``study(root)`` reads ROOT/case1 ... ROOT/case7 (and
-ROOT/case1-conserving, ROOT/case3-conserving when present) and writes ROOT/summary.json (per case:
+ROOT/case1-conserving, ROOT/case3-conserving when present), each one run or an ensemble of starts
+(engines.run.ensemble: every completed start is read), and writes ROOT/summary.json (per case and start:
 porosity change, mean and peak U per block, wall time, re-meshing water change; the drainage
 times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
-transfer comparison and ROOT/trends.md (the paper's trends against our numbers).
+transfer comparison and ROOT/trends.md (the paper's trends against our numbers, each criterion's
+quantity with its 95 % interval over the starts and a verdict holds / fails / undecided: ``trends``).
 
     /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
     /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
