@@ -1,8 +1,13 @@
 """The study's measures (postproc/liquefaction.py) on signals with known answers."""
+import json
+import os
+
 import numpy as np
 import pytest
 
-from postproc.liquefaction import compaction_correlation, dominant_period, end_mean, trends
+from engines.studies.ensemble import ensemble_statistics
+from postproc.liquefaction import compaction_correlation, dominant_period, end_mean, study, trends
+from tests.figures import assert_drawn
 
 t = np.arange(0, 0.18, 1e-4)
 
@@ -78,3 +83,46 @@ def test_one_run_per_case_decides_no_trend():
     row = rows["drained sides with h"]
     assert row["verdict"] == "undecided" and np.isnan(row["conditions"][0]["ci95"]).all()
     assert row["conditions"][0]["estimate"] == pytest.approx(10 / 140)
+
+
+def _write_start(path, dn, wet, rng):
+    """A start's history.csv and summary.json with a porosity falling by ``dn`` over 0.18 s."""
+    os.makedirs(path)
+    tt = np.arange(0, 0.1801, 1e-3)
+    h = {"t": tt, "porosity": 0.47 + dn * tt / tt[-1], "base_acc": 15 * np.cos(2 * np.pi * 50 * tt),
+         "base_disp": 0 * tt, "side_left_dx": 0 * tt, "side_right_dx": 0 * tt, "bed_top": 0.01 + 0 * tt}
+    for b in range(1, 7):
+        h[f"U_block{b}"] = (100 * tt / tt[-1] + 10 * rng.standard_normal(len(tt))) if wet else np.full(len(tt), np.nan)
+    with open(os.path.join(path, "history.csv"), "w") as f:
+        f.write(",".join(h) + "\n")
+        for row in zip(*h.values()):
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    summary = {"scene": "test", "status": "completed", "steps": 180000, "wall_seconds": 1.0, "us_per_step": 1.0,
+               "parameters": {"water": {"enabled": wet, "transfer": "paper"}}, "water_balance_error": 0.0, "n_rebuilds": 180}
+    if wet:
+        summary["water_balance"] = {"initial": 1e-5, "remesh_change": 0.0, "side_outflow": 0.0, "surface_outflow": 0.0}
+    with open(os.path.join(path, "summary.json"), "w") as f:
+        json.dump(summary, f)
+    return h
+
+
+def test_study_reads_ensembles_and_states_the_trends_with_intervals(tmp_path):
+    """Cases 1 (wet) and 2 (dry) as ensembles of 4 starts: the study reads every start, the dry
+    case settling 3x the wet one holds its trend, and Fig. 40 draws the means."""
+    rng = np.random.default_rng(4)
+    for case, dn, wet in ((1, -0.02, True), (2, -0.06, False)):
+        root = tmp_path / f"case{case}"
+        hists = [_write_start(str(root / f"start_{k}"), dn * (1 + 0.02 * rng.standard_normal()), wet, rng)
+                 for k in range(4)]
+        stats = ensemble_statistics(hists, [{} for _ in hists])
+        with open(root / "ensemble.json", "w") as f:
+            json.dump({"seeds": list(range(4)), **stats}, f, default=lambda a: None)
+    written = study(str(tmp_path))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["starts"] == {"case1": 4, "case2": 4}
+    (row,) = [r for r in summary["trends"] if r["trend"].startswith("dry settles more than saturated-undrained (cosine")]
+    cond = row["conditions"][0]
+    assert cond["estimate"] == pytest.approx(3.0, rel=0.05) and cond["ci95"][0] > 2.0 and row["verdict"] == "holds"
+    assert "→ holds" in (tmp_path / "trends.md").read_text()
+    fig40 = [p for p in written if p.endswith("fig40_porosity_cosine_spring_d.png")]
+    assert fig40 and assert_drawn(fig40[0]) is None
