@@ -325,6 +325,9 @@ def test_fast_variants_are_the_validated_setting_on_scenes_that_pass():
 
     for factor, named in time_step.VALIDATED_ON.items():
         assert sorted(named) == sorted(s for s in validation["scenes"] if factor in passing(s)), factor
+        said = time_step.describe(1e-5, {"contact": 1e-5 / factor}, "contact", 1, factor)  # what dt = "auto" prints
+        assert all(s in said for s in named) and "validated over the whole run on" in said
+    assert "not validated" in time_step.describe(1e-5, {"contact": 2e-5}, "contact", 1, 0.5)
     for path in os.listdir(scenes.SCENE_DIR):
         if path.endswith("_fast.toml"):
             scene = path[:-len("_fast.toml")]
