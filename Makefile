@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs stability mutants clean
+.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -95,20 +95,25 @@ packings: deps
 biaxial: deps
 	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
-# Seismic liquefaction (seed 000 §6): the seven cases at the paper's settings (0.18 s, dt = 1e-6 s,
-# water every step; a few minutes each), cases 1 and 3 again with the water-conserving transfer,
-# the drainage time of the still box (drainage.json), then the study: $(OUT)/liquefaction/
-# summary.json, trends.md, Fig. 40, 41, 46. LIQ_JOBS runs at a
-# time (LIQ_JOBS=2 uses both cores of a machine of your own); LIQ_CASES="1 2" runs a subset, the
-# study uses what is there.
+# Seismic liquefaction (seed 000 §6): the seven cases over 0.18 s, each an ensemble of LIQ_STARTS
+# starts perturbed by 1e-7 m, with the fast numerics where the validation passed for the case (its
+# yade_scripts/scenes/liquefaction_case<N>_fast.toml; docs/TRADEOFFS.md) and the paper's (dt = 1e-6 s)
+# otherwise; cases 1 and 3 again with the water-conserving transfer, the drainage time of the still
+# box (drainage.json), then the study: $(OUT)/liquefaction/summary.json, trends.md (each trend with
+# its 95 % interval and verdict), Fig. 40, 41, 46. LIQ_JOBS starts run at a time (LIQ_JOBS=2 uses
+# both cores of a machine of your own); LIQ_CASES="1 2" runs a subset, the study uses what is there;
+# LIQ_STARTS=1 runs single runs (which decide no trend).
 LIQ_CASES ?= 1 2 3 4 5 6 7
 LIQ_CONSERVING ?= 1 3
+LIQ_STARTS ?= 8
 LIQ_JOBS ?= 2
 LIQ_RUN := $(YADE) -n -x yade_scripts/liquefaction.py
+LIQ_SCENE = $$(f=yade_scripts/scenes/liquefaction_case$${n}_fast.toml; if [ -f $$f ]; then echo --scene $$f; else echo --case $$n; fi)
+LIQ_ENSEMBLE = $(if $(filter 1,$(LIQ_STARTS)),,--starts $(LIQ_STARTS) --jobs $(LIQ_JOBS))
 liquefaction: deps
-	@{ for n in $(LIQ_CASES); do echo "--case $$n --overwrite --out $(OUT)/liquefaction/case$$n"; done; \
-	   for n in $(LIQ_CONSERVING); do echo "--case $$n --transfer conserving --overwrite --out $(OUT)/liquefaction/case$$n-conserving"; done; } \
-	 | xargs -P $(LIQ_JOBS) -L 1 $(LIQ_RUN)
+	@for n in $(LIQ_CASES); do $(LIQ_RUN) $(LIQ_SCENE) $(LIQ_ENSEMBLE) --overwrite --out $(OUT)/liquefaction/case$$n || exit 1; done
+	@for n in $(LIQ_CONSERVING); do $(LIQ_RUN) $(LIQ_SCENE) --transfer conserving $(LIQ_ENSEMBLE) --overwrite \
+	   --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
 
@@ -120,6 +125,15 @@ liquefaction: deps
 # runs it on a Dask cluster) -> $(OUT)/tradeoffs/{tradeoffs.json,table.md,tradeoffs_*.png}.
 tradeoffs: deps
 	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --out $(OUT)/tradeoffs $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+
+# The fast setting validated where it is offered (docs/TRADEOFFS.md, "Validation"): on every preset
+# scene (quick sand 1-2, liquefaction 1-7) over its whole duration, 20 starts at the scene's
+# perturbation each, the fast setting against the paper's numerics (dt = 1e-6 s, rebuilds every 1000
+# steps, water every step), one job at a time (about 90 CPU-minutes; resumable: a re-run skips the
+# finished jobs; SCHEDULER as above) -> $(OUT)/validation/{validation.json,validation.md};
+# docs/tradeoffs/validation.json is its copy, which the tests read.
+validation: deps
+	nice -n 10 $(PY) yade_scripts/tradeoffs.py study --validation --out $(OUT)/validation $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 # The stability map: ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
 # (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.

@@ -5,11 +5,13 @@ block pressures the way Fig. 35 and 37 present them (``blocks.png``: the blocks 
 packing, the base input, then the block-mean U from the surface block 6 down to block 1 on one
 scale centred on 0); its snapshots (Fig. 36/38/43/45) and history panels are drawn by
 postproc.plots when the run ends. ``study(root)`` reads ROOT/case1 ... ROOT/case7 (and
-ROOT/case1-conserving, ROOT/case3-conserving when present) and writes ROOT/summary.json (per case:
+ROOT/case1-conserving, ROOT/case3-conserving when present), each one run or an ensemble of starts
+(engines.run.ensemble: every completed start is read), and writes ROOT/summary.json (per case and start:
 porosity change, mean and peak U per block, wall time, re-meshing water change; the drainage
 times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
-transfer comparison and ROOT/trends.md (the paper's trends against our numbers).
+transfer comparison and ROOT/trends.md (the paper's trends against our numbers, each criterion's
+quantity with its 95 % interval over the starts and a verdict holds / fails / undecided: ``trends``).
 
     /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
     /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
@@ -22,11 +24,19 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
-from postproc.plots import GROUP_COLOURS  # noqa: E402
-from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402
+from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
+from postproc.run_files import (  # noqa: E402
+    ensemble_history,
+    read_history,
+    read_snapshot,
+    read_summary,
+    run_folders,
+    snapshot_files,
+)
 
 PERIOD = 0.02        # the cosine's period [s] (50 Hz): the averaging window of the end values
 LOW_BLOCKS = 4       # blocks 1-4: below the two surface blocks, whose U drains to the surface (§6.2)
@@ -101,9 +111,8 @@ def blocks_figure(history, title, bounds=None, snap0=None):
         a.axhline(0.0, color="0.3", lw=0.6)
         a.set_ylim(-lim, lim)
         ok = np.isfinite(y)
-        where = " (surface)" if b == n - 1 else " (bottom)" if b == 0 else ""
         stats = f"mean {np.mean(y[ok]):.0f}, max {np.max(y[ok]):.0f} N/m" if ok.any() else "no pore"
-        a.text(0.005, 0.93, f"block {b + 1}{where}: {stats}", transform=a.transAxes, fontsize=7.5, va="top")
+        a.text(0.005, 0.93, f"{block_label(b, n, bounds)}: {stats}", transform=a.transAxes, fontsize=7.5, va="top")
         a.set_ylabel("U [N/m]")
         a.grid(alpha=0.3)
         if a is not axes[-1]:
@@ -206,94 +215,158 @@ def case_summary(run_dir):
     return out
 
 
-def trends(cases, drainage=None):
-    """The paper's four observed trends (SPEC §2.5) against our numbers: a list of rows
-    {trend, paper, ours, holds}; rows whose cases are missing are left out. ``drainage``: the
-    contents of drainage.json (yade_scripts/liquefaction_drainage.py), quoted in the drained row."""
+def _holds_if(low, high):
+    return f"> {low:g}" if high == np.inf else f"< {high:g}" if low == -np.inf else f"in ({low:g}, {high:g})"
+
+
+# The paper's trends (SPEC §2.5) with the study's criteria, fixed before the runs: per trend its
+# cases and its conditions (name, a quantity of the cases' means over their starts {case: {key:
+# mean}}, low, high); the trend holds where every quantity lies in (low, high).
+TRENDS = tuple(
+    [(f"dry settles more than saturated-undrained ({label}: case {dry} vs {wet})",
+      "undrained ≈ constant volume; dry porosity falls with time (Fig. 40/46)", (wet, dry),
+      [(f"-Δn(case {dry}) / |Δn(case {wet})|",
+        lambda m, w=wet, d=dry: -m[d]["porosity_change"] / abs(m[w]["porosity_change"]), 2.0, np.inf)])
+     for wet, dry, label in ((1, 2, "cosine"), (6, 7, "El Centro"))]
+    + [("drained sides with high k keep |U| small (case 3 vs 1)", "U hardly rises in any block, stays near 0 (Fig. 39)",
+        (1, 3), [("time-mean |U| of blocks 1-4, case 3 / case 1",
+                  lambda m: m[3]["U_low_abs_mean"] / m[1]["U_low_abs_mean"], -np.inf, 0.5)]),
+       ("drained case lies between undrained and dry in porosity (case 3)", "intermediate (Fig. 40)", (1, 2, 3),
+        [("(Δn3 - Δn1) / (Δn2 - Δn1)", lambda m: (m[3]["porosity_change"] - m[1]["porosity_change"])
+          / (m[2]["porosity_change"] - m[1]["porosity_change"]), 0.0, 1.0)]),
+       ("elastic springs keep porosity nearly constant (cases 4, 5 vs 2)",
+        "porosity hardly changes, saturated or dry (Fig. 41)", (2, 4, 5),
+        [("max(|Δn4|, |Δn5|) / |Δn2|", lambda m: max(abs(m[4]["porosity_change"]), abs(m[5]["porosity_change"]))
+          / abs(m[2]["porosity_change"]), -np.inf, 0.5)]),
+       ("elastic springs: U oscillates about 0 (case 4)",
+        "U oscillates near 0 in every block, with suction; no build-up (Fig. 42)", (1, 4),
+        [("|mean U| / std U of blocks 1-4, case 4", lambda m: abs(m[4]["U_low_mean"]) / m[4]["U_low_std"], -np.inf, 1.0),
+         ("|mean U| of blocks 1-4, case 4 / case 1", lambda m: abs(m[4]["U_low_mean"]) / abs(m[1]["U_low_mean"]),
+          -np.inf, 0.5)]),
+       ("hysteretic springs: U builds up with the input period (case 1)",
+        "U rises through the first cycle (0.02 s), then oscillates at the input period about a plateau (Fig. 37)", (1,),
+        [("rise of U (blocks 1-4) in the first 20 ms / std U",
+          lambda m: m[1]["U_low_rise_first_period"] / m[1]["U_low_std"], 0.0, np.inf),
+         ("U over the last 20 ms / std U", lambda m: m[1]["U_low_end"] / m[1]["U_low_std"], 0.5, np.inf),
+         ("dominant period of U / 20 ms", lambda m: m[1]["U_low_dominant_period"] / PERIOD, 0.75, 1.25)])])
+N_BOOT = 2000  # bootstrap resamples of the starts of each case for a quantity's interval
+
+
+def small_sample_factor(n):
+    """The factor that widens a percentile bootstrap interval of means of n starts about its
+    estimate to a Student-t one: t(0.975, n - 1) / z(0.975) x sqrt(n / (n - 1)) (the bootstrap's
+    spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
+    return float(stats.t.ppf(0.975, n - 1) / stats.norm.ppf(0.975) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
+
+
+def _means(cases, keys, pick=None):
+    """{case: {key: mean over the starts (those of ``pick`` {case: indices}, default all)}}."""
+    return {k: {key: float(np.mean([runs[i][key] for i in (pick[k] if pick else range(len(runs)))]))
+                for key in keys} for k, runs in cases.items()}
+
+
+def _verdict(lo, hi, low, high):
+    """holds: the interval (lo, hi) inside (low, high); fails: outside; undecided: it straddles a
+    threshold (or is unknown)."""
+    if np.isnan(lo) or np.isnan(hi):
+        return "undecided"
+    if low < lo and hi < high:
+        return "holds"
+    if hi <= low or lo >= high:
+        return "fails"
+    return "undecided"
+
+
+def trends(cases, drainage=None, seed=0):
+    """The paper's trends (TRENDS) on our runs: a list of rows {trend, paper, cases, starts,
+    conditions: [{quantity, estimate, ci95, holds_if, verdict}], verdict}; rows whose cases are
+    missing are left out. ``cases``: {case: [summary of each start (``case_summary``)]} (a dict for
+    one run). Each quantity: its value on the means over the starts, its 95 % interval the
+    percentile interval over N_BOOT bootstrap resamples of each case's starts (numpy Generator(seed))
+    widened by ``small_sample_factor`` of the fewest starts,
+    its verdict holds (the interval inside the criterion's range), fails (outside) or undecided
+    (straddling a threshold, or a case with one start); the trend fails where a condition fails,
+    holds where all hold. ``drainage``: drainage.json (yade_scripts/liquefaction_drainage.py), quoted
+    in the drained row."""
+    cases = {k: v if isinstance(v, list) else [v] for k, v in cases.items()}
+    keys = ("porosity_change", "U_low_abs_mean", "U_low_mean", "U_low_std", "U_low_rise_first_period", "U_low_end",
+            "U_low_dominant_period")
+    rng = np.random.default_rng(seed)
     rows = []
-
-    def have(*k):
-        return all(k_ in cases for k_ in k)
-
-    for wet, dry, label in ((1, 2, "cosine"), (6, 7, "El Centro")):
-        if have(wet, dry):
-            dw, dd = cases[wet]["porosity_change"], cases[dry]["porosity_change"]
-            rows.append({"trend": f"dry settles more than saturated-undrained ({label}: case {dry} vs {wet})",
-                         "paper": "undrained ≈ constant volume; dry porosity falls with time (Fig. 40/46)",
-                         "ours": f"Δn = {dd:+.4f} dry vs {dw:+.4f} saturated",
-                         "holds": bool(dd < 0 and dd < dw and abs(dd) > 2 * abs(dw))})
-    if have(1, 3):
-        u1, u3 = cases[1]["U_low_abs_mean"], cases[3]["U_low_abs_mean"]
+    for trend, paper, need, conditions in TRENDS:
+        if not all(k in cases for k in need):
+            continue
+        sub = {k: cases[k] for k in need}
+        have = [key for key in keys if all(key in r for runs in sub.values() for r in runs)]
+        mean = _means(sub, have)
+        boot = [_means(sub, have, {k: rng.integers(0, len(runs), len(runs)) for k, runs in sub.items()})
+                for _ in range(N_BOOT)]
+        one = min(len(runs) for runs in sub.values()) < 2
+        out = []
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for name, f, low, high in conditions:
+                est = float(f(mean))
+                values = np.array([f(b) for b in boot], float)
+                lo, hi = (np.nanpercentile(values, [2.5, 97.5]) if not one and np.isfinite(values).any()
+                          else (np.nan, np.nan))
+                widen = small_sample_factor(min(len(runs) for runs in sub.values()))
+                lo, hi = est - widen * (est - lo), est + widen * (hi - est)
+                out.append({"quantity": name, "estimate": est, "ci95": [float(lo), float(hi)],
+                            "holds_if": _holds_if(low, high),
+                            "verdict": "undecided" if one else _verdict(lo, hi, low, high)})
+        verdicts = {c["verdict"] for c in out}
+        row = {"trend": trend, "paper": paper, "cases": list(need), "starts": {k: len(sub[k]) for k in need},
+               "conditions": out,
+               "verdict": "fails" if "fails" in verdicts else "holds" if verdicts == {"holds"} else "undecided"}
         tau = (drainage or {}).get("case3", {}).get("1", {}).get("tau")
-        rows.append({"trend": "drained sides with high k keep |U| small (case 3 vs 1)",
-                     "paper": "U hardly rises in any block, stays near 0 (Fig. 39)",
-                     "ours": f"time-mean |U| of blocks 1-4: {u3:.1f} vs {u1:.1f} N/m (ratio {u3 / u1:.2f})" +
-                             (f"; slowest drainage time constant {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
-                              if tau else ""),
-                     "holds": bool(u3 < 0.5 * u1)})
-    if have(3):
-        d1 = cases.get(1, {}).get("porosity_change", np.nan)
-        rows.append({"trend": "drained case lies between undrained and dry in porosity (case 3)",
-                     "paper": "intermediate (Fig. 40)",
-                     "ours": f"Δn = {cases[3]['porosity_change']:+.4f} (undrained {d1:+.4f}, dry "
-                             f"{cases.get(2, {}).get('porosity_change', np.nan):+.4f})",
-                     "holds": bool(have(1, 2) and min(d1, cases[2]["porosity_change"]) <= cases[3]["porosity_change"]
-                                   <= max(d1, cases[2]["porosity_change"]))})
-    if have(4, 5, 2):
-        d4, d5, d2 = (cases[k]["porosity_change"] for k in (4, 5, 2))
-        rows.append({"trend": "elastic springs keep porosity nearly constant (cases 4, 5 vs 2)",
-                     "paper": "porosity hardly changes, saturated or dry (Fig. 41)",
-                     "ours": f"Δn = {d4:+.4f} (4), {d5:+.4f} (5) vs {d2:+.4f} (2, spring d dry)",
-                     "holds": bool(max(abs(d4), abs(d5)) < 0.5 * abs(d2))})
-    if have(4, 1):
-        c4, c1 = cases[4], cases[1]
-        rows.append({"trend": "elastic springs: U oscillates about 0 (case 4)",
-                     "paper": "U oscillates near 0 in every block, with suction; no build-up (Fig. 42)",
-                     "ours": f"blocks 1-4: mean {c4['U_low_mean']:+.1f} N/m, std {c4['U_low_std']:.1f}, min "
-                             f"{min(v['min'] for v in c4['U_blocks'].values()):.0f} (case 1: mean "
-                             f"{c1['U_low_mean']:+.1f}, std {c1['U_low_std']:.1f})",
-                     "holds": bool(abs(c4["U_low_mean"]) < c4["U_low_std"] and abs(c4["U_low_mean"]) < 0.5 * abs(c1["U_low_mean"]))})
-        rows[-1]["ours"] += f"; corr(U, compaction) {c4['U_low_vs_compaction_corr']:.2f}"
-    if have(1):
-        c1 = cases[1]
-        rows.append({"trend": "hysteretic springs: U builds up with the input period (case 1)",
-                     "paper": "U rises through the first cycle (0.02 s), then oscillates at the input period "
-                              "about a plateau (Fig. 37)",
-                     "ours": f"blocks 1-4: rise {c1['U_low_rise_first_period']:+.1f} N/m in the first 20 ms, "
-                             f"{c1['U_low_end']:+.1f} N/m over the last 20 ms; dominant period "
-                             f"{1e3 * c1['U_low_dominant_period']:.1f} ms",
-                     "holds": bool(c1["U_low_rise_first_period"] > 0 and c1["U_low_end"] > c1["U_low_std"] / 2
-                                   and abs(c1["U_low_dominant_period"] - PERIOD) < 0.25 * PERIOD)})
+        if 3 in need and "U_low_abs_mean" in have and tau:
+            row["note"] = f"slowest drainage time constant of case 3 {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
+        rows.append(row)
     return rows
 
 
 def _wet(runs):
-    return [k for k, (h, s) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
+    return [k for k, (_, s, _) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
+
+
+def _drawn(run, col):
+    """The values a figure draws of a column of ``run`` (history, summary, band): the line and its band."""
+    history, _, band = run
+    return np.concatenate([history[col], *(band[col] if band is not None else ())])
 
 
 def porosity_figure(runs, title, n_lim=None, u_lim=None):
-    """Porosity of the cases together (top), then the block pressures of each wet case; n_lim
-    (low, high) and u_lim (U from -u_lim to u_lim) give several figures the same axes."""
+    """Porosity of the cases together (top), then the block pressures of each wet case; ``runs``
+    {case: (history, summary, band)}: an ensemble's history is its means over the starts, drawn with
+    its 95 % band (band {column: (low, high)}; None for one run). n_lim (low, high) and u_lim (U
+    from -u_lim to u_lim) give several figures the same axes."""
     wet = _wet(runs)
     fig, axes = plt.subplots(1 + len(wet), 1, figsize=(9, 3.2 + 2.3 * len(wet)), sharex=True,
                              gridspec_kw={"height_ratios": [1.4] + [1] * len(wet)}, layout="constrained")
     axes = np.atleast_1d(axes)
-    for k, (h, _) in runs.items():
-        axes[0].plot(h["t"] * 1e3, h["porosity"], label=f"case {k}: {CASES[k]}")
+
+    def draw(ax, h, band, col, **style):
+        line, = ax.plot(h["t"] * 1e3, h[col], **style)
+        if band is not None:
+            ax.fill_between(h["t"] * 1e3, *band[col], color=line.get_color(), alpha=0.25, lw=0)
+
+    for k, (h, _, band) in runs.items():
+        draw(axes[0], h, band, "porosity", label=f"case {k}: {CASES[k]}" + (" (mean over the starts, 95 % band)"
+                                                                            if band is not None else ""))
     axes[0].set_ylabel("porosity of the window [-]")
     axes[0].legend(fontsize=8)
     axes[0].set_title(title)
     if n_lim:
         axes[0].set_ylim(*n_lim)
-    lim = u_lim or max([np.nanmax(np.abs(runs[k][0][c])) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
+    lim = u_lim or max([np.nanmax(np.abs(_drawn(runs[k], c))) for k in wet for c in block_columns(runs[k][0])] + [1e-9])
     for ax, k in zip(axes[1:], wet):
-        h = runs[k][0]
+        h, _, band = runs[k]
         ax.set_ylim(-1.05 * lim, 1.05 * lim)  # one scale for the wet cases, centred on U = 0
         for b, c in enumerate(block_columns(h)):
-            ax.plot(h["t"] * 1e3, h[c], color=f"C{b}", lw=0.7, label=f"block {b + 1}")
+            draw(ax, h, band, c, color=f"C{b}", lw=0.7, label=block_label(b, len(block_columns(h))))
         ax.axhline(0.0, color="0.3", lw=0.6)
         ax.set_ylabel(f"case {k}: U [N/m]")
-        ax.legend(fontsize=7, ncol=6, loc="upper left")
+        ax.legend(fontsize=7, ncol=3, loc="upper left")
     for ax in axes:
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [ms]")
@@ -322,29 +395,50 @@ def transfer_figure(pairs):
 
 
 def trends_markdown(rows):
-    lines = ["| trend | the paper | ours | holds |", "|---|---|---|---|"]
-    lines += [f"| {r['trend']} | {r['paper']} | {r['ours']} | {'yes' if r['holds'] else 'no'} |" for r in rows]
+    """The trends as a table: per condition its estimate, 95 % interval, criterion and verdict."""
+    lines = ["| trend | the paper | quantity: estimate [95 % interval] (holds if) → verdict | starts | verdict |",
+             "|---|---|---|---|---|"]
+    for r in rows:
+        cells = "; ".join(f"{c['quantity']}: {c['estimate']:.3g} [{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}] "
+                          f"({c['holds_if']}) → {c['verdict']}" for c in r["conditions"])
+        if r.get("note"):
+            cells += f"; {r['note']}"
+        starts = ", ".join(f"{n} (case {k})" for k, n in r["starts"].items())
+        lines.append(f"| {r['trend']} | {r['paper']} | {cells} | {starts} | {r['verdict']} |")
     return "\n".join(lines) + "\n"
+
+
+def _case_runs(path):
+    """([case_summary of each completed start], (history, summary, band)) of the run or ensemble in
+    ``path`` (history: an ensemble's means over its starts, band: their 95 % intervals per column,
+    None for one run), or None when nothing has completed there."""
+    starts = [s for s in (case_summary(d) for d in run_folders(path)) if s is not None and s["status"] == "completed"]
+    if not starts:
+        return None
+    if run_folders(path) == [path]:
+        return starts, (read_history(os.path.join(path, "history.csv")), read_summary(path), None)
+    history, band = ensemble_history(path)
+    if history is None:
+        return None
+    return starts, (history, read_summary(run_folders(path)[0]), band)
 
 
 def study(root):
     """Summaries, trends and the study figures of the runs under ``root``; returns the paths written."""
     cases, runs, written = {}, {}, []
     for k in CASES:
-        d = os.path.join(root, f"case{k}")
-        s = case_summary(d)
-        if s is not None:
-            cases[k] = s
-            runs[k] = (read_history(os.path.join(d, "history.csv")), read_summary(d))
-    conserving = {}
+        got = _case_runs(os.path.join(root, f"case{k}"))
+        if got is not None:
+            cases[k], runs[k] = got
+    conserving, conserving_runs = {}, {}
     for k in TRANSFER_CASES:
-        s = case_summary(os.path.join(root, f"case{k}-conserving"))
-        if s is not None:
-            conserving[k] = s
+        got = _case_runs(os.path.join(root, f"case{k}-conserving"))
+        if got is not None:
+            conserving[k], conserving_runs[k] = got
     drain = os.path.join(root, "drainage.json")
     drainage = json.load(open(drain)) if os.path.exists(drain) else None
     rows = trends(cases, drainage)
-    out = {"cases": {f"case{k}": v for k, v in cases.items()},
+    out = {"cases": {f"case{k}": v for k, v in cases.items()}, "starts": {f"case{k}": len(v) for k, v in cases.items()},
            "drainage": drainage,
            "conserving": {f"case{k}": v for k, v in conserving.items()},
            "trends": rows, "paper_cpu_minutes": 330,
@@ -358,10 +452,10 @@ def study(root):
     with open(path, "w") as f:
         f.write(trends_markdown(rows))
     written.append(path)
-    n_all = np.concatenate([h["porosity"] for h, _ in runs.values()]) if runs else np.zeros(1)
+    n_all = np.concatenate([_drawn(r, "porosity") for r in runs.values()]) if runs else np.zeros(1)
     pad = 0.05 * (np.nanmax(n_all) - np.nanmin(n_all) + 1e-9)
     n_lim = (np.nanmin(n_all) - pad, np.nanmax(n_all) + pad)  # Fig. 40, 41, 46 on the same axes
-    u_lim = max([np.nanmax(np.abs(runs[k][0][c])) for k in _wet(runs) for c in block_columns(runs[k][0])] + [1e-9])
+    u_lim = max([np.nanmax(np.abs(_drawn(runs[k], c))) for k in _wet(runs) for c in block_columns(runs[k][0])] + [1e-9])
     for name, (title, ks) in STUDY_FIGURES.items():
         have = {k: runs[k] for k in ks if k in runs}
         if have:
@@ -369,8 +463,7 @@ def study(root):
             written.append(os.path.join(root, name))
             fig.savefig(written[-1], dpi=110)
             plt.close(fig)
-    pairs = {k: (runs[k][0], read_history(os.path.join(root, f"case{k}-conserving", "history.csv")))
-             for k in conserving if k in runs}
+    pairs = {k: (runs[k][0], conserving_runs[k][0]) for k in conserving if k in runs}  # the (mean) histories
     if pairs:
         fig = transfer_figure(pairs)
         written.append(os.path.join(root, "transfer_comparison.png"))

@@ -23,7 +23,6 @@ U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess p
 FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
 FLAT_WALL_COLOUR = "dimgrey"  # a flat wall's face in the snapshots
 FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max
-BLOCK_NAMES = {"U_block1": "block 1 (bottom)", "U_block2": "block 2 (surface)"}
 HISTORY_PANELS = [("porosity", "porosity [-]", 1.0), ("kinetic_energy", "kinetic energy [J/m]", 1.0),
                   ("fn_bottom_mean", "mean normal force, block 1 [N]", 1.0), ("bed_top", "bed top [mm]", 1e3)]
 
@@ -35,22 +34,36 @@ def nan_runs(t, y):
     return [(t[max(a - 1, 0)], t[min(b + 1, len(t) - 1)]) for a, b in zip(starts, ends)]
 
 
-def plot_block_pressures(history, E_w, path, title):
+def block_label(k, n, bounds=None):
+    """The name of block k (0 = bottom) of n by its position: bottom, surface or its number from the
+    bottom, with its z range [mm] when ``bounds`` [(z0, z1)] [m] are given (the surface block's from z0 up)."""
+    where = "bottom" if k == 0 else "surface" if k == n - 1 else ""
+    if bounds:
+        z0, z1 = (1e3 * z for z in bounds[k])
+        where += (", " if where else "") + (f"z > {z0:.1f} mm" if k == n - 1 else f"z {z0:.1f}–{z1:.1f} mm")
+    return f"block {k + 1}" + (f" ({where})" if where else "")
+
+
+def plot_block_pressures(history, E_w, path, title, bounds=None):
     """block_pressure_figure saved to ``path``."""
-    fig = block_pressure_figure(history, E_w, title)
+    fig = block_pressure_figure(history, E_w, title, bounds)
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
-def block_pressure_figure(history, E_w, title):
-    """Block-mean excess pore pressure against time, one line per block (Fig. 21/23). A block
-    holding no pore has no mean (NaN in history.csv): drawn as a hatched band in its colour."""
+def block_pressure_figure(history, E_w, title, bounds=None):
+    """Block-mean excess pore pressure against time, one line per block (Fig. 21/23), each named
+    by its position (``block_label``; ``bounds``: the blocks' z ranges [m]); the axis spans the
+    data, with the bound E_w of eq 32 drawn when it lies within a quarter above the data, else named
+    in the key. A block holding no pore has no mean (NaN in history.csv): drawn as a hatched band
+    in its colour."""
     fig, ax = plt.subplots(figsize=(7.5, 4.9))
     t_ms = history["t"] * 1e3
     handles, any_gap = [], False
-    for k, name in enumerate(sorted(c for c in history if c.startswith("U_block"))):
+    names = sorted((c for c in history if c.startswith("U_block")), key=lambda c: int(c[len("U_block"):]))
+    for k, name in enumerate(names):
         colour = f"C{k}"
-        label = BLOCK_NAMES.get(name, name)
+        label = block_label(k, len(names), bounds)
         handles += ax.plot(t_ms, history[name], color=colour, label=label)
         gaps = nan_runs(t_ms, history[name])
         for t0, t1 in gaps:
@@ -61,7 +74,15 @@ def block_pressure_figure(history, E_w, title):
             share = np.isnan(history[name]).mean()
             handles.append(Patch(facecolor="none", edgecolor=colour, hatch="////", linewidth=0,
                                  label=f"{label}: no pore, no mean ({100 * share:.0f} % of the time)"))
-    handles.append(ax.axhline(E_w, color="0.5", ls="--", lw=0.8, label=f"E_w = {E_w:g} N/m (bound of eq 32)"))
+    data = np.concatenate([history[c][np.isfinite(history[c])] for c in names] + [np.zeros(1)])
+    lo, hi = data.min(), data.max()
+    pad = 0.05 * max(hi - lo, 1e-9)
+    if np.isfinite(E_w) and E_w <= 1.25 * hi:
+        handles.append(ax.axhline(E_w, color="0.5", ls="--", lw=0.8, label=f"E_w = {E_w:g} N/m (bound of eq 32)"))
+        hi = max(hi, E_w)
+    elif np.isfinite(E_w):
+        handles.append(Line2D([], [], color="none", label=f"E_w = {E_w:g} N/m (bound of eq 32): above the axis"))
+    ax.set_ylim(lo - pad, hi + pad)
     ax.axhline(0.0, color="0.3", lw=0.6)
     ax.set_xlabel("t [ms]")
     ax.set_ylabel("block-mean excess pore pressure U [N/m]")
@@ -159,6 +180,8 @@ def plot_snapshots(snaps, path, title, blocks=None):
 
 
 SNAPSHOT_COLUMNS = 3  # panels per row of a snapshot figure
+KEY_ENTRY_WIDTH = 2.7  # [in]: one column of a snapshot figure's key (a handle and a label of ~30 characters)
+KEY_SHARE = 0.78       # of the figure's width: the key's columns; the velocity arrow's key on the right
 
 
 def snapshot_figure(snaps, title, blocks=None):
@@ -172,41 +195,7 @@ def snapshot_figure(snaps, title, blocks=None):
     lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
     hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
     aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])  # panel height / width of the scene
-    fig = plt.figure(figsize=(max(4.3 * cols + 1.2, 8.6), rows * (4.0 * aspect + 1.0) + 0.8), layout="constrained")
-    grid = fig.add_gridspec(rows + 1, cols, height_ratios=(1,) * rows + (0.12,))
-    axes = [fig.add_subplot(grid[k // cols, k % cols]) for k in range(n)]
-    key_ax = fig.add_subplot(grid[rows, :])
-    key_ax.axis("off")
-    Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
-    u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
-    norm = Normalize(-u_max, u_max)
     f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
-    speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
-    moving = max(v.max(initial=0.0) for v in speed) > 0
-    v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
-    v_key = _nice(v_max / 2)
-    colour_source = quiver = None
-    for ax, s, v in zip(axes, snaps, speed):
-        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
-        colour_source = colour_source or polys
-        quiver = quiver or q
-        parts = [f"max |v| = {v.max(initial=0.0):.3g} m/s", f"max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
-        if "U" in s and len(s["U"]):
-            parts.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
-        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + ", ".join(parts), fontsize=8.5)
-        if blocks:
-            for k, (z0, z1) in enumerate(blocks):
-                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
-    pad = 0.3
-    for k, ax in enumerate(axes):
-        ax.set_xlim(lo[0] - pad, hi[0] + pad)
-        ax.set_ylim(lo[1] - pad, hi[1] + pad)
-        if k % cols:
-            ax.set_ylabel("")
-            ax.tick_params(labelleft=False)
-    if colour_source is not None:
-        fig.colorbar(colour_source, ax=axes, label="pore excess pressure U [N/m]\n(0 = hydrostatic)",
-                     shrink=0.85, pad=0.01)
     dense = max(s["density_factor"].max() for s in snaps)
     key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
     if dense > 1:
@@ -220,11 +209,50 @@ def snapshot_figure(snaps, title, blocks=None):
             for f in (f_max / 4, f_max)]
     if blocks:
         key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
-    key_ax.legend(handles=key, loc="center left", ncol=(len(key) + 1) // 2, fontsize=8, frameon=False)
+    width = max(4.3 * cols + 1.2, 8.6)
+    key_cols = max(1, int(KEY_SHARE * width / KEY_ENTRY_WIDTH))
+    key_height = 0.22 * -(-len(key) // key_cols) + 0.2  # [in]: the key's rows
+    panel_height = 4.3 * min(aspect, 1.5) + 0.8      # [in]: a panel and its three-line title
+    fig = plt.figure(figsize=(width, rows * panel_height + key_height + 0.8), layout="constrained")
+    grid = fig.add_gridspec(rows + 1, cols, height_ratios=(panel_height,) * rows + (key_height,))
+    axes = [fig.add_subplot(grid[k // cols, k % cols]) for k in range(n)]
+    key_ax = fig.add_subplot(grid[rows, :])
+    key_ax.axis("off")
+    Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
+    u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
+    norm = Normalize(-u_max, u_max)
+    speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
+    moving = max(v.max(initial=0.0) for v in speed) > 0
+    v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
+    v_key = _nice(v_max / 2)
+    colour_source = quiver = None
+    for ax, s, v in zip(axes, snaps, speed):
+        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
+        colour_source = colour_source or polys
+        quiver = quiver or q
+        lines = [f"max |v| = {v.max(initial=0.0):.3g} m/s, max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
+        if "U" in s and len(s["U"]):
+            lines.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
+        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + "\n".join(lines), fontsize=8.5)
+        if blocks:
+            for k, (z0, z1) in enumerate(blocks):
+                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    pad = 0.3
+    for k, ax in enumerate(axes):
+        ax.set_xlim(lo[0] - pad, hi[0] + pad)
+        ax.set_ylim(lo[1] - pad, hi[1] + pad)
+        if k % cols:
+            ax.set_ylabel("")
+            ax.tick_params(labelleft=False)
+    if colour_source is not None:
+        fig.colorbar(colour_source, ax=axes, label="pore excess pressure U [N/m]\n(0 = hydrostatic)",
+                     shrink=0.85, pad=0.01)
+    key_ax.legend(handles=key, loc="center left", bbox_to_anchor=(0.0, 0.0, KEY_SHARE, 1.0), ncol=key_cols,
+                  fontsize=8, frameon=False)
     if quiver is not None and moving:
         fig.canvas.draw()  # a quiver key belongs to its quiver's axes: place it in figure units, after layout
         box = key_ax.get_position()
-        axes[0].quiverkey(quiver, box.x0 + 0.84 * box.width, box.y0 + 0.5 * box.height, v_key,
+        axes[0].quiverkey(quiver, box.x0 + (KEY_SHARE + 0.02) * box.width, box.y0 + 0.5 * box.height, v_key,
                           f"particle velocity {v_key:g} m/s", labelpos="E", coordinates="figure",
                           color=ARROW_COLOUR, fontproperties={"size": 8})
     fig.suptitle(title + ":\npores coloured by U, normal forces (line width), particle velocities (arrows)")
@@ -242,7 +270,7 @@ def figures_of_run(run_dir):
         if params.get("water", {}).get("enabled", True) and any(c.startswith("U_block") for c in history):
             written.append(os.path.join(run_dir, "pressure_blocks.png"))
             plot_block_pressures(history, params.get("water", {}).get("E_w", np.nan), written[-1],
-                                 f"{title}: block-mean excess pore pressure")
+                                 f"{title}: block-mean excess pore pressure", summary.get("block_bounds_m"))
         written.append(os.path.join(run_dir, "history_panels.png"))
         plot_history_panels(history, written[-1], title)
     snaps = [read_snapshot(f) for f in snapshot_files(run_dir)]

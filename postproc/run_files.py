@@ -28,6 +28,29 @@ def read_snapshot(path):
         return dict(z)
 
 
+def run_folders(path):
+    """The run folders under ``path``: each start's (start_<k>) of an ensemble (ensemble.json there,
+    engines.run.ensemble), else ``path`` itself."""
+    plan = os.path.join(path, "ensemble.json")
+    if not os.path.exists(plan):
+        return [path]
+    with open(plan) as f:
+        return [os.path.join(path, f"start_{k}") for k in json.load(f)["seeds"]]
+
+
+def ensemble_history(path):
+    """(history of the means over the starts {column: array}, {column: (95 % low, high)}) of the
+    ensemble in ``path`` (its ensemble.json's history statistics), or (None, None) before they exist."""
+    with open(os.path.join(path, "ensemble.json")) as f:
+        doc = json.load(f)
+    if "history" not in doc:
+        return None, None
+    cols = doc["history"]["columns"]
+    f = lambda v: np.array([np.nan if x is None else x for x in v], float)  # noqa: E731
+    mean = {"t": np.array(doc["history"]["t"], float), **{c: f(st["mean"]) for c, st in cols.items()}}
+    return mean, {c: (f(st["ci95_low"]), f(st["ci95_high"])) for c, st in cols.items()}
+
+
 def read_summary(run_dir):
     """summary.json of a run as a dict ({} when missing)."""
     path = os.path.join(run_dir, "summary.json")

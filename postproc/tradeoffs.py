@@ -13,6 +13,12 @@ reference's ensembles, the estimate sqrt(max(0, measured^2 - floor^2)) and its b
 engines.studies.tradeoffs.systematic). The judgement against the 5 % target (``within_target``) is on the
 estimate, the raw metric being the estimate plus the chaos of finite ensembles; ``resolved`` says
 whether the estimate plus 2 sigma is within 5 % too. ``within_target_raw`` is kept for comparison.
+
+``validate(out, jobs, meta)`` judges the validation's runs (the fast setting against the paper's
+numerics on every preset over its whole duration, engines.studies.tradeoffs.VALIDATION): per scene
+every metric of ``systematic`` with the blocks' time-mean pressures, and the verdict (``verdict``:
+"pass" when every judged metric's estimate + 2 sigma is within 5 %) of the fast setting and of the
+candidate settings tried -> OUT/validation.json and validation.md.
 """
 import json
 import os
@@ -124,10 +130,6 @@ def analyse(out, jobs, meta, log=print):
                            "target_met": bool(fast["within_target"] and (fast["speedup"] or 0) >= SPEEDUP_TARGET),
                            "floor": doc["reference"]["liquefaction_case1"]["floor"], "case": "liquefaction_case1",
                            "window_s": doc["reference"]["liquefaction_case1"]["window_s"]}
-        full = doc["alternatives"].get("liquefaction_case1_full:fast")
-        if full is not None:  # the whole 0.18 s, against the paper's settings as the reference
-            doc["defaults"]["full_duration"] = {k: full[k] for k in ("speedup", "error", "cpu_s")}
-            doc["defaults"]["full_duration"]["floor"] = doc["reference"]["liquefaction_case1_full"]["floor"]
     speed = os.path.join(out, "speed", "speed.json")  # engines.run.tradeoffs.measure_speed: interleaved in one process
     if os.path.exists(speed):
         with open(speed) as f:
@@ -308,3 +310,89 @@ def figure(doc, case, path):
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def judged_metrics(systematic):
+    """The metrics a validation judges, of those ``systematic`` gave: METRICS and the blocks' time means."""
+    return [m for m in systematic if m in METRICS or m.startswith("block_mean_")]
+
+
+def verdict(systematic):
+    """"pass" when every judged metric's estimate + 2 sigma is within TARGET; "fail" when an estimate
+    is above it; else "not resolved" (every estimate within, not every estimate + 2 sigma)."""
+    judged = [systematic[m] for m in judged_metrics(systematic)]
+    if all(m["systematic"] + 2 * m["sigma"] <= TARGET for m in judged):
+        return "pass"
+    return "fail" if any(m["systematic"] > TARGET for m in judged) else "not resolved"
+
+
+def validate(out, jobs, meta, log=print):
+    """The validation table (module docstring) of the runs in OUT/runs; ``meta``: job name -> (case,
+    knob, value) of the validation's cases. Writes OUT/validation.json and OUT/validation.md;
+    returns the validation.json dict."""
+    log = log or (lambda *a: None)
+    results = {j.name: load(os.path.join(out, "runs", j.name, "result.json")) for j in jobs}
+    doc = {"target": TARGET, "criterion": "pass: every judged metric's noise-corrected estimate + 2 sigma <= target; "
+                                          "fail: an estimate > target; not resolved: otherwise",
+           "paper": {k: v for k, v in tr.ACCURATE.items() if k != "name"},
+           "fast": {k: v for k, v in tr.FAST.items() if k != "name"}, "scenes": {},
+           "notes": "systematic: the noise-corrected estimate of the metric (engines.studies.tradeoffs.systematic, as "
+                    "fractions), sigma its bootstrap standard deviation; block_mean_<b>: the error of block b's "
+                    "time-mean pressure over the RMS of the paper's ensemble-mean pressures; dry scenes have no "
+                    "pressure metrics; cpu_s: CPU seconds per start"}
+    for case in dict.fromkeys(c for c, _, _ in meta.values()):
+        scene = tr.CASES[case].get("preset", case)
+        ref = next((results[n] for n, (c, k, _) in meta.items() if c == case and k == "reference"), None)
+        runs = {v["name"]: results[n] for n, (c, k, v) in meta.items() if c == case and k in ("defaults", "candidate")}
+        entry = {"case": case, "perturbation_m": tr.CASES[case]["perturbation_size"], "verdict": "not run"}
+        for name, run in runs.items():
+            row = _validated(ref, run) if ref is not None and run is not None else {"verdict": "not run"}
+            if name == tr.FAST["name"]:
+                entry.update(row)
+            else:
+                entry.setdefault("candidates", {})[name] = {
+                    "settings": next(v for v in tr.CASES[case]["candidate"] if v["name"] == name), **row}
+        doc["scenes"][scene] = entry
+        log(f"{scene}: {entry['verdict']}" + "".join(f"; {n}: {c['verdict']}" for n, c in entry.get("candidates", {}).items()))
+    with open(os.path.join(out, "validation.json"), "w") as f:
+        json.dump(doc, f, indent=1, default=float)
+    with open(os.path.join(out, "validation.md"), "w") as f:
+        f.write(validation_table(doc))
+    return doc
+
+
+def _validated(ref, run):
+    """The validation of one setting's run against the paper's (results of ``load``): its cost,
+    metrics (``systematic`` with the blocks) and verdict."""
+    row = {"window_s": ref["window"], "dt_fast": run["dt"], "starts": {"paper": ref["n_ok"], "fast": run["n_ok"]},
+           "cpu_s": {"paper": ref["cpu_s"], "fast": run["cpu_s"]}, "messages": ref["messages"] + run["messages"]}
+    if ref["data"] is None or run["data"] is None:
+        return {**row, "verdict": "failed"}
+    sys_ = tr.systematic(run["data"], ref["data"], blocks=True)
+    return {**row, "speedup": ref["cpu_s"] / run["cpu_s"], "floor": tr.floors(ref["data"]), "metrics": sys_,
+            "judged": judged_metrics(sys_), "verdict": verdict(sys_)}
+
+
+def validation_table(doc):
+    """Markdown: one line per scene (the fast setting), then one per candidate setting tried; per
+    metric the noise-corrected estimate ± sigma in % (– where the scene has no such metric), the
+    cost and the verdict."""
+    n_blocks = max([int(m.rsplit("_", 1)[1]) for e in doc["scenes"].values() for m in e.get("metrics", {})
+                    if m.startswith("block_mean_")], default=0)
+    metrics = list(METRICS) + [f"block_mean_{b}" for b in range(1, n_blocks + 1)]
+    heads = [LABELS[m] for m in METRICS] + [f"block {b} mean" for b in range(1, n_blocks + 1)]
+    lines = ["| scene | starts (paper/fast) | fast dt [s] | CPU s/start paper / fast | speed-up | "
+             + " | ".join(f"{h} %" for h in heads) + " | verdict |",
+             "|" + "---|" * (6 + len(metrics))]
+    rows = [(scene, e) for scene, e in doc["scenes"].items()]
+    rows += [(f"{scene}, {name}", c) for scene, e in doc["scenes"].items() for name, c in e.get("candidates", {}).items()]
+    for label, e in rows:
+        if "metrics" not in e:
+            lines.append(f"| {label} | " + " | ".join([""] * (4 + len(metrics))) + f" | {e['verdict']} |")
+            continue
+        cells = [f"{100 * e['metrics'][m]['systematic']:.1f} ± {100 * e['metrics'][m]['sigma']:.1f}"
+                 if m in e["metrics"] else "–" for m in metrics]
+        lines.append(f"| {label} | {e['starts']['paper']}/{e['starts']['fast']} | {e['dt_fast']:.3g} | "
+                     f"{e['cpu_s']['paper']:.1f} / {e['cpu_s']['fast']:.2f} | {e['speedup']:.1f} | "
+                     + " | ".join(cells) + f" | {e['verdict']} |")
+    return "\n".join(lines) + "\n"

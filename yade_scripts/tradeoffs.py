@@ -3,6 +3,8 @@
     make tradeoffs                                   # the study -> out/tradeoffs/ (resumable)
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs [--workers 1] [--scheduler ADDR]
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --analyse-only
+    make validation                                  # the fast setting on every preset -> out/validation/
+    /usr/bin/python3 yade_scripts/tradeoffs.py study --validation --out out/validation [--analyse-only]
     /usr/bin/python3 yade_scripts/tradeoffs.py study --out out/tradeoffs --cases liquefaction_case1 \\
          --knobs reference dt defaults perturbation          # the judged rows only
     yade -n -j 1 -x yade_scripts/tradeoffs.py run --case liquefaction_case1 --window 0.04 \\
@@ -24,7 +26,10 @@ each per repeat, the median CPU ratio to the first (the paper's settings).
 ``study`` builds the jobs of KNOBS (one per case, knob and value), runs them with the sweep runner
 (yade_scripts/sweep.py: resumable, local processes or a Dask scheduler), then computes the
 errors (engines.studies.tradeoffs) against each case's reference and writes out/tradeoffs/tradeoffs.json,
-table.md and the error-against-cost figures (docs/TRADEOFFS.md explains them).
+table.md and the error-against-cost figures (docs/TRADEOFFS.md explains them). ``study
+--validation`` runs the fast setting and the paper's numerics on every preset scene over its whole
+duration from 20 starts each and writes OUT/validation.json and validation.md: per scene every
+metric's systematic error ± σ and the verdict (every estimate + 2σ within 5 %).
 """
 import os
 import sys
@@ -82,10 +87,12 @@ def study_main(argv):
     ap.add_argument("--cases", nargs="+", choices=sorted(CASES), help="a subset of the cases")
     ap.add_argument("--knobs", nargs="+", help="a subset of the knobs (e.g. reference dt defaults)")
     ap.add_argument("--analyse-only", action="store_true", help="skip the runs, analyse what is there")
+    ap.add_argument("--validation", action="store_true",
+                    help="the fast setting against the paper's numerics on every preset (cases <scene>_full)")
     a = ap.parse_args(argv)
     announce_output(a.out)
     run_study(a.out, workers=a.workers, scheduler=a.scheduler, cases=a.cases, knobs=a.knobs,
-              analyse_only=a.analyse_only)
+              analyse_only=a.analyse_only, validation=a.validation)
 
 
 def main(argv):

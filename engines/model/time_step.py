@@ -25,6 +25,13 @@ from engines.model.pore_dem import disc_masses, side_wall_ties
 from engines.model.pore_water import PoreWater
 
 AUTO = "auto"
+# The default dt_auto_factor, and per factor tried the preset scenes on which dt = "auto" at that factor,
+# with the pores rebuilt every 50 steps and the water every step, is within 5 % of the paper's numerics
+# (dt = 1e-6 s, rebuilds every 1000 steps) on every judged statistic over the whole run (docs/TRADEOFFS.md,
+# "Validation"; tests/studies/test_tradeoffs.py ties them to docs/tradeoffs/validation.json).
+VALIDATED_FACTOR = 0.36
+VALIDATED_ON = {0.36: ("liquefaction_case2",), 0.18: ("liquefaction_case2",)}
+SHORT_WINDOW_EVIDENCE = {0.36: "within 5 % over the first 0.04 s of liquefaction_case1 only (the trade study)"}
 
 
 def start_pores(scene, packing):
@@ -99,11 +106,22 @@ def describe(dt, lims, name, n_sub, factor):
     shown = ", ".join(f"{k} {v:.3g} s" for k, v in lims.items())
     text = (f"dt = auto: {dt:.3g} s, bound by the {name} limit"
             + ("" if name == "darcy_check" else f" x dt_auto_factor {factor:g}") + f" (limits at the start: {shown})")
+    text += "\n" + validation_note(factor)
     if n_sub > 1:
         text += (f"\nwater: {n_sub} sub-steps per water step at the start (substep = true, Gershgorin Darcy limit "
                  f"{lims['darcy_check']:.3g} s per DEM step); each costs about {lim.SUBSTEP_COST:.0%} of a water step, "
                  f"so the water costs about {lim.substep_cost(n_sub):.2g}x a water step without sub-steps")
     return text
+
+
+def validation_note(factor):
+    """Where the automatic time step's factor was validated (VALIDATED_ON)."""
+    if factor not in VALIDATED_ON:
+        return f"dt_auto_factor {factor:g} is not validated (docs/TRADEOFFS.md, Validation)"
+    where = ", ".join(VALIDATED_ON[factor]) or "no preset scene"
+    extra = f"; {SHORT_WINDOW_EVIDENCE[factor]}" if factor in SHORT_WINDOW_EVIDENCE else ""
+    return (f"dt_auto_factor {factor:g} with rebuild_interval 50 and water_interval 1 against the paper's numerics: "
+            f"validated over the whole run on {where} (other scenes: not validated){extra} (docs/TRADEOFFS.md, Validation)")
 
 
 def resolve_dt(scene, packing, log=print):

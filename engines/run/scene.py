@@ -15,6 +15,7 @@ from engines import ROOT
 from engines.model.contact import CONTACT_FIELDS, ContactSettings
 from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, check, describe_check
 from engines.model.pore_water import WATER_FIELDS, WaterSettings
+from engines.model.time_step import VALIDATED_FACTOR
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
 
@@ -95,7 +96,7 @@ SCHEMA = {
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
         # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
-        "dt_auto_factor": (float, 0.36, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),
+        "dt_auto_factor": (float, VALIDATED_FACTOR, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),
     },
     "output": {
         "history_interval": (int, 100, (1, math.inf), "steps between history rows"),

@@ -2,7 +2,8 @@
 settings of each point of the study (settings_of; the points: engines.studies.tradeoffs), one
 setting from perturbed starts inside YADE (run_setting, run_point), the speed-ups measured in one
 process (measure_speed), and the study's jobs through the sweep runner with their analysis
-(study_jobs, run_study; the tables and figures: postproc.tradeoffs).
+(study_jobs, run_study; the tables and figures: postproc.tradeoffs); with ``validation`` the
+study's validation of the fast setting on every preset (engines.studies.tradeoffs.VALIDATION).
 """
 import json
 import os
@@ -18,6 +19,7 @@ from engines.studies.tradeoffs import (
     PERTURBATION,
     RECORD,
     REFERENCE_DT,
+    VALIDATION_CASES,
     dt_settings,
     job_name,
     named_value,
@@ -31,7 +33,7 @@ from engines.studies.tradeoffs import (
 def settings_of(case, knob, value):
     """(overrides, yade program) of one point of the study."""
     spec = CASES[case]
-    base = dt_settings(spec["fast_dt"])
+    base = dt_settings(spec["fast_dt"]) if "fast_dt" in spec else None  # the knobs' base settings
     if knob == "reference":
         return dt_settings(spec.get("reference_dt", REFERENCE_DT)), "yade"
     if knob == "dt":
@@ -55,6 +57,15 @@ def settings_of(case, knob, value):
     if knob in ("defaults", "candidate"):  # a named setting chosen from the study, or tried for it
         return {k: v for k, v in value.items() if k != "name"}, "yade"
     raise ValueError(f"unknown knob {knob!r}")
+
+
+def window_of(case):
+    """The window [s] of a case of the study: its own, or (None) the preset scene's duration."""
+    spec = CASES[case]
+    if spec["window"] is not None:
+        return spec["window"]
+    from engines.run import scene as scenes
+    return scenes.preset(spec.get("preset", case)).numerics.duration
 
 
 def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None):
@@ -147,13 +158,13 @@ def measure_speed(case, settings, repeats, out):
         for k in range(len(pairs)):
             knob, text = pairs[(k + rep) % len(pairs)]
             over = nested(settings_of(case, knob, named_value(case, knob, text))[0])
-            over.setdefault("numerics", {})["duration"] = spec["window"]
-            res = run_setting(spec.get("preset", case), over, spec["window"], RECORD, 1, out,
+            over.setdefault("numerics", {})["duration"] = window_of(case)
+            res = run_setting(spec.get("preset", case), over, window_of(case), RECORD, 1, out,
                               perturbation_of(case, knob, named_value(case, knob, text)))
             cpu[f"{knob}={text}"].append(res["cpu_s"])
             print(f"repeat {rep}: {knob}={text}: {res['cpu_s']:.2f} CPU s", flush=True)
     med = {p: float(np.median(c)) for p, c in cpu.items()}
-    doc = {"case": case, "window_s": spec["window"], "repeats": repeats, "cpu_s": cpu, "median_cpu_s": med,
+    doc = {"case": case, "window_s": window_of(case), "repeats": repeats, "cpu_s": cpu, "median_cpu_s": med,
            "speedup": {p: med[settings[0]] / m for p, m in med.items()}}
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "speed.json"), "w") as f:
@@ -172,7 +183,7 @@ def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
         over, program = settings_of(case, knob, value)
         name = job_name(case, knob, value)
         argv = [program, *yade_args, "-x", os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), "run",
-                "--case", CASES[case].get("preset", case), "--window", repr(CASES[case]["window"]),
+                "--case", CASES[case].get("preset", case), "--window", repr(window_of(case)),
                 "--starts", str(starts_of(case, knob)), "--perturbation", repr(perturbation_of(case, knob, value)),
                 "--out", "{out}"]
         for k, v in over.items():
@@ -182,13 +193,17 @@ def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
     return jobs, meta
 
 
-def run_study(out, workers=1, scheduler=None, cases=None, knobs=None, analyse_only=False):
+def run_study(out, workers=1, scheduler=None, cases=None, knobs=None, analyse_only=False, validation=False):
     """``tradeoffs.py study``: the study's jobs (of ``cases`` and ``knobs`` only, when given) through
     the sweep runner (none with ``analyse_only``), then postproc.tradeoffs.analyse: OUT/tradeoffs.json,
-    table.md and the figures; returns the tradeoffs.json dict."""
+    table.md and the figures; returns the tradeoffs.json dict. With ``validation``: the validation's
+    cases (of ``cases`` only, when given), then postproc.tradeoffs.validate: OUT/validation.json and
+    validation.md; returns the validation.json dict."""
+    if validation:
+        cases = [c for c in VALIDATION_CASES if not cases or c in cases]
     jobs, meta = study_jobs(cases, knobs=knobs)
     if not analyse_only:
         from engines.run.sweep import run_sweep
         run_sweep(jobs, os.path.join(out, "runs"), workers=workers, scheduler=scheduler)
-    from postproc.tradeoffs import analyse
-    return analyse(out, jobs, meta)
+    from postproc.tradeoffs import analyse, validate
+    return validate(out, jobs, meta) if validation else analyse(out, jobs, meta)

@@ -34,7 +34,7 @@ Plain NumPy; no YADE.
 """
 import numpy as np
 
-from engines.studies.ensemble import SEISMIC_PERTURBATION
+from engines.studies.ensemble import QUICKSAND_PERTURBATION, SEISMIC_PERTURBATION
 
 
 def _on_grid(t, values, t_ref):
@@ -78,15 +78,18 @@ def _pressure_noise(A, R):
     return float(np.sqrt(np.nanmean(var)) / _rms(np.nanmean(R, axis=0)))
 
 
-def change_noise(x, x_ref):
-    """floor of ``change_error`` between these two ensembles: sqrt(var/n + var_ref/n_ref) / |<x_ref>|."""
+def change_noise(x, x_ref, scale=None):
+    """floor of ``change_error`` between these two ensembles: sqrt(var/n + var_ref/n_ref) / scale
+    (default |<x_ref>|)."""
     x, x_ref = np.asarray(x, float), np.asarray(x_ref, float)
-    return float(np.sqrt(np.var(x, ddof=1) / len(x) + np.var(x_ref, ddof=1) / len(x_ref)) / abs(np.mean(x_ref)))
+    scale = abs(np.mean(x_ref)) if scale is None else scale
+    return float(np.sqrt(np.var(x, ddof=1) / len(x) + np.var(x_ref, ddof=1) / len(x_ref)) / scale)
 
 
-def change_error(x, x_ref):
-    """|<x> - <x_ref>| / |<x_ref>| of a scalar change per start (x: (starts,))."""
-    return float(abs(np.mean(x) - np.mean(x_ref)) / abs(np.mean(x_ref)))
+def change_error(x, x_ref, scale=None):
+    """|<x> - <x_ref>| / scale (default |<x_ref>|) of a scalar per start (x: (starts,))."""
+    scale = abs(np.mean(x_ref)) if scale is None else scale
+    return float(abs(np.mean(x) - np.mean(x_ref)) / scale)
 
 
 def change_floor(x_ref):
@@ -95,11 +98,26 @@ def change_floor(x_ref):
     return float(np.sqrt(2.0 / len(x_ref)) * np.std(x_ref, ddof=1) / abs(np.mean(x_ref)))
 
 
+def is_wet(run):
+    """Whether the run has block pressures (a dry scene records none: all NaN)."""
+    return bool(np.any(np.isfinite(np.asarray(run["U"], float))))
+
+
 def floors(ref):
-    """{metric: chaos floor} of the reference (see ``_metric_pairs``)."""
+    """{metric: chaos floor} of the reference (see ``_metric_pairs``; no pressure metrics when dry)."""
     U = np.asarray(ref["U"], float)
-    return {"pressure_rms": pressure_floor(U), "porosity_change": change_floor(porosity_change(ref)),
-            "settlement": change_floor(settlement(ref)), "pressure_rms_below_surface": pressure_floor(U[:, :, :-1])}
+    out = {"porosity_change": change_floor(porosity_change(ref)), "settlement": change_floor(settlement(ref))}
+    if is_wet(ref):
+        out.update(pressure_rms=pressure_floor(U), pressure_rms_below_surface=pressure_floor(U[:, :, :-1]))
+    return out
+
+
+def block_mean_pressures(U):
+    """The time-mean pressure of each block per start [N/m] of histories U (starts, times, blocks),
+    over the samples where the block has pores (NaN for a block that never has one)."""
+    U = np.asarray(U, float)
+    n = np.sum(np.isfinite(U), axis=1)
+    return np.divide(np.nansum(U, axis=1), n, out=np.full(n.shape, np.nan), where=n > 0)
 
 
 def corrected(measured, floor):
@@ -107,15 +125,26 @@ def corrected(measured, floor):
     return float(np.sqrt(max(0.0, measured * measured - floor * floor)))
 
 
-def _metric_pairs(run, ref):
+def _metric_pairs(run, ref, blocks=False):
     """{metric: (measured, floor)} of a run's histories against the reference's (dicts as written by
     yade_scripts/tradeoffs.py: t (times,), U (starts, times, blocks), porosity (starts, times),
     height (starts, times) the particles' mean centre height [m]; the run's U is interpolated onto
-    the reference's times)."""
+    the reference's times). No pressure metrics when the reference is dry. With ``blocks``, also
+    ``block_mean_<b>`` for each block b (1 at the bottom) with pores: the change error of its
+    time-mean pressure per start (``block_mean_pressures``) over RMS(<U_ref>), the scale of
+    ``pressure_rms``, so that a block whose mean pressure is near 0 is judged on the scene's pressures."""
     A, R = _on_grid(run["t"], run["U"], ref["t"]), np.asarray(ref["U"], float)
     out = {}
-    for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
-        out[key] = (_pressure_error(a, r), _pressure_noise(a, r))
+    if is_wet(ref):
+        for key, a, r in (("pressure_rms", A, R), ("pressure_rms_below_surface", A[:, :, :-1], R[:, :, :-1])):
+            out[key] = (_pressure_error(a, r), _pressure_noise(a, r))
+    if blocks and is_wet(ref):
+        scale = _rms(np.nanmean(R, axis=0))
+        x, x_ref = block_mean_pressures(A), block_mean_pressures(R)
+        for b in range(R.shape[2]):
+            if np.all(np.isfinite(x_ref[:, b])) and np.all(np.isfinite(x[:, b])):
+                out[f"block_mean_{b + 1}"] = (change_error(x[:, b], x_ref[:, b], scale),
+                                              change_noise(x[:, b], x_ref[:, b], scale))
     for key, f in (("porosity_change", porosity_change), ("settlement", settlement)):
         x, x_ref = f(run), f(ref)
         out[key] = (change_error(x, x_ref), change_noise(x, x_ref))
@@ -126,19 +155,21 @@ def _subset(run, idx):
     return {"t": run["t"], **{k: np.asarray(run[k], float)[idx] for k in ("U", "porosity", "height")}}
 
 
-def systematic(run, ref, n_boot=400, seed=0):
+def systematic(run, ref, n_boot=400, seed=0, blocks=False):
     """{metric: {"measured", "floor", "systematic", "sigma"}}: the metric, its floor between these
     two ensembles (``_pressure_noise``, ``change_noise``), the noise-corrected estimate
     ``corrected(measured, floor)`` and the standard deviation of that estimate over ``n_boot``
-    bootstrap resamples of the starts of run and reference (module docstring)."""
-    out = {k: {"measured": m, "floor": f, "systematic": corrected(m, f)} for k, (m, f) in _metric_pairs(run, ref).items()}
+    bootstrap resamples of the starts of run and reference (module docstring); ``blocks``: with
+    the blocks' time-mean pressures (``_metric_pairs``)."""
+    pairs = _metric_pairs(run, ref, blocks)
+    out = {k: {"measured": m, "floor": f, "systematic": corrected(m, f)} for k, (m, f) in pairs.items()}
     rng = np.random.default_rng(seed)
     na, nb = len(run["U"]), len(ref["U"])
     boot = {k: [] for k in out}
     for _ in range(n_boot):
-        pairs = _metric_pairs(_subset(run, rng.integers(0, na, na)), _subset(ref, rng.integers(0, nb, nb)))
-        for k, (m, f) in pairs.items():
-            boot[k].append(corrected(m, f))
+        pairs = _metric_pairs(_subset(run, rng.integers(0, na, na)), _subset(ref, rng.integers(0, nb, nb)), blocks)
+        for k in out:
+            boot[k].append(corrected(*pairs[k]) if k in pairs else np.nan)
     for k in out:
         out[k]["sigma"] = float(np.nanstd(boot[k], ddof=1))
     return out
@@ -177,6 +208,11 @@ REFERENCE_DT = 5e-7
 PERTURBATION = 1e-9  # m: the size of the perturbation of the starts (engines.studies.ensemble.perturbed)
 PAPER_DT = 1e-6
 
+# The named settings chosen from the study: the fast one (dt = "auto" at the schema's dt_auto_factor) and
+# the paper's numerics
+FAST = {"name": "fast", "numerics.dt": "auto", "numerics.rebuild_interval": 50, "numerics.water_interval": 1}
+ACCURATE = {"name": "accurate", "numerics.dt": PAPER_DT, "numerics.rebuild_interval": 1000, "numerics.water_interval": 1}
+
 # Per case: the window [s], the base dt the other knobs are swept around (rebuilds every 1 ms) and
 # the values of each knob; "preset" (default: the key) and "reference_dt" (default REFERENCE_DT)
 # where they differ; "starts": {knob: starts} where a knob needs more than STARTS (the chaos floor
@@ -192,10 +228,7 @@ CASES = {
                            "water_interval": [2, 5, 10], "rebuild_period": [2e-4, 5e-4, 2e-3, 5e-3],
                            "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [0.1, 10.0, 100.0],
                            "precision": ["longdouble"],
-                           "defaults": [{"name": "fast", "numerics.dt": "auto",  # at the schema's dt_auto_factor
-                                         "numerics.rebuild_interval": 50, "numerics.water_interval": 1},
-                                        {"name": "accurate", "numerics.dt": 1e-6, "numerics.rebuild_interval": 1000,
-                                         "numerics.water_interval": 1}],
+                           "defaults": [FAST, ACCURATE],
                            # settings tried for the fast setting around the largest dt still within 5 % (2e-5 s at
                            # 1e-7 m starts; 5e-5 s is at 5 %): dt_auto_factor x eq 52 (1.108e-4 s), rebuilds every
                            # ~1 ms, the water every M steps; f0.45_M2_rb20 is the earlier fast setting
@@ -208,12 +241,28 @@ CASES = {
                         "dt": [1e-6, 5e-6, 1e-5, 2e-5, 2.5e-5],
                         "water_interval": [2, 5, 10, 20], "rebuild_period": [2.5e-4, 5e-4, 2e-3, 5e-3],
                         "smoothing": [True], "transfer": ["conserving"], "E_w_scale": [10.0, 100.0]},
-    # the fast setting over the whole 0.18 s against the paper's settings as the reference
-    "liquefaction_case1_full": {"preset": "liquefaction_case1", "window": 0.18, "reference_dt": PAPER_DT, "perturbation_size": SEISMIC_PERTURBATION,
-                                "fast_dt": 2e-5, "defaults": []},
     "liquefaction_case4": {"window": 0.02, "fast_dt": 2e-5, "dt": [1e-6, 2e-5], "law": ["yade"]},
 }
-CASES["liquefaction_case1_full"]["defaults"] = CASES["liquefaction_case1"]["defaults"][:1]
+
+# The validation of the fast setting where it is offered: on every preset scene, over the scene's whole
+# duration ("window": None), from VALIDATION_STARTS starts at the scene's perturbation, against the
+# paper's numerics (dt = 1e-6 s, rebuilds every 1000 steps, water every step: dt_settings(PAPER_DT)) as
+# the reference. Case "<scene>_full"; not part of the trade study's default points (``points``).
+VALIDATION = {"liquefaction_case1": SEISMIC_PERTURBATION, "quicksand_case1": QUICKSAND_PERTURBATION,
+              "quicksand_case2": QUICKSAND_PERTURBATION,
+              **{f"liquefaction_case{n}": SEISMIC_PERTURBATION for n in range(2, 8)}}
+VALIDATION_STARTS = 20
+# tried on the seismic box where the fast setting is not validated: half its dt (dt_auto_factor 0.18, 2.0e-5 s,
+# within the chaos on every metric over 0.04 s) with the pores rebuilt every 1 ms
+VALIDATION_CANDIDATE = {"name": "f0.18_rb50", "numerics.dt": "auto", "numerics.dt_auto_factor": 0.18,
+                        "numerics.rebuild_interval": 50, "numerics.water_interval": 1}
+for _scene, _size in VALIDATION.items():
+    CASES[f"{_scene}_full"] = {"preset": _scene, "window": None, "reference_dt": PAPER_DT, "perturbation_size": _size,
+                               "starts": {"reference": VALIDATION_STARTS, "defaults": VALIDATION_STARTS,
+                                          "candidate": VALIDATION_STARTS},
+                               "defaults": [FAST], "validation": True,
+                               "candidate": [VALIDATION_CANDIDATE] if _size == SEISMIC_PERTURBATION else []}
+VALIDATION_CASES = tuple(f"{scene}_full" for scene in VALIDATION)
 
 
 def dt_settings(dt):
@@ -225,21 +274,21 @@ def dt_settings(dt):
 
 PRIORITY = (("reference", "dt", "defaults", "perturbation", "candidate", "water_interval", "rebuild_period"),
             ("smoothing", "transfer", "E_w_scale", "precision", "law"))
-LAST = ("liquefaction_case1_full", "liquefaction_case4")  # run after every knob of the other cases
+LAST = ("liquefaction_case4",)  # run after every knob of the other cases
 
 
 def points(cases=None):
-    """[(case, knob, value)] of the study in the order it runs: the references, dt (with the paper's
-    settings), water_interval and rebuild_period of every case, then the other knobs, case by case
-    in the order of CASES (liquefaction case 4 last), so that a stopped study has the first knobs."""
+    """[(case, knob, value)] of the study (of ``cases`` only, when given; by default every case
+    but the validation's) in the order it runs: the references, dt (with the paper's settings),
+    water_interval and rebuild_period of every case, then the other knobs, case by case in the
+    order of CASES (liquefaction case 4 last), so that a stopped study has the first knobs."""
+    chosen = [c for c in CASES if (c in cases if cases else not CASES[c].get("validation"))]
     out = []
-    order = [(knobs, [c for c in CASES if c not in LAST]) for knobs in PRIORITY]
-    order.append((sum(PRIORITY, ()), list(LAST)))
+    order = [(knobs, [c for c in chosen if c not in LAST]) for knobs in PRIORITY]
+    order.append((sum(PRIORITY, ()), [c for c in chosen if c in LAST]))
     for knobs, names in order:
         for case in names:
             spec = CASES[case]
-            if cases and case not in cases:
-                continue
             for knob in knobs:
                 if knob == "reference":
                     out.append((case, knob, spec.get("reference_dt", REFERENCE_DT)))

@@ -89,6 +89,38 @@ def test_snapshots_draw_flat_walls_and_key_only_what_is_there(snaps):
     assert any(np.allclose(xy[:, 1], 0.0) for xy in lines) and any(np.allclose(xy[:, 0], -1.0) for xy in lines)
 
 
+@pytest.mark.parametrize("n", [1, 2])
+def test_one_or_two_snapshots_fill_their_figure_and_the_key_fits(snaps, n):
+    """A run of one or two snapshots with the seismic box's six blocks: each panel spans a good part
+    of the figure's width and the key lies inside the figure."""
+    fig = plots.snapshot_figure(snaps[:n], "test", blocks=[[1e-3 * k, 1e-3 * (k + 1)] for k in range(6)])
+    fig.canvas.draw()
+    box = fig.bbox
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("t = ")]
+    assert len(panels) == n
+    for ax in panels:
+        assert ax.get_window_extent().width > 0.3 * box.width
+    (legend,) = [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+    ext = legend.get_window_extent()
+    assert box.x0 <= ext.x0 and ext.x1 <= box.x1 and box.y0 <= ext.y0 and ext.y1 <= box.y1
+
+
+def test_block_pressures_name_every_block_by_position_and_span_the_data():
+    t = np.linspace(0, 0.01, 101)
+    hist = {"t": t, **{f"U_block{k}": (k - 3) * 4.0 * np.sin(2 * np.pi * 100 * t) for k in range(1, 7)}}
+    bounds = [[1e-3 * k, 1e-3 * (k + 1)] for k in range(5)] + [[5e-3, 0.1]]
+    ax = plots.block_pressure_figure(hist, 2400.0, "test", bounds).axes[0]
+    labels = [x.get_text() for x in ax.get_legend().get_texts()]
+    assert labels[:6] == ["block 1 (bottom, z 0.0–1.0 mm)"] + [f"block {k} (z {k - 1:.1f}–{k:.1f} mm)" for k in range(2, 6)] \
+        + ["block 6 (surface, z > 5.0 mm)"]
+    peak = max(np.abs(hist[c]).max() for c in hist if c != "t")
+    lo, hi = ax.get_ylim()
+    assert -1.2 * peak < lo < -peak and peak < hi < 1.2 * peak  # the data, not the bound E_w
+    assert any("E_w = 2400 N/m" in lab and "above the axis" in lab for lab in labels)
+    ax = plots.block_pressure_figure(hist, 14.0, "test").axes[0]  # a bound near the data (12 N/m) is drawn
+    assert ax.get_ylim()[1] > 14.0 and plots.block_label(2, 6) == "block 3"
+
+
 def test_nan_runs():
     t = np.arange(10.0)
     y = np.array([0, 1, np.nan, np.nan, 4, 5, np.nan, 7, 8, np.nan])

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from engines.run import scene as scenes
+from engines.studies import ensemble as ens
 from engines.studies import tradeoffs as tr
 from tests.figures import assert_drawn
 
@@ -116,6 +117,28 @@ def test_errors_use_porosity_change_and_settlement():
     assert set(tr.floors(ref)) == set(e)
 
 
+def test_block_means_are_judged_on_the_scenes_pressure_scale_and_dry_runs_have_no_pressure_metrics():
+    rng = np.random.default_rng(3)
+    t = np.arange(40) * 5e-4
+    shape = np.column_stack([100 * np.sin(2 * np.pi * 50 * t) + 60, 0 * t + 1.0])  # block 2: mean ~0
+    ref = _run(shape + rng.normal(0, 5, (8, 40, 2)), np.tile([0.30, 0.31], (8, 1))[:, [0] * 20 + [1] * 20],
+               np.tile([1e-2, 0.9e-2], (8, 1))[:, [0] * 20 + [1] * 20], t)
+    run = {**ref, "U": ref["U"] + [0.0, 3.0]}  # block 2 higher by 3 N/m in every start and sample
+    res = tr.systematic(run, ref, n_boot=20, blocks=True)
+    scale = np.sqrt(np.mean(ref["U"].mean(axis=0) ** 2))
+    assert res["block_mean_1"]["measured"] == pytest.approx(0.0, abs=1e-12)
+    assert res["block_mean_2"]["measured"] == pytest.approx(3.0 / scale, rel=1e-9)  # not 3 / 1 = 300 %
+    # the same starts: the two ensembles' floor is sqrt(2 var / n) of the block's time means
+    x = ref["U"][:, :, 1].mean(axis=1)
+    assert res["block_mean_2"]["floor"] == pytest.approx(np.sqrt(2 * np.var(x, ddof=1) / 8) / scale, rel=1e-9)
+    assert "block_mean_1" not in tr.systematic(run, ref, n_boot=2)  # only with blocks
+    dry = {**ref, "U": np.full_like(ref["U"], np.nan)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no mean of an empty slice
+        res = tr.systematic(dry, dry, n_boot=2, blocks=True)
+    assert set(res) == set(tr.floors(dry)) == {"porosity_change", "settlement"}
+
+
 def test_pareto_front():
     cost = [1, 2, 3, 4, 5, 0.5]
     err = [0.5, 0.1, 0.2, 0.05, 0.3, np.nan]
@@ -203,6 +226,118 @@ def test_analyse_writes_the_issue_format(tmp_path):
     assert "| liquefaction_case1 | dt | 2e-05 |" in (tmp_path / "table.md").read_text()
 
 
+def test_validation_runs_the_fast_setting_against_the_papers_numerics_on_every_preset():
+    from engines.run import tradeoffs as study
+    presets = sorted(os.path.basename(p)[:-5] for p in os.listdir(scenes.SCENE_DIR)
+                     if p.startswith(("quicksand_case", "liquefaction_case")) and p[:-5].split("case")[1].isdigit())
+    assert sorted(tr.VALIDATION) == presets
+    assert not any(c in tr.VALIDATION_CASES for c, _, _ in tr.points())  # not in the trade study's default
+    jobs, meta = study.study_jobs(list(tr.VALIDATION_CASES))
+    seismic_scenes = [p for p in presets if p.startswith("liquefaction")]
+    assert len(jobs) == 2 * len(presets) + len(seismic_scenes)  # and a candidate setting on the seismic box
+    for j in jobs:
+        case, knob, value = meta[j.name]
+        argv = dict(zip(j.argv, j.argv[1:]))
+        scene = scenes.preset(tr.CASES[case]["preset"])
+        assert argv["--case"] == tr.CASES[case]["preset"] and float(argv["--window"]) == scene.numerics.duration
+        assert argv["--starts"] == "20"
+        seismic = tr.CASES[case]["preset"].startswith("liquefaction")
+        assert float(argv["--perturbation"]) == (ens.SEISMIC_PERTURBATION if seismic else ens.QUICKSAND_PERTURBATION)
+        sets = {a.split("=", 1)[0]: json.loads(a.split("=", 1)[1]) for a in j.argv if "=" in a and a.startswith("numerics.")}
+        named = {"reference": tr.ACCURATE, "defaults": tr.FAST, "candidate": tr.VALIDATION_CANDIDATE}[knob]
+        assert sets == {k: v for k, v in named.items() if k != "name"}, (j.name, sets)
+
+
+def _fake_validation(path, scale, spread, rng, wet=True, n=20):
+    t = np.arange(0, 0.0405, 5e-4)
+    starts = []
+    for s in range(n):
+        U = scale * (100 * np.sin(2 * np.pi * 50 * t)[:, None] * [1.0, 0.6] + 50) + rng.normal(0, spread, (len(t), 2))
+        d = 1 + 0.05 * rng.standard_normal()
+        starts.append({"seed": s, "status": "ok", "t": list(t), "U": U.tolist() if wet else np.full_like(U, np.nan).tolist(),
+                       "porosity": list(0.3 - scale * d * 0.01 * t / t[-1]), "height": list(1e-2 - scale * d * 1e-4 * t / t[-1]),
+                       "kinetic_energy": list(0 * t), "cpu_s": 1.0})
+    os.makedirs(path, exist_ok=True)
+    with open(os.path.join(path, "result.json"), "w") as f:
+        json.dump({"case": "x", "overrides": {}, "dt": 1e-6, "window": 0.04, "cpu_s": 10.0 / scale, "wall_s": 1.0,
+                   "starts": starts}, f)
+
+
+def test_validate_writes_every_metric_and_the_verdict(tmp_path):
+    from engines.run.sweep import Job
+    from postproc.tradeoffs import validate
+    rng = np.random.default_rng(5)
+    # case 1: the fast runs 1 % off (pass); quick sand: 10 % off (fail); case 2: dry, 1 % off (pass);
+    # case 3: no runs yet
+    spec = {"liquefaction_case1_full": (1.01, True), "quicksand_case1_full": (1.10, True),
+            "liquefaction_case2_full": (1.01, False), "liquefaction_case3_full": None}
+    jobs, meta = [], {}
+    for case, what in spec.items():
+        settings = [("reference", 1e-6), ("defaults", tr.FAST)] + [("candidate", v) for v in tr.CASES[case]["candidate"]]
+        for knob, value in settings:
+            name = tr.job_name(case, knob, value)
+            if what is not None:  # a candidate 0.5 % off
+                scale = {"reference": 1.0, "defaults": what[0], "candidate": 1.005}[knob]
+                _fake_validation(str(tmp_path / "runs" / name), scale, 2.0, rng, what[1])
+            jobs.append(Job(name, ("true",)))
+            meta[name] = (case, knob, value)
+    doc = validate(str(tmp_path), jobs, meta, log=None)
+    assert json.loads((tmp_path / "validation.json").read_text())["scenes"].keys() == doc["scenes"].keys()
+    v = {scene: e["verdict"] for scene, e in doc["scenes"].items()}
+    assert v == {"liquefaction_case1": "pass", "quicksand_case1": "fail", "liquefaction_case2": "pass",
+                 "liquefaction_case3": "not run"}
+    wet, dry = doc["scenes"]["liquefaction_case1"], doc["scenes"]["liquefaction_case2"]
+    assert set(wet["judged"]) == {"pressure_rms", "porosity_change", "settlement", "block_mean_1", "block_mean_2"}
+    assert set(dry["judged"]) == {"porosity_change", "settlement"}
+    assert wet["speedup"] == pytest.approx(1.01) and wet["starts"] == {"paper": 20, "fast": 20}
+    # 10 % off everywhere: every metric's estimate near 10 %
+    qs = doc["scenes"]["quicksand_case1"]["metrics"]
+    assert qs["porosity_change"]["systematic"] == pytest.approx(0.10, abs=0.03)
+    candidate = tr.VALIDATION_CANDIDATE["name"]
+    assert wet["candidates"][candidate]["verdict"] == "pass" and "candidates" not in doc["scenes"]["quicksand_case1"]
+    table = (tmp_path / "validation.md").read_text()
+    assert "| quicksand_case1 | 20/20 |" in table and table.count("| fail |") == 1 and "| not run |" in table
+    assert f"| liquefaction_case1, {candidate} | 20/20 |" in table
+
+
+def _numerics(setting):
+    return {k.split(".", 1)[1]: v for k, v in setting.items() if k.startswith("numerics.")}
+
+
+def test_fast_variants_are_the_validated_setting_on_scenes_that_pass():
+    """Every scene offered a fast variant (``<scene>_fast.toml``) holds the numerics of a setting
+    with the verdict "pass" on that scene in the committed validation (docs/tradeoffs/validation.json),
+    and dt = "auto" names, per factor, exactly the scenes where its setting passes."""
+    from engines import ROOT
+    from engines.model import time_step
+    with open(os.path.join(ROOT, "docs", "tradeoffs", "validation.json")) as f:
+        validation = json.load(f)
+    assert validation["fast"] == {k: v for k, v in tr.FAST.items() if k != "name"}
+    assert scenes.preset("liquefaction_case1").numerics.dt_auto_factor == time_step.VALIDATED_FACTOR
+
+    def passing(scene):
+        """{dt_auto_factor: numerics} of the settings that pass on ``scene``."""
+        e = validation["scenes"][scene]
+        out = {time_step.VALIDATED_FACTOR: _numerics(tr.FAST)} if e["verdict"] == "pass" else {}
+        out.update({c["settings"]["numerics.dt_auto_factor"]: _numerics(c["settings"])
+                    for c in e.get("candidates", {}).values() if c["verdict"] == "pass"})
+        return out
+
+    for factor, named in time_step.VALIDATED_ON.items():
+        assert sorted(named) == sorted(s for s in validation["scenes"] if factor in passing(s)), factor
+        said = time_step.describe(1e-5, {"contact": 1e-5 / factor}, "contact", 1, factor)  # what dt = "auto" prints
+        assert all(s in said for s in named) and "validated over the whole run on" in said
+    assert "not validated" in time_step.describe(1e-5, {"contact": 2e-5}, "contact", 1, 0.5)
+    for path in os.listdir(scenes.SCENE_DIR):
+        if path.endswith("_fast.toml"):
+            scene = path[:-len("_fast.toml")]
+            num = scenes.preset(path[:-5]).numerics
+            ok = passing(scene).get(num.dt_auto_factor)
+            assert ok is not None, f"{path}: no setting at dt_auto_factor {num.dt_auto_factor} passes on {scene}"
+            assert {k: getattr(num, k) for k in ok if k != "dt_auto_factor"} == {k: v for k, v in ok.items()
+                                                                               if k != "dt_auto_factor"}, path
+
+
 def test_speed_points_name_the_study_settings():
     from engines.run import tradeoffs as study
     assert tr.named_value("liquefaction_case1", "dt", "1e-06") == 1e-6
@@ -213,8 +348,9 @@ def test_speed_points_name_the_study_settings():
 
 
 def test_presets_are_the_study_defaults():
-    """liquefaction_case1_fast/accurate.toml hold the numerics the study measured under their names."""
-    for setting in tr.CASES["liquefaction_case1"]["defaults"]:
+    """liquefaction_case1_accurate.toml holds the numerics the study measured under its name (a fast
+    variant is offered only where the validation passes: the test above)."""
+    for setting in [tr.ACCURATE]:
         num = scenes.preset(f"liquefaction_case1_{setting['name']}").numerics
         for key, value in setting.items():
             if key.startswith("numerics."):
