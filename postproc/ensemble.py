@@ -55,7 +55,8 @@ def figures(out_dir):
     blocks = sorted((c for c in cols if c.startswith("U_block")), key=lambda c: int(c[len("U_block"):]))
     if len(t_ms) >= 2 and water.get("enabled", False) and blocks:
         # one panel per block, the surface block on top (as Fig. 35/37 stack them)
-        fig, axes = plt.subplots(len(blocks), 1, figsize=(7.5, 1.2 + 1.3 * len(blocks)), sharex=True, squeeze=False)
+        fig, axes = plt.subplots(len(blocks), 1, figsize=(7.5, 1.2 + 1.3 * len(blocks)), sharex=True, sharey=True,
+                                 squeeze=False)  # one U axis: the blocks compared at a glance
         for ax, (k, name) in zip(axes[:, 0], reversed(list(enumerate(blocks)))):
             where = " (bottom)" if k == 0 else " (surface)" if k == len(blocks) - 1 else ""
             _band(ax, t_ms, cols[name], f"C{k}")
