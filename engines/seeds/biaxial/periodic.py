@@ -218,6 +218,19 @@ def rest_servo(rates, depth, tolerance, unbalanced, state):
     return servo
 
 
+def run_to_rest(state, seconds, dt, what):
+    """Run YADE up to ``seconds`` [s] of steps dt until the ``rest_servo`` of ``state`` is done;
+    returns its (sigma_x, sigma_z) [Pa]. RuntimeError naming ``what``, the stresses, the
+    unbalanced-force ratio and dt when it is not."""
+    from yade import O, utils
+    O.run(int(seconds / dt), True)
+    sx, sz = state["sigma"]
+    if not state["done"]:
+        raise RuntimeError(f"{what}: not at rest within {seconds} s (dt = {dt:g} s): sigma_x = {sx:.2f}, "
+                           f"sigma_z = {sz:.2f} Pa, unbalanced force ratio {utils.unbalancedForce():.3g}")
+    return sx, sz
+
+
 def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     """Pack discs r (radii [m]) in a periodic cell with YADE (resets the YADE scene) to each
     confining stress of ``sigma3`` [Pa] in turn, lowest first: one random placement, shrunk to
@@ -228,7 +241,7 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     Generator for the placement. Raises RuntimeError if a target is not reached within
     ``settings.max_time`` (simulated seconds per target).
     """
-    from yade import O, utils
+    from yade import O
 
     from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
 
@@ -253,12 +266,7 @@ def pack_periodic(r, contact, sigma3, settings, rng, log=None):
     for target in sorted(set(targets)):
         state.update(target=target, done=False)
         start = O.iter
-        O.run(int(s.max_time / s.dt), True)
-        sx, sz = state["sigma"]
-        if not state["done"]:
-            raise RuntimeError(f"periodic packing did not reach sigma3 = {target:g} Pa within {s.max_time} s "
-                               f"(sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa, unbalanced force ratio "
-                               f"{utils.unbalancedForce():.3g}, dt = {s.dt:g} s)")
+        sx, sz = run_to_rest(state, s.max_time, s.dt, f"periodic packing at sigma3 = {target:g} Pa")
         h = O.cell.hSize
         lx, lz = float(h[0, 0]), float(h[2, 2])
         pos = np.mod([[b.state.pos[0], b.state.pos[2]] for b in O.bodies], [lx, lz])
@@ -310,12 +318,8 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     O.engines = yade_engines([py_runner(rest_servo(servo_rates(block.r, contact, pack), depth, s.tolerance,
                                                    s.unbalanced, st), pack.check_every)])
     O.dt = s.dt
-    O.run(int(s.max_equilibrium_time / s.dt), True)
-    sx, sz = st["sigma"]
-    if not st["done"]:
-        raise RuntimeError(f"periodic equilibrium not reached in {s.max_equilibrium_time} s (dt = {s.dt:g} s): sigma_x = "
-                           f"{sx:.2f}, sigma_z = {sz:.2f} Pa for sigma3 = {s.sigma3:g} Pa, unbalanced force ratio "
-                           f"{utils.unbalancedForce():.3g} (at rest below {s.unbalanced})")
+    sx, sz = run_to_rest(st, s.max_equilibrium_time, s.dt,
+                         f"periodic equilibrium at sigma3 = {s.sigma3:g} Pa (at rest below {s.unbalanced})")
     eq = {"sigma1_pa": sz, "sigma1_bottom_pa": sz, "sigma3_applied_pa": sx, "unbalanced": utils.unbalancedForce(),
           "moves": 0, "steps": O.iter, "time_s": O.time}
     if log:
