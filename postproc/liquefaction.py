@@ -28,6 +28,7 @@ from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
+from engines.studies.ensemble import CONFIDENCE  # noqa: E402
 from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
 from postproc.run_files import (  # noqa: E402
     ensemble_history,
@@ -254,9 +255,10 @@ N_BOOT = 2000  # bootstrap resamples of the starts of each case for a quantity's
 
 def small_sample_factor(n):
     """The factor that widens a percentile bootstrap interval of means of n starts about its
-    estimate to a Student-t one: t(0.975, n - 1) / z(0.975) x sqrt(n / (n - 1)) (the bootstrap's
-    spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
-    return float(stats.t.ppf(0.975, n - 1) / stats.norm.ppf(0.975) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
+    estimate to a Student-t one: t(q, n - 1) / z(q) x sqrt(n / (n - 1)), q = (1 + CONFIDENCE) / 2 (the
+    bootstrap's spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
+    q = 0.5 + CONFIDENCE / 2
+    return float(stats.t.ppf(q, n - 1) / stats.norm.ppf(q) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
 
 
 def _means(cases, keys, pick=None):
@@ -307,7 +309,8 @@ def trends(cases, drainage=None, seed=0):
             for name, f, low, high in conditions:
                 est = float(f(mean))
                 values = np.array([f(b) for b in boot], float)
-                lo, hi = (np.nanpercentile(values, [2.5, 97.5]) if not one and np.isfinite(values).any()
+                tails = [50 * (1 - CONFIDENCE), 50 * (1 + CONFIDENCE)]  # percent
+                lo, hi = (np.nanpercentile(values, tails) if not one and np.isfinite(values).any()
                           else (np.nan, np.nan))
                 widen = small_sample_factor(min(len(runs) for runs in sub.values()))
                 lo, hi = est - widen * (est - lo), est + widen * (hi - est)

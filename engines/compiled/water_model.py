@@ -88,8 +88,7 @@ class WaterModel(water_model.WaterModel):
         super().move_walls(shift)
         wv = self.wall_vertices
         self._part("wall_position")[:] = wv.faces()
-        corners = wv.foot(len(wv.walls), 0)
-        self._part("vertices").reshape(-1, 2)[corners:] = wv.positions(self.xz_built)[corners:]
+        self._part("vertices").reshape(-1, 2)[wv.foot(len(wv.walls), 0):] = wv.corner_positions()
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""

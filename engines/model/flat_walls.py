@@ -125,7 +125,13 @@ class WallVertices:
             feet = out[self.foot(w, 0):self.foot(w, n)]
             feet[:] = xz
             feet[:, wall.axis] = faces[w]
-        for c, (a, b) in enumerate(self.corners.tolist(), self.foot(len(self.walls), 0)):
+        out[self.foot(len(self.walls), 0):] = self.corner_positions()
+        return out
+
+    def corner_positions(self):
+        """Positions (C, 2) [m] of the corners, where the faces of their two walls meet."""
+        out, faces = np.empty((len(self.corners), 2)), self.faces()
+        for c, (a, b) in enumerate(self.corners.tolist()):
             for w in (a, b):
                 out[c, self.walls[w].axis] = faces[w]
         return out
