@@ -8,11 +8,13 @@ saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 ga
 (engines.model.ground_motion.BaseMotion), the side-wall columns moving in x on their springs (Fig. 27),
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
-"comparison": {...}}: the comparison times YADE alone on the same discs (fixed walls), our step
-with the compiled kernels (one compiled call a step: kernels.dem_step), with the compiled kernels
-on the general path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and
-with the NumPy path, interleaved in the same run (ratios hold on a shared machine; absolute times
-do not).
+"comparison": {...}, "breakdown_cpu_us": {...}}: the comparison times YADE alone on the same discs
+(fixed walls), our step with the compiled kernels (the steps between pore rebuilds in compiled
+runs: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and with the NumPy
+path, interleaved in the same run (ratios hold on a shared machine; absolute times do not); the
+breakdown splits the run's CPU time a step into its parts, their sum against the measured mean
+(``breakdown``).
 """
 import argparse
 import json
@@ -33,9 +35,10 @@ PRESET = "liquefaction_case1"
 
 def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
-    + eps_m/2, no Python), our step with the compiled kernels in one call, on the general path and
-    with the NumPy path, interleaved;
-    medians of wall and CPU microseconds per step and their ratios to YADE alone."""
+    + eps_m/2, no Python), our step with the compiled kernels (many steps in one call:
+    kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+    path and with the NumPy path, interleaved; medians of wall and CPU microseconds per step and
+    their ratios to YADE alone."""
     import numpy as np
 
     from benchmarks.floor import native_floor, run_steps
@@ -45,13 +48,18 @@ def compare(scene, packing, steps, repeats):
         native_floor(scene, packing)
         return run_steps
 
-    def general_path():  # no one-call step (how this scene ran while its side-wall ties were NumPy)
-        cp = YadeCoupling(scene, packing)
-        cp.core.kernel_step_args = lambda rows, held: None
+    def coupling(one_call=True, many=True, compiled=True):
+        cp = YadeCoupling(scene, packing, compiled=compiled)
+        if not many:
+            cp.core.kernel_drive_args = lambda rows, held, n: None
+        if not one_call:
+            cp.core.kernel_step_args = lambda rows, held: None
         return cp.run
 
-    setups = {"yade_alone": floor, "compiled": lambda: YadeCoupling(scene, packing).run,
-              "compiled_general_path": general_path, "numpy": lambda: YadeCoupling(scene, packing, compiled=False).run}
+    setups = {"yade_alone": floor, "compiled": coupling,
+              "compiled_one_call_a_step": lambda: coupling(many=False),
+              "compiled_general_path": lambda: coupling(one_call=False, many=False),
+              "numpy": lambda: coupling(compiled=False)}
     wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
     for _ in range(repeats):
         for name, setup in setups.items():
@@ -66,89 +74,161 @@ def compare(scene, packing, steps, repeats):
         med = {k: float(np.median(v)) for k, v in d.items()}
         out[label] = med
         out[label.replace("_us", "_ratio_to_yade_alone")] = {k: v / med["yade_alone"] for k, v in med.items()}
+        # the ratio within each repeat (the same minute of the machine), its median and spread
+        paired = {k: [a / y for a, y in zip(v, d["yade_alone"])] for k, v in d.items() if k != "yade_alone"}
+        out[label.replace("_us", "_paired_ratio")] = {k: {"median": float(np.median(v)), "min": min(v), "max": max(v)}
+                                                      for k, v in paired.items()}
     return out
 
 
-def breakdown(scene, packing, calls=2000, repeats=5, warmup=1100):
-    """CPU microseconds per step of each part of a seismic step (medians of ``repeats`` runs of
-    ``calls`` calls), after ``warmup`` steps of the real run. Each part is timed alone, called
-    again and again at the same state (its cost, not its result, is what counts here): the
-    compiled kernels from Python (each includes numba's ~1 us call and argument overhead), the
-    bridge's read and write, the Python around one step (kernel_step_args, finish_kernel_step,
-    hooks), the rebuilds of the pair list and of the pores spread over the steps between them, and
-    YADE's own step (ForceResetter, TranslationEngine, NewtonIntegrator) last, on held forces."""
+class Clock:
+    """CPU time spent in some methods of some objects, each method's own time (a timed method
+    called inside another is counted for itself only): ``wrap(obj, name, label)``."""
+
+    def __init__(self):
+        self.seconds, self.calls, self._inner = {}, {}, []
+
+    def wrap(self, obj, name, label):
+        f = getattr(obj, name)
+        self.seconds[label], self.calls[label] = 0.0, 0
+
+        def timed(*args):
+            c0 = time.process_time()
+            self._inner.append(0.0)
+            try:
+                return f(*args)
+            finally:
+                dt, inner = time.process_time() - c0, self._inner.pop()
+                self.seconds[label] += dt - inner
+                self.calls[label] += 1
+                if self._inner:
+                    self._inner[-1] += dt
+        setattr(obj, name, timed)
+
+
+RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
+    "compiled runs of steps (kernels.dem_drive_bulk_io: read, law, ties, water, write, base, YADE's step)":
+        ("engine", "_drive_dem"),
+    "steps finished in Python after a compiled run (eq 18-24 fixes, books, O.step)": ("engine", "_finish_in_python"),
+    "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
+    "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
+}
+
+
+def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
+    """CPU microseconds a step of the seismic run, complete. The run: ``repeats`` runs of
+    ``steps`` steps after ``warmup``, each part timed where it runs (RUN_PARTS, Clock), the rest
+    (the Python of drive, kernel_drive_args, finish_kernel_drive, YadeCoupling.run) the residual
+    of the measured mean; the same runs without timers alternate with them. A step of the
+    compiled runs: its parts timed alone, ``calls`` times in a compiled loop at one state (no
+    Python between calls): the law, the side-wall ties, the water (the pore measure, the flows,
+    the rest: update, pressures, eq 33 forces), the bridge's position read and force write, the
+    base motion, and YADE's own step (ForceResetter, NewtonIntegrator: the bridge's steps(), on
+    held forces); against the compiled runs' time a step, the residual stated. Medians."""
+    import numba
     import numpy as np
-    from yade import O
 
     from engines.compiled import kernels
+    from engines.yade import yade_io, yadebulk
     from engines.yade.coupling import YadeCoupling
+
+    @numba.njit
+    def repeat(n, f, args):
+        for _ in range(n):
+            f(*args)
 
     cp = YadeCoupling(scene, packing)
     cp.run(warmup)
     eng, core = cp.engine, cp.core
-    law, wm, c = core.law, core.water_model, core.law.contact
-    builds0, k0 = c.list_builds, O.iter
-    cp.run(2000)  # how often the pair list is rebuilt
-    list_builds_per_step = (c.list_builds - builds0) / (O.iter - k0)
+    owners = {"engine": eng, "contact": core.law.contact}
+    plain = {label: getattr(owners[o], n) for label, (o, n) in RUN_PARTS.items()}
+    kernel_steps = [0]
+    drive = eng._drive_dem
+
+    def counted(*args):  # the steps made in compiled runs
+        out = drive(*args)
+        kernel_steps[0] += out[0]
+        return out
+    eng._drive_dem = counted
+    clock = Clock()
+    for label, (o, n) in RUN_PARTS.items():
+        clock.wrap(owners[o], n, label)
+    timed = {label: getattr(owners[o], n) for label, (o, n) in RUN_PARTS.items()}
+    run = {"timed": [], "plain": []}
+    parts = {label: [] for label in RUN_PARTS}
+    counts = {label: [] for label in RUN_PARTS}
+    per_kernel_step = []
+    for _ in range(repeats):
+        for how, methods in (("timed", timed), ("plain", plain)):
+            for label, (o, n) in RUN_PARTS.items():
+                setattr(owners[o], n, methods[label])
+            c0 = time.process_time()
+            cp.run(steps)
+            run[how].append(1e6 * (time.process_time() - c0) / steps)
+        for label in RUN_PARTS:
+            parts[label].append(1e6 * clock.seconds[label] / steps)
+            counts[label].append(clock.calls[label])
+            clock.seconds[label] = clock.calls[label] = 0
+        per_kernel_step.append(parts[next(iter(RUN_PARTS))][-1] * steps / kernel_steps[0])
+        kernel_steps[0] = 0
+    med = {label: float(np.median(v)) for label, v in parts.items()}
+    mean = float(np.median(run["timed"]))
+    out = {"run: CPU us a step, with the timers": mean, "run: CPU us a step, without them": float(np.median(run["plain"])),
+           "run: parts a step": dict(med, **{"Python around them (residual)": mean - sum(med.values())}),
+           "run: calls of each part in %d steps" % steps: {label: float(np.median(v)) for label, v in counts.items()}}
+
+    # a step of the compiled runs, part by part
     xz = cp.positions()
-    step_args = core.kernel_step_args(eng._dynamic, eng.held)
+    law, wm = core.law, core.water_model
+    law.contact._update_list(xz)
     law_args, water_args = law.kernel_args(), wm.kernel_args(wm.water_interval * law.dt)
-    F_out = np.zeros_like(eng.held)
-    part = wm._part
-    net = wm.water.net
-    geometry = (xz, wm.r, net.links, part("vec0").reshape(-1, 2), net.corner_pore, net.corner_sign, net.corner_link,
-                net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m, part("poly"),
-                part("sect"), part("void"), part("length"), part("contact") > 0, part("theta"),
+    part, net = wm._part, wm.water.net
+    geometry = (xz, part("r"), net.links, part("vec0").reshape(-1, 2), net.corner_pore, net.corner_sign,
+                net.corner_link, net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m,
+                part("poly"), part("sect"), part("void"), part("length"), part("contact"), part("theta"),
                 part("vec").reshape(-1, 2), part("rot"), part("cross"))
-    flow = (wm.water.W, part("void"), geometry[16], net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
+    flow = (wm.water.W, part("void"), part("contact"), net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
             part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))
-    forces = (net.links, net.link_pores, wm.r, part("U"), part("length"), part("vec").reshape(-1, 2), np.zeros_like(wm.F),
-              part("Fj").reshape(-1, 2))
+    drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
+    motion = drive_args[4]
+    rows = np.arange(len(eng._F_out))
+    bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (yade_io._SET_PERM, eng.forced.ids, eng._F_out.copy(), rows,
+                                                      eng.held, eng._F_out)
     W0 = wm.water.W.copy()
-    parts = {
-        "law (kernels.law_step)": lambda: kernels.law_step(xz, *law_args),
-        "side-wall ties (kernels.tie_forces)": lambda: kernels.tie_forces(xz, law.du, law.dt, *core._tie_args),
-        "side-wall ties, NumPy path (SideWallTies.forces)": lambda: core._tie_forces(xz, law.du),
-        "water (kernels.water_step)": lambda: kernels.water_step(xz, *water_args),
-        "  of which pore measure": lambda: kernels.measure(*geometry),
-        "  of which flows": lambda: kernels.darcy_flows(*flow),
-        "  of which pressure forces": lambda: kernels.pressure_forces(*forces),
-        "law + ties + water + forces to write (kernels.dem_step)": lambda: kernels.dem_step(xz, F_out, *step_args),
-        "read positions (bridge)": lambda: eng.io.positions(),
-        "write forces (bridge)": lambda: eng.forced.set_permanent_forces(F_out),
-        "Python around a step": lambda: (core.kernel_step_args(eng._dynamic, eng.held), core.law._fixes([], None),
-                                         [f() for f in eng.hooks]),
-        "  of which base motion and wall velocity (BaseMotion.step, hook)":
-            lambda: (core.base.step(), [f() for f in eng.hooks]),
-        "whole engine step (PaperLawEngine._kernel_work)": lambda: eng._kernel_work() or eng._work(eng._write_held),
+    alone = {
+        "law (kernels.law_step)": (kernels.law_step, (xz,) + law_args),
+        "side-wall ties (kernels.tie_forces)": (kernels.tie_forces, (xz, law.du, law.dt) + core._tie_args),
+        "water (kernels.water_step)": (kernels.water_step, (xz,) + water_args),
+        "  of which pore measure (kernels.measure)": (kernels.measure, geometry),
+        "  of which flows (kernels.darcy_flows)": (kernels.darcy_flows, flow),
+        "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
+        "bridge: write forces (set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
+        "base motion (kernels.cosine_base_step)": (kernels.cosine_base_step, (motion, core.k)),
     }
-    out = {}
-    for name, fn in parts.items():
-        times = []
-        for _ in range(repeats):
-            c0 = time.process_time()
-            for _ in range(calls):
-                fn()
-            times.append(1e6 * (time.process_time() - c0) / calls)
-            wm.water.W[:] = W0  # the same state for every call
-        out[name] = float(np.median(times))
-    c0 = time.process_time()
-    for _ in range(20):
-        c.xz_list = xz + 1.0  # stale: rebuilt at the next call
-        c._update_list(xz)
-    out["pair-list rebuilds, spread"] = 1e6 * (time.process_time() - c0) / 20 * list_builds_per_step
-    c0 = time.process_time()
-    for _ in range(5):
-        wm.rebuild(xz)
-    out["pore rebuilds, spread"] = 1e6 * (time.process_time() - c0) / 5 / wm.rebuild_interval
-    times = []
+    times = {name: [] for name in alone}
+    times["YADE's own step (ForceResetter, NewtonIntegrator: bridge steps())"] = []
+    for f, args in alone.values():
+        repeat(1, f, args)  # compiled for these arguments
     for _ in range(repeats):
+        for name, (f, args) in alone.items():
+            c0 = time.process_time()
+            repeat(calls, f, args)
+            times[name].append(1e6 * (time.process_time() - c0) / calls)
+            wm.water.W[:] = W0  # the same state for every call
         c0 = time.process_time()
-        for _ in range(calls // 4):
-            O.step()
-        times.append(1e6 * (time.process_time() - c0) / (calls // 4))
-    out["YADE's own step (O.step)"] = float(np.median(times))
+        yadebulk.steps(calls // 4)
+        times["YADE's own step (ForceResetter, NewtonIntegrator: bridge steps())"].append(
+            1e6 * (time.process_time() - c0) / (calls // 4))
+    step = {name: float(np.median(v)) for name, v in times.items()}
+    measured = float(np.median(per_kernel_step))
+    named = sum(v for name, v in step.items() if not name.startswith(" "))
+    step["  of which the rest (update, pressures, eq 33 forces)"] = (step["water (kernels.water_step)"]
+                                                                 - step["  of which pore measure (kernels.measure)"]
+                                                                 - step["  of which flows (kernels.darcy_flows)"])
+    out["a compiled run: CPU us a step (its time in the run / its steps)"] = measured
+    out["a compiled run: parts a step, timed alone"] = dict(step, **{"residual (the loop, the wall velocity write)":
+                                                                     measured - named})
     return out
 
 
@@ -159,7 +239,7 @@ def main(argv):
     ap.add_argument("--compare-steps", type=int, default=3000,
                     help="steps of the in-run comparison with YADE alone and the NumPy path (0: skip)")
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--breakdown", type=int, default=1, help="1: time each part of a step alone (0: skip)")
+    ap.add_argument("--breakdown", type=int, default=1, help="1: split a step's CPU time into its parts (0: skip)")
     args = ap.parse_args(argv)
     scene = scenes.preset(PRESET)
     packing = Packing.load(scene.packing.file)

@@ -544,8 +544,8 @@ def water_forces_step_args(rows, held, water):
     return (rows, held) + water
 
 # The addresses of the C functions of engines.yade.yadebulk a kernel calls: the position read, the
-# permanent-force write and YADE's steps (yadebulk.c_steps).
-BRIDGE = Layout("BRIDGE", ("get_pos", "set_perm", "steps"))
+# permanent-force write, the velocity write and YADE's steps (yadebulk.c_steps).
+BRIDGE = Layout("BRIDGE", ("get_pos", "set_perm", "set_vel", "steps"))
 
 
 @intrinsic
@@ -651,6 +651,96 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
 
 
 Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
+
+
+@jit
+def frees_a_disc(lost, n_lost, pi, pj, state, mobile):
+    """Does one of the pairs lost[:n_lost] that stopped touching leave a mobile disc touching
+    nothing (a free disc of engines.model.contact.separation_adjustment, eq 18-24)? Without one
+    the velocity adjustment changes nothing."""
+    left = np.zeros(len(mobile), np.bool_)
+    for m in range(n_lost):
+        for a in (pi[lost[m]], pj[lost[m]]):
+            left[a] = mobile[a]
+    for k in range(len(pi)):
+        if state[k, TOUCHING] != 0.0:
+            left[pi[k]] = left[pj[k]] = False
+    for a in range(len(left)):
+        if left[a]:
+            return True
+    return False
+
+
+MOTION = Layout("MOTION", ("amplitude", "w", "dt", "acc", "vel", "disp", "wall_velocity"))  # of cosine_base_step
+
+
+@jit
+def cosine_base_step(motion, k):
+    """Twin of engines.model.ground_motion.BaseMotion.step for a Cosine acceleration: motion =
+    (amplitude [m/s^2], 2 pi frequency [rad/s], dt [s], acc, vel, disp, wall velocity) (MOTION)
+    advanced in place from step k to k + 1; the wall velocity of that step is (u_k+1 - u_k) / dt [m/s]."""
+    amplitude, w, dt = motion[MOTION.amplitude], motion[MOTION.w], motion[MOTION.dt]
+    a_next = amplitude * math.cos(w * ((k + 1) * dt))
+    a_bar = 0.5 * (motion[MOTION.acc] + a_next)
+    du = motion[MOTION.vel] * dt + 0.5 * a_bar * dt * dt
+    motion[MOTION.vel] += a_bar * dt
+    motion[MOTION.disp] += du
+    motion[MOTION.acc] = a_next
+    motion[MOTION.wall_velocity] = du / dt
+
+
+@jit
+def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, totals, motion, wall_ids, wall_vel, ids_in, xz, ids_out,
+                      F_out, rows, held,
+                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
+                      F, M, acc_j, lost,
+                      h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
+                      tie_pairs, tie_rest, tie_prm, T):
+    """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
+    -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
+    wet), set_perm(ids_out <- F_out), then the water's balance of the step added to totals (3,)
+    [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
+    walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
+    bridge's steps() (O.step()).
+    It stops after the force write of a step that needs Python: with ``adjust`` (the eq 18-24
+    velocity adjustment) pairs that stopped touching and left a disc free (dem_step's n_lost > 0,
+    ``frees_a_disc``), or a water step that needed sub-steps or failed; and at the start of a step
+    whose pair list is stale (LIST_STALE: nothing done of it) or at an error code.
+    Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code)."""
+    wet = len(W) > 0
+    balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
+    for s in range(n):
+        rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
+        if rc != 0:
+            return s, 0, 1, rc
+        water_due = wet and (k + s) % water_interval == 0
+        n_lost, n_sub = dem_step(xz, F_out, rows, held, water_due,
+                                 xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state,
+                                 prm, spring, F, M, acc_j, lost,
+                                 h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
+                                 tie_pairs, tie_rest, tie_prm, T)
+        if n_lost == LIST_STALE:
+            return s, n_lost, 0, 0
+        rc = _write_forces(0, bridge[BRIDGE.set_perm], ids_out, F_out)
+        if rc != 0 or n_sub != 1 or (adjust and n_lost > 0 and frees_a_disc(lost, n_lost, pi, pj, state, mobile)):
+            return s, n_lost, n_sub, rc
+        if water_due:
+            for a in range(3):
+                totals[a] += balance[a]
+        if len(motion):
+            cosine_base_step(motion, k + s)
+            for b in range(len(wall_ids)):
+                wall_vel[b, 0], wall_vel[b, 1] = motion[MOTION.wall_velocity], 0.0
+            rc = _c_bulk_call(bridge[BRIDGE.set_vel], wall_ids.ctypes.data, wall_ids.size, wall_vel.ctypes.data)
+            if rc != 0:
+                return s, 0, 1, rc
+        rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
+        if rc != 0:
+            return s, 0, 1, rc
+    return n, 0, 1, 0
+
+
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 13).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit

@@ -1,10 +1,14 @@
 """One DEM step of the seed-000 model by compiled kernels: engines.model.pore_dem.PoreDEM on the
 compiled law (engines.compiled.paper_law) and water (engines.compiled.water_model), and the whole step
 as one call of kernels.dem_step (law_step, tie_forces, water_step when due). No YADE."""
+import numpy as np
+
 from engines.compiled import kernels
 from engines.compiled.paper_law import PaperLaw
 from engines.compiled.water_model import WaterModel
 from engines.model import pore_dem
+from engines.model.ground_motion import Cosine
+from engines.model.water_model import steps_to_rebuild
 
 
 class PoreDEM(pore_dem.PoreDEM):
@@ -29,14 +33,57 @@ class PoreDEM(pore_dem.PoreDEM):
             return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
         if wm.rebuild_distance > 0 or wm.rebuild_due(self.k):
             return None
-        return kernels.dem_step_args(rows, held, self.k % wm.water_interval == 0, law.kernel_args(),
+        return kernels.dem_step_args(rows, held, self.water_due(), law.kernel_args(),
                                      wm.kernel_args(wm.water_interval * self.dt), self._tie_args)
 
-    def finish_kernel_step(self, xz, n_lost, n_sub, args, vel=None):
-        """The Python part of a dem_step at xz that returned (n_lost, n_sub) for ``args`` (from
-        kernel_step_args): velocity fixes (eq 18-24, returned), the water's books, the walls."""
+    def finish_kernel_step(self, xz, n_lost, n_sub, water_due, vel=None):
+        """The Python part of a dem_step at xz that returned (n_lost, n_sub), with the water when
+        water_due: velocity fixes (eq 18-24, returned), the water's books, the walls."""
         fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
-        if args[kernels.DEM_STEP.water_due]:
-            self.water_model.finish_kernel_step(args[kernels.DEM_STEP.h], n_sub)
+        if water_due:
+            wm = self.water_model
+            wm.finish_kernel_step(wm.water_interval * self.dt, n_sub)
         self._move_walls()
         return fixes
+
+    def water_due(self):
+        """Does step k advance the water (kernels.dem_step's water_due)?"""
+        return self.water_model is not None and self.k % self.water_model.water_interval == 0
+
+    def kernel_drive_args(self, rows, held, n):
+        """(steps, water_interval, adjust, totals, motion, args) for kernels.dem_drive_bulk_io: up to
+        n steps from step k (none of them a pore rebuild), whether the eq 18-24 adjustment is on,
+        the water's balance so far (3,) [m^2], the base
+        motion (kernels.MOTION; empty without one) and the arguments after F_out (DEM_DRIVE), or
+        None when step k needs ``kernel_step_args``'s other paths or the input acceleration is not
+        a Cosine. ``finish_kernel_drive`` books what the call did."""
+        base, wm = self.base, self.water_model
+        if base is not None and not isinstance(base.accel, Cosine):
+            return None
+        step = self.kernel_step_args(rows, held)
+        if step is None:
+            return None
+        args = step[:kernels.DEM_STEP.water_due] + step[kernels.DEM_STEP.water_due + 1:]  # DEM_DRIVE
+        motion = np.zeros(0) if base is None else np.array(kernels.MOTION.values(
+            amplitude=base.accel.amplitude, w=base.accel.w, dt=base.dt, acc=base.acc, vel=base.vel, disp=base.disp,
+            wall_velocity=self.wall_velocity))
+        adjust = self.law.settings.separation_adjustment
+        if wm is None:
+            return n, 1, adjust, np.zeros(3), motion, args
+        b = wm.water.balance
+        steps = min(n, steps_to_rebuild(self.k, wm.k_built, wm.k0, wm.rebuild_interval, 1))
+        return steps, wm.water_interval, adjust, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args
+
+    def finish_kernel_drive(self, done, totals, motion):
+        """Book the ``done`` steps a kernels.dem_drive_bulk_io call made with the totals and motion
+        of ``kernel_drive_args``: the step index, the base motion, the water's books."""
+        k, self.k = self.k, self.k + done
+        if len(motion):
+            base = self.base
+            base.acc, base.vel, base.disp, self.wall_velocity = motion[kernels.MOTION.acc:].tolist()
+            base.k += done
+        wm = self.water_model
+        if wm is not None and k + (-k) % wm.water_interval < self.k:  # a water step among them
+            b = wm.water.balance
+            b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+            wm.after_kernel_steps()

@@ -1,9 +1,11 @@
 """YADE glue for scenes: discs as spheres in the x-z plane, the scene's contact law, the water engine.
 
-[contact] law = "paper" (the presets): ForceResetter, the wall motion, NewtonIntegrator; before each
-O.step() ``run`` drives the PaperLawEngine (engines.model.paper_law; it calls PoreDEM.step: the paper's
-law, spin, the water in the paper's order) and holds its forces plus buoyancy as permanent forces:
-no PyRunner (its dispatch costs ~50 us a call). No collider: the law keeps its own Verlet list.
+[contact] law = "paper" (the presets): ForceResetter, NewtonIntegrator; before each O.step() ``run``
+drives the PaperLawEngine (engines.model.paper_law; it calls PoreDEM.step: the paper's law, spin, the
+water in the paper's order), holds its forces plus buoyancy as permanent forces and sets the
+velocity of the walls that follow the input: no PyRunner (its dispatch costs ~50 us a call), and
+between pore rebuilds many steps in one compiled call with the bridge (PaperLawEngine.drive). No
+collider: the law keeps its own Verlet list.
 Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
 scenes with ``YadeCoupling.run``, not O.run.
 
@@ -20,8 +22,8 @@ The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
 of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
-without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk) and
-returns early when it is true (engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into
+without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk; the
+paper's law's compiled runs of steps: after each) and returns early when it is true (engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into
 a checkpoint (engines.yade.checkpoint): keep closures out of its state.
 """
 import math
@@ -199,9 +201,11 @@ class YadeCoupling:
             yade_io.freeze_gc()
 
     def _wall_motion(self):
-        """A TranslationEngine moving the walls that follow the input ([loading] moves) at the
-        velocity of the base motion for each step (engines.model.ground_motion.BaseMotion, the one input
-        path): set by the paper's law's step (PoreDEM), or with law = 'yade' before each O.step."""
+        """The walls that follow the input ([loading] moves) move at the velocity of the base motion
+        for each step (engines.model.ground_motion.BaseMotion, the one input path): with the paper's
+        law the PaperLawEngine sets their velocities to the core's (PoreDEM) before each O.step
+        (``drive_walls``; no engine), with law = 'yade' a TranslationEngine whose velocity is set
+        before each O.step. Returns the engines to add ([] or the TranslationEngine)."""
         self.wall_engine = self.base = None
         if self.scene.loading.type == "none":
             return []
@@ -215,9 +219,10 @@ class YadeCoupling:
                + [self.wall_ids[code] for code, m in zip(self.flat_walls, flat) if m and code in self.wall_ids])
         if not ids:
             return []
-        self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
         if self.law == "paper":
-            self.engine.hooks.append(WallVelocity(self.wall_engine, self.core))
+            self.engine.drive_walls(ids)
+            return []
+        self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
         return [self.wall_engine]
 
     # -- running ------------------------------------------------------------------------------------
@@ -250,7 +255,7 @@ class YadeCoupling:
 
     def run(self, n_steps, stop=None):
         """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
-        asked after every step) turned true first. The hooks are called as hook(self) whenever
+        asked after every step or compiled run of steps, see the module docstring) turned true first. The hooks are called as hook(self) whenever
         O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
         once per step index, before the step. An error inside an engine stops YADE and is
         re-raised here."""
@@ -416,13 +421,3 @@ def simulate(scene, packing, n_steps, record_every, hooks=()):
 def _never():
     return False
 
-
-class WallVelocity:
-    """PaperLawEngine hook: the wall engine's velocity follows the core's wall velocity (a class,
-    not a closure, so that the coupling pickles)."""
-
-    def __init__(self, wall_engine, core):
-        self.wall_engine, self.core = wall_engine, core
-
-    def __call__(self):
-        self.wall_engine.velocity = self.core.wall_velocity

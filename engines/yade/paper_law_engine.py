@@ -18,14 +18,18 @@ class PaperLawEngine:
 
     or without a PyRunner, driven from Python: ``law.drive(n)`` does the same work before each of n
     O.step() calls and holds the forces as permanent forces (with ``held`` added, e.g. buoyancy);
-    this saves the PyRunner's dispatch at every step.
+    this saves the PyRunner's dispatch at every step, and with a core that offers
+    ``kernel_drive_args`` (PoreDEM) and the bridge runs the steps between pore rebuilds in one
+    compiled call (kernels.dem_drive_bulk_io), back in Python only for the steps that need it.
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
-    run after each step's forces are written.
+    run after each step's forces are written (not called by the compiled drive: a core that has
+    them offers no kernel_drive_args). ``drive_walls(ids)``: the bodies ids move in x at the core's
+    ``wall_velocity`` of each step (their velocity set before O.step()).
     """
 
     def __init__(self, disc_ids, settings=None, core=None, compiled=True):
@@ -52,7 +56,15 @@ class PaperLawEngine:
         self._xz = np.zeros((self.io.n, 2))  # positions read and forces written by _kernel_work
         self._F_out = np.zeros((len(self._dynamic), 2))
         self.hooks = []
-        self._set_velocities, self._run_kernel = yade_io.set_velocities, yade_io.run_kernel
+        self._set_velocities, self._run_kernel, self._check = yade_io.set_velocities, yade_io.run_kernel, yade_io.check
+        self._drive_dem = yade_io.drive_dem if yade_io.BACKEND == "yadebulk" else None
+        self.drive_walls([])
+
+    def drive_walls(self, ids):
+        """Move the bodies ``ids`` (fixed walls) in x at the core's ``wall_velocity`` of each step."""
+        from engines.yade import yade_io
+        self.walls = yade_io.Bodies(np.asarray(ids, np.int64))
+        self._wall_vel = np.zeros((self.walls.n, 2))  # (v, 0) rows
 
     def runner(self, label="paperLaw"):
         from engines.yade import yade_io
@@ -67,6 +79,9 @@ class PaperLawEngine:
         if fixes:
             disc = np.fromiter(fixes, np.int64)
             self._set_velocities(self.io.ids[disc], np.array([fixes[d] for d in disc.tolist()]))
+        if self.walls.n:
+            self._wall_vel[:, 0] = self.core.wall_velocity
+            self._set_velocities(self.walls.ids, self._wall_vel)
         for hook in self.hooks:
             hook()
 
@@ -77,17 +92,59 @@ class PaperLawEngine:
         self.forced.add_forces(F[self._dynamic])
 
     def drive(self, n, stop=None):
-        """n steps: this engine's work, then O.step(); ``stop()`` true ends early. A core that
-        offers ``kernel_step_args`` (PoreDEM) does the step in one compiled call where it can."""
-        from yade import O
-        write = self._write_held
-        fused = self._kernel_work if hasattr(self.core, "kernel_step_args") else None
-        for _ in range(int(n)):
-            if fused is None or not fused():
-                self._work(write)
-            O.step()
+        """n steps: this engine's work, then O.step(); ``stop()`` true ends early (asked after each
+        step made from Python and after each compiled run of steps). A core that offers
+        ``kernel_step_args`` (PoreDEM) does a step in one compiled call where it can, and with
+        ``kernel_drive_args`` and the bridge many steps in one call (``_kernel_steps``)."""
+        many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
+        done, n = 0, int(n)
+        while done < n:
+            m = 0 if many is None else many(n - done)
+            if m == 0:
+                self._python_step()
+                m = 1
+            done += m
             if stop is not None and stop():
                 break
+
+    def _python_step(self):
+        """One step from Python: ``_kernel_work`` where the core offers it, else ``_work``; then O.step()."""
+        from yade import O
+        if not (hasattr(self.core, "kernel_step_args") and self._kernel_work()):
+            self._work(self._write_held)
+        O.step()
+
+    def _kernel_steps(self, n):
+        """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
+        among them; a step it leaves after its force write (a disc set free, eq 18-24; water
+        sub-steps) is finished here with its O.step(). Returns the steps done (0: the next step
+        needs ``_kernel_work`` or ``_work``)."""
+        if self.hooks:
+            return 0
+        core = self.core
+        while True:
+            drive = core.kernel_drive_args(self._dynamic, self.held, n)
+            if drive is None:
+                return 0
+            steps, water_interval, adjust, totals, motion, args = drive
+            done, n_lost, n_sub, rc = self._drive_dem(steps, core.k, water_interval, adjust, totals, motion, self.walls,
+                                                      self._wall_vel, self.io, self._xz, self.forced, self._F_out, args)
+            core.finish_kernel_drive(done, totals, motion)
+            self._check(rc)
+            if done == steps:
+                return done
+            if n_lost != kernels.LIST_STALE:  # step ``done``, made up to its force write: finished here
+                self._finish_in_python(n_lost, n_sub)
+                return done + 1
+            core.law.contact._update_list(self._xz)
+            if done:
+                return done
+
+    def _finish_in_python(self, n_lost, n_sub):
+        """The rest of a step the compiled drive left after its force write, then O.step()."""
+        from yade import O
+        self._after(self.core.finish_kernel_step(self._xz, n_lost, n_sub, self.core.water_due()))
+        O.step()
 
     def _kernel_work(self):
         """This step as kernels.dem_step between a position read and the force write (one compiled
@@ -101,7 +158,7 @@ class PaperLawEngine:
             if n_lost != kernels.LIST_STALE:
                 break
             core.law.contact._update_list(self._xz)
-        fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args)
+        fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due])
         self._after(fixes)
         return True
 

@@ -42,10 +42,11 @@ def _load_bulk():
 
 _BULK = _load_bulk()
 BACKEND = "yadebulk" if _BULK is not None else "python"
-if _BULK is not None:  # addresses of the bridge's position read, permanent-force write and step, for kernels
-    _GET_POS, _SET_PERM, _STEPS = (ctypes.cast(f, ctypes.c_void_p).value
-                                   for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_steps))
-    _BRIDGE = kernels.BRIDGE.values(get_pos=_GET_POS, set_perm=_SET_PERM, steps=_STEPS)
+if _BULK is not None:  # addresses of the bridge's position read, force and velocity writes and step, for kernels
+    _GET_POS, _SET_PERM, _SET_VEL, _STEPS = (
+        ctypes.cast(f, ctypes.c_void_p).value
+        for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_set_vel_xz, _BULK.c_steps))
+    _BRIDGE = kernels.BRIDGE.values(get_pos=_GET_POS, set_perm=_SET_PERM, set_vel=_SET_VEL, steps=_STEPS)
 
 
 class Bodies:
@@ -152,6 +153,17 @@ def drive_water(n, k, k0, water_interval, totals, xz_built, moved2, reader, xz, 
     its (steps, water steps, answer, error code)."""
     return kernels.water_drive_bulk_io(_BRIDGE, n, k, k0, water_interval, totals, xz_built, moved2, reader.ids, xz,
                                        writer.ids, out, *args)
+
+
+def drive_dem(n, k, water_interval, adjust, totals, motion, walls, wall_vel, reader, xz, writer, out, args):
+    """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
+    step k (``adjust``: the eq 18-24 adjustment is on), the positions read from ``reader`` and the
+    forces out written to ``writer`` (Bodies),
+    the velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the
+    base motion ``motion``, args those of dem_drive_bulk_io after F_out. Returns its (steps done,
+    n_lost, n_sub, error code)."""
+    return kernels.dem_drive_bulk_io(_BRIDGE, n, k, water_interval, adjust, totals, motion, walls.ids, wall_vel,
+                                     reader.ids, xz, writer.ids, out, *args)
 
 
 def check(rc, ids=None):

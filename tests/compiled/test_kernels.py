@@ -228,3 +228,41 @@ def test_the_darcy_check_twins_equal_the_model_limits():
         assert kernels.gershgorin_limit(lam) == limits.gershgorin_limit(lam)
     for h, limit in ((1e-3, 1e-3), (0.5e-3, 1e-3), (2.5e-3, 1e-3), (1.0, np.inf), (3e-6, 1e-6 + 1e-22), (7.0, 0.7)):
         assert kernels.substep_count(h, limit) == limits.substep_count(h, limit)
+
+
+@pytest.mark.parametrize("dt", [1e-6, 3.7e-4])
+def test_the_cosine_base_motion_twin_equals_base_motion_bit_for_bit(dt):
+    """kernels.cosine_base_step against engines.model.ground_motion.BaseMotion.step with the 1500
+    gal, 50 Hz cosine: acceleration, velocity, displacement and the wall velocity of every step
+    the same floats, over several periods."""
+    from engines.model.ground_motion import BaseMotion, Cosine
+    accel = Cosine(15.0, 50.0)
+    base = BaseMotion(accel, dt)
+    motion = np.array(kernels.MOTION.values(amplitude=accel.amplitude, w=accel.w, dt=dt, acc=base.acc, vel=0.0,
+                                            disp=0.0, wall_velocity=0.0))
+    for k in range(int(0.05 / dt)):
+        v = base.step()
+        kernels.cosine_base_step(motion, k)
+        assert motion[kernels.MOTION.acc:].tolist() == [base.acc, base.vel, base.disp, v], k
+    assert abs(base.disp) > 1e-5
+
+
+def test_frees_a_disc_finds_the_free_discs_of_the_velocity_adjustment():
+    """kernels.frees_a_disc is true exactly when separation_adjustment would find a free disc:
+    a mobile disc of a pair that stopped touching with no touching pair left (random pair lists)."""
+    from engines.model.contact import TOUCHING
+    rng = np.random.default_rng(5)
+    seen = set()
+    for _ in range(200):
+        n, m = 8, 12
+        pi, pj = rng.integers(0, n, m), rng.integers(0, n, m)
+        state = np.zeros((m, 6))
+        state[:, TOUCHING] = rng.random(m) < 0.4
+        mobile = rng.random(n) < 0.7
+        lost = rng.choice(np.flatnonzero(state[:, TOUCHING] == 0), 2)
+        touch = np.bincount(pi[state[:, TOUCHING] != 0], minlength=n) + np.bincount(pj[state[:, TOUCHING] != 0], minlength=n)
+        left = set(pi[lost]) | set(pj[lost])
+        expected = any(mobile[a] and touch[a] == 0 for a in left)
+        assert kernels.frees_a_disc(lost, len(lost), pi, pj, state, mobile) == expected
+        seen.add(expected)
+    assert seen == {True, False}

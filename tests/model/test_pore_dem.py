@@ -347,7 +347,7 @@ def fused_step(core, xz, vel=None):
     while True:
         n_lost, n_sub = kernels.dem_step(xz, F, *args)
         if n_lost != kernels.LIST_STALE:
-            return F, core.finish_kernel_step(xz, n_lost, n_sub, args, vel), True
+            return F, core.finish_kernel_step(xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due], vel), True
         core.law.contact._update_list(xz)
         args = core.kernel_step_args(rows, held)
 

@@ -212,63 +212,95 @@ def test_yade_law_head_on_collision_matches_the_paper_law():
 
 
 def _fused_and_general(sc, packing, n=200):
-    """The same run of n steps through PaperLawEngine.drive with kernels.dem_step where it can and
-    through the general path only: (x, v, omega, pair-list builds, W, O.iter) of each, and the
-    number of steps the first took in one call."""
+    """The same run of n steps through PaperLawEngine.drive three ways: many steps in one compiled
+    call where it can (kernels.dem_drive_bulk_io), one compiled call a step (kernels.dem_step)
+    and the general path only: (x, v, omega, pair-list builds, W, O.iter) of each, and the steps
+    the first two made in compiled calls."""
     from yade import O
-    runs, fused_steps = [], 0
-    for fused in (True, False):
+    runs, compiled_steps = [], []
+    for how in ("many", "one", "general"):
         cp = YadeCoupling(sc, packing)
         cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
-        step_args = cp.core.kernel_step_args
-        if fused:
-            def counted(rows, held):
-                nonlocal fused_steps
-                args = step_args(rows, held)
-                fused_steps += args is not None
-                return args
-            cp.core.kernel_step_args = counted
+        counted = 0
+        if how == "many":
+            drive = cp.engine._drive_dem
+
+            def many(*args):
+                nonlocal counted
+                out = drive(*args)
+                counted += out[0]
+                return out
+            cp.engine._drive_dem = many
         else:
+            cp.core.kernel_drive_args = lambda rows, held, n: None
+        step_args = cp.core.kernel_step_args
+        if how == "one":
+            def one(rows, held):
+                nonlocal counted
+                args = step_args(rows, held)
+                counted += args is not None
+                return args
+            cp.core.kernel_step_args = one
+        elif how == "general":
             cp.core.kernel_step_args = lambda rows, held: None
         cp.run(n)
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
-    return runs, fused_steps
+        compiled_steps.append(counted)
+    return runs, compiled_steps[:2]
 
 
 def _assert_same_runs(runs, n=200):
-    (x1, v1, w1, b1, W1, k1), (x0, v0, w0, b0, W0, k0) = runs
-    assert k1 == k0 == n and b1 == b0 > 5
-    np.testing.assert_array_equal(x1, x0)
-    np.testing.assert_array_equal(v1, v0)
-    np.testing.assert_array_equal(w1, w0)
-    if W0 is not None:
-        np.testing.assert_array_equal(W1, W0)
+    x0, v0, w0, b0, W0, k0 = runs[-1]
+    for x1, v1, w1, b1, W1, k1 in runs[:-1]:
+        assert k1 == k0 == n and b1 == b0 > 5
+        np.testing.assert_array_equal(x1, x0)
+        np.testing.assert_array_equal(v1, v0)
+        np.testing.assert_array_equal(w1, w0)
+        if W0 is not None:
+            np.testing.assert_array_equal(W1, W0)
 
 
 @pytest.mark.parametrize("law_override", [{}, {"water": {"enabled": False}}])
-def test_paper_law_one_call_step_equals_the_general_path(packing, law_override):
-    """PaperLawEngine.drive runs kernels.dem_step (read, law, water, write in one call) where it
-    can; the general path (PoreDEM.step between yade_io calls) gives the same run, bit for bit,
-    through pair-list and pore rebuilds and steps without water."""
+def test_paper_law_compiled_steps_equal_the_general_path(packing, law_override):
+    """PaperLawEngine.drive runs many steps in one compiled call (kernels.dem_drive_bulk_io), or
+    kernels.dem_step (read, law, water, write in one call) where it can; the general path
+    (PoreDEM.step between yade_io calls) gives the same run, bit for bit, through pair-list and
+    pore rebuilds and steps without water."""
     over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
     over.update(law_override)
-    runs, fused_steps = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
+    runs, compiled_steps = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
     _assert_same_runs(runs)
-    assert fused_steps > 150
+    assert min(compiled_steps) > 150
 
 
-def test_seismic_one_call_step_with_side_wall_ties_equals_the_general_path():
+def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
     """The seismic box (liquefaction_case1: base shaken, side walls on the springs of Fig. 27)
-    takes the one-call step too (kernels.tie_forces inside dem_step), and the run is bit for bit
-    that of the general path (SideWallTies.forces in NumPy), the side walls moving."""
+    takes the compiled steps too (kernels.tie_forces inside dem_step; the base motion and the
+    walls' velocity inside dem_drive_bulk_io), and the run is bit for bit that of the general path
+    (SideWallTies.forces in NumPy, BaseMotion in Python), the side walls and the base moving."""
     sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 60, "water_interval": 3}})
     packing = Packing.load(sc.packing.file)
-    runs, fused_steps = _fused_and_general(sc, packing)
+    runs, compiled_steps = _fused_and_general(sc, packing)
     _assert_same_runs(runs)
-    assert fused_steps > 150
+    assert min(compiled_steps) > 150
     side = side_wall_ties(sc, packing).moving
     assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)
+    bottom = packing.group == pg.WALL_BOTTOM
+    assert np.all(runs[0][0][bottom, 0] > packing.xz[bottom, 0])
+
+
+def test_compiled_steps_leave_a_disc_set_free_to_the_velocity_adjustment():
+    """The head-on collision with the eq 18-24 adjustment: the compiled runs of steps stop at the
+    separation that sets the discs free, Python adjusts their velocities (-Vn''/Vn = e), and the
+    run is bit for bit that of the other two paths."""
+    from engines.run.crosscheck import contact_scene, launcher_packing
+    sc = contact_scene("head_on_adjusted", spring="a", separation_adjustment=True)
+    runs, compiled_steps = _fused_and_general(sc, launcher_packing(), n=2500)
+    _assert_same_runs(runs, n=2500)
+    assert min(compiled_steps) > 2000
+    v = runs[0][1]
+    assert v[2, 0] > v[1, 0] > 0  # B ahead of A, both on their way after the collision
 
 
 def test_the_engine_rebuilds_on_the_schedule_of_the_paper_law():
