@@ -109,7 +109,7 @@ class Clock:
 RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
     "compiled runs of steps (kernels.dem_drive_bulk_io: read, law, ties, water, write, base, YADE's step)":
         ("engine", "_drive_dem"),
-    "steps finished in Python after a compiled run (eq 18-24 fixes, books, O.step)": ("engine", "_finish_in_python"),
+    "steps finished in Python after a compiled run (eq 18-24 adjustments, books, O.step)": ("engine", "_finish_in_python"),
     "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
     "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
 }
@@ -191,7 +191,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
             part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[4]
+    motion = drive_args[5]
     rows = np.arange(len(eng._F_out))
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (yade_io._SET_PERM, eng.forced.ids, eng._F_out.copy(), rows,
                                                       eng.held, eng._F_out)

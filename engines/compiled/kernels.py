@@ -654,21 +654,54 @@ Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
 
 
 @jit
-def frees_a_disc(lost, n_lost, pi, pj, state, mobile):
-    """Does one of the pairs lost[:n_lost] that stopped touching leave a mobile disc touching
-    nothing (a free disc of engines.model.contact.separation_adjustment, eq 18-24)? Without one
-    the velocity adjustment changes nothing."""
-    left = np.zeros(len(mobile), np.bool_)
+def free_discs(lost, n_lost, pi, pj, state, mobile):
+    """(N,) bool: the mobile discs of the pairs lost[:n_lost] that stopped touching which touch
+    nothing now: the free discs of engines.model.contact.separation_adjustment (eq 18-24)."""
+    free = np.zeros(len(mobile), np.bool_)
     for m in range(n_lost):
         for a in (pi[lost[m]], pj[lost[m]]):
-            left[a] = mobile[a]
+            free[a] = mobile[a]
     for k in range(len(pi)):
         if state[k, TOUCHING] != 0.0:
-            left[pi[k]] = left[pj[k]] = False
-    for a in range(len(left)):
-        if left[a]:
+            free[pi[k]] = free[pj[k]] = False
+    return free
+
+
+ADJUST_SLACK = 1e-9  # may_adjust's relative margin on the eq 18 test: NumPy's dot may round otherwise
+
+
+@jit
+def may_adjust(free, lost, n_lost, pi, pj, state, xz, du, dt, e):
+    """Can the eq 18-24 adjustment (separation_adjustment at the velocities du / dt) change a
+    velocity after the pairs lost[:n_lost] stopped touching at centres xz, the discs ``free``
+    (``free_discs``) set free? Only if such a pair separates faster than restitution e allows
+    (eq 18: -(Vn_i + Vn_j) > e Vn_ij > 0, eq 20), tested with a margin ADJUST_SLACK, so that False
+    is certain: every free disc then keeps du / dt. (The tests come before any adjustment: where
+    they all fail at the first velocities nothing is adjusted.)"""
+    for m in range(n_lost):
+        k = lost[m]
+        i, j = pi[k], pj[k]
+        limit = e * state[k, VN_COLL]
+        if not ((free[i] or free[j]) and limit > 0.0):
+            continue
+        dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
+        R = math.sqrt(dx * dx + dz * dz)
+        away = ((du[j, 0] - du[i, 0]) * dx + (du[j, 1] - du[i, 1]) * dz) / (R * dt)  # -(Vn_i + Vn_j)
+        if away > limit * (1.0 - ADJUST_SLACK) - ADJUST_SLACK * abs(away):
             return True
     return False
+
+
+@jit
+def _write_step_velocities(set_vel, ids, discs, du, dt):
+    """set_vel(ids[discs] <- du[discs] / dt) for the discs where ``discs`` (N,) is true; the
+    bridge's error code."""
+    at = np.flatnonzero(discs)
+    V = np.empty((len(at), 2))
+    for m in range(len(at)):
+        V[m, 0], V[m, 1] = du[at[m], 0] / dt, du[at[m], 1] / dt
+    chosen = ids[at]
+    return _c_bulk_call(set_vel, chosen.ctypes.data, chosen.size, V.ctypes.data)
 
 
 MOTION = Layout("MOTION", ("amplitude", "w", "dt", "acc", "vel", "disp", "wall_velocity"))  # of cosine_base_step
@@ -690,8 +723,8 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, totals, motion, wall_ids, wall_vel, ids_in, xz, ids_out,
-                      F_out, rows, held,
+def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, totals, motion, wall_ids, wall_vel, ids_in, xz,
+                      ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
@@ -702,10 +735,12 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, totals, motion, wall
     [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
     walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
     bridge's steps() (O.step()).
-    It stops after the force write of a step that needs Python: with ``adjust`` (the eq 18-24
-    velocity adjustment) pairs that stopped touching and left a disc free (dem_step's n_lost > 0,
-    ``frees_a_disc``), or a water step that needed sub-steps or failed; and at the start of a step
-    whose pair list is stale (LIST_STALE: nothing done of it) or at an error code.
+    With ``adjust`` (the eq 18-24 velocity adjustment, restitution e), pairs that stopped touching
+    (dem_step's n_lost > 0) and set discs free (``free_discs``) give those discs the velocity du /
+    dt, as the adjustment does where it adjusts nothing. It stops after the force write of a step
+    that needs Python: such a separation that may adjust a velocity (``may_adjust``), or a water
+    step that needed sub-steps or failed; and at the start of a step whose pair list is stale
+    (LIST_STALE: nothing done of it) or at an error code.
     Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code)."""
     wet = len(W) > 0
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
@@ -722,8 +757,16 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, totals, motion, wall
         if n_lost == LIST_STALE:
             return s, n_lost, 0, 0
         rc = _write_forces(0, bridge[BRIDGE.set_perm], ids_out, F_out)
-        if rc != 0 or n_sub != 1 or (adjust and n_lost > 0 and frees_a_disc(lost, n_lost, pi, pj, state, mobile)):
+        if rc != 0 or n_sub != 1:
             return s, n_lost, n_sub, rc
+        if adjust and n_lost > 0:
+            free = free_discs(lost, n_lost, pi, pj, state, mobile)
+            if free.any():
+                if may_adjust(free, lost, n_lost, pi, pj, state, xz, du, dt, e):
+                    return s, n_lost, n_sub, 0
+                rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, du, dt)  # adjusted: none
+                if rc != 0:
+                    return s, n_lost, n_sub, rc
         if water_due:
             for a in range(3):
                 totals[a] += balance[a]
@@ -740,7 +783,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, totals, motion, wall
     return n, 0, 1, 0
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 13).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 14).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit

@@ -247,22 +247,38 @@ def test_the_cosine_base_motion_twin_equals_base_motion_bit_for_bit(dt):
     assert abs(base.disp) > 1e-5
 
 
-def test_frees_a_disc_finds_the_free_discs_of_the_velocity_adjustment():
-    """kernels.frees_a_disc is true exactly when separation_adjustment would find a free disc:
-    a mobile disc of a pair that stopped touching with no touching pair left (random pair lists)."""
-    from engines.model.contact import TOUCHING
+def test_free_discs_and_may_adjust_against_the_velocity_adjustment():
+    """kernels.free_discs and may_adjust against engines.model.contact.separation_adjustment (eq
+    18-24) on random pair lists, lost pairs and velocities: the free discs are the discs it gives
+    a velocity; where may_adjust says False each of them keeps du / dt, bit for bit (what
+    dem_drive_bulk_io writes); it says True where a velocity is adjusted, and rarely otherwise."""
+    from engines.model.contact import VN_COLL, SeparationEvent, TOUCHING, separation_adjustment
     rng = np.random.default_rng(5)
-    seen = set()
-    for _ in range(200):
+    dt, e = 1e-6, 0.5
+    answers = {}
+    for _ in range(400):
         n, m = 8, 12
-        pi, pj = rng.integers(0, n, m), rng.integers(0, n, m)
+        pi, pj = rng.integers(0, n, m), rng.integers(0, n - 1, m)
+        pj += pj >= pi  # no pair of a disc with itself
         state = np.zeros((m, 6))
         state[:, TOUCHING] = rng.random(m) < 0.4
+        state[:, VN_COLL] = rng.normal(0.1, 0.1, m)
         mobile = rng.random(n) < 0.7
-        lost = rng.choice(np.flatnonzero(state[:, TOUCHING] == 0), 2)
-        touch = np.bincount(pi[state[:, TOUCHING] != 0], minlength=n) + np.bincount(pj[state[:, TOUCHING] != 0], minlength=n)
-        left = set(pi[lost]) | set(pj[lost])
-        expected = any(mobile[a] and touch[a] == 0 for a in left)
-        assert kernels.frees_a_disc(lost, len(lost), pi, pj, state, mobile) == expected
-        seen.add(expected)
-    assert seen == {True, False}
+        xz, du = rng.random((n, 2)), 1e-7 * rng.standard_normal((n, 2))
+        lost = rng.choice(np.flatnonzero(state[:, TOUCHING] == 0), 2, replace=False)
+        touching = state[:, TOUCHING] != 0
+        touch = np.bincount(pi[touching], minlength=n) + np.bincount(pj[touching], minlength=n)
+        events = []
+        for k in lost:
+            d = xz[pj[k]] - xz[pi[k]]
+            events.append(SeparationEvent(int(pi[k]), int(pj[k]), d / np.sqrt(d[0] ** 2 + d[1] ** 2), state[k, VN_COLL]))
+        v = du / dt
+        fixes = separation_adjustment(events, touch, v, np.ones(n), mobile, e)
+        free = kernels.free_discs(lost, len(lost), pi, pj, state, mobile)
+        assert set(fixes) == set(np.flatnonzero(free).tolist())
+        changed = any(np.any(fixes[a] != v[a]) for a in fixes)
+        maybe = kernels.may_adjust(free, lost, len(lost), pi, pj, state, xz, du, dt, e)
+        assert maybe or not changed
+        answers[changed, maybe] = answers.get((changed, maybe), 0) + 1
+    assert answers.get((True, True), 0) > 20 and answers.get((False, False), 0) > 100
+    assert answers.get((False, True), 0) < 0.1 * sum(answers.values())
