@@ -24,7 +24,12 @@ kept, of wall time (the eight columns) and of the process's CPU time ("cpu_us", 
 machine), and "cpu_ratio_paired", the ratio to yade_alone within each repeat, median over the
 repeats (steadier when the load drifts); each run includes the pore rebuilds (every 1000 steps,
 or by displacement) that fall in it, counted in "rebuilds" (median per timed run). Read the
-ratios, not the absolute times.
+ratios, not the absolute times. "yade_law_dry_paired_ab": first, YADE alone and law = "yade" dry
+(the same discs and engines) alone in turns (``paired_dry``): their ratio must be 1 within its
+spread, the check that the columns compare like with like; with it the touching pairs YADE
+counts. The packings start with every gap >= eps_m and a timed run lasts about 1 ms: the discs
+barely move, so few pairs touch (149 of the 238 bodies' pairs, none at 10,044 bodies): the
+columns time the engines with few or no contacts.
 """
 import argparse
 import os
@@ -109,8 +114,30 @@ def coupling_setup(scene, packing):
     return cp.run, lambda: cp.water_model.n_rebuilds if cp.water_model is not None else 0
 
 
+def paired_dry(packing, steps, repeats, log):
+    """YADE alone against law = "yade" dry (the same discs, the same four engines) in turns, the
+    order swapped every repeat, nothing else between them: {"median", "min", "max"} of the CPU
+    ratio within each pair (it should be 1 within the spread), and the touching pairs YADE
+    counts at the end of its runs (O.interactions.countReal)."""
+    from yade import O
+    setups = {"yade_alone_us": lambda: floor_setup(packing),
+              "yade_law_dry_us": lambda: coupling_setup(scene_for(COLUMNS["yade_law_dry_us"]), packing)}
+    cpu, contacts = {k: [] for k in setups}, []
+    for rep in range(repeats):
+        for name in list(setups)[::1 if rep % 2 == 0 else -1]:
+            cpu[name].append(timed(setups[name], steps, warmup=200)[1])
+            if name == "yade_alone_us":
+                contacts.append(O.interactions.countReal())
+    ratio = np.array(cpu["yade_law_dry_us"]) / np.array(cpu["yade_alone_us"])
+    log(f"  n = {len(packing.r)} yade law dry / YADE alone, paired: {np.median(ratio):.3f} "
+        f"({ratio.min():.3f}-{ratio.max():.3f}), touching pairs {contacts}")
+    return {"median": float(np.median(ratio)), "min": float(ratio.min()), "max": float(ratio.max()),
+            "samples_cpu_us": cpu, "touching_pairs": contacts}
+
+
 def bench_size(n, steps, repeats, log):
     packing = box_packing(n)
+    dry_ab = paired_dry(packing, steps, repeats, log)
     setups = {"yade_alone_us": lambda: floor_setup(packing)}
     for name, over in COLUMNS.items():
         setups[name] = (lambda over=over: coupling_setup(scene_for(over), packing))
@@ -133,6 +160,7 @@ def bench_size(n, steps, repeats, log):
     # the ratio to YADE alone within each repeat (its columns run seconds apart), median over repeats:
     # steadier than a ratio of medians when the machine's load drifts
     row["cpu_ratio_paired"] = {k: float(np.median(np.array(v) / np.array(cpu["yade_alone_us"]))) for k, v in cpu.items()}
+    row["yade_law_dry_paired_ab"] = dry_ab
     return row
 
 

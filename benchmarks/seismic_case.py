@@ -238,7 +238,7 @@ def main(argv):
     ap.add_argument("--steps", type=int, default=180000)
     ap.add_argument("--compare-steps", type=int, default=3000,
                     help="steps of the in-run comparison with YADE alone and the NumPy path (0: skip)")
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--breakdown", type=int, default=1, help="1: split a step's CPU time into its parts (0: skip)")
     args = ap.parse_args(argv)
     scene = scenes.preset(PRESET)
