@@ -109,7 +109,8 @@ class Clock:
 RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
     "compiled runs of steps (kernels.dem_drive_bulk_io: read, law, ties, water, write, base, YADE's step)":
         ("engine", "_drive_dem"),
-    "steps finished in Python after a compiled run (eq 18-24 adjustments, books, O.step)": ("engine", "_finish_in_python"),
+    "steps finished in Python after a compiled run (eq 18-24 adjustments, books, O.step)":
+        ("engine", "_finish_in_python"),
     "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
     "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
 }
@@ -173,7 +174,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         kernel_steps[0] = 0
     med = {label: float(np.median(v)) for label, v in parts.items()}
     mean = float(np.median(run["timed"]))
-    out = {"run: CPU us a step, with the timers": mean, "run: CPU us a step, without them": float(np.median(run["plain"])),
+    out = {"run: CPU us a step, with the timers": mean,
+           "run: CPU us a step, without them": float(np.median(run["plain"])),
            "run: parts a step": dict(med, **{"Python around them (residual)": mean - sum(med.values())}),
            "run: calls of each part in %d steps" % steps: {label: float(np.median(v)) for label, v in counts.items()}}
 

@@ -23,8 +23,9 @@ The mapping to eq 1-13 and what differs: see ``yade_law_material``.
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
 of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
 without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk; the
-paper's law's compiled runs of steps: after each) and returns early when it is true (engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into
-a checkpoint (engines.yade.checkpoint): keep closures out of its state.
+paper's law's compiled runs of steps: after each) and returns early when it is true
+(engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into a checkpoint
+(engines.yade.checkpoint): keep closures out of its state.
 """
 import math
 import time
@@ -255,7 +256,8 @@ class YadeCoupling:
 
     def run(self, n_steps, stop=None):
         """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
-        asked after every step or compiled run of steps, see the module docstring) turned true first. The hooks are called as hook(self) whenever
+        asked after every step or compiled run of steps, see the module docstring) turned true
+        first. The hooks are called as hook(self) whenever
         O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
         once per step index, before the step. An error inside an engine stops YADE and is
         re-raised here."""

@@ -27,9 +27,9 @@ class PaperLawEngine:
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
-    run after each step's forces are written (not called by the compiled drive: a core that has
-    them offers no kernel_drive_args). ``drive_walls(ids)``: the bodies ids move in x at the core's
-    ``wall_velocity`` of each step (their velocity set before O.step()).
+    run after each step's forces are written (with hooks, drive makes no compiled runs of steps).
+    ``drive_walls(ids)``: the bodies ids move in x at the core's ``wall_velocity`` of each step
+    (their velocity set before O.step()).
     """
 
     def __init__(self, disc_ids, settings=None, core=None, compiled=True):
@@ -117,8 +117,8 @@ class PaperLawEngine:
     def _kernel_steps(self, n):
         """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
         among them; a step it leaves after its force write (a separation that may adjust a
-        velocity, eq 18-24; water sub-steps) is finished here with its O.step(). Returns the steps done (0: the next step
-        needs ``_kernel_work`` or ``_work``)."""
+        velocity, eq 18-24; water sub-steps) is finished here with its O.step(). Returns the
+        steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
         if self.hooks:
             return 0
         core = self.core

@@ -271,7 +271,8 @@ def test_free_discs_and_may_adjust_against_the_velocity_adjustment():
         events = []
         for k in lost:
             d = xz[pj[k]] - xz[pi[k]]
-            events.append(SeparationEvent(int(pi[k]), int(pj[k]), d / np.sqrt(d[0] ** 2 + d[1] ** 2), state[k, VN_COLL]))
+            normal = d / np.sqrt(d[0] ** 2 + d[1] ** 2)
+            events.append(SeparationEvent(int(pi[k]), int(pj[k]), normal, state[k, VN_COLL]))
         v = du / dt
         fixes = separation_adjustment(events, touch, v, np.ones(n), mobile, e)
         free = kernels.free_discs(lost, len(lost), pi, pj, state, mobile)
