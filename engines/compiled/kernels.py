@@ -164,13 +164,13 @@ def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
     nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
     if max_sq_displacement(xz, xz_list) >= half_skin2:
         return -1
-    for a in range(len(xz)):
-        du[a, 0] = xz[a, 0] - xz_prev[a, 0]
-        du[a, 1] = xz[a, 1] - xz_prev[a, 1]
+    for a in range(len(xz)):  # one pass: (xz_prev[:] = xz would be a second, with an overlap check)
+        x, z = xz[a, 0], xz[a, 1]
+        du[a, 0], du[a, 1] = x - xz_prev[a, 0], z - xz_prev[a, 1]
+        xz_prev[a, 0], xz_prev[a, 1] = x, z
         dpsi[a] = omega[a] * dt
     n_lost = contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost)
     spin_update(omega, M, inertia, mobile, dt)
-    xz_prev[:] = xz
     return n_lost
 
 
@@ -181,7 +181,7 @@ LAW.check(LAW_OWN, CONTACT)
 
 # atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 7 terms leave < 1e-22 relative
 SMALL_TURN = 0.03
-ATAN_SERIES = np.array([(-1.0) ** k / (2 * k + 1) for k in range(7)])
+_A0, _A1, _A2, _A3, _A4, _A5, _A6 = ((-1.0) ** k / (2 * k + 1) for k in range(7))  # numba constants
 
 
 @jit
@@ -192,10 +192,7 @@ def turn(s, c):
     if c > 0.0 and abs(s) <= SMALL_TURN * c:
         t = s / c
         t2 = t * t
-        acc = 0.0
-        for k in range(len(ATAN_SERIES) - 1, -1, -1):  # Horner, highest term first
-            acc = ATAN_SERIES[k] + t2 * acc
-        return t * acc
+        return t * (_A0 + t2 * (_A1 + t2 * (_A2 + t2 * (_A3 + t2 * (_A4 + t2 * (_A5 + t2 * _A6))))))  # Horner
     return math.atan2(s, c)
 
 
