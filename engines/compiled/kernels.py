@@ -164,7 +164,7 @@ def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
     nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
     if max_sq_displacement(xz, xz_list) >= half_skin2:
         return -1
-    for a in range(len(xz)):  # one pass: (xz_prev[:] = xz would be a second, with an overlap check)
+    for a in range(len(xz)):  # du, dpsi and xz_prev <- xz in one pass
         x, z = xz[a, 0], xz[a, 1]
         du[a, 0], du[a, 1] = x - xz_prev[a, 0], z - xz_prev[a, 1]
         xz_prev[a, 0], xz_prev[a, 1] = x, z
