@@ -25,8 +25,9 @@ packings (seeds), in this order (the judged comparisons first):
                 φe = 15° (and 5° for rotation and packing); the size effect (250 against 1000 discs)
                 of the block and of the periodic cell -> OUT/hypotheses.json, hypotheses.md
     judged      (not in the default) the judged command (biaxial.py --phi-e P --sigma3 100,200,300) at
-                φe = 15° then 5° on 5 packings (seeds 1–5 whatever --seeds), means with 95 % intervals
-                beside the paper, and the calibration round trip on its curves with E50's conditioning
+                φe = 15° then 5° (and 10°, the middle of f1 for the calibration) on 5 packings (seeds 1–5
+                whatever --seeds), means with 95 % intervals beside the paper, and the calibration round
+                trip on its curves with E50's conditioning
                 -> OUT/judged.json, judged.md, judged_fit.json (calibrate.py --fit), fig_judged.png
 then writes into OUT: study.json (every number, the CPU cost), fit.json (the eq 2/4 curves calibrate.py
 reads), table.md (side by side with the paper, and the time steps) and the figures

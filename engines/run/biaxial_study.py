@@ -13,16 +13,6 @@ from engines import ROOT
 from engines.run.sweep import Job, is_done, read_record, run_sweep
 from engines.seeds.biaxial.cem_contact import TABLE2_DT
 from engines.seeds.biaxial.periodic import PACKING_PHI_E
-from engines.studies.biaxial_judged import (
-    JUDGED_PHI,
-    JUDGED_SEEDS,
-    JUDGED_SIGMA3,
-    analyse_judged,
-    conditioning,
-    conditioning_text,
-    judged_name,
-    write_judged,
-)
 from engines.seeds.biaxial.specimen import mohr_coulomb_fit
 from engines.seeds.biaxial.study import (
     CALIBRATION_TARGET_SIGMA3,
@@ -49,6 +39,16 @@ from engines.seeds.biaxial.study import (
     summarise,
     write_hypotheses,
     write_table,
+)
+from engines.studies.biaxial_judged import (
+    JUDGED_PHI,
+    JUDGED_SEEDS,
+    JUDGED_SIGMA3,
+    analyse_judged,
+    conditioning,
+    conditioning_text,
+    judged_name,
+    write_judged,
 )
 
 BIAXIAL = os.path.join(ROOT, "yade_scripts", "biaxial.py")
@@ -115,7 +115,7 @@ def hypothesis_jobs(seeds, quick=False):
 
 
 def judged_jobs(quick=False):
-    """The judged command on each of JUDGED_SEEDS at each of JUDGED_PHI (φe = 15° first): every
+    """The judged command on each of JUDGED_SEEDS at each of JUDGED_PHI (in its order): every
     option at its default but the seed."""
     return [biaxial_job(judged_name(p, s), quick=quick, phi_e=p, sigma3=JUDGED_SIGMA3, seed=s)
             for p in JUDGED_PHI for s in JUDGED_SEEDS]
@@ -129,7 +129,8 @@ def stability_job(runs, seed):
 
 # ---- the cost -------------------------------------------------------------------------------
 
-PACK_STEPS = (22000, 3000)  # packing steps at Δt = 0.5e-4 s: to the first σ3 (21 000–23 000, the dense protocol), then to each further one
+PACK_STEPS = (20000, 3000)  # packing steps at Δt = 0.5e-4 s to the first σ3, then to each further one (the judged
+                            # runs at 0.45e-4 s: 17 000–28 000, then 600–15 000)
 EQUILIBRIUM_STEPS = 4500    # preliminary equilibrium per σ3 at Δt = 0.5e-4 s (3000–5500 measured)
 
 
@@ -241,9 +242,10 @@ def calibration_round_trip(runs, cal, seeds, run, quick=False):
 
 
 def run_judged(out, runs, run, quick=False):
-    """The judged part: its jobs (``run(jobs)``), OUT/judged.json, judged.md, judged_fit.json (the
-    eq 2/4 curves with their scatter, for calibrate.py --fit), fig_judged.png, and the
-    calibration round trip on these curves (OUT/judged_calibration.json); returns the tables."""
+    """The judged part: its jobs (``run(jobs)``), the calibration round trip on their curves (its
+    jobs too), and OUT/judged.json (both, with the conditioning of E50 in kn), judged.md,
+    judged_fit.json (the eq 2/4 curves with their scatter, for calibrate.py --fit) and
+    fig_judged.png; returns the tables."""
     from postproc.biaxial_plots import plot_judged
 
     run(judged_jobs(quick))

@@ -1,6 +1,6 @@
 """Seed 003's judged points on the default reading (docs/BIAXIAL.md, "The judged points"): the
 command `yade -n -x yade_scripts/biaxial.py --phi-e P --sigma3 100,200,300 --out DIR` at φe = 15°
-and 5° on JUDGED_SEEDS packings; φ*, c* (Mohr–Coulomb over the three circles of a packing), peak
+and 5° (and 10°, so that the eq 2 curve f1 has its middle) on JUDGED_SEEDS packings; φ*, c* (Mohr–Coulomb over the three circles of a packing), peak
 q, E50 and the porosity after packing, as means with 95 % intervals over the packings (Student's
 t, engines.studies.ensemble.statistics) beside the paper and the judged tolerances; the eq 2/4
 curves they give (Calibration, with the packing-to-packing scatter of E50 and φ*).
@@ -16,7 +16,7 @@ from engines.seeds.biaxial.specimen import mohr_coulomb_fit
 from engines.seeds.biaxial.study import KN, KS, PAPER, calibration_lines, job_status, read_run
 from engines.studies.ensemble import CONFIDENCE, statistics, t_half_width
 
-JUDGED_PHI = (15.0, 5.0)               # deg, in the order they run
+JUDGED_PHI = (15.0, 5.0, 10.0)         # deg, in the order they run: the judged two, then the middle of f1 (eq 2)
 JUDGED_SIGMA3 = (100.0, 200.0, 300.0)  # Pa, the judged command's
 JUDGED_SEEDS = (1, 2, 3, 4, 5)         # packings (placement seeds) per φe
 PHI_TOLERANCE = 3.0                    # deg: φ* within 3° of the paper's at φe = 15°
@@ -174,7 +174,8 @@ def write_judged(res, json_path, md_path):
              + (f"; failed: {', '.join(res['jobs_failed'])}" if res["jobs_failed"] else "") + "):", "",
              "| φe | φ* paper | φ* model | c* paper | c* model [Pa] | porosity after packing | eq 4: A | m |",
              "|---|---|---|---|---|---|---|---|"]
-    for r in res["rows"]:
+    rows = sorted(res["rows"], key=lambda r: r["phi_e_deg"])
+    for r in rows:
         p = r["phi_e_deg"]
         eq4 = r.get("eq4")
         lines.append(f"| {p:g}° | {PAPER['phi_star_deg'].get(p, '–')} | {_ci(r['phi_star_deg'], unit='°')} | "
@@ -182,7 +183,7 @@ def write_judged(res, json_path, md_path):
                      f"{'–' if not eq4 else format(eq4['A'], '.3g')} | {'–' if not eq4 else format(eq4['m'], '.3f')} |")
     lines += ["", "| φe | σ3 [Pa] | peak q paper [Pa] | peak q model [Pa] | strain at peak [%] | E50 model [Pa] |",
               "|---|---|---|---|---|---|"]
-    for r in res["rows"]:
+    for r in rows:
         for s3, c in r["per_sigma3"].items():
             eps = {k: (v if k in ("n", "values") or v is None else 100 * v) for k, v in c["peak_strain"].items()}
             paper = f"≈ {paper_q[r['phi_e_deg']]:g}" if s3 == "200" else "–"
