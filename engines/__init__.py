@@ -11,7 +11,8 @@ The packages, each importing only those before it (tests/test_layers.py checks i
               (checks of the bodies it is given), the coupling, checkpoints
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
   studies/    the speed-accuracy and stability studies (their points and analysis, no YADE); the
-              perturbed starts of an ensemble and its statistics (ensemble.py)
+              perturbed starts of an ensemble and its statistics (ensemble.py); seed 003's judged
+              points and their intervals (biaxial_judged.py)
   run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,
               sweeps, ensembles (--starts); the cross-check's cases; the studies' runs
 

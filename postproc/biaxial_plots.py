@@ -251,3 +251,32 @@ def study_figures(out, main, sens):
         if groups:
             plot_sensitivity(groups, os.path.join(out, fname),
                              f"φe = {SENS_PHI:g}°, σ3 = {SENS_SIGMA3:g} Pa: {title}", label, failed)
+
+
+def plot_judged(res, path):
+    """The judged points (engines.studies.biaxial_judged.analyse_judged's record): φ*, peak q at
+    σ3 = 200 Pa and E50 at 200 Pa against φe, every packing and the mean with its 95 % interval,
+    beside the paper's values."""
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    panels = ((lambda r: r["phi_star_deg"], "φ* [°]", PAPER["phi_star_deg"], "φ* against φe (Fig. 12)"),
+              (lambda r: r["per_sigma3"]["200"]["peak_pa"], "peak deviator q_f at σ3 = 200 Pa [Pa]",
+               PAPER["peak_deviator_200_pa"], "peak q at σ3 = 200 Pa (Fig. 9–11)"),
+              (lambda r: r["per_sigma3"]["200"]["e50_pa"], "E50 at σ3 = 200 Pa [Pa]", {}, "E50 at σ3 = 200 Pa (Fig. 16)"))
+    n = sorted({r["phi_star_deg"]["n"] for r in res["rows"]})
+    for ax, (get, ylabel, paper, title) in zip(axes, panels):
+        for k, r in enumerate(res["rows"]):
+            st, p = get(r), r["phi_e_deg"]
+            ax.plot(np.full(len(st["values"]), p - 0.4), st["values"], "o", color="0.6", ms=4,
+                    label="one packing" if k == 0 else None)
+            if st["low"] is not None:
+                ax.errorbar([p], [st["mean"]], yerr=[[st["mean"] - st["low"]], [st["high"] - st["mean"]]], fmt="s",
+                            color="C3", capsize=4, label="model: mean, 95 % interval" if k == 0 else None)
+        if paper:
+            ax.plot(list(paper), list(paper.values()), "k*", ms=11, label="paper")
+        ax.set(xlabel="inter-element friction angle φe [°]", ylabel=ylabel, xlim=(0, 20), ylim=(0, None), title=title)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[2].text(0.98, 0.02, "the paper: figures only", transform=axes[2].transAxes, ha="right", fontsize=8, color="0.4")
+    fig.suptitle(f"Judged points on the default reading: 1000 discs, σ3 = 100, 200, 300 Pa, "
+                 f"n = {'/'.join(map(str, n))} packings per φe", fontsize=10)
+    _save(fig, path)

@@ -1,17 +1,18 @@
 """`make biaxial`: seed 003's study (Murakami et al. §3) through the sweep runner.
 
     /usr/bin/python3 yade_scripts/biaxial_study.py --out out/biaxial [--workers 2] [--scheduler ADDR]
-                     [--parts main,calibration,stiffness,discs,rate,dt,stability,hypotheses] [--seeds 1,2,3]
+                     [--parts main,calibration,stiffness,discs,rate,dt,stability,hypotheses,judged] [--seeds 1,2,3]
                      [--estimate] [--analyse-only] [--quick]
 
 Runs yade_scripts/biaxial.py jobs (one directory each under OUT/runs/, resumable) with Table 2's
-constants (kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, Δt = 0.5e-4 s, 100 %/min), every point on 3
+constants (kn = 1e8 Pa/m, ks/kn = 0.25, ρ = 2500, 100 %/min) on the default reading (Δt =
+0.45e-4 s, packed with friction nearly off: docs/BIAXIAL.md), every point on 3
 packings (seeds), in this order (the judged comparisons first):
     main        φe = 5, 10, 15° × σ3 = 100, 200, 300, 400 Pa to 5 % strain on the paper's
                 1000-disc specimen (Table 1) (Fig. 9–12, 15, 19–21)
     calibration target φ*, E50 → φe, kn (eq 5–6) → the biaxial test again (yade_scripts/calibrate.py)
     stiffness   kn ×0.5, ×2 and ks/kn ×0.5, ×2 (Fig. 13–14, 17)     } φe = 10°, σ3 = 200 Pa, to 4 %,
-    dt          Δt = 0.25e-4, 1e-4 s in the test (packed at 0.5e-4) } on SMALL_DISCS = 500 discs
+    dt          Δt = 0.25e-4, 0.5e-4, 1e-4 s in the test            } on SMALL_DISCS = 500 discs
                 (Fig. 6)                                            } (the budget: docs/BIAXIAL.md)
     discs       125, 250, 500, 1000 discs (Fig. 7–8)                } φe = 10°, σ3 = 200 Pa, to 4 %
     rate        axial strain rate 25, 50, 100 %/min (the paper's three) on 1000 discs (Fig. 5)
@@ -23,6 +24,11 @@ packings (seeds), in this order (the judged comparisons first):
                 a denser packing (φe = 0.5° while packing), the contact width = the diameter; at
                 φe = 15° (and 5° for rotation and packing); the size effect (250 against 1000 discs)
                 of the block and of the periodic cell -> OUT/hypotheses.json, hypotheses.md
+    judged      (not in the default) the judged command (biaxial.py --phi-e P --sigma3 100,200,300) at
+                φe = 15° then 5° (and 10°, the middle of f1 for the calibration) on 5 packings (seeds 1–5
+                whatever --seeds), means with 95 % intervals beside the paper, and the calibration round
+                trip on its curves with E50's conditioning
+                -> OUT/judged.json, judged.md, judged_fit.json (calibrate.py --fit), fig_judged.png
 then writes into OUT: study.json (every number, the CPU cost), fit.json (the eq 2/4 curves calibrate.py
 reads), table.md (side by side with the paper, and the time steps) and the figures
 fig05_strain_rate.png, fig06_dt.png, fig08_discs.png, fig09_11_curves.png, fig12_phi_star.png,

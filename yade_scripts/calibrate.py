@@ -1,12 +1,14 @@
 """Contact constants for a target model ground (Murakami et al. §3(3)c, eq 5–6), verified.
 
     /usr/bin/python3 yade_scripts/calibrate.py --phi-star DEG --e50 PA --sigma3 PA --out DIR
-                     [--fit out/biaxial/fit.json] [--seeds 1,2,3]
+                     [--fit out/biaxial_judged/judged_fit.json] [--seeds 1,2,3]
                      [--workers 2] [--scheduler ADDR] [--no-verify]
 
-From the curves `make biaxial` fitted (fit.json: φ*(φe), A(φe), m(φe) at kn = 1e8 Pa/m,
-ks/kn = 0.25), eq 5 gives φe for the target φ* and eq 6 the kn for the target E50 at σ3. It
-prints both, then runs the biaxial test with them on the --seeds packings at σ3 = 100 and
+From the curves a study fitted (judged_fit.json of `biaxial_study.py --parts judged`, or fit.json
+of `make biaxial`: φ*(φe), A(φe), m(φe) at kn = 1e8 Pa/m, ks/kn = 0.25), eq 5 gives φe for the
+target φ* and eq 6 the kn for the target E50 at σ3. It prints both, and, when the fit carries the
+scatter between packings (judged_fit.json), how well the --seeds packings can verify E50 and
+how well E50 fixes kn (engines.studies.biaxial_judged.conditioning); then runs the biaxial test with them on the --seeds packings at σ3 = 100 and
 400 Pa and the target σ3 (through the sweep runner), and prints the φ* and E50 obtained against
 the target. Writes OUT/calibration.json and the runs under OUT/runs.
 """
@@ -31,7 +33,8 @@ def main(argv=None):
                     help="target E50 [Pa] at --sigma3")
     ap.add_argument("--sigma3", type=number(float, 0, lo_open=True, unit="Pa"), required=True,
                     help="confining stress of the target E50 [Pa]")
-    ap.add_argument("--fit", default="out/biaxial/fit.json", help="the study's curves (make biaxial writes them)")
+    ap.add_argument("--fit", default="out/biaxial_judged/judged_fit.json",
+                    help="the study's curves (biaxial_study.py --parts judged --out out/biaxial_judged writes them)")
     ap.add_argument("--out", type=output_dir, required=True, help="output directory")
     ap.add_argument("--seeds", default="1,2,3", help="packings of the verification")
     ap.add_argument("--workers", type=number(int, 1), default=2, help="local processes (default 2)")
@@ -39,7 +42,7 @@ def main(argv=None):
     ap.add_argument("--no-verify", action="store_true", help="only print φe and kn")
     a = ap.parse_args(argv)
     if not os.path.exists(a.fit):
-        ap.error(f"--fit {a.fit}: not found (run `make biaxial` first)")
+        ap.error(f"--fit {a.fit}: not found (run yade_scripts/biaxial_study.py --parts judged first)")
     announce_output(a.out)
     try:
         cal = Calibration.load(a.fit)

@@ -28,6 +28,7 @@ import numpy as np
 from engines.run.command_line import batch_out
 from engines.run.preflight import ArgumentParser, number, output_dir
 from engines.seeds.biaxial.cem_contact import ROTATIONS
+from engines.seeds.biaxial.periodic import PACKING_PHI_E
 
 PERCENT_PER_MIN = 1.0 / 6000.0  # 1 %/min in 1/s
 
@@ -51,6 +52,11 @@ def friction_angle(text):
     return value
 
 
+def packing_friction(text):
+    """argparse type: φe while packing [deg], or "test" (the test's --phi-e; returned as None)."""
+    return None if str(text) == "test" else friction_angle(text)
+
+
 def parser():
     ap = ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
                         epilog=__doc__.split("\n\n", 1)[1])
@@ -66,7 +72,7 @@ def parser():
     ap.add_argument("--n-discs", type=number(int, 20), default=1000, help="discs in Table 1's size ratio (paper: 1000)")
     ap.add_argument("--seed", type=number(int, 0), default=1, help="seed of the random placement")
     ap.add_argument("--dt", type=number(float, 0, lo_open=True, unit="s"),
-                    help="time step [s] (default: the paper's 0.5e-4, smaller for stiffer contacts: "
+                    help="time step [s] (default: 0.45e-4 for Table 2's constants, smaller for stiffer contacts: "
                     "engines.seeds.biaxial.cem_contact.stable_dt)")
     ap.add_argument("--packing-dt", type=number(float, 0, lo_open=True, unit="s"),
                     help="time step of the packing [s] (default: --dt)")
@@ -81,8 +87,9 @@ def parser():
                     help="discs turn under the contact moments (free) or not (locked)")
     ap.add_argument("--specimen", choices=("block", "periodic"), default="block",
                     help="the block out of its cell with bands (2)-(5) (Fig. 2), or the test on the periodic cell itself")
-    ap.add_argument("--packing-phi-e", type=friction_angle,
-                    help="φe while packing [deg] (default: --phi-e; small = a denser packing), then --phi-e in the test")
+    ap.add_argument("--packing-phi-e", type=packing_friction, default=PACKING_PHI_E,
+                    help=f"φe while packing [deg], or 'test' for --phi-e (default {PACKING_PHI_E:g}: friction nearly off, "
+                    "a dense packing, the same for every --phi-e), then --phi-e in the test")
     ap.add_argument("--width-factor", type=number(float, 0, lo_open=True), default=1.0,
                     help="contact width w over the harmonic mean of the radii (1; 2 = the diameter)")
     return ap
@@ -187,7 +194,7 @@ def run_test(args, contact):
     t0 = time.time()
     os.makedirs(args.out, exist_ok=True)
     log = lambda msg: print(msg, flush=True)  # noqa: E731
-    packing_contact = replace(contact, phi_e_deg=args.packing_phi_e) if args.packing_phi_e else contact
+    packing_contact = contact if args.packing_phi_e is None else replace(contact, phi_e_deg=args.packing_phi_e)
     test = run_periodic_biaxial if args.specimen == "periodic" else run_biaxial
     try:
         blocks = pack_periodic(table1_radii(args.n_discs), packing_contact, args.sigma3,

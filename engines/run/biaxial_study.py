@@ -11,6 +11,8 @@ import numpy as np
 
 from engines import ROOT
 from engines.run.sweep import Job, is_done, read_record, run_sweep
+from engines.seeds.biaxial.cem_contact import TABLE2_DT
+from engines.seeds.biaxial.periodic import PACKING_PHI_E
 from engines.seeds.biaxial.specimen import mohr_coulomb_fit
 from engines.seeds.biaxial.study import (
     CALIBRATION_TARGET_SIGMA3,
@@ -38,6 +40,16 @@ from engines.seeds.biaxial.study import (
     write_hypotheses,
     write_table,
 )
+from engines.studies.biaxial_judged import (
+    JUDGED_PHI,
+    JUDGED_SEEDS,
+    JUDGED_SIGMA3,
+    analyse_judged,
+    conditioning,
+    conditioning_text,
+    judged_name,
+    write_judged,
+)
 
 BIAXIAL = os.path.join(ROOT, "yade_scripts", "biaxial.py")
 STABILITY = os.path.join(ROOT, "yade_scripts", "biaxial_stability.py")
@@ -51,6 +63,9 @@ def biaxial_job(name, yade=("yade", "-n"), quick=False, **options):
     does not study that knob."""
     if quick:
         options = {**options, **{k: v for k, v in QUICK.items() if k not in options or k == "max_strain"}}
+    # the packing protocol always on the command line: resume compares command lines, and one
+    # without it does not say which protocol made the run
+    options = {"packing_phi_e": PACKING_PHI_E, **options}
     argv = [*yade, "-x", BIAXIAL, "--out", "{out}"]
     for k, v in options.items():
         argv += ["--" + k.replace("_", "-"), ",".join(f"{x:g}" for x in v) if isinstance(v, (tuple, list)) else f"{v:g}"
@@ -89,7 +104,7 @@ def sensitivity_jobs(parts, seeds, quick=False):
     if "rate" in parts:
         jobs += [sens(s, strain_rate=r) for r in RATES for s in seeds]
     if "dt" in parts:
-        jobs += [sens(s, dt=dt, packing_dt=5e-5, **small) for dt in sorted(DTS, reverse=True) for s in seeds]
+        jobs += [sens(s, dt=dt, packing_dt=TABLE2_DT, **small) for dt in sorted(DTS, reverse=True) for s in seeds]
     return jobs
 
 
@@ -97,6 +112,13 @@ def hypothesis_jobs(seeds, quick=False):
     """The hypotheses study (engines.seeds.biaxial.study.HYPOTHESES): one biaxial.py job per
     variant, φe, σ3 and packing seed, and the size-effect runs."""
     return [biaxial_job(name, quick=quick, **opts) for name, opts in hypothesis_points(seeds)]
+
+
+def judged_jobs(quick=False):
+    """The judged command on each of JUDGED_SEEDS at each of JUDGED_PHI (in its order): every
+    option at its default but the seed."""
+    return [biaxial_job(judged_name(p, s), quick=quick, phi_e=p, sigma3=JUDGED_SIGMA3, seed=s)
+            for p in JUDGED_PHI for s in JUDGED_SEEDS]
 
 
 def stability_job(runs, seed):
@@ -107,7 +129,8 @@ def stability_job(runs, seed):
 
 # ---- the cost -------------------------------------------------------------------------------
 
-PACK_STEPS = (10000, 1500)  # packing steps at Δt = 0.5e-4 s: to the first σ3, then to each further one
+PACK_STEPS = (20000, 3000)  # packing steps at Δt = 0.5e-4 s to the first σ3, then to each further one (the judged
+                            # runs at 0.45e-4 s: 17 000–28 000, then 600–15 000)
 EQUILIBRIUM_STEPS = 4500    # preliminary equilibrium per σ3 at Δt = 0.5e-4 s (3000–5500 measured)
 
 
@@ -218,6 +241,28 @@ def calibration_round_trip(runs, cal, seeds, run, quick=False):
     return rec
 
 
+def run_judged(out, runs, run, quick=False):
+    """The judged part: its jobs (``run(jobs)``), the calibration round trip on their curves (its
+    jobs too), and OUT/judged.json (both, with the conditioning of E50 in kn), judged.md,
+    judged_fit.json (the eq 2/4 curves with their scatter, for calibrate.py --fit) and
+    fig_judged.png; returns the tables."""
+    from postproc.biaxial_plots import plot_judged
+
+    run(judged_jobs(quick))
+    os.makedirs(out, exist_ok=True)
+    res, cal = analyse_judged(runs)
+    if cal:
+        cal.save(os.path.join(out, "judged_fit.json"))
+        try:
+            res["calibration"] = calibration_round_trip(runs, cal, JUDGED_SEEDS, run, quick=quick)
+        except ValueError as e:
+            res["calibration"] = {"error": str(e)}
+        res["calibration"]["conditioning"] = conditioning(cal, res["calibration"].get("inverted", {}).get("phi_e_deg"))
+    res["timing"] = timing(runs)
+    plot_judged(res, os.path.join(out, "fig_judged.png"))
+    return write_judged(res, os.path.join(out, "judged.json"), os.path.join(out, "judged.md"))
+
+
 def run_study(out, parts, seeds, workers=2, scheduler=None, estimate_only=False, analyse_only=False, quick=False):
     """The study's ``parts`` on the packings ``seeds`` (yade_scripts/biaxial_study.py): runs the jobs
     not yet done (none with ``analyse_only``; with ``estimate_only`` prints their predicted cost
@@ -237,8 +282,13 @@ def run_study(out, parts, seeds, workers=2, scheduler=None, estimate_only=False,
         jobs = (main_jobs(seeds, quick) if "main" in parts else []) + sensitivity_jobs(parts, seeds, quick)
         jobs += calibration_jobs(cal, seeds, quick)[2] if "calibration" in parts else []
         jobs += hypothesis_jobs(seeds, quick) if "hypotheses" in parts else []
+        jobs += judged_jobs(quick) if "judged" in parts else []
         estimate(jobs + ([stability_job(runs, seeds[0])] if "stability" in parts else []), runs)
         return None
+    if "judged" in parts:
+        judged = run_judged(out, runs, run, quick)
+        if parts == {"judged"}:
+            return judged
     if "hypotheses" in parts:
         run(hypothesis_jobs(seeds, quick))
         hyp = write_hypotheses(analyse_hypotheses(runs, seeds), os.path.join(out, "hypotheses.json"),
@@ -286,7 +336,13 @@ def calibrate(cal, inverted, target, fit, out, seeds, workers=2, scheduler=None,
     print(f"eq 5: phi_e = {phi_e:.3f} deg (phi* = {phi_star} deg); eq 6: kn = {kn:.4g} Pa/m "
           f"(A = {A:.4g}, m = {m:.4f}; ks/kn = {cal.ks_ratio})", flush=True)
     record = {"target": {"phi_star_deg": phi_star, "e50_pa": e50, "sigma3_pa": sigma3},
-              "inverted": {"phi_e_deg": phi_e, "kn_pa_per_m": kn, "A": A, "m": m}, "fit": fit}
+              "inverted": {"phi_e_deg": phi_e, "kn_pa_per_m": kn, "A": A, "m": m}, "fit": fit,
+              "conditioning": conditioning(cal, phi_e, len(seeds))}
+    if record["conditioning"]:
+        print(conditioning_text(record["conditioning"]), flush=True)
+    else:
+        print(f"note: {fit} has no packing-to-packing scatter: the uncertainty of E50 and kn is not known "
+              "(biaxial_study.py --parts judged writes a fit with it)", flush=True)
     if kn / cal.kn > 2 or kn / cal.kn < 0.5:
         print(f"note: kn is {kn / cal.kn:.2g} x the kn of the fit ({cal.kn:g}): the paper checked f1 only for "
               "x0.5-2; refit at a kn near this one", flush=True)

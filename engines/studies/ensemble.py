@@ -50,8 +50,14 @@ def statistics(values):
     dev = np.where(ok, v - mean, 0.0)
     var = np.divide((dev * dev).sum(axis=0), n - 1, out=np.full(n.shape, np.nan), where=n > 1)
     se = np.sqrt(var / np.maximum(n, 1))
-    half = stats.t.ppf(0.5 + CONFIDENCE / 2, np.maximum(n - 1, 1)) * se
+    half = t_half_width(se, n)
     return {"n": n, "mean": mean, "standard_error": se, "ci95_low": mean - half, "ci95_high": mean + half}
+
+
+def t_half_width(standard_error, n):
+    """Half-width of the CONFIDENCE interval of a mean of n values with this standard error
+    (s.d. / √n): t((1 + CONFIDENCE)/2, n − 1) standard_error (n < 2: t at one degree of freedom)."""
+    return stats.t.ppf(0.5 + CONFIDENCE / 2, np.maximum(np.asarray(n) - 1, 1)) * standard_error
 
 
 def flat_results(results, prefix=""):

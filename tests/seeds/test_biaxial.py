@@ -177,6 +177,7 @@ def test_the_test_on_the_periodic_cell_holds_sigma3_and_loads_sigma1(blocks):
     (["--phi-e", "15", "--sigma3", "100", "--dt", "1e-3"], "--dt"),
     (["--phi-e", "15", "--sigma3", "100", "--specimen", "periodic", "--side-load", "diameter"], "--side-load"),
     (["--phi-e", "15", "--sigma3", "100", "--rotation", "rolling"], "--rotation"),
+    (["--phi-e", "15", "--sigma3", "100", "--packing-phi-e", "same"], "--packing-phi-e"),
 ])
 def test_bad_input_is_refused_in_one_line_before_anything_is_written(tmp_path, capsys, args, needle):
     from yade_scripts import biaxial

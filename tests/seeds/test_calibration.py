@@ -5,7 +5,14 @@ import numpy as np
 import pytest
 
 from engines.seeds.biaxial.calibration import Calibration, eq4_e50, eq6_kn, fit_eq4
-from engines.seeds.biaxial.cem_contact import CemContact, disc_mass, pair_constants, series, single_contact_dt_limit
+from engines.seeds.biaxial.cem_contact import (
+    TABLE2_DT,
+    CemContact,
+    disc_mass,
+    pair_constants,
+    series,
+    single_contact_dt_limit,
+)
 from engines.seeds.biaxial.periodic import PeriodicBlock, cell_for, random_placement, table1_radii, tile
 from engines.seeds.biaxial.specimen import (
     BOTTOM,
@@ -182,9 +189,10 @@ def test_study_cost_estimate_follows_steps_and_discs(tmp_path):
     assert st.predicted_cpu_s(st.sensitivity(1, n_discs=500)) == pytest.approx(ref / 2)
     ms = st.MS_PER_STEP_1000 / 1000
     slow = st.predicted_cpu_s(st.sensitivity(1, strain_rate=25.0))
-    assert (slow - ref) / ms == pytest.approx(0.04 / (25 / 6000) / 5e-5 - 0.04 / (100 / 6000) / 5e-5)
-    fine = st.predicted_cpu_s(st.sensitivity(1, dt=2.5e-5, packing_dt=5e-5))
-    pack = st.PACK_STEPS[0] * ms
+    dt = TABLE2_DT  # the default step
+    assert (slow - ref) / ms == pytest.approx(0.04 / (25 / 6000) / dt - 0.04 / (100 / 6000) / dt)
+    fine = st.predicted_cpu_s(st.sensitivity(1, dt=dt / 2, packing_dt=dt))
+    pack = st.PACK_STEPS[0] * 5e-5 / dt * ms  # PACK_STEPS are counted at 0.5e-4 s
     assert fine - pack == pytest.approx(2 * (ref - pack))  # all but the packing at half the step
     assert st.predicted_cpu_s(st.main_jobs([1])[0]) > 3 * ref  # four σ3 to 5 % against one to 4 %
     jobs = [st.sensitivity(1), st.sensitivity(2)]
@@ -195,22 +203,26 @@ def test_study_cost_estimate_follows_steps_and_discs(tmp_path):
 
 
 def fake_run(runs, name, sigma3, q_f, e50_pa, solid_fraction):
-    """A finished biaxial.py job as the sweep runner leaves it: a linear rise at the slope E50 to
-    q_f, flat to 5 %."""
+    """A finished biaxial.py job as the sweep runner leaves it: at each σ3 (a number or a list,
+    with q_f and e50_pa alike) a linear rise at the slope E50 to q_f, flat to 5 %."""
     import json
     import os
 
     d = os.path.join(runs, name)
     os.makedirs(d)
     strain = np.linspace(0, 0.05, 251)
-    q = np.minimum(e50_pa * strain, q_f)
-    np.savetxt(os.path.join(d, "curves.csv"), np.column_stack([np.full_like(strain, sigma3), strain, q, sigma3 + q,
-               sigma3 + q, np.full_like(strain, sigma3), strain]), delimiter=",", header="h", comments="")
+    rows = []
+    for s3, qf, e in zip(*(np.atleast_1d(np.asarray(v, float)) for v in (sigma3, q_f, e50_pa))):
+        q = np.minimum(e * strain, qf)
+        rows.append(np.column_stack([np.full_like(strain, s3), strain, q, s3 + q, s3 + q, np.full_like(strain, s3),
+                                     strain]))
+    np.savetxt(os.path.join(d, "curves.csv"), np.vstack(rows), delimiter=",", header="h", comments="")
     with open(os.path.join(d, "summary.json"), "w") as f:
-        json.dump({"per_sigma3": [{"sigma3_pa": sigma3, "peak_deviator_pa": q_f}],
-                   "packings": [{"solid_fraction": solid_fraction}]}, f)
+        json.dump({"per_sigma3": [{"sigma3_pa": float(s3), "peak_deviator_pa": float(qf)}
+                                  for s3, qf in zip(np.atleast_1d(sigma3), np.atleast_1d(q_f))],
+                   "packings": [{"solid_fraction": solid_fraction}] * len(np.atleast_1d(sigma3))}, f)
     with open(os.path.join(d, "job.json"), "w") as f:
-        json.dump({"status": "ok"}, f)
+        json.dump({"status": "ok", "wall_s": 60.0}, f)
 
 
 def test_hypotheses_table_from_synthetic_runs(tmp_path):
@@ -246,3 +258,19 @@ def test_hypotheses_table_from_synthetic_runs(tmp_path):
     assert res["jobs_total"] == len(hypothesis_points([1, 2, 3])) and res["jobs_failed"] == []
     table = write_hypotheses(res, str(tmp_path / "h.json"), str(tmp_path / "h.md"))
     assert "| rotation_locked | rotation = locked | 15° | 26.0 ± 0.5° (n = 3) |" in table
+
+
+def test_the_default_reading_packs_with_friction_nearly_off_and_test_means_the_tests_phi():
+    """The default reading (docs/BIAXIAL.md): packed at PACKING_PHI_E whatever --phi-e; "test"
+    packs at --phi-e (None); the study's jobs name the protocol on their command line."""
+    from engines.run import biaxial_study as st
+    from engines.run.biaxial import parser
+    from engines.seeds.biaxial.periodic import PACKING_PHI_E
+
+    ap = parser()
+    assert ap.parse_args(["--phi-e", "5", "--out", "x"]).packing_phi_e == PACKING_PHI_E == 0.5
+    assert ap.parse_args(["--phi-e", "5", "--out", "x", "--packing-phi-e", "test"]).packing_phi_e is None
+    argv = st.judged_jobs()[0].argv
+    assert argv[argv.index("--packing-phi-e") + 1] == "0.5"
+    hyp = dict(st.hypothesis_points([1]))["hyp_packing_at_test_phi_phi15_s3100_seed1"]
+    assert hyp["packing_phi_e"] == "test"

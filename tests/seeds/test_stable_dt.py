@@ -7,6 +7,7 @@ import pytest
 
 from engines.seeds.biaxial.cem_contact import (
     PAPER_DT,
+    TABLE2_DT,
     CemContact,
     disc_dt_bound,
     disc_mass,
@@ -111,12 +112,37 @@ def test_stable_dt_stays_below_the_square_lattice_limit_where_the_old_factor_did
     for ks_ratio in (0.5, 1.0):
         c = CemContact(ks_ratio=ks_ratio)
         assert old_rule(c) > lattice_limit(c, square)
-    assert stable_dt(R, CemContact()) == PAPER_DT  # Table 1–2: the paper's step
+    assert stable_dt(R, CemContact()) == TABLE2_DT  # Table 1–2: below the paper's step (the dense packings' limit)
 
 
 def test_locked_rotation_leaves_the_translation():
     c, locked = CemContact(ks_ratio=0.5), CemContact(ks_ratio=0.5, rotation="locked")
     assert disc_dt_bound(R, locked) > disc_dt_bound(R, c)
-    assert stable_dt(R, locked) == PAPER_DT
+    assert stable_dt(R, locked) == TABLE2_DT
     with pytest.raises(ValueError, match="rotation"):
         CemContact(rotation="rolling")
+
+
+def periodic_square_lattice(n, overlap=1e-6):
+    """n × n equal discs (RMIN) on a square grid of spacing 2 RMIN − overlap in its periodic cell."""
+    a = 2 * RMIN - overlap
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    return np.column_stack([i.ravel(), j.ravel()]) * a + a / 2, np.full(n * n, RMIN), (n * a, n * a)
+
+
+@pytest.mark.parametrize("ks_ratio", [0.25, 1.0])
+def test_network_limit_of_a_square_lattice_is_the_lattice_limit(ks_ratio):
+    """network_dt_limit on a periodic square lattice (even side: the alternating modes fit) gives
+    the Bloch limit of the lattice (lattice_limit, found independently); with the rotation
+    locked the translation's, leapfrog_dt of the alternating mode (4 (k_n + k_s), dashpots alike)."""
+    from engines.seeds.biaxial.stability import network_dt_limit
+
+    xz, r, cell = periodic_square_lattice(6)
+    c = CemContact(ks_ratio=ks_ratio)
+    assert network_dt_limit(xz, r, cell, c) == pytest.approx(lattice_limit(c, square), rel=3e-4)
+    locked = CemContact(ks_ratio=ks_ratio, rotation="locked")
+    kn, ks, cn, cs = pair_constants(RMIN, RMIN, locked)
+    alternating = leapfrog_dt(4 * (kn + ks), 4 * (cn + cs), float(disc_mass(RMIN, locked.rho)))
+    assert network_dt_limit(xz, r, cell, locked) == pytest.approx(alternating, rel=3e-4)
+    # apart by more than the overlap: no contact, no limit from the springs (the bisection's ceiling)
+    assert network_dt_limit(xz * 1.01, r, (cell[0] * 1.01, cell[1] * 1.01), c) == pytest.approx(1e-3, rel=1e-3)

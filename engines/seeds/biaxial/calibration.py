@@ -43,7 +43,9 @@ def eq6_kn(e50, sigma3, A, m):
 @dataclass
 class Calibration:
     """The study's curves: at each φe [deg] the strength φ* [deg] (eq 2) and A, m (eq 4), for
-    the contact constants kn [Pa/m] (at which f1 was measured) and ks/kn."""
+    the contact constants kn [Pa/m] (at which f1 was measured) and ks/kn; optionally, at each φe,
+    the scatter between packings: the standard deviation of ln E50 at one σ3 and of φ* [deg],
+    and the number of packings."""
 
     phi_e: list
     phi_star: list
@@ -51,6 +53,9 @@ class Calibration:
     m: list
     kn: float
     ks_ratio: float
+    e50_log_sd: list = None
+    phi_star_sd: list = None
+    packings: list = None
 
     def __post_init__(self):
         n = len(self.phi_e)

@@ -116,6 +116,9 @@ def tile(block, nx, nz, origin=(0.0, 0.0)):
     return Packing(xz, r, np.zeros(len(r), np.int64), np.ones(len(r)))
 
 
+PACKING_PHI_E = 0.5  # deg: φe while packing (friction nearly off), the same for every test φe (docs/BIAXIAL.md)
+
+
 # ---- YADE: the packing itself ---------------------------------------------------------------
 
 @dataclass(frozen=True)

@@ -11,17 +11,18 @@ import os
 import numpy as np
 
 from engines.seeds.biaxial.calibration import Calibration, eq4_e50, fit_eq4
+from engines.seeds.biaxial.cem_contact import TABLE2_DT
 from engines.seeds.biaxial.specimen import Curve, mohr_coulomb_fit
 
-PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "hypotheses")
-DEFAULT_PARTS = PARTS[:-1]
+PARTS = ("main", "calibration", "stiffness", "dt", "discs", "rate", "stability", "hypotheses", "judged")
+DEFAULT_PARTS = PARTS[:-2]  # hypotheses and judged run on request
 PHI_E = (5.0, 10.0, 15.0)
 SIGMA3 = (100.0, 200.0, 300.0, 400.0)
 KN = 1e8
 KS = 0.25
 SENS_PHI, SENS_SIGMA3, SENS_STRAIN = 10.0, 200.0, 4.0  # the paper's sensitivity runs (§3(1)–(2), Fig. 13–14)
 RATES = (25.0, 50.0)                                     # %/min, besides the reference 100 (the paper's)
-DTS = (2.5e-5, 1e-4)                                     # s, besides the reference 0.5e-4
+DTS = (2.5e-5, 5e-5, 1e-4)                               # s (the paper's three), besides the reference TABLE2_DT
 DISCS = (125, 250, 500)                                  # besides the reference 1000
 KNS = (0.5e8, 2e8)
 KSS = (0.125, 0.5)
@@ -37,13 +38,12 @@ def sensitivity_name(seed, **changes):
 
 # The readings of the paper that may change strength, each an option of yade_scripts/biaxial.py
 # against the reference (every option at its default): name -> (options, the φe it runs at)
-DENSE_PACKING_PHI = 0.5  # deg: φe while packing for the denser protocol (friction nearly off, then φe)
 HYPOTHESES = {
     "reference": ({}, (15.0, 5.0)),
     "rotation_locked": ({"rotation": "locked"}, (15.0, 5.0)),
     "side_load_diameter": ({"side_load": "diameter"}, (15.0,)),
     "periodic_cell": ({"specimen": "periodic"}, (15.0,)),
-    "dense_packing": ({"packing_phi_e": DENSE_PACKING_PHI}, (15.0, 5.0)),
+    "packing_at_test_phi": ({"packing_phi_e": "test"}, (15.0, 5.0)),
     "width_diameter": ({"width_factor": 2.0}, (15.0,)),
 }
 HYP_STRAIN = 5.0                              # % (the main grid's)
@@ -146,7 +146,7 @@ def analyse_sensitivity(runs, seeds):
     (the reference value's runs are those of the knob's specimen: 1000 or SMALL_DISCS discs)."""
     small = {"n_discs": SMALL_DISCS}
     groups = {"strain_rate_pct_min": ("strain_rate", RATES, 100.0, lambda v: {}, {}),
-              "dt_s": ("dt", DTS, 5e-5, lambda v: {"packing_dt": 5e-5}, small),
+              "dt_s": ("dt", DTS, TABLE2_DT, lambda v: {"packing_dt": TABLE2_DT}, small),
               "n_discs": ("n_discs", DISCS, 1000, lambda v: {}, {}),
               "kn_pa_per_m": ("kn", KNS, KN, lambda v: {}, small), "ks_ratio": ("ks_ratio", KSS, KS, lambda v: {}, small)}
     out = {}
@@ -332,6 +332,29 @@ SENS_ROWS = (("strain_rate_pct_min", "strain rate [%/min] (Fig. 5)", "1000"),
              ("kn_pa_per_m", "kn [Pa/m] (Fig. 13)", f"{SMALL_DISCS}"), ("ks_ratio", "ks/kn (Fig. 14)", f"{SMALL_DISCS}"))
 
 
+def calibration_lines(cal):
+    """The calibration round trip's table (markdown lines) of calibration_round_trip's record,
+    or the reason it was not verified; [] for None."""
+    if cal and cal.get("verified"):
+        v, t = cal["verified"], cal["target"]
+        return ["", "Calibration round trip (eq 5–6, then the biaxial test again, 1000 discs):", "",
+                "| | target | inverted | verified (mean of packings) | error |", "|---|---|---|---|---|",
+                f"| φ* | {t['phi_star_deg']:.2f}° | φe = {cal['inverted']['phi_e_deg']:.2f}° | "
+                f"{v['phi_star_deg']['mean']:.2f}° ({', '.join(f'{x:.2f}' for x in v['phi_star_deg']['values'])}) | "
+                f"{100 * v['phi_star_error']:+.1f} % |",
+                f"| E50 at σ3 = {t['sigma3_pa']:g} Pa | {t['e50_pa']:.4g} Pa | kn = {cal['inverted']['kn_pa_per_m']:.4g} Pa/m | "
+                f"{v['e50_pa']['mean']:.4g} Pa ({', '.join(f'{x:.4g}' for x in v['e50_pa']['values'])}) | "
+                f"{100 * v['e50_error']:+.1f} % |"]
+    if cal:
+        why = cal.get("error") or "no result from " + ", ".join(f["job"] for f in cal.get("failed", []))
+        inv = cal.get("inverted")
+        return ["", "Calibration round trip: not verified: " + why + (
+            f" (eq 5–6 gave φe = {inv['phi_e_deg']:.2f}°, kn = {inv['kn_pa_per_m']:.4g} Pa/m for φ* = "
+            f"{cal['target']['phi_star_deg']:.2f}°, E50 = {cal['target']['e50_pa']:.4g} Pa at σ3 = "
+            f"{cal['target']['sigma3_pa']:g} Pa)" if inv else "")]
+    return []
+
+
 def write_table(study, path):
     """The side-by-side tables with the paper (markdown): main grid, sensitivities, calibration,
     time steps, cost."""
@@ -370,23 +393,7 @@ def write_table(study, path):
         for v, c in sens.get(key, {}).items():
             lines.append(f"| {label} | {v if key == 'n_discs' else discs} | {v} | {_ms(c['peak_deviator_pa'], '{:.0f}')} | "
                          f"{_ms(c['e50_pa'], '{:.3g}')} | {_ms(c['phi0'], unit='°')} | {len(c['failed']) or ''} |")
-    if cal and cal.get("verified"):
-        v, t = cal["verified"], cal["target"]
-        lines += ["", "Calibration round trip (eq 5–6, then the biaxial test again, 1000 discs):", "",
-                  "| | target | inverted | verified (mean of packings) | error |", "|---|---|---|---|---|",
-                  f"| φ* | {t['phi_star_deg']:.2f}° | φe = {cal['inverted']['phi_e_deg']:.2f}° | "
-                  f"{v['phi_star_deg']['mean']:.2f}° ({', '.join(f'{x:.2f}' for x in v['phi_star_deg']['values'])}) | "
-                  f"{100 * v['phi_star_error']:+.1f} % |",
-                  f"| E50 at σ3 = {t['sigma3_pa']:g} Pa | {t['e50_pa']:.4g} Pa | kn = {cal['inverted']['kn_pa_per_m']:.4g} Pa/m | "
-                  f"{v['e50_pa']['mean']:.4g} Pa ({', '.join(f'{x:.4g}' for x in v['e50_pa']['values'])}) | "
-                  f"{100 * v['e50_error']:+.1f} % |"]
-    elif cal:
-        why = cal.get("error") or "no result from " + ", ".join(f["job"] for f in cal.get("failed", []))
-        inv = cal.get("inverted")
-        lines += ["", "Calibration round trip: not verified: " + why + (
-            f" (eq 5–6 gave φe = {inv['phi_e_deg']:.2f}°, kn = {inv['kn_pa_per_m']:.4g} Pa/m for φ* = "
-            f"{cal['target']['phi_star_deg']:.2f}°, E50 = {cal['target']['e50_pa']:.4g} Pa at σ3 = "
-            f"{cal['target']['sigma3_pa']:g} Pa)" if inv else "")]
+    lines += calibration_lines(cal)
     if study.get("stability"):
         st = study["stability"]
         lines += ["", f"Time steps ({st['n_discs']} discs packed at 0.5e-4 s, left at rest {st['rest_time_s']:g} s):", "",
