@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-before-after packings biaxial liquefaction tradeoffs validation stability mutants clean
+.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-scaling bench-before-after packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -67,6 +67,10 @@ bench: deps
 	$(YADE) -n -x benchmarks/water_interval.py --json $(OUT)/bench-water-interval.json
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
+# The pore core from 1,000 to 100,000 discs (water step, rebuild, YADE's step, memory; docs/PERFORMANCE.md).
+bench-scaling: deps
+	$(YADE) -n -x benchmarks/pores.py --sizes 1000 3000 10000 30000 100000 --json $(OUT)/bench-scaling.json
+
 bench-seismic: deps
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
@@ -116,6 +120,17 @@ liquefaction: deps
 	   --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
+
+# The seismic study's reconstruction (docs/LIQUEFACTION.md, "Reconstruction"): the paper's unknowns
+# (case 3's permeabilities x3/x10/x30, E_w x3/x10, the box wider and narrower with the same discs, a
+# denser packing) on ensembles of 8 starts of the cases each touches, against make liquefaction's
+# ensembles (LIQ_BASELINE) -> $(OUT)/reconstruction/{reconstruction.json,reconstruction.md,
+# reconstruction.png}; resumable (a re-run skips the finished jobs, continues a stopped ensemble);
+# about 55 CPU-minutes (2026-12-02: 42 for all but the narrower box).
+LIQ_BASELINE ?= $(OUT)/liquefaction
+reconstruction: deps
+	nice -n 10 $(PY) yade_scripts/liquefaction_reconstruction.py --out $(OUT)/reconstruction \
+	   --baseline $(LIQ_BASELINE) --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 # Speed against accuracy (docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
 # and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows

@@ -12,6 +12,9 @@ times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), 
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
 transfer comparison and ROOT/trends.md (the paper's trends against our numbers, each criterion's
 quantity with its 95 % interval over the starts and a verdict holds / fails / undecided: ``trends``).
+``run_figures`` also draws ``depth.png`` (``depth_figure``: pore pressure and porosity by depth over
+time); ``reconstruction(out, baseline)`` the trends on each variant of the reconstruction
+(engines.studies.reconstruction: reconstruction.json, .md, .png).
 
     /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
     /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
@@ -28,7 +31,11 @@ from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
+from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
+from engines.model.observe import Window, porosity  # noqa: E402
 from engines.studies.ensemble import CONFIDENCE  # noqa: E402
+from engines.studies.reconstruction import VARIANTS, ensemble_path  # noqa: E402
+from packing.packing import Packing  # noqa: E402
 from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
 from postproc.run_files import (  # noqa: E402
     ensemble_history,
@@ -125,8 +132,57 @@ def blocks_figure(history, title, bounds=None, snap0=None):
     return fig
 
 
+def band_porosity(snap, bounds, top):
+    """Porosity of each band [z0, z1) of ``bounds`` [m] (the last up to ``top``) between the inner
+    faces of the side walls in snapshot ``snap`` (engines.model.observe.porosity)."""
+    pk = Packing(snap["xz"], snap["r"], snap["group"], snap["density_factor"])
+    faces = pk.inner_faces()
+    m = pk.mobile
+    return np.array([porosity(pk.xz[m], pk.r[m], Window(faces[WALL_LEFT], faces[WALL_RIGHT], z0, min(z1, top)))
+                     for z0, z1 in bounds])
+
+
+def depth_figure(history, snaps, bounds, title):
+    """Pore pressure and porosity by depth over time: the block-mean U (history) and the porosity
+    change of the same bands since t = 0 (the snapshots ``snaps``) as colour over time and height,
+    both centred on 0, and the porosity profile at t = 0. ``bounds``: the blocks' [z0, z1] [m]."""
+    s0 = snaps[0]
+    mobile = s0["group"] == 0
+    top = max(float(np.max(s0["xz"][mobile, 1] + s0["r"][mobile])), bounds[-1][0] + 1e-9)  # the bed's top at t = 0
+    edges = 1e3 * np.array([b[0] for b in bounds] + [min(bounds[-1][1], top)])
+    U = np.column_stack([history[c] for c in block_columns(history)])
+    n = np.array([band_porosity(s, bounds, top) for s in snaps])
+    ts = np.array([float(s["t"]) for s in snaps]) * 1e3
+    t_edges = np.r_[ts[0], 0.5 * (ts[1:] + ts[:-1]), ts[-1]] if len(ts) > 1 else np.r_[ts, ts + 1]
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.8), sharey=True, layout="constrained",
+                             gridspec_kw={"width_ratios": (1.4, 1.4, 0.7)})
+    lim = max(float(np.nanpercentile(np.abs(U), 99)), 1e-9)  # the surface block's rare spikes saturate
+    im = axes[0].pcolormesh(history["t"] * 1e3, edges, U[:-1].T if len(U) > 1 else U.T, cmap="RdBu_r",
+                            vmin=-lim, vmax=lim, shading="flat")
+    fig.colorbar(im, ax=axes[0], extend="both",
+                 label=f"block-mean excess pore pressure U [N/m]\n(beyond ±{lim:.0f}: the end colours; max |U| "
+                       f"{np.nanmax(np.abs(U)):.0f})")
+    dn = n - n[0]
+    dlim = max(float(np.nanmax(np.abs(dn[:, :-1] if dn.shape[1] > 1 else dn))), 1e-9)  # the bands below the surface
+    im = axes[1].pcolormesh(t_edges, edges, dn.T, cmap="RdBu_r",  # a cell about each snapshot's time
+                            vmin=-dlim, vmax=dlim, shading="flat")
+    fig.colorbar(im, ax=axes[1], extend="both", label="porosity change since t = 0 [-]\n(scaled to the bands "
+                 f"below the surface; max |Δn| {np.nanmax(np.abs(dn)):.3f})")
+    axes[2].step(np.r_[n[0], n[0][-1]], edges, where="post", color="k")
+    axes[2].set_xlabel("porosity at t = 0 [-]\n(top band: to the highest disc)", fontsize=9)
+    for ax, what in zip(axes[:2], ("pore pressure", "porosity (at the snapshots)")):
+        ax.set_xlabel("t [ms]")
+        ax.set_title(f"{what} by height", fontsize=9)
+    axes[0].set_ylabel("z [mm]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{title}: pore pressure and porosity by depth over time")
+    return fig
+
+
 def run_figures(run_dir):
-    """Draw blocks.png of a wet run (``blocks_figure``); returns the paths written."""
+    """Draw blocks.png of a wet run (``blocks_figure``) and, with two snapshots or more, depth.png
+    (``depth_figure``); returns the paths written."""
     summary = read_summary(run_dir)
     history = read_history(os.path.join(run_dir, "history.csv"))
     params = summary.get("parameters", {})
@@ -135,10 +191,16 @@ def run_figures(run_dir):
     files = snapshot_files(run_dir)
     snap0 = read_snapshot(files[0]) if files and float(read_snapshot(files[0])["t"]) == 0.0 else None
     fig = blocks_figure(history, summary.get("scene", run_dir), summary.get("block_bounds_m"), snap0)
-    path = os.path.join(run_dir, "blocks.png")
-    fig.savefig(path, dpi=110)
+    paths = [os.path.join(run_dir, "blocks.png")]
+    fig.savefig(paths[-1], dpi=110)
     plt.close(fig)
-    return [path]
+    bounds = summary.get("block_bounds_m")
+    if len(files) > 1 and bounds:
+        fig = depth_figure(history, [read_snapshot(f) for f in files], bounds, summary.get("scene", run_dir))
+        paths.append(os.path.join(run_dir, "depth.png"))
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths
 
 
 # -- the study ----------------------------------------------------------------------------------------
@@ -473,6 +535,140 @@ def study(root):
         fig.savefig(written[-1], dpi=110)
         plt.close(fig)
     return written
+
+
+def _cases_of(summary):
+    """{case: [case_summary of each start]} of a study's summary.json."""
+    return {int(k[len("case"):]): v for k, v in summary["cases"].items()}
+
+
+def variant_cases(base, changed, runs):
+    """The cases a variant's trends are evaluated on: ``runs`` {case: [start summaries]} of the
+    ``changed`` cases that completed, the baseline's ``base`` for the cases the variant does not
+    change; a changed case not in ``runs`` is left out (never taken from the baseline)."""
+    return {**{k: r for k, r in base.items() if k not in changed}, **runs}
+
+
+def reconstruction(out, baseline, packings=None):
+    """The trends on each variant of engines.studies.reconstruction: its cases' ensembles (under
+    OUT/runs) with the study's own (BASELINE/summary.json; those of the variant it is ``on``) for
+    the cases it does not change; a case it changes that has not completed drops the trends that
+    need it. ``packings``: {variant: facts of its deposit} (engines.run.reconstruction.packing_facts).
+    Writes OUT/reconstruction.json, reconstruction.md and reconstruction.png; returns the JSON's dict."""
+    with open(os.path.join(baseline, "summary.json")) as f:
+        base = _cases_of(json.load(f))
+    doc = {"baseline": os.path.abspath(baseline), "confidence": CONFIDENCE, "reference": trends(base), "variants": {}}
+    evaluated = {}  # the cases each variant's trends were evaluated on, for the variants built on it
+    for name, v in VARIANTS.items():
+        got = {k: _case_runs(ensemble_path(os.path.join(out, "runs"), name, k)) for k in v.cases}
+        done = [k for k in v.cases if got[k] is not None]
+        if not done or (v.on and v.on not in evaluated):
+            continue
+        cases = variant_cases(evaluated[v.on] if v.on else base, v.cases, {k: got[k][0] for k in done})
+        evaluated[name] = cases
+        changed = sorted(set(done) | set(doc["variants"][v.on]["changed"] if v.on else ()))  # against the presets
+        doc["variants"][name] = {
+            "unknown": v.unknown, "reason": v.reason, "cases": list(v.cases), "done": done, "on": v.on,
+            "changed": changed,
+            "starts": {k: len(cases[k]) for k in done}, "packing": (packings or {}).get(name),
+            "case_means": {k: {key: float(np.mean([r[key] for r in cases[k]]))
+                               for key in ("porosity_initial", "porosity_change", "U_low_mean") if key in cases[k][0]}
+                           for k in done},
+            "trends": trends(cases)}
+    with open(os.path.join(out, "reconstruction.json"), "w") as f:
+        json.dump(doc, f, indent=1)
+    with open(os.path.join(out, "reconstruction.md"), "w") as f:
+        f.write(reconstruction_markdown(doc))
+    fig = reconstruction_figure(doc)
+    fig.savefig(os.path.join(out, "reconstruction.png"), dpi=110)
+    plt.close(fig)
+    return doc
+
+
+MARK = {"holds": "✓", "fails": "✗", "undecided": "?"}  # a condition's verdict in the table
+
+
+def _rows(doc):
+    """[(label, trend rows, the cases changed)]: the study's presets first (None), then each variant."""
+    return [("the presets (make liquefaction)", doc["reference"], None)] + [
+        (name, v["trends"], set(v["changed"])) for name, v in doc["variants"].items()]
+
+
+def _unchanged(row, changed):
+    """A trend row of a variant none of whose cases the variant changed (the presets' own numbers)."""
+    return changed is not None and not changed & set(row["cases"])
+
+
+def reconstruction_markdown(doc):
+    """The reconstruction table: per variant (rows) each trend's (columns T1..) quantities with
+    their intervals and verdicts (MARK), the trend's verdict in bold ("as the presets" where the
+    variant changes none of its cases); the trends' key, the variants' reasons and their cases' means."""
+    names = [t[0] for t in TRENDS]
+    lines = ["| variant | " + " | ".join(f"T{i + 1}" for i in range(len(names))) + " |",
+             "|---" * (len(names) + 1) + "|"]
+    for label, rows, changed in _rows(doc):
+        by = {r["trend"]: r for r in rows}
+        cells = []
+        for t in names:
+            r = by.get(t)
+            cells.append("–" if r is None else "as the presets" if _unchanged(r, changed) else "; ".join(
+                f"{c['estimate']:.3g} [{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}] {MARK[c['verdict']]}"
+                for c in r["conditions"]) + f" **{r['verdict']}**")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    lines += ["", "Trends (each quantity's criterion in brackets):", ""]
+    for i, (trend, _, _, conditions) in enumerate(TRENDS):
+        lines.append(f"- T{i + 1}: {trend}: " + "; ".join(f"{q} ({_holds_if(lo, hi)})" for q, _, lo, hi in conditions))
+    lines += ["", "| variant | unknown | why a candidate | cases run (starts) | packing | "
+              "case means: porosity at t = 0, Δn, U_low mean [N/m] |", "|---|---|---|---|---|---|"]
+    for name, v in doc["variants"].items():
+        pk = v["packing"]
+        packing = "–" if not pk else (f"bed top {pk['bed_top_mm']:.1f} mm, contacts carry "
+                                      f"{pk['dense_top_support']:.2f} of the dense top's weight")
+        means = "; ".join(f"case {k}: " + ", ".join(f"{m[key]:.3g}" for key in ("porosity_initial", "porosity_change",
+                                                                                 "U_low_mean") if key in m)
+                          for k, m in v["case_means"].items())
+        starts = ", ".join(f"{k} ({n})" for k, n in v["starts"].items())
+        missing = [k for k in v["cases"] if k not in v["done"]]
+        lines.append(f"| {name} | {v['unknown']} | {v['reason']} | {starts}"
+                     + (f"; not yet: {missing}" if missing else "") + f" | {packing} | {means} |")
+    return "\n".join(lines) + "\n"
+
+
+def reconstruction_figure(doc):
+    """One panel per criterion of TRENDS: its estimate and 95 % interval for the presets and each
+    variant, the region where it holds shaded."""
+    conditions = [(t, c) for t, _, _, cs in TRENDS for c in cs]
+    labels = _rows(doc)
+    ncol = 5
+    nrow = -(-len(conditions) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.3 * ncol, 3.6 * nrow), layout="constrained", squeeze=False)
+    for ax, (trend, (quantity, _, low, high)) in zip(axes.flat, conditions):
+        for y, (_, rows, changed) in enumerate(labels):
+            row = next((r for r in rows if r["trend"] == trend), None)
+            if row is None:
+                continue
+            c = next(c for c in row["conditions"] if c["quantity"] == quantity)
+            lo, hi = c["ci95"]
+            colour = {"holds": "tab:green", "fails": "tab:red"}.get(c["verdict"], "tab:grey")
+            same = _unchanged(row, changed)
+            ax.errorbar([c["estimate"]], [y], xerr=[[c["estimate"] - lo], [hi - c["estimate"]]], fmt="o",
+                        color=colour, ms=4, capsize=2, mfc="none" if same else colour, alpha=0.4 if same else 1)
+        edges = [v for v in (low, high) if np.isfinite(v)]  # the thresholds in view
+        x0, x1 = min(ax.get_xlim()[0], *edges), max(ax.get_xlim()[1], *edges)
+        x0, x1 = x0 - 0.05 * (x1 - x0), x1 + 0.05 * (x1 - x0)
+        ax.axvspan(max(low, x0) if np.isfinite(low) else x0, min(high, x1) if np.isfinite(high) else x1,
+                   color="tab:green", alpha=0.12, lw=0)
+        ax.set_xlim(x0, x1)
+        ax.set_yticks(range(len(labels)), [lab if y else "presets" for y, (lab, _, _) in enumerate(labels)], fontsize=7)
+        ax.invert_yaxis()
+        ax.set_title(f"T{[t[0] for t in TRENDS].index(trend) + 1}: {quantity}", fontsize=7)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[len(conditions):]:
+        ax.axis("off")
+    fig.suptitle(f"The trends on the variants: estimate and {100 * CONFIDENCE:g} % interval (green: holds, "
+                 "red: fails, grey: undecided; open: the variant changes none of the trend's cases; shaded: where "
+                 "the criterion holds)", fontsize=10)
+    return fig
 
 
 if __name__ == "__main__":

@@ -2,9 +2,11 @@
 size distribution (Fig. 14) and a drawing of the packing (Fig. 15) beside it.
 
     yade -n -x yade_scripts/deposit.py --scene quicksand_case1 [--out FILE | --replace] [--from CSV]
+                                       [--set TABLE.FIELD=VALUE ...]
 
 ``--from CSV``: instead of a fresh deposit, the packing of CSV settled again against the scene's
 flat walls ([walls] kind = "flat": quicksand_case1_flat's packing is case 1's, settled on them).
+``--set``: a change to the scene, as in the run scripts (e.g. ``--set packing.n_bottom=37``).
 
 By default the packing goes to out/packings/<scene name>.csv; ``--replace`` overwrites the
 packing file the scene names (a tracked preset file: check the diff before committing it).
@@ -18,6 +20,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] i
 
 from engines.model.pore_dem import scene_flat_walls
 from engines.run import scene as scenes
+from engines.run.command_line import overrides_of, scene_setting
 from engines.run.preflight import ArgumentParser, InputError, check_output_dir
 from engines.yade.deposition import deposit, settle_on_flat_walls
 from packing.packing import Packing
@@ -33,11 +36,15 @@ def main(argv):
     where.add_argument("--replace", action="store_true", help="overwrite the packing file the scene names")
     ap.add_argument("--from", dest="source", metavar="CSV",
                     help="settle this packing against the scene's flat walls instead of depositing one")
+    ap.add_argument("--set", type=scene_setting, action="append", default=[], metavar="TABLE.FIELD=VALUE",
+                    help="change a scene field (repeatable)")
     args = ap.parse_args(argv)
     try:
-        sc = scenes.load(args.scene) if args.scene.endswith(".toml") else scenes.preset(args.scene)
-        if args.replace and not sc.packing.file:
-            raise InputError("--replace: the scene names no [packing] file")
+        over = overrides_of(args)
+        sc = scenes.load(args.scene, over) if args.scene.endswith(".toml") else scenes.preset(args.scene, over)
+        if args.replace and (not sc.packing.file or over):
+            raise InputError("--replace: the scene names no [packing] file" if not sc.packing.file else
+                             "--replace with --set: a changed scene does not replace the preset's packing; use --out")
         out = sc.packing.file if args.replace else args.out or os.path.join("out", "packings", sc.scene.name + ".csv")
         check_output_dir(os.path.dirname(os.path.abspath(out)), "--out")
         if args.source and sc.walls.kind != "flat":

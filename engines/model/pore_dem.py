@@ -32,6 +32,7 @@ import numpy as np
 
 from engines.model import ground_motion, limits
 from engines.model import pores as pg
+from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.flat_walls import FlatWall
 from engines.model.observe import block_means, box_window, porosity
 from engines.model.paper_law import PaperLaw
@@ -43,6 +44,21 @@ def disc_masses(scene, packing):
     """Mass rho f pi r^2 [kg per m thickness] and moment of inertia m r^2/2 (SPEC §1, eq 15)."""
     m = scene.material.rho * packing.density_factor * np.pi * packing.r**2
     return m, 0.5 * m * packing.r**2
+
+
+def weight_carried(scene, packing, which=None):
+    """The vertical force of the normal springs (the packing law: spring a, eps_m of the scene) on
+    the discs ``which`` (a mask; default: every mobile disc) at the packing's positions, over their
+    weight: ~1 when they rest on the others and the walls. Of every mobile disc: the overburden the
+    walls carry; of the denser top: ~1 when the packing starts at rest under it ([packing]
+    settle_loaded), ~1/dense_top_factor when it was settled before the top was marked."""
+    which = packing.mobile if which is None else which
+    c = scene.contact
+    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m),
+                     packing.r, packing.mobile)
+    F, _, _ = law.forces(packing.xz, np.zeros_like(packing.xz), np.zeros(len(packing.r)), scene.numerics.dt)
+    m, _ = disc_masses(scene, packing)
+    return float(F[which, 1].sum() / (m[which] * scene.material.g).sum())
 
 
 def side_wall_ties(scene, packing):

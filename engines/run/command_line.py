@@ -95,10 +95,10 @@ def overrides_of(args):
     over = {}
     for table, field, value in args.set:
         over.setdefault(table, {})[field] = value
-    for name in ("dt", "duration"):
-        if getattr(args, name) is not None:
+    for name in ("dt", "duration"):  # the run options, where the script has them
+        if getattr(args, name, None) is not None:
             over.setdefault("numerics", {})[name] = getattr(args, name)
-    if args.vtk:
+    if getattr(args, "vtk", False):
         over.setdefault("output", {})["vtk"] = True
     return over or None
 

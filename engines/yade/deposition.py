@@ -114,9 +114,9 @@ def deposit(scene):
     then re-settled: a scene cut out of a deposit, with a flat surface as in the paper (§4.2).
     The dense top is marked afterwards; with ``settle_loaded`` > 0 the packing settles once more
     with its masses, so that a run starts at rest (else the bed compacts under the added weight).
-    With [walls] kind = "flat" the particles settle once more against the flat walls that replace
-    the wall discs (``settle_on_flat_walls``). Raises ValueError if a particle ends outside the box
-    (``check_inside_box``).
+    With [walls] kind = "flat" every stage settles against the flat walls at the wall discs' inner
+    faces (no dips between wall discs for a small grain to be driven into or through by the fall).
+    Raises ValueError if a particle ends outside the box (``check_inside_box``).
     """
     p = scene.packing
     rng = np.random.default_rng(p.seed)
@@ -131,22 +131,23 @@ def deposit(scene):
     n_w = len(walls)
     loose = Packing(np.vstack([xz, walls]), np.concatenate([d / 2, np.full(n_w, p.wall_radius)]),
                     np.concatenate([np.full(n_dep, WALL_NONE), groups]), np.ones(n_dep + n_w))
-    settled = settle(scene, loose)
+    walls_kind = scene.walls.kind
+    settled = settle(scene, loose, walls=walls_kind)
     check_inside_box(settled, f"deposit of seed {p.seed}")
     n_box = p.n_bottom + 2 * (p.n_side - 1)  # the guard discs come after the box's walls
     keep = np.argsort(settled.xz[:n_dep, 1])[:p.n_particles]
     keep = np.concatenate([np.sort(keep), np.arange(n_dep, n_dep + (n_w if p.cut_extra > 0 else n_box))])
     cut = Packing(settled.xz[keep], settled.r[keep], settled.group[keep], settled.density_factor[keep])
     if p.cut_extra > 0:
-        cut = settle(scene, cut, duration=0.5 * p.settle_time)
+        cut = settle(scene, cut, duration=0.5 * p.settle_time, walls=walls_kind)
         check_inside_box(cut, f"deposit of seed {p.seed} after the cut")
         cut = Packing(cut.xz[:p.n_particles + n_box], cut.r[:p.n_particles + n_box],
                       cut.group[:p.n_particles + n_box], cut.density_factor[:p.n_particles + n_box])
     cut = _mark(scene, cut)
     if p.settle_loaded > 0:  # the dense top was settled at density 1: let the bed take its weight
-        cut = settle(scene, cut, duration=p.settle_loaded)
+        cut = settle(scene, cut, duration=p.settle_loaded, walls=walls_kind)
         check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
-    return settle_on_flat_walls(scene, cut) if scene.walls.kind == "flat" else cut
+    return cut
 
 
 def settle_on_flat_walls(scene, packing):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from engines.studies.ensemble import ensemble_statistics
-from postproc.liquefaction import compaction_correlation, dominant_period, end_mean, study, trends
+from postproc.liquefaction import band_porosity, compaction_correlation, depth_figure, dominant_period, end_mean, study, trends
 from tests.figures import assert_drawn
 
 t = np.arange(0, 0.18, 1e-4)
@@ -126,3 +126,40 @@ def test_study_reads_ensembles_and_states_the_trends_with_intervals(tmp_path):
     assert "→ holds" in (tmp_path / "trends.md").read_text()
     fig40 = [p for p in written if p.endswith("fig40_porosity_cosine_spring_d.png")]
     assert fig40 and assert_drawn(fig40[0]) is None
+
+
+def _square_box(nx, nz, r, dz=0.0):
+    """A square lattice of touching discs of radius r, nx wide and nz high, on a bottom row of wall
+    discs and between two wall columns, every particle lifted by dz; as a snapshot dict."""
+    ix, iz = np.meshgrid(np.arange(nx), np.arange(nz))
+    xz = np.column_stack([(2 * ix.ravel() + 1) * r, (2 * iz.ravel() + 1) * r + dz])
+    bottom = np.column_stack([(2 * np.arange(-1, nx + 1) + 1) * r, np.full(nx + 2, -r)])
+    left = np.column_stack([np.full(nz, -r), xz[:nz * nx:nx, 1] - dz])
+    right = np.column_stack([np.full(nz, (2 * nx + 1) * r), xz[:nz * nx:nx, 1] - dz])
+    pts = np.vstack([xz, bottom, left, right])
+    group = np.r_[np.zeros(len(xz)), np.ones(len(bottom)), np.full(nz, 2), np.full(nz, 3)].astype(int)
+    return {"t": 0.0, "xz": pts, "r": np.full(len(pts), r), "group": group, "density_factor": np.ones(len(pts))}
+
+
+def test_band_porosity_of_a_square_lattice_is_one_minus_pi_over_4():
+    """Bands of two rows each hold whole discs: 1 - pi/4; a band cut through the disc centres
+    holds half of each row around it, the same; a band above the bed is empty."""
+    r = 1e-3
+    snap = _square_box(6, 4, r)
+    bands = [[0.0, 4 * r], [4 * r, 8 * r], [r, 5 * r]]
+    assert band_porosity(snap, bands, top=8 * r) == pytest.approx([1 - np.pi / 4] * 3, rel=1e-9)
+    assert band_porosity(snap, [[8 * r, 10 * r]], top=10 * r) == pytest.approx([1.0])
+    # the bed lifted by r / 2: the second row's caps of height r / 2 leave the band [0, 4 r]
+    lifted = band_porosity(_square_box(6, 4, r, dz=0.5 * r), [[0.0, 4 * r]], top=8.5 * r)[0]
+    cap = np.arccos(0.5) - 0.5 * np.sqrt(0.75)  # [r^2]
+    assert lifted == pytest.approx(1 - (2 * np.pi - cap) / 8, rel=1e-9)  # per column: 2 r x 4 r
+
+
+def test_depth_figure_draws_pressure_and_porosity_by_height(tmp_path):
+    r = 1e-3
+    snaps = [_square_box(6, 4, r), {**_square_box(6, 4, r, dz=-0.1 * r), "t": 0.01}]
+    tt = np.arange(0, 0.0101, 1e-3)
+    h = {"t": tt, "U_block1": 50 * np.sin(300 * tt), "U_block2": -20 * tt / tt[-1]}
+    fig = depth_figure(h, snaps, [[0.0, 4 * r], [4 * r, 10.0]], "square lattice")
+    fig.savefig(tmp_path / "d.png")
+    assert assert_drawn(str(tmp_path / "d.png")) is None

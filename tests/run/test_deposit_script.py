@@ -47,3 +47,19 @@ def test_replace_without_a_file_and_an_unwritable_out_are_refused(tmp_path):
     run = deposit(tmp_path, "--scene", str(scene), "--out", "/proc/x/p.csv")
     assert run.returncode != 0 and "--out" in run.stderr and "Traceback" not in run.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nofile.toml"]
+
+
+def test_set_changes_the_deposit_and_is_refused_with_replace(tmp_path):
+    """--set as in the run scripts: a wider box (8 bottom discs instead of 6) holds the same 8 discs;
+    a changed scene never replaces the preset's packing file."""
+    scene = tmp_path / "small.toml"
+    scene.write_text(f'extends = "{os.path.relpath(PRESET, tmp_path)}"\n' + SMALL)
+    run = deposit(tmp_path, "--scene", str(scene), "--set", "packing.n_bottom=8", "--out", "wide.csv")
+    assert run.returncode == 0, run.stderr
+    rows = np.loadtxt(tmp_path / "wide.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert rows.shape[0] == 8 + 8 + 2 * 4
+    run = deposit(tmp_path, "--scene", str(scene), "--set", "packing.n_bottom=8", "--replace")
+    assert run.returncode != 0 and "--replace with --set" in run.stderr and "Traceback" not in run.stderr
+    assert not (tmp_path / "mine.csv").exists()
+    run = deposit(tmp_path, "--scene", str(scene), "--set", "packing.n_bottom=1", "--out", "bad.csv")
+    assert run.returncode != 0 and "n_bottom" in run.stderr and "Traceback" not in run.stderr

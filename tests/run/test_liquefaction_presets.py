@@ -3,10 +3,9 @@ import numpy as np
 import pytest
 
 from engines.compiled.pore_dem import PoreDEM
-from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.ground_motion import BaseMotion, input_acceleration
 from engines.model.observe import box_window, porosity
-from engines.model.pore_dem import disc_masses
+from engines.model.pore_dem import weight_carried
 from engines.model.side_walls import SideWallTies
 from engines.run import scene as scenes
 from packing.packing import Packing
@@ -83,13 +82,7 @@ def test_the_seismic_packing_carries_its_dense_top():
     their weight until deposition settled them again under it: [packing] settle_loaded)."""
     sc = scenes.preset("liquefaction_case1")
     pk = Packing.load(sc.packing.file)
-    c = sc.contact
-    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m),
-                     pk.r, pk.mobile)
-    F, _, _ = law.forces(pk.xz, np.zeros_like(pk.xz), np.zeros(len(pk.r)), sc.numerics.dt)
-    m, _ = disc_masses(sc, pk)
-    dense = pk.mobile & (pk.density_factor > 1)
-    lift = F[dense, 1].sum() / (m[dense] * sc.material.g).sum()
+    lift = weight_carried(sc, pk, pk.mobile & (pk.density_factor > 1))
     assert 0.5 < lift < 2.0, f"the contacts carry {lift:.2f} of the dense top's weight"
 
 
@@ -121,3 +114,13 @@ def test_presets_build_in_the_current_engine(case):
 def test_bad_new_fields_are_refused(over, match):
     with pytest.raises(scenes.SceneError, match=match):
         scenes.preset("liquefaction_case1", over)
+
+
+def test_the_gravel_case_3_differs_from_case_3_only_in_k1_k2():
+    """liquefaction_case3_gravel: Table 5's k1, k2 x10 (the reconstruction's smallest factor with
+    which the drained sides keep U small), every other field case 3's."""
+    gravel, case3 = scenes.preset("liquefaction_case3_gravel"), scenes.preset("liquefaction_case3")
+    assert (gravel.water.k1, gravel.water.k2) == (10 * case3.water.k1, 10 * case3.water.k2)
+    assert gravel.water.k3 == case3.water.k3 and gravel.water.sides == "drained"
+    for table in ("packing", "contact", "material", "loading", "numerics", "output", "walls"):
+        assert getattr(gravel, table) == getattr(case3, table), table

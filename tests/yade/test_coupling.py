@@ -90,3 +90,21 @@ def test_deposit():
     assert np.all(pk.xz[mob, 0] > walls[:, 0].min()) and np.all(pk.xz[mob, 0] < walls[:, 0].max())
     assert np.all(pk.xz[mob, 1] > 0) and np.all(pk.density_factor[~mob] == 1)
     assert np.any(pk.density_factor[mob] == 5.0)
+
+
+def test_deposit_against_flat_walls():
+    """[walls] kind = "flat": the discs deposit against the flat walls at the wall discs' inner
+    faces, not into the dips between wall discs: none past a face by more than the overlap their
+    weight gives, the lowest resting on the bottom face."""
+    sc = scenes.preset("quicksand_case1_flat", {"packing": {"source": "deposit", "n_particles": 30, "n_bottom": 8,
+                                                            "n_side": 8, "settle_time": 0.05, "seed": 7}})
+    pk = deposit(sc)
+    m = pk.mobile
+    faces = pk.inner_faces()
+    (x, z), r = pk.xz[m].T, pk.r[m]
+    sink = 1e-6  # [m]: 100x the overlap of the bed's weight on one contact (kn = 1.4e6 N/m)
+    assert np.all(x - r > faces[2] - sink) and np.all(x + r < faces[3] + sink) and np.all(z - r > faces[1] - sink)
+    assert (z - r).min() == pytest.approx(faces[1], abs=sink)
+    dips = deposit(scenes.preset("quicksand_case1", {"packing": {
+        "source": "deposit", "n_particles": 30, "n_bottom": 8, "n_side": 8, "settle_time": 0.05, "seed": 7}}))
+    assert (dips.xz[dips.mobile, 1] - dips.r[dips.mobile]).min() < faces[1] - 10 * sink  # a disc in a dip
