@@ -33,7 +33,7 @@ from matplotlib.patches import Circle  # noqa: E402
 
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
 from engines.model.observe import Window, porosity  # noqa: E402
-from engines.studies.ensemble import CONFIDENCE  # noqa: E402
+from engines.studies.ensemble import CONFIDENCE, t_half_width  # noqa: E402
 from engines.studies.reconstruction import VARIANTS, ensemble_path  # noqa: E402
 from packing.packing import Packing  # noqa: E402
 from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
@@ -320,7 +320,7 @@ def small_sample_factor(n):
     estimate to a Student-t one: t(q, n - 1) / z(q) x sqrt(n / (n - 1)), q = (1 + CONFIDENCE) / 2 (the
     bootstrap's spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
     q = 0.5 + CONFIDENCE / 2
-    return float(stats.t.ppf(q, n - 1) / stats.norm.ppf(q) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
+    return float(t_half_width(1.0, n) / stats.norm.ppf(q) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
 
 
 def _means(cases, keys, pick=None):
