@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-scaling bench-before-after packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -74,6 +74,10 @@ bench-scaling: deps
 bench-seismic: deps
 	$(YADE) -n -x benchmarks/seismic_case.py --json $(OUT)/bench-seismic.json
 
+# The 10,000-disc wet ground (yade_scripts/scenes/ground_10000.toml): our step against YADE alone on its discs.
+bench-ground: deps
+	$(YADE) -n -x benchmarks/ground.py --json $(OUT)/bench-ground.json
+
 # An older engine (OLD, by default commit 26fe280, one Python engine; checked out
 # under $(OUT)) and today's, on the seismic box, in turns on this machine: the speed-up (a few minutes).
 OLD ?= 26fe280
@@ -120,6 +124,12 @@ liquefaction: deps
 	   --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
+
+# The 10,000-disc wet ground (issue 25) shaken 0.1 s by case 1's cosine: history, pressure blocks,
+# snapshots and depth.png (pore pressure and porosity by depth over time) in $(OUT)/ground/run
+# (about an hour of one core).
+ground: deps
+	$(LIQ_RUN) --scene yade_scripts/scenes/ground_10000.toml --overwrite --out $(OUT)/ground/run
 
 # The seismic study's reconstruction (docs/LIQUEFACTION.md, "Reconstruction"): the paper's unknowns
 # (case 3's permeabilities x3/x10/x30, E_w x3/x10, the box wider and narrower with the same discs, a

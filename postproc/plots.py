@@ -181,6 +181,7 @@ def plot_snapshots(snaps, path, title, blocks=None):
 
 SNAPSHOT_COLUMNS = 3  # panels per row of a snapshot figure
 KEY_ENTRY_WIDTH = 2.7  # [in]: one column of a snapshot figure's key (a handle and a label of ~30 characters)
+WINDOW_DISCS = 2000    # a scene of more discs is drawn in a window of its middle with about this many
 KEY_SHARE = 0.78       # of the figure's width: the key's columns; the velocity arrow's key on the right
 
 
@@ -194,6 +195,13 @@ def snapshot_figure(snaps, title, blocks=None):
     rows = -(-n // cols)
     lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
     hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    window = ""
+    n_discs = len(snaps[0]["r"])
+    if n_discs > WINDOW_DISCS:  # a large scene: the panels show its middle, about WINDOW_DISCS discs wide
+        mid, half = (lo[0] + hi[0]) / 2, (hi[0] - lo[0]) * WINDOW_DISCS / n_discs / 2
+        window = (f" (x = {mid - half:.0f} to {mid + half:.0f} mm of {lo[0]:.0f} to {hi[0]:.0f} mm; "
+                  f"the titles' maxima of the whole scene)")
+        lo[0], hi[0] = mid - half, mid + half
     aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])  # panel height / width of the scene
     f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
     dense = max(s["density_factor"].max() for s in snaps)
@@ -255,7 +263,7 @@ def snapshot_figure(snaps, title, blocks=None):
         axes[0].quiverkey(quiver, box.x0 + (KEY_SHARE + 0.02) * box.width, box.y0 + 0.5 * box.height, v_key,
                           f"particle velocity {v_key:g} m/s", labelpos="E", coordinates="figure",
                           color=ARROW_COLOUR, fontproperties={"size": 8})
-    fig.suptitle(title + ":\npores coloured by U, normal forces (line width), particle velocities (arrows)")
+    fig.suptitle(title + ":\npores coloured by U, normal forces (line width), particle velocities (arrows)" + window)
     return fig
 
 

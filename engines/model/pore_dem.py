@@ -50,15 +50,29 @@ def weight_carried(scene, packing, which=None):
     """The vertical force of the normal springs (the packing law: spring a, eps_m of the scene) on
     the discs ``which`` (a mask; default: every mobile disc) at the packing's positions, over their
     weight: ~1 when they rest on the others and the walls. Of every mobile disc: the overburden the
-    walls carry; of the denser top: ~1 when the packing starts at rest under it ([packing]
-    settle_loaded), ~1/dense_top_factor when it was settled before the top was marked."""
-    which = packing.mobile if which is None else which
+    walls carry; of the discs above a depth: the overburden the discs below carry; of the denser top:
+    ~1 when the packing starts at rest under it ([packing] settle_loaded), ~1/dense_top_factor when
+    it was settled before the top was marked. With [walls] kind = "flat" the flat walls replace the
+    wall discs, each meeting a disc as a wall disc of radius 0 at the disc's foot (engines.model.paper_law)."""
+    which = packing.mobile if which is None else np.asarray(which, bool)
+    weight = float((disc_masses(scene, packing)[0][which] * scene.material.g).sum())
     c = scene.contact
-    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m),
-                     packing.r, packing.mobile)
-    F, _, _ = law.forces(packing.xz, np.zeros_like(packing.xz), np.zeros(len(packing.r)), scene.numerics.dt)
-    m, _ = disc_masses(scene, packing)
-    return float(F[which, 1].sum() / (m[which] * scene.material.g).sum())
+    xz, r, mobile = packing.xz, packing.r, packing.mobile
+    walls = scene_flat_walls(scene, packing)
+    if walls:
+        m = np.flatnonzero(mobile)
+        feet = []
+        for w in walls.values():
+            f = xz[m[w.gap(xz[m], r[m]) <= c.eps_m]].copy()
+            f[:, w.axis] = w.position
+            feet.append(f)
+        n_feet = sum(len(f) for f in feet)
+        xz, r = np.vstack([xz[m]] + feet), np.concatenate([r[m], np.zeros(n_feet)])
+        mobile = np.concatenate([np.ones(len(m), bool), np.zeros(n_feet, bool)])
+        which = np.concatenate([which[m], np.zeros(n_feet, bool)])
+    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m), r, mobile)
+    F, _, _ = law.forces(xz, np.zeros_like(xz), np.zeros(len(r)), scene.numerics.dt)
+    return float(F[which, 1].sum()) / weight
 
 
 def side_wall_ties(scene, packing):

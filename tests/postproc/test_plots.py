@@ -89,6 +89,29 @@ def test_snapshots_draw_flat_walls_and_key_only_what_is_there(snaps):
     assert any(np.allclose(xy[:, 1], 0.0) for xy in lines) and any(np.allclose(xy[:, 0], -1.0) for xy in lines)
 
 
+def suptitle(fig):
+    return " ".join(t.get_text() for t in fig.texts)  # the figure's own texts: its suptitle
+
+
+def test_a_large_scene_is_drawn_in_a_window_of_its_middle(snaps, monkeypatch):
+    """More discs than WINDOW_DISCS: the panels show the middle WINDOW_DISCS / N of the scene's
+    width, full height, and the title says which x range of which."""
+    monkeypatch.setattr(plots, "WINDOW_DISCS", 10)
+    fig = plots.snapshot_figure(snaps, "test")
+    panel = next(ax for ax in fig.axes if ax.get_title().startswith("t = "))
+    lo = min((s["xz"][:, 0] - s["r"]).min() for s in snaps) * 1e3
+    hi = max((s["xz"][:, 0] + s["r"]).max() for s in snaps) * 1e3
+    x0, x1 = panel.get_xlim()
+    n = len(snaps[0]["r"])
+    assert x1 - x0 == pytest.approx((hi - lo) * 10 / n + 0.6) and (x0 + x1) / 2 == pytest.approx((lo + hi) / 2)
+    shown_range = shown(suptitle(fig), r"x = " + NUMBER + " to " + NUMBER + " mm of " + NUMBER + " to " + NUMBER)
+    assert shown_range == pytest.approx([x0 + 0.3, x1 - 0.3, lo, hi], abs=0.5)
+    monkeypatch.setattr(plots, "WINDOW_DISCS", n)  # no more discs than that: the whole scene
+    fig = plots.snapshot_figure(snaps, "test")
+    panel = next(ax for ax in fig.axes if ax.get_title().startswith("t = "))
+    assert panel.get_xlim() == pytest.approx((lo - 0.3, hi + 0.3)) and "x = " not in suptitle(fig)
+
+
 @pytest.mark.parametrize("n", [1, 2])
 def test_one_or_two_snapshots_fill_their_figure_and_the_key_fits(snaps, n):
     """A run of one or two snapshots with the seismic box's six blocks: each panel spans a good part

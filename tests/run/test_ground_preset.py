@@ -1,0 +1,95 @@
+"""The 10,000-disc wet ground (issue 25, item 3): the seismic box's grains and constants in a wide,
+deep box, its packing at rest under its own weight, and a flat-wall check of weight_carried."""
+import numpy as np
+import pytest
+from scipy import stats
+
+from engines.model.groups import WALL_BOTTOM, WALL_NONE
+from engines.model.observe import box_window, porosity
+from engines.model.pore_dem import weight_carried
+from engines.run import scene as scenes
+from packing.packing import Packing
+from packing.psd import diameter_distribution
+
+# the fields the ground may change from liquefaction_case1 (the box, its deposit, the run's length
+# and output); every other field, grains and constants included, is case 1's
+GROUND_ONLY = {("packing", f) for f in ("file", "seed", "n_particles", "n_bottom", "n_side", "cut_extra", "settle_time",
+                                        "settle_loaded", "dense_top_count", "dense_top_depth", "dense_top_factor",
+                                        "wall_density_factor")} | {
+    ("loading", "moves"), ("loading", "side_walls"), ("numerics", "duration"), ("output", "snapshot_times"),
+    ("output", "block_z"), ("scene", "name"), ("scene", "description")}
+
+
+@pytest.fixture(scope="module")
+def ground():
+    sc = scenes.preset("ground_10000")
+    return sc, Packing.load(sc.packing.file)
+
+
+def test_the_ground_is_case_1_in_a_wider_box():
+    g, c1 = scenes.preset("ground_10000").as_dict(), scenes.preset("liquefaction_case1").as_dict()
+    changed = {(t, f) for t in g for f in g[t] if g[t][f] != c1[t][f]}
+    assert changed <= GROUND_ONLY, changed - GROUND_ONLY
+    assert g["packing"]["n_particles"] >= 10000 and g["numerics"]["duration"] >= 0.1
+    assert (g["loading"]["moves"], g["loading"]["side_walls"], g["water"]["sides"]) == ("box", "fixed", "undrained")
+    assert g["walls"]["kind"] == "discs" and g["water"]["enabled"]
+    assert (g["packing"]["dense_top_factor"], g["packing"]["wall_density_factor"]) == (1.0, 1.0)
+
+
+def test_the_ground_packing_has_the_seismic_grains(ground):
+    sc, pk = ground
+    p = sc.packing
+    d = 2 * pk.r[pk.mobile]
+    assert len(d) == p.n_particles and (~pk.mobile).sum() == p.n_bottom + 2 * (p.n_side - 1)
+    assert np.all(pk.r[~pk.mobile] == p.wall_radius) and np.all(pk.density_factor == 1.0)
+    assert len(pk.outside_box()) == 0
+    assert d.min() >= p.d_min and d.max() <= p.d_max
+    dist = diameter_distribution(p.mean_diameter, p.std_diameter)  # eq 53, truncated to [d_min, d_max]
+    lo, hi = dist.cdf(p.d_min), dist.cdf(p.d_max)
+    assert stats.kstest(d, lambda x: (dist.cdf(x) - lo) / (hi - lo)).pvalue > 0.01
+
+
+def test_the_ground_is_level_and_as_porous_as_the_seismic_box(ground):
+    sc, pk = ground
+    m = pk.mobile
+    x, top = pk.xz[m, 0], pk.xz[m, 1] + pk.r[m]
+    bins = np.linspace(x.min(), x.max(), 11)  # ten columns across the box: the surface of each
+    surface = [top[(x >= a) & (x <= b)].max() for a, b in zip(bins[:-1], bins[1:])]
+    bottom = pk.inner_faces()[WALL_BOTTOM]
+    depth = pk.bed_top - bottom
+    assert np.ptp(surface) < 0.1 * depth, f"surface heights {np.round(np.asarray(surface) * 1e3, 2)} mm"
+    assert pk.bed_top < (pk.xz[~m, 1] + pk.r[~m]).max()  # the side walls reach above the ground
+    case1 = Packing.load(scenes.preset("liquefaction_case1").packing.file)
+    n = porosity(pk.xz[m], pk.r[m], box_window(pk, sc.output.porosity_window))
+    n1 = porosity(case1.xz[case1.mobile], case1.r[case1.mobile], box_window(case1, sc.output.porosity_window))
+    assert abs(n - n1) < 0.05, (n, n1)
+
+
+def test_the_ground_carries_its_overburden(ground):
+    """At rest under gravity: the walls carry the whole weight, and at each depth the discs below
+    carry the discs above, within a few per cent (the normal springs of the packing law at the
+    packing's positions, engines.model.pore_dem.weight_carried; the tangential springs of the
+    deposit, which this cannot recover from positions, carry the rest)."""
+    sc, pk = ground
+    assert weight_carried(sc, pk) == pytest.approx(1.0, abs=0.05)
+    m, z = pk.mobile, pk.xz[:, 1]
+    for q in (0.1, 0.25, 0.5, 0.75, 0.9):
+        above = m & (z > np.quantile(z[m], q))
+        assert weight_carried(sc, pk, above) == pytest.approx(1.0, abs=0.05), q
+
+
+def test_weight_carried_meets_flat_walls():
+    """A disc resting on a flat bottom at its spring-a equilibrium gap (eq 26: kn (eps_m - gap) =
+    m g) is carried whole; lifted out of the force range it is carried by nothing. The wall
+    discs stay in the packing; the flat face at their tops replaces them."""
+    sc = scenes.preset("quicksand_case1_flat")
+    c, g = sc.contact, sc.material.g
+    sc = sc.with_overrides({"contact": {"eps_m": 1e-4}})
+    r, wall_r = 0.5e-3, 0.45e-3
+    m = sc.material.rho * np.pi * r ** 2
+    face = wall_r  # the bottom wall discs' tops
+    walls = np.column_stack([np.arange(-5, 6) * 2 * wall_r, np.zeros(11)])
+    for gap, carried in ((1e-4 - m * g / c.kn, 1.0), (2e-4, 0.0)):
+        xz = np.vstack([[0.0, face + r + gap], walls])
+        pk = Packing(xz, np.r_[r, np.full(11, wall_r)], np.r_[WALL_NONE, np.full(11, WALL_BOTTOM)], np.ones(12))
+        assert weight_carried(sc, pk) == pytest.approx(carried, abs=1e-9)
