@@ -9,7 +9,7 @@ from engines.compiled.pore_dem import PoreDEM
 from engines.model import pore_dem
 from engines.model import pores as pg
 from engines.model.flat_walls import FlatWall, as_tables
-from engines.model.pore_dem import disc_masses, moving_walls
+from engines.model.pore_dem import disc_masses, moving_walls, weight_carried
 from packing.layouts import hex_lattice
 from packing.packing import Packing
 from tests.scene_helpers import make_scene as scene
@@ -522,3 +522,21 @@ def test_the_compiled_pore_dem_with_flat_walls_is_the_numpy_one():
     assert cores[1].law.walls is not None and cores[1].kernel_step_args(np.arange(3), np.zeros((3, 2))) is None
     np.testing.assert_allclose(cores[1].law.wall_forces(), cores[0].law.wall_forces(), rtol=1e-9)
     np.testing.assert_allclose(cores[1].water.W, cores[0].water.W, rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["discs", "flat"])
+def test_weight_carried_by_wall_discs_or_flat_walls(kind):
+    """A disc resting at its spring-a equilibrium (eq 26: kn (eps_m - gap) = m g) is carried whole;
+    lifted out of the force range, by nothing. On wall discs it rests on top of one; on flat walls
+    above the dip between two, out of the wall discs' reach, where only the flat face at their
+    tops (which replaces them) carries it, meeting it at its foot."""
+    eps_m, kn, rho, g = 1e-4, 1.4e6, 2700.0, 9.81
+    sc = scene(contact={"spring": "a", "kn": kn, "eps_m": eps_m}, material={"rho": rho, "g": g}, walls={"kind": kind})
+    r, wall_r = 0.5e-3, 0.45e-3
+    x = 0.0 if kind == "discs" else wall_r
+    walls = np.column_stack([np.arange(-5, 6) * 2 * wall_r, np.zeros(11)])
+    m = rho * np.pi * r ** 2
+    for gap, carried in ((eps_m - m * g / kn, 1.0), (2 * eps_m, 0.0)):
+        xz = np.vstack([[x, wall_r + r + gap], walls])
+        pk = Packing(xz, np.r_[r, np.full(11, wall_r)], np.r_[pg.WALL_NONE, np.full(11, pg.WALL_BOTTOM)], np.ones(12))
+        assert weight_carried(sc, pk) == pytest.approx(carried, abs=1e-9)

@@ -1,10 +1,10 @@
 """The 10,000-disc wet ground (issue 25, item 3): the seismic box's grains and constants in a wide,
-deep box, its packing at rest under its own weight, and a flat-wall check of weight_carried."""
+deep box, its packing at rest under its own weight."""
 import numpy as np
 import pytest
 from scipy import stats
 
-from engines.model.groups import WALL_BOTTOM, WALL_NONE
+from engines.model.groups import WALL_BOTTOM
 from engines.model.observe import box_window, porosity
 from engines.model.pore_dem import weight_carried
 from engines.run import scene as scenes
@@ -76,20 +76,3 @@ def test_the_ground_carries_its_overburden(ground):
     for q in (0.1, 0.25, 0.5, 0.75, 0.9):
         above = m & (z > np.quantile(z[m], q))
         assert weight_carried(sc, pk, above) == pytest.approx(1.0, abs=0.05), q
-
-
-def test_weight_carried_meets_flat_walls():
-    """A disc resting on a flat bottom at its spring-a equilibrium gap (eq 26: kn (eps_m - gap) =
-    m g) is carried whole; lifted out of the force range it is carried by nothing. The wall
-    discs stay in the packing; the flat face at their tops replaces them."""
-    sc = scenes.preset("quicksand_case1_flat")
-    c, g = sc.contact, sc.material.g
-    sc = sc.with_overrides({"contact": {"eps_m": 1e-4}})
-    r, wall_r = 0.5e-3, 0.45e-3
-    m = sc.material.rho * np.pi * r ** 2
-    face = wall_r  # the bottom wall discs' tops
-    walls = np.column_stack([np.arange(-5, 6) * 2 * wall_r, np.zeros(11)])
-    for gap, carried in ((1e-4 - m * g / c.kn, 1.0), (2e-4, 0.0)):
-        xz = np.vstack([[0.0, face + r + gap], walls])
-        pk = Packing(xz, np.r_[r, np.full(11, wall_r)], np.r_[WALL_NONE, np.full(11, WALL_BOTTOM)], np.ones(12))
-        assert weight_carried(sc, pk) == pytest.approx(carried, abs=1e-9)
