@@ -127,7 +127,7 @@ liquefaction: deps
 
 # The 10,000-disc wet ground (issue 25) shaken 0.1 s by case 1's cosine: history, pressure blocks,
 # snapshots and depth.png (pore pressure and porosity by depth over time) in $(OUT)/ground/run
-# (about an hour of one core).
+# (about 11 minutes of one core).
 ground: deps
 	$(LIQ_RUN) --scene yade_scripts/scenes/ground_10000.toml --overwrite --out $(OUT)/ground/run
 

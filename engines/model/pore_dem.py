@@ -54,7 +54,7 @@ def weight_carried(scene, packing, which=None):
     ~1 when the packing starts at rest under it ([packing] settle_loaded), ~1/dense_top_factor when
     it was settled before the top was marked. With [walls] kind = "flat" the flat walls replace the
     wall discs, each meeting a disc as a wall disc of radius 0 at the disc's foot (engines.model.paper_law)."""
-    which = packing.mobile if which is None else np.asarray(which, bool)
+    which = packing.mobile if which is None else which
     weight = float((disc_masses(scene, packing)[0][which] * scene.material.g).sum())
     c = scene.contact
     xz, r, mobile = packing.xz, packing.r, packing.mobile
@@ -66,11 +66,12 @@ def weight_carried(scene, packing, which=None):
             f = xz[m[w.gap(xz[m], r[m]) <= c.eps_m]].copy()
             f[:, w.axis] = w.position
             feet.append(f)
-        n_feet = sum(len(f) for f in feet)
-        xz, r = np.vstack([xz[m]] + feet), np.concatenate([r[m], np.zeros(n_feet)])
-        mobile = np.concatenate([np.ones(len(m), bool), np.zeros(n_feet, bool)])
-        which = np.concatenate([which[m], np.zeros(n_feet, bool)])
-    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eta_n=0.0, ks=0.0, eta_s=0.0, eps_m=c.eps_m), r, mobile)
+        xz = np.vstack([xz[m]] + feet)
+        r = np.concatenate([r[m], np.zeros(len(xz) - len(m))])
+        mobile = np.arange(len(xz)) < len(m)
+        which = np.concatenate([which[m], np.zeros(len(xz) - len(m), bool)])
+    # at rest (du = 0): no dashpot and no shear force, the normal springs alone
+    law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eps_m=c.eps_m), r, mobile)
     F, _, _ = law.forces(xz, np.zeros_like(xz), np.zeros(len(r)), scene.numerics.dt)
     return float(F[which, 1].sum()) / weight
 

@@ -529,14 +529,23 @@ def test_weight_carried_by_wall_discs_or_flat_walls(kind):
     """A disc resting at its spring-a equilibrium (eq 26: kn (eps_m - gap) = m g) is carried whole;
     lifted out of the force range, by nothing. On wall discs it rests on top of one; on flat walls
     above the dip between two, out of the wall discs' reach, where only the flat face at their
-    tops (which replaces them) carries it, meeting it at its foot."""
-    eps_m, kn, rho, g = 1e-4, 1.4e6, 2700.0, 9.81
-    sc = scene(contact={"spring": "a", "kn": kn, "eps_m": eps_m}, material={"rho": rho, "g": g}, walls={"kind": kind})
+    tops (which replaces them) carries it, meeting it at its foot. A second disc beside it, out of
+    every reach, is carried by nothing: ``which`` picks the discs, the default takes both. The
+    disc is heavy enough (f x its own density) to load its spring above f_max: the packing law is
+    spring a, uncapped, whatever the scene's spring."""
+    eps_m, kn, rho, g, f = 1e-4, 7e5, 2700.0, 9.81, 200.0
+    sc = scene(contact={"spring": "c", "kn": kn, "eps_m": eps_m, "f_max": 1.0}, material={"rho": rho, "g": g},
+               walls={"kind": kind})
     r, wall_r = 0.5e-3, 0.45e-3
     x = 0.0 if kind == "discs" else wall_r
     walls = np.column_stack([np.arange(-5, 6) * 2 * wall_r, np.zeros(11)])
-    m = rho * np.pi * r ** 2
+    m = f * rho * np.pi * r ** 2
+    assert kn * eps_m > m * g > sc.contact.f_max
     for gap, carried in ((eps_m - m * g / kn, 1.0), (2 * eps_m, 0.0)):
-        xz = np.vstack([[x, wall_r + r + gap], walls])
-        pk = Packing(xz, np.r_[r, np.full(11, wall_r)], np.r_[pg.WALL_NONE, np.full(11, pg.WALL_BOTTOM)], np.ones(12))
-        assert weight_carried(sc, pk) == pytest.approx(carried, abs=1e-9)
+        xz = np.vstack([[x, wall_r + r + gap], [x + 4 * wall_r, wall_r + r + 3 * eps_m], walls])
+        pk = Packing(xz, np.r_[r, r, np.full(11, wall_r)], np.r_[pg.WALL_NONE, pg.WALL_NONE, np.full(11, pg.WALL_BOTTOM)],
+                     np.r_[f, 1.0, np.ones(11)])
+        first, second = np.arange(13) == 0, np.arange(13) == 1
+        assert weight_carried(sc, pk, first) == pytest.approx(carried, abs=1e-9)
+        assert weight_carried(sc, pk, second) == 0.0
+        assert weight_carried(sc, pk) == pytest.approx(carried * f / (f + 1), abs=1e-9)

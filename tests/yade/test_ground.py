@@ -15,8 +15,7 @@ def test_the_ground_runs_shaken_as_one_box():
     sc = scenes.preset("ground_10000")
     pk = Packing.load(sc.packing.file)
     cp = YadeCoupling(sc, pk)
-    n = 500
-    cp.run(n)
+    cp.run(500)
     xz = cp.positions()
     shift = xz - pk.xz
     base = cp.core.base
