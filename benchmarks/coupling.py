@@ -127,20 +127,33 @@ def coupling_setup(scene, packing):
     return cp.run, lambda: cp.water_model.n_rebuilds if cp.water_model is not None else 0
 
 
+def paired_runs(setups, steps, repeats, after=None):
+    """The setups {name: setup} of ``timed`` in turns, the order swapped every repeat, nothing else
+    between them: ({name: [wall us]}, {name: [CPU us]}, {name: [rebuilds]}), one sample a repeat;
+    ``after(name, wall us, CPU us, rebuilds)`` is called after each run."""
+    wall, cpu, built = ({k: [] for k in setups} for _ in range(3))
+    for rep in range(repeats):
+        for name in list(setups)[::1 if rep % 2 == 0 else -1]:
+            w, c, b = timed(setups[name], steps, warmup=200)
+            wall[name].append(w)
+            cpu[name].append(c)
+            built[name].append(b)
+            if after is not None:
+                after(name, w, c, b)
+    return wall, cpu, built
+
+
 def paired_dry(packing, steps, repeats, log):
-    """YADE alone against law = "yade" dry (the same discs, the same four engines) in turns, the
-    order swapped every repeat, nothing else between them: {"median", "min", "max"} of the CPU
-    ratio within each pair (it should be 1 within the spread), and the touching pairs YADE
-    counts at the end of its runs (O.interactions.countReal)."""
+    """YADE alone against law = "yade" dry (the same discs, the same four engines) in turns
+    (``paired_runs``): {"median", "min", "max"} of the CPU ratio within each pair (it should be 1
+    within the spread), and the touching pairs YADE counts at the end of its runs
+    (O.interactions.countReal)."""
     from yade import O
     setups = {"yade_alone_us": lambda: floor_setup(packing),
               "yade_law_dry_us": lambda: coupling_setup(scene_for(COLUMNS["yade_law_dry_us"]), packing)}
-    cpu, contacts = {k: [] for k in setups}, []
-    for rep in range(repeats):
-        for name in list(setups)[::1 if rep % 2 == 0 else -1]:
-            cpu[name].append(timed(setups[name], steps, warmup=200)[1])
-            if name == "yade_alone_us":
-                contacts.append(O.interactions.countReal())
+    contacts = []
+    _, cpu, _ = paired_runs(setups, steps, repeats,
+                            lambda name, *_: contacts.append(O.interactions.countReal()) if name == "yade_alone_us" else None)
     ratio = np.array(cpu["yade_law_dry_us"]) / np.array(cpu["yade_alone_us"])
     log(f"  n = {len(packing.r)} yade law dry / YADE alone, paired: {np.median(ratio):.3f} "
         f"({ratio.min():.3f}-{ratio.max():.3f}), touching pairs {contacts}")

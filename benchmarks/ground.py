@@ -5,7 +5,7 @@
 Our step: the preset as it runs (the paper's law, the water every step, the pores rebuilt every
 1000 steps, the box shaken by the cosine; engines.yade.coupling.YadeCoupling). YADE alone: its
 collider and linear law on the same discs, radii + eps_m/2, fixed walls, no Python
-(benchmarks.floor). The two run in turns, the order swapped each repeat, ``steps`` steps after a
+(benchmarks.floor). The two run in turns (benchmarks.coupling.paired_runs), ``steps`` steps after a
 warm-up (a run of 1000 steps holds one pore rebuild, the preset's share). Writes {"n_discs",
 "steps", "us_per_step", "yade_alone_us", "ratio", ...}: CPU microseconds a step (medians) and the
 ratio of the two within each repeat (median, with its min and max: "ratio_range").
@@ -20,7 +20,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] i
 import numpy as np
 
 from benchmarks import write_json
-from benchmarks.coupling import coupling_setup, timed
+from benchmarks.coupling import coupling_setup, paired_runs
 from benchmarks.floor import native_floor, run_steps
 from engines.run import scene as scenes
 from engines.yade import yade_io
@@ -43,14 +43,9 @@ def main(argv):
         return run_steps, lambda: 0
 
     setups = {"yade_alone": floor, "ours": lambda: coupling_setup(sc, pk)}
-    wall, cpu, built = ({k: [] for k in setups} for _ in range(3))
-    for rep in range(args.repeats):
-        for name in list(setups)[::1 if rep % 2 == 0 else -1]:
-            w, c, b = timed(setups[name], args.steps, warmup=200)
-            wall[name].append(w)
-            cpu[name].append(c)
-            built[name].append(b)
-            print(f"rep {rep + 1}/{args.repeats} {name}: {c:.0f} CPU us/step ({w:.0f} wall), {b} rebuilds", flush=True)
+    wall, cpu, built = paired_runs(setups, args.steps, args.repeats,
+                                   lambda name, w, c, b: print(f"{name}: {c:.0f} CPU us/step ({w:.0f} wall), {b} rebuilds",
+                                                                  flush=True))
     ratio = np.array(cpu["ours"]) / np.array(cpu["yade_alone"])
     out = {"n_discs": int(pk.mobile.sum()), "n_walls": int((~pk.mobile).sum()), "steps": args.steps,
            "repeats": args.repeats, "us_per_step": float(np.median(cpu["ours"])),
