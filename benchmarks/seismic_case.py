@@ -37,16 +37,18 @@ def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
     + eps_m/2, no Python), our step with the compiled kernels (many steps in one call:
     kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
-    path and with the NumPy path, interleaved; medians of wall and CPU microseconds per step and
-    their ratios to YADE alone."""
+    path and with the NumPy path, in turns (benchmarks.coupling.paired_runs: YADE alone and the
+    compiled runs next to each other, the order swapped every repeat); medians of wall and CPU
+    microseconds per step and their ratios to YADE alone."""
     import numpy as np
 
+    from benchmarks.coupling import paired_runs
     from benchmarks.floor import native_floor, run_steps
     from engines.yade.coupling import YadeCoupling
 
     def floor():
         native_floor(scene, packing)
-        return run_steps
+        return run_steps, lambda: 0
 
     def coupling(one_call=True, many=True, compiled=True):
         cp = YadeCoupling(scene, packing, compiled=compiled)
@@ -54,21 +56,13 @@ def compare(scene, packing, steps, repeats):
             cp.core.kernel_drive_args = lambda rows, held, n: None
         if not one_call:
             cp.core.kernel_step_args = lambda rows, held: None
-        return cp.run
+        return cp.run, lambda: cp.water_model.n_rebuilds
 
     setups = {"yade_alone": floor, "compiled": coupling,
               "compiled_one_call_a_step": lambda: coupling(many=False),
               "compiled_general_path": lambda: coupling(one_call=False, many=False),
               "numpy": lambda: coupling(compiled=False)}
-    wall, cpu = {k: [] for k in setups}, {k: [] for k in setups}
-    for _ in range(repeats):
-        for name, setup in setups.items():
-            run = setup()
-            run(200)
-            t0, c0 = time.perf_counter(), time.process_time()
-            run(steps)
-            wall[name].append(1e6 * (time.perf_counter() - t0) / steps)
-            cpu[name].append(1e6 * (time.process_time() - c0) / steps)
+    wall, cpu, _ = paired_runs(setups, steps, repeats)
     out = {"steps": steps, "repeats": repeats}
     for label, d in (("wall_us", wall), ("cpu_us", cpu)):
         med = {k: float(np.median(v)) for k, v in d.items()}
@@ -109,7 +103,7 @@ class Clock:
 RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
     "compiled runs of steps (kernels.dem_drive_bulk_io: read, law, ties, water, write, base, YADE's step)":
         ("engine", "_drive_dem"),
-    "steps finished in Python after a compiled run (eq 18-24 adjustments, books, O.step)":
+    "steps finished in Python after a compiled run (water sub-steps: books, O.step)":
         ("engine", "_finish_in_python"),
     "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
     "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
@@ -198,7 +192,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[5]
+    motion = drive_args[6]
     rows = np.arange(len(eng._F_out))
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (yade_io._SET_PERM, eng.forced.ids, eng._F_out.copy(), rows,
                                                       eng.held, eng._F_out)
@@ -246,7 +240,7 @@ def main(argv):
     ap.add_argument("--steps", type=int, default=180000)
     ap.add_argument("--compare-steps", type=int, default=3000,
                     help="steps of the in-run comparison with YADE alone and the NumPy path (0: skip)")
-    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--repeats", type=int, default=11, help="of the comparison (the machine's speed drifts by 1.5x)")
     ap.add_argument("--breakdown", type=int, default=1, help="1: split a step's CPU time into its parts (0: skip)")
     args = ap.parse_args(argv)
     scene = scenes.preset(PRESET)

@@ -10,6 +10,7 @@ reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 r
   darcy_update      engines.model.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
   pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
   tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
+  separation_velocities  engines.model.contact.separation_adjustment   (eq 18-24, bit for bit)
   gershgorin_limit, substep_count   engines.model.limits (the Darcy check of a water step)
 
 and per-step kernels chain them, so that a step costs one call from Python (each array passed to
@@ -664,41 +665,113 @@ def free_discs(lost, n_lost, pi, pj, state, mobile):
     return free
 
 
-ADJUST_SLACK = 1e-9  # may_adjust's relative margin on the eq 18 test: NumPy's dot may round otherwise
+@jit
+def _normal_parts(V, ea, eb, en, m, a):
+    """(Vn_a, Vn_b, b, n_x, n_z) of disc a in separation m (eq 20): n from a to its partner b."""
+    if ea[m] == a:
+        b, n0, n1 = eb[m], en[m, 0], en[m, 1]
+    else:
+        b, n0, n1 = ea[m], -en[m, 0], -en[m, 1]
+    return V[a, 0] * n0 + V[a, 1] * n1, -(V[b, 0] * n0 + V[b, 1] * n1), b, n0, n1
 
 
 @jit
-def may_adjust(free, lost, n_lost, pi, pj, state, xz, du, dt, e):
-    """Can the eq 18-24 adjustment (separation_adjustment at the velocities du / dt) change a
-    velocity after the pairs lost[:n_lost] stopped touching at centres xz, the discs ``free``
-    (``free_discs``) set free? Only if such a pair separates faster than restitution e allows
-    (eq 18: -(Vn_i + Vn_j) > e Vn_ij > 0, eq 20), tested with a margin ADJUST_SLACK, so that False
-    is certain: every free disc then keeps du / dt. (The tests come before any adjustment: where
-    they all fail at the first velocities nothing is adjusted.)"""
-    for m in range(n_lost):
-        k = lost[m]
-        i, j = pi[k], pj[k]
-        limit = e * state[k, VN_COLL]
-        if not ((free[i] or free[j]) and limit > 0.0):
+def _separations_of(ea, eb, a):
+    """How many of the separations (ea, eb) disc a is in."""
+    c = 0
+    for m in range(len(ea)):
+        c += (ea[m] == a) + (eb[m] == a)
+    return c
+
+
+@jit
+def _adjust_one(V, ea, eb, en, vnc, free, only_fixed, a, e):
+    """Eq 22-23 for free disc a against its separations (``only_fixed``: those whose partner is not
+    free): the smallest Rk_a, along that pair's normal (separation_adjustment's ``adjust``)."""
+    best, vn_best, n0_best, n1_best = np.inf, 0.0, 0.0, 0.0
+    found = False
+    for m in range(len(ea)):
+        if ea[m] != a and eb[m] != a:
             continue
-        dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
-        R = math.sqrt(dx * dx + dz * dz)
-        away = ((du[j, 0] - du[i, 0]) * dx + (du[j, 1] - du[i, 1]) * dz) / (R * dt)  # -(Vn_i + Vn_j)
-        if away > limit * (1.0 - ADJUST_SLACK) - ADJUST_SLACK * abs(away):
-            return True
-    return False
+        vn_a, vn_b, b, n0, n1 = _normal_parts(V, ea, eb, en, m, a)
+        if only_fixed and free[b]:
+            continue
+        if vn_a == 0 or not -(vn_a + vn_b) > e * vnc[m] > 0:
+            continue
+        rk = (-e * vnc[m] - vn_b) / vn_a                        # eq 22
+        if not found or rk < best:
+            best, vn_best, n0_best, n1_best, found = rk, vn_a, n0, n1, True
+    if found:
+        c = (1 - best) * vn_best                                # eq 23
+        V[a, 0] -= c * n0_best
+        V[a, 1] -= c * n1_best
 
 
 @jit
-def _write_step_velocities(set_vel, ids, discs, du, dt):
-    """set_vel(ids[discs] <- du[discs] / dt) for the discs where ``discs`` (N,) is true; the
-    bridge's error code."""
+def separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e, V):
+    """Twin of engines.model.contact.separation_adjustment (eq 18-24, Fig. 3) for the pairs
+    lost[:n_lost] that stopped touching at centres xz, at the velocities du / dt: V (N, 2) [m/s]
+    gets the new velocity of each disc ``free`` (``free_discs``); its other rows are not set."""
+    ea, eb = pi[lost[:n_lost]], pj[lost[:n_lost]]
+    vnc = state[lost[:n_lost], VN_COLL]
+    en = np.empty((n_lost, 2))
+    for m in range(n_lost):
+        d0, d1 = xz[eb[m], 0] - xz[ea[m], 0], xz[eb[m], 1] - xz[ea[m], 1]
+        R = math.sqrt(d0 * d0 + d1 * d1)
+        en[m, 0], en[m, 1] = d0 / R, d1 / R
+    discs = np.unique(np.concatenate((ea, eb)))  # ascending, as separation_adjustment's sorted()
+    for a in discs:
+        V[a, 0], V[a, 1] = du[a, 0] / dt, du[a, 1] / dt
+    done = np.zeros(len(free), np.bool_)
+    for a in discs:  # (d) pairs that touched only each other (eq 24)
+        if not free[a] or done[a] or _separations_of(ea, eb, a) != 1:
+            continue
+        m = 0
+        while ea[m] != a and eb[m] != a:
+            m += 1
+        vn_a, vn_b, b, n0, n1 = _normal_parts(V, ea, eb, en, m, a)
+        if free[b] and _separations_of(ea, eb, b) == 1:
+            target = -e * vnc[m]
+            if -(vn_a + vn_b) > e * vnc[m] > 0:
+                P = mass[a] * vn_a - mass[b] * vn_b             # eq 24b
+                new_a = (P + mass[b] * target) / (mass[a] + mass[b])
+                new_b = target - new_a                          # eq 24a
+                V[a, 0] -= (vn_a - new_a) * n0
+                V[a, 1] -= (vn_a - new_a) * n1
+                V[b, 0] += (vn_b - new_b) * n0
+                V[b, 1] += (vn_b - new_b) * n1
+            done[a] = done[b] = True
+    for a in discs:  # (a), (b): every partner is a wall or still touches others
+        if free[a] and not done[a]:
+            alone = True
+            for m in range(n_lost):
+                if (ea[m] == a and free[eb[m]]) or (eb[m] == a and free[ea[m]]):
+                    alone = False
+            if alone:
+                _adjust_one(V, ea, eb, en, vnc, free, False, a, e)
+                done[a] = True
+    for a in discs:  # (c) first the partner j, against the discs that are not free
+        if free[a] and not done[a]:
+            for m in range(n_lost):
+                if (ea[m] == a and not free[eb[m]]) or (eb[m] == a and not free[ea[m]]):
+                    _adjust_one(V, ea, eb, en, vnc, free, True, a, e)
+                    done[a] = True
+                    break
+    for a in discs:  # (c) then i, against the adjusted j
+        if free[a] and not done[a]:
+            _adjust_one(V, ea, eb, en, vnc, free, False, a, e)
+
+
+@jit
+def _write_step_velocities(set_vel, ids, discs, V):
+    """set_vel(ids[discs] <- V[discs]) for the discs where ``discs`` (N,) is true; the bridge's
+    error code."""
     at = np.flatnonzero(discs)
-    V = np.empty((len(at), 2))
+    W = np.empty((len(at), 2))
     for m in range(len(at)):
-        V[m, 0], V[m, 1] = du[at[m], 0] / dt, du[at[m], 1] / dt
+        W[m, 0], W[m, 1] = V[at[m], 0], V[at[m], 1]
     chosen = ids[at]
-    return _c_bulk_call(set_vel, chosen.ctypes.data, chosen.size, V.ctypes.data)
+    return _c_bulk_call(set_vel, chosen.ctypes.data, chosen.size, W.ctypes.data)
 
 
 MOTION = Layout("MOTION", ("amplitude", "w", "dt", "acc", "vel", "disp", "wall_velocity"))  # of cosine_base_step
@@ -720,7 +793,7 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, totals, motion, wall_ids, wall_vel, ids_in, xz,
+def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, motion, wall_ids, wall_vel, ids_in, xz,
                       ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
@@ -732,14 +805,15 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, totals, motion, w
     [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
     walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
     bridge's steps() (O.step()).
-    With ``adjust`` (the eq 18-24 velocity adjustment, restitution e), pairs that stopped touching
-    (dem_step's n_lost > 0) and set discs free (``free_discs``) give those discs the velocity du /
-    dt, as the adjustment does where it adjusts nothing. It stops after the force write of a step
-    that needs Python: such a separation that may adjust a velocity (``may_adjust``), or a water
-    step that needed sub-steps or failed; and at the start of a step whose pair list is stale
-    (LIST_STALE: nothing done of it) or at an error code.
+    With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``
+    (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
+    (``free_discs``) give those discs their ``separation_velocities`` by set_vel. It stops after
+    the force write of a step that needs Python (a water step that needed sub-steps or failed), at
+    the start of a step whose pair list is stale (LIST_STALE: nothing done of it) or at an error
+    code.
     Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code)."""
     wet = len(W) > 0
+    V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
@@ -759,9 +833,8 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, totals, motion, w
         if adjust and n_lost > 0:
             free = free_discs(lost, n_lost, pi, pj, state, mobile)
             if free.any():
-                if may_adjust(free, lost, n_lost, pi, pj, state, xz, du, dt, e):
-                    return s, n_lost, n_sub, 0
-                rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, du, dt)  # adjusted: none
+                separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e, V)
+                rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, V)
                 if rc != 0:
                     return s, n_lost, n_sub, rc
         if water_due:
@@ -780,7 +853,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, totals, motion, w
     return n, 0, 1, 0
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 14).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 15).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit

@@ -51,9 +51,9 @@ class PoreDEM(pore_dem.PoreDEM):
         return self.water_model is not None and self.k % self.water_model.water_interval == 0
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_interval, adjust, e, totals, motion, args) for kernels.dem_drive_bulk_io: up
-        to n steps from step k (none of them a pore rebuild), whether the eq 18-24 adjustment is on
-        and its restitution, the water's balance so far (3,) [m^2], the base
+        """(steps, water_interval, adjust, e, mass, totals, motion, args) for kernels.dem_drive_bulk_io:
+        up to n steps from step k (none of them a pore rebuild), whether the eq 18-24 adjustment is on,
+        its restitution and the discs' masses, the water's balance so far (3,) [m^2], the base
         motion (kernels.MOTION; empty without one) and the arguments after F_out (DEM_DRIVE), or
         None when step k needs ``kernel_step_args``'s other paths or the input acceleration is not
         a Cosine. ``finish_kernel_drive`` books what the call did."""
@@ -69,10 +69,10 @@ class PoreDEM(pore_dem.PoreDEM):
             wall_velocity=self.wall_velocity))
         s = self.law.settings
         if wm is None:
-            return n, 1, s.separation_adjustment, s.restitution, np.zeros(3), motion, args
+            return n, 1, s.separation_adjustment, s.restitution, self.law.mass, np.zeros(3), motion, args
         b = wm.water.balance
         steps = min(n, steps_to_rebuild(self.k, wm.k_built, wm.k0, wm.rebuild_interval, 1))
-        return (steps, wm.water_interval, s.separation_adjustment, s.restitution,
+        return (steps, wm.water_interval, s.separation_adjustment, s.restitution, self.law.mass,
                 np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args)
 
     def finish_kernel_drive(self, done, totals, motion):

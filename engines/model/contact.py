@@ -250,7 +250,7 @@ def separation_adjustment(events, touch_count, vel, mass, mobile, e):
     def normal_parts(ev, a):
         """(Vn_a, Vn_b, n from a to b) for disc a of the event, eq 20."""
         b, n = (ev.j, ev.normal) if ev.i == a else (ev.i, -ev.normal)
-        return float(v[a] @ n), float(-(v[b] @ n)), b, n
+        return float(v[a][0] * n[0] + v[a][1] * n[1]), float(-(v[b][0] * n[0] + v[b][1] * n[1])), b, n
 
     # (d) isolated pairs first, then (a)/(b) against discs that are not free, then (c)
     for a in sorted(free):

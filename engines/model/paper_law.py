@@ -34,7 +34,7 @@ class PaperLaw:
     def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
         self.settings, self.dt = settings, float(dt)
         self.mobile = np.asarray(mobile, bool)
-        self.mass, self.inertia = np.asarray(mass, float), np.ascontiguousarray(inertia, float)
+        self.mass, self.inertia = np.ascontiguousarray(mass, float), np.ascontiguousarray(inertia, float)
         n = len(self.mobile)
         self.walls = WallVertices(flat_walls, n) if flat_walls else None
         if self.walls is None:

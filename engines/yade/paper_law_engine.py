@@ -116,8 +116,7 @@ class PaperLawEngine:
 
     def _kernel_steps(self, n):
         """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
-        among them; a step it leaves after its force write (a separation that may adjust a
-        velocity, eq 18-24; water sub-steps) is finished here with its O.step(). Returns the
+        among them; a step it leaves after its force write (water sub-steps) is finished here with its O.step(). Returns the
         steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
         if self.hooks:
             return 0
@@ -126,8 +125,8 @@ class PaperLawEngine:
             drive = core.kernel_drive_args(self._dynamic, self.held, n)
             if drive is None:
                 return 0
-            steps, water_interval, adjust, e, totals, motion, args = drive
-            done, n_lost, n_sub, rc = self._drive_dem(steps, core.k, water_interval, adjust, e, totals, motion,
+            steps, water_interval, adjust, e, mass, totals, motion, args = drive
+            done, n_lost, n_sub, rc = self._drive_dem(steps, core.k, water_interval, adjust, e, mass, totals, motion,
                                                       self.walls, self._wall_vel, self.io, self._xz, self.forced,
                                                       self._F_out, args)
             core.finish_kernel_drive(done, totals, motion)

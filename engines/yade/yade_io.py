@@ -155,14 +155,14 @@ def drive_water(n, k, k0, water_interval, totals, xz_built, moved2, reader, xz, 
                                        writer.ids, out, *args)
 
 
-def drive_dem(n, k, water_interval, adjust, e, totals, motion, walls, wall_vel, reader, xz, writer, out, args):
+def drive_dem(n, k, water_interval, adjust, e, mass, totals, motion, walls, wall_vel, reader, xz, writer, out, args):
     """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
-    step k (``adjust``: the eq 18-24 adjustment is on, with restitution e), the positions read from ``reader`` and the
-    forces out written to ``writer`` (Bodies),
-    the velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the
-    base motion ``motion``, args those of dem_drive_bulk_io after F_out. Returns its (steps done,
-    n_lost, n_sub, error code)."""
-    return kernels.dem_drive_bulk_io(_BRIDGE, n, k, water_interval, adjust, e, totals, motion, walls.ids, wall_vel,
+    step k (``adjust``: the eq 18-24 adjustment is on, with restitution e and the discs' masses
+    mass (N,) [kg/m]), the positions read from ``reader`` and the forces out written to ``writer``
+    (Bodies), the velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set
+    from the base motion ``motion``, args those of dem_drive_bulk_io after F_out. Returns its
+    (steps done, n_lost, n_sub, error code)."""
+    return kernels.dem_drive_bulk_io(_BRIDGE, n, k, water_interval, adjust, e, mass, totals, motion, walls.ids, wall_vel,
                                      reader.ids, xz, writer.ids, out, *args)
 
 

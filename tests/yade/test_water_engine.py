@@ -291,14 +291,16 @@ def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
 
 
 def test_compiled_steps_leave_a_disc_set_free_to_the_velocity_adjustment():
-    """The head-on collision with the eq 18-24 adjustment: the compiled runs of steps stop at the
-    separation that sets the discs free, Python adjusts their velocities (-Vn''/Vn = e), and the
-    run is bit for bit that of the other two paths."""
+    """The head-on collision with the eq 18-24 adjustment: the compiled runs of steps adjust the
+    velocities of the discs the separation sets free (kernels.separation_velocities, -Vn''/Vn = e)
+    without leaving the compiled call, and the run is bit for bit that of the other two paths (the
+    NumPy adjustment)."""
     from engines.run.crosscheck import contact_scene, launcher_packing
     sc = contact_scene("head_on_adjusted", spring="a", separation_adjustment=True)
     runs, compiled_steps = _fused_and_general(sc, launcher_packing(), n=2500)
     _assert_same_runs(runs, n=2500)
     assert min(compiled_steps) > 2000
+    assert compiled_steps[0] == 2499  # all but the first step (du = 0): none finished in Python
     v = runs[0][1]
     assert v[2, 0] > v[1, 0] > 0  # B ahead of A, both on their way after the collision
 
