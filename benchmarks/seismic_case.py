@@ -9,8 +9,8 @@ saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 ga
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}, "breakdown_cpu_us": {...}}: the comparison times YADE alone on the same discs
-(fixed walls), our step with the compiled kernels (every step after the first in compiled runs:
-kernels.dem_drive_bulk_io; the pore rebuilds in Python before their step), with one compiled call a step (kernels.dem_step), on the general
+(fixed walls), our step with the compiled kernels (the steps between pore rebuilds in compiled
+runs: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
 path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and with the NumPy
 path, interleaved in the same run (ratios hold on a shared machine; absolute times do not); the
 breakdown splits the run's CPU time a step into its parts, their sum against the measured mean
@@ -105,8 +105,7 @@ RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
         ("engine", "_drive_dem"),
     "steps finished in Python after a compiled run (water sub-steps: books, O.step)":
         ("engine", "_finish_in_python"),
-    "steps made in Python (PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
-    "pore rebuilds before their step (PoreDEM.rebuild_before_step)": ("core", "rebuild_before_step"),
+    "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
     "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
 }
 
@@ -136,7 +135,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     cp = YadeCoupling(scene, packing)
     cp.run(warmup)
     eng, core = cp.engine, cp.core
-    owners = {"engine": eng, "core": core, "contact": core.law.contact}
+    owners = {"engine": eng, "contact": core.law.contact}
     plain = {label: getattr(owners[o], n) for label, (o, n) in RUN_PARTS.items()}
     kernel_steps = [0]
     drive = eng._drive_dem

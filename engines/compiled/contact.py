@@ -32,12 +32,6 @@ class ContactLaw(contact.ContactLaw):
     def _max_sq_moved(self, xz):
         return kernels.max_sq_displacement(xz, self.xz_list)
 
-    def _near_pairs(self, xz):
-        if self.pair_filter is not None:
-            return super()._near_pairs(xz)
-        return kernels.near_pairs(np.ascontiguousarray(xz, float), self.r, self.mobile, self.s.eps_m, self.skin,
-                                  self.reach + self.skin)
-
     def _update_list(self, xz):
         if not super()._update_list(xz):
             return False

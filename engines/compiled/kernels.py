@@ -5,7 +5,6 @@ Each kernel repeats, loop by loop, the arithmetic of a readable NumPy function, 
 reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 relative):
 
   contact_forces    engines.model.contact.ContactLaw.forces          (eq 1-13, 26-27)
-  near_pairs        engines.model.contact.ContactLaw._near_pairs     (the pair list, by a cell list)
   measure           engines.model.pores.measure              (eq 29, 43b; ``turn`` below)
   darcy_flows       engines.model.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
   darcy_update      engines.model.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
@@ -147,47 +146,6 @@ def max_sq_displacement(xz, xz_ref):
         dx, dz = xz[a, 0] - xz_ref[a, 0], xz[a, 1] - xz_ref[a, 1]
         out = max(out, dx * dx + dz * dz)
     return out
-
-
-@jit
-def near_pairs(xz, r, mobile, eps_m, skin, reach):
-    """Twin of engines.model.contact.ContactLaw._near_pairs without a pair filter: the pairs (K, 2)
-    i < j with a mobile disc and hypot(dx, dz) <= r_i + r_j + eps_m + skin, sorted by (i, j), found
-    by a cell list of cells no smaller than ``reach`` [m] (>= every pair's bound), with no more
-    cells than about 4 a disc."""
-    n = len(xz)
-    if n == 0:
-        return np.zeros((0, 2), np.int64)
-    lo0, lo1 = xz[:, 0].min(), xz[:, 1].min()
-    span0, span1 = xz[:, 0].max() - lo0, xz[:, 1].max() - lo1
-    if not (math.isfinite(span0) and math.isfinite(span1)):
-        raise ValueError("a disc centre is not finite: no pair list")
-    cell = reach
-    while (span0 / cell + 1.0) * (span1 / cell + 1.0) > 4.0 * n + 16.0:
-        cell *= 2.0
-    n0, n1 = int(span0 / cell) + 1, int(span1 / cell) + 1
-    c0, c1 = np.empty(n, np.int64), np.empty(n, np.int64)
-    head, nxt = np.full(n0 * n1, -1, np.int64), np.empty(n, np.int64)
-    for i in range(n - 1, -1, -1):
-        c0[i], c1[i] = min(int((xz[i, 0] - lo0) / cell), n0 - 1), min(int((xz[i, 1] - lo1) / cell), n1 - 1)
-        c = c0[i] * n1 + c1[i]
-        nxt[i], head[c] = head[c], i
-    out = np.empty((max(16, 8 * n), 2), np.int64)
-    k = 0
-    for i in range(n):
-        for a in range(max(c0[i] - 1, 0), min(c0[i] + 2, n0)):
-            for b in range(max(c1[i] - 1, 0), min(c1[i] + 2, n1)):
-                j = head[a * n1 + b]
-                while j >= 0:
-                    if j > i and (mobile[i] or mobile[j]) and \
-                            math.hypot(xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]) <= r[i] + r[j] + eps_m + skin:
-                        if k == len(out):
-                            out = np.concatenate((out, np.empty_like(out)))
-                        out[k, 0], out[k, 1] = i, j
-                        k += 1
-                    j = nxt[j]
-    pairs = out[:k]
-    return pairs[np.argsort(pairs[:, 0] * n + pairs[:, 1])]
 
 
 @jit

@@ -46,18 +46,6 @@ class PoreDEM(pore_dem.PoreDEM):
         self._move_walls()
         return fixes
 
-    def rebuild_before_step(self, xz):
-        """Make step k's pore rebuild, due on the schedule, now at its centres xz (N, 2) [m], so
-        that the step itself takes ``kernel_step_args`` (the law reads no pore: the run is the one
-        that rebuilds inside ``step``); True if it rebuilt. Not with a rebuild_distance, flat walls
-        or at the first step, which take the general ``step``."""
-        wm, law = self.water_model, self.law
-        if (wm is None or wm.rebuild_distance > 0 or law.xz_prev is None or law.walls is not None
-                or not wm.rebuild_due(self.k)):
-            return False
-        wm.rebuild(xz, self.k)
-        return True
-
     def water_due(self):
         """Does step k advance the water (kernels.dem_step's water_due)?"""
         return self.water_model is not None and self.k % self.water_model.water_interval == 0

@@ -110,9 +110,10 @@ class ContactLaw:
         self.list_builds += 1
         return True
 
-    def _near_pairs(self, xz):
-        """The pairs (K, 2) i < j at xz with a mobile disc and R <= r_i + r_j + eps_m + skin (that
-        ``pair_filter`` keeps), sorted by (i, j)."""
+    def _pairs_near(self, xz):
+        """(i, j, state) of a pair list built at xz: the pairs with a mobile disc and
+        R <= r_i + r_j + eps_m + skin, so that no other pair can touch before the next build,
+        sorted by (i, j), with the state of the pairs already listed."""
         pairs = cKDTree(xz).query_pairs(self.reach + self.skin, output_type="ndarray").astype(np.int64)
         d = xz[pairs[:, 1]] - xz[pairs[:, 0]]
         near = np.hypot(d[:, 0], d[:, 1]) <= self.r[pairs[:, 0]] + self.r[pairs[:, 1]] + self.s.eps_m + self.skin
@@ -120,13 +121,9 @@ class ContactLaw:
         pairs.sort(axis=1)
         if self.pair_filter is not None:
             pairs = pairs[self.pair_filter(pairs[:, 0], pairs[:, 1])]
-        return pairs[np.argsort(pairs[:, 0] * self.n + pairs[:, 1])]
-
-    def _pairs_near(self, xz):
-        """(i, j, state) of a pair list built at xz: the ``_near_pairs``, so that no other pair
-        can touch before the next build, with the state of the pairs already listed."""
-        pairs = self._near_pairs(xz)
         key_new = pairs[:, 0] * self.n + pairs[:, 1]
+        order = np.argsort(key_new)
+        pairs, key_new = pairs[order], key_new[order]
         key_old = self.i * self.n + self.j  # sorted by construction
         state = np.zeros((len(pairs), 6))
         if len(key_old):

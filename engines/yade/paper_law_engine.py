@@ -116,15 +116,13 @@ class PaperLawEngine:
 
     def _kernel_steps(self, n):
         """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
-        among them; a step it leaves after its force write (water sub-steps) is finished here with its O.step(). Returns the
-        steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
+        among them; a step it leaves after its force write (water sub-steps) is finished here with
+        its O.step(). Returns the steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
         if self.hooks:
             return 0
         core = self.core
         while True:
             drive = core.kernel_drive_args(self._dynamic, self.held, n)
-            if drive is None and self._rebuild_first():
-                drive = core.kernel_drive_args(self._dynamic, self.held, n)
             if drive is None:
                 return 0
             steps, water_interval, adjust, e, mass, totals, motion, args = drive
@@ -154,8 +152,6 @@ class PaperLawEngine:
         core = self.core
         while True:
             args = core.kernel_step_args(self._dynamic, self.held)
-            if args is None and self._rebuild_first():
-                args = core.kernel_step_args(self._dynamic, self.held)
             if args is None:
                 return False
             n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args)
@@ -165,11 +161,6 @@ class PaperLawEngine:
         fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due])
         self._after(fixes)
         return True
-
-    def _rebuild_first(self):
-        """The core's scheduled pore rebuild of this step made before it (``rebuild_before_step``,
-        at the positions read here), so that the step runs compiled; True if it rebuilt."""
-        return hasattr(self.core, "rebuild_before_step") and self.core.rebuild_before_step(self.io.positions())
 
     def _write_held(self, F):
         self.forced.set_permanent_forces(F, self._dynamic, self.held)

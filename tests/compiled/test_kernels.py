@@ -291,35 +291,3 @@ def test_separation_velocities_equal_the_velocity_adjustment_bit_for_bit():
                 cases.add("d" if len(partners) == 1 and free[partners[0]] and alone[0]
                           else "c" if any(free[partners]) else "a, b")
     assert changed > 100 and cases == {"a, b", "c", "d"}
-
-
-@pytest.mark.parametrize("spread", ["packed", "one disc far away", "a line"])
-def test_near_pairs_equal_the_kdtree_pair_list(spread):
-    """kernels.near_pairs (a cell list) against engines.model.contact.ContactLaw._near_pairs (cKDTree)
-    on discs of two sizes, some fixed: the same pairs in the same order, the pairs that touch now
-    among them; a disc far from the rest (the cells coarsened, not ~1e11 of them) and discs on a
-    line change nothing."""
-    rng = np.random.default_rng(11)
-    n = 400
-    r = rng.choice([1e-3, 2.5e-3], n)
-    xz = rng.random((n, 2)) * [0.08, 0.05]
-    if spread == "one disc far away":
-        xz[7] = [1e9, -3.0]  # a fine grid would need ~1e11 cells
-    elif spread == "a line":
-        xz[:, 1] = 0.01
-    mobile = rng.random(n) < 0.8
-    s = ContactSettings(eps_m=2e-4)
-    law = model_contact.ContactLaw(s, r, mobile)
-    pairs = law._near_pairs(xz)
-    got = kernels.near_pairs(xz, law.r, law.mobile, s.eps_m, law.skin, law.reach + law.skin)
-    assert got.dtype == np.int64 and len(pairs) > n
-    np.testing.assert_array_equal(got, pairs)
-    d = np.hypot(*(xz[pairs[:, 1]] - xz[pairs[:, 0]]).T)
-    assert np.any(d <= r[pairs[:, 0]] + r[pairs[:, 1]])
-
-
-def test_near_pairs_refuse_a_centre_that_is_not_finite():
-    xz = np.zeros((3, 2))
-    xz[1] = [np.nan, 0.0]
-    with pytest.raises(ValueError, match="not finite"):
-        kernels.near_pairs(xz, np.ones(3), np.ones(3, bool), 0.0, 0.1, 2.1)
