@@ -62,8 +62,9 @@ def compare(scene, packing, steps, repeats):
               "compiled_one_call_a_step": lambda: coupling(many=False),
               "compiled_general_path": lambda: coupling(one_call=False, many=False),
               "numpy": lambda: coupling(compiled=False)}
-    wall, cpu, _ = paired_runs(setups, steps, repeats)
-    out = {"steps": steps, "repeats": repeats}
+    wall, cpu, built = paired_runs(setups, steps, repeats)
+    out = {"steps": steps, "repeats": repeats,  # the pore rebuilds in each timed run (the run's share: steps / 1000)
+           "rebuilds_per_run": {k: sorted(set(v)) for k, v in built.items() if k != "yade_alone"}}
     for label, d in (("wall_us", wall), ("cpu_us", cpu)):
         med = {k: float(np.median(v)) for k, v in d.items()}
         out[label] = med
