@@ -685,6 +685,15 @@ def _separations_of(ea, eb, a):
 
 
 @jit
+def _has_partner(ea, eb, free, a, partner_free):
+    """Has disc a a partner in the separations (ea, eb) whose ``free`` flag is partner_free?"""
+    for m in range(len(ea)):
+        if (ea[m] == a and free[eb[m]] == partner_free) or (eb[m] == a and free[ea[m]] == partner_free):
+            return True
+    return False
+
+
+@jit
 def _adjust_one(V, ea, eb, en, vnc, free, only_fixed, a, e):
     """Eq 22-23 for free disc a against its separations (``only_fixed``: those whose partner is not
     free): the smallest Rk_a, along that pair's normal (separation_adjustment's ``adjust``)."""
@@ -742,21 +751,13 @@ def separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e
                 V[b, 1] += (vn_b - new_b) * n1
             done[a] = done[b] = True
     for a in discs:  # (a), (b): every partner is a wall or still touches others
-        if free[a] and not done[a]:
-            alone = True
-            for m in range(n_lost):
-                if (ea[m] == a and free[eb[m]]) or (eb[m] == a and free[ea[m]]):
-                    alone = False
-            if alone:
-                _adjust_one(V, ea, eb, en, vnc, free, False, a, e)
-                done[a] = True
+        if free[a] and not done[a] and not _has_partner(ea, eb, free, a, True):
+            _adjust_one(V, ea, eb, en, vnc, free, False, a, e)
+            done[a] = True
     for a in discs:  # (c) first the partner j, against the discs that are not free
-        if free[a] and not done[a]:
-            for m in range(n_lost):
-                if (ea[m] == a and not free[eb[m]]) or (eb[m] == a and not free[ea[m]]):
-                    _adjust_one(V, ea, eb, en, vnc, free, True, a, e)
-                    done[a] = True
-                    break
+        if free[a] and not done[a] and _has_partner(ea, eb, free, a, False):
+            _adjust_one(V, ea, eb, en, vnc, free, True, a, e)
+            done[a] = True
     for a in discs:  # (c) then i, against the adjusted j
         if free[a] and not done[a]:
             _adjust_one(V, ea, eb, en, vnc, free, False, a, e)
