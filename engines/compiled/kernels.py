@@ -61,6 +61,14 @@ jit = nb.njit(cache=True, nogil=True)
 SPRING_CODE = {"a": 0, "b": 0, "c": 1, "d": 2}  # linear, capped elastic, capped hysteretic
 
 
+@jit
+def _at(i):
+    """Index i >= 0 as an unsigned integer: numba indexes with it without the wraparound of
+    negative indices it adds for a signed one (measured on the seismic case: the pore measure
+    28 % cheaper, the Darcy flows 15 %, the law and the eq 33 forces 8 %)."""
+    return np.uint64(i)
+
+
 def contact_params(s, dt):
     """The float parameters of ``contact_forces`` from ContactSettings ``s`` and dt [s]."""
     return np.array([s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m, dt])
@@ -79,7 +87,7 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
     acc_j[:] = 0.0
     n_lost = 0
     for k in range(len(pi)):
-        i, j = pi[k], pj[k]
+        i, j = _at(pi[k]), _at(pj[k])
         dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
         R = math.sqrt(dx * dx + dz * dz)
         nx, nz = dx / R, dz / R                                 # eq 2
@@ -180,9 +188,10 @@ LAW_OWN = Layout("LAW_OWN", LAW.names[:-len(CONTACT.names)])
 LAW.check(LAW_OWN, CONTACT)
 
 
-# atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 7 terms leave < 1e-22 relative
+# atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 5 terms leave < 6e-17 relative
+# (half an ulp), and each of them moves turn(s, c) by more than 2 ulp somewhere in that range
 SMALL_TURN = 0.03
-_A0, _A1, _A2, _A3, _A4, _A5, _A6 = ((-1.0) ** k / (2 * k + 1) for k in range(7))  # numba constants
+_A0, _A1, _A2, _A3, _A4 = ((-1.0) ** k / (2 * k + 1) for k in range(5))  # numba constants
 
 
 @jit
@@ -193,7 +202,8 @@ def turn(s, c):
     if c > 0.0 and abs(s) <= SMALL_TURN * c:
         t = s / c
         t2 = t * t
-        return t * (_A0 + t2 * (_A1 + t2 * (_A2 + t2 * (_A3 + t2 * (_A4 + t2 * (_A5 + t2 * _A6))))))  # Horner
+        t4 = t2 * t2  # Estrin's scheme: the pairs of terms side by side, not one chain
+        return t * ((_A0 + t2 * _A1) + t4 * ((_A2 + t2 * _A3) + t4 * _A4))
     return math.atan2(s, c)
 
 
@@ -207,7 +217,7 @@ def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, 
     of two turns, as in engines.model.pores.measure. ``contact`` is a bool array.
     """
     for l in range(len(links)):
-        i, j = links[l, 0], links[l, 1]
+        i, j = _at(links[l, 0]), _at(links[l, 1])
         xi, zi = xz[i, 0], xz[i, 1]
         dx, dz = xz[j, 0] - xi, xz[j, 1] - zi
         length[l] = math.sqrt(dx * dx + dz * dz)
@@ -219,9 +229,9 @@ def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, 
     sect[:] = 0.0
     two_pi = 2 * math.pi
     for c in range(len(c_pore)):
-        p = c_pore[c]
-        poly[p] += c_sign[c] * cross[c_link[c]]
-        x = rot[c_link[c]] - rot[c_next[c]] + math.pi
+        p, l = _at(c_pore[c]), _at(c_link[c])
+        poly[p] += c_sign[c] * cross[l]
+        x = rot[l] - rot[_at(c_next[c])] + math.pi
         if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
             x = x % two_pi
         theta[c] = c_theta0[c] + x - math.pi                    # eq 29
@@ -254,9 +264,9 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
         g_b[p] = g_s + g_d
         acc_i[p] = acc_j[p] = 0.0
     for t in range(len(ti)):
-        i, j = ti[t], tj[t]
+        i, j = _at(ti[t]), _at(tj[t])
         if A[i] > a_min and A[j] > a_min:
-            k = k2 if link_contact[t_link[t]] else k1           # eq 43
+            k = k2 if link_contact[_at(t_link[t])] else k1      # eq 43
             g[t] = k * (W[i] * W[j] / (A[i] + A[j])) / E_w      # eq 40
         else:
             g[t] = 0.0
@@ -277,8 +287,8 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
     out_i[:] = 0.0
     out_j[:] = 0.0
     for t in range(len(ti)):
-        out_i[ti[t]] += q[t]
-        out_j[tj[t]] += q[t]
+        out_i[_at(ti[t])] += q[t]
+        out_j[_at(tj[t])] += q[t]
     for p in range(len(W)):
         if W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h <= 0:
             return p
@@ -907,15 +917,17 @@ def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
     n = len(F)
     for l in range(len(links)):
         p0, p1 = link_pores[l, 0], link_pores[l, 1]
-        s = ((U[p1] if p1 >= 0 else 0.0) - (U[p0] if p0 >= 0 else 0.0)) / length[l]
+        s = ((U[_at(p1)] if p1 >= 0 else 0.0) - (U[_at(p0)] if p0 >= 0 else 0.0)) / length[l]
         px, pz = -vec[l, 1] * s, vec[l, 0] * s
         i, j = links[l, 0], links[l, 1]
         if i < n:
-            F[i, 0] += r[i] * px
-            F[i, 1] += r[i] * pz
+            a = _at(i)
+            F[a, 0] += r[a] * px
+            F[a, 1] += r[a] * pz
         if j < n:
-            Fj[j, 0] += r[j] * px
-            Fj[j, 1] += r[j] * pz
+            b = _at(j)
+            Fj[b, 0] += r[b] * px
+            Fj[b, 1] += r[b] * pz
     for a in range(len(F)):
         F[a, 0] += Fj[a, 0]
         F[a, 1] += Fj[a, 1]

@@ -23,7 +23,7 @@ simulation.
 its own work. For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` and ``c_steps`` are the
 ctypes function objects, ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready
 (``available()`` not yet True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps``
-(``yb_error`` says what), k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit``
+(``yb_error`` says what), -5 no memory for the lookup of the ids, k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit``
 function calls them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after
 ``available()``. Like YADE's Python API, call them from the thread that runs the simulation (a
 PyRunner) or while it is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
@@ -143,7 +143,8 @@ def raise_error(rc, ids=None):
     if rc == STEP_THREW:
         raise RuntimeError(f"a YADE engine failed in the step: {_lib.yb_error().decode()}")
     if rc < 0:
-        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene"}.get(rc, rc))
+        raise RuntimeError({-1: "the bridge is not configured", -2: "YADE has no current scene",
+                            -5: "the bridge found no memory to look the bodies up"}.get(rc, rc))
 
 
 def _call(fn, ids, arr, width, writes_arr):

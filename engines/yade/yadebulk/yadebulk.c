@@ -22,10 +22,12 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #define YB_ENOTREADY (-1) /* not opened or layout not verified */
 #define YB_ENOSCENE (-2)  /* no current scene or body container */
 #define YB_EBADN (-3)     /* n < 0 */
+#define YB_ENOMEM (-5)    /* no memory for the ids' lookup */
 
 /* C++ signatures, `this` first (mangled names in yb_open). References are returned as pointers. */
 typedef void *(*omega_instance_fn)(void);              /* Omega& Singleton<Omega>::instance() */
@@ -144,25 +146,36 @@ static char *state_of(const Ctx *c, int64_t id)
     return body ? *(char **)(body + L.state) : NULL;
 }
 
-/* 0 if every id names a live body, else k >= 1 for the first bad ids[k-1]. */
-static int64_t check_ids(const Ctx *c, const int64_t *ids, int64_t n)
+/* The States of the bodies of one call, looked up once: the checks pass, then the reads or writes
+ * (thread-local: a numba caller may hold no GIL). Grown as needed, never freed. */
+static __thread char **states;
+static __thread int64_t states_cap;
+
+/* 0 with states[k] the State of body ids[k] for every k, YB_ENOMEM, or k >= 1 for the first bad
+ * ids[k-1] (out of range, erased or stateless). */
+static int64_t look_up(const Ctx *c, const int64_t *ids, int64_t n)
 {
+    if (n > states_cap) {
+        char **grown = realloc(states, (size_t)n * sizeof *states);
+        if (!grown) return YB_ENOMEM;
+        states = grown, states_cap = n;
+    }
     for (int64_t k = 0; k < n; k++)
-        if (!state_of(c, ids[k])) return k + 1;
+        if (!(states[k] = state_of(c, ids[k]))) return k + 1;
     return 0;
 }
 
 #define BULK_PROLOGUE                                                                                   \
     Ctx c;                                                                                              \
     int64_t err = begin(&c, n);                                                                         \
-    if (err || (err = check_ids(&c, ids, n))) return err;
+    if (err || (err = look_up(&c, ids, n))) return err;
 
 /* out[k] = (x, z) of the Vector3r at byte `offset` in body ids[k]'s State */
 static int64_t get_xz(ptrdiff_t offset, const int64_t *ids, int64_t n, double *out)
 {
     BULK_PROLOGUE
     for (int64_t k = 0; k < n; k++) {
-        const double *v = (const double *)(state_of(&c, ids[k]) + offset);
+        const double *v = (const double *)(states[k] + offset);
         out[2 * k] = v[0], out[2 * k + 1] = v[2];
     }
     return 0;
@@ -179,7 +192,7 @@ int64_t yb_set_vel_xz(const int64_t *ids, int64_t n, const double *V)
 {
     BULK_PROLOGUE
     for (int64_t k = 0; k < n; k++) {
-        double *v = (double *)(state_of(&c, ids[k]) + L.vel);
+        double *v = (double *)(states[k] + L.vel);
         v[0] = V[2 * k], v[1] = 0.0, v[2] = V[2 * k + 1];
     }
     return 0;
@@ -189,7 +202,7 @@ int64_t yb_set_vel_xz(const int64_t *ids, int64_t n, const double *V)
 int64_t yb_get_angvel_y(const int64_t *ids, int64_t n, double *out)
 {
     BULK_PROLOGUE
-    for (int64_t k = 0; k < n; k++) out[k] = ((const double *)(state_of(&c, ids[k]) + L.angvel))[1];
+    for (int64_t k = 0; k < n; k++) out[k] = ((const double *)(states[k] + L.angvel))[1];
     return 0;
 }
 
