@@ -119,8 +119,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     compiled runs: its parts timed alone, ``calls`` times in a compiled loop at one state (no
     Python between calls): the law, the side-wall ties, the water (the pore measure, the flows,
     the update, the eq 33 forces, the rest), the bridge's position read and force write, the
-    base motion, and YADE's own step (ForceResetter, NewtonIntegrator: the bridge's steps(), on
-    held forces); against the compiled runs' time a step, the residual stated. Medians."""
+    base motion, and YADE's own step (NewtonIntegrator, ForceResetter: the bridge's steps());
+    against the compiled runs' time a step, the residual stated. Medians."""
     import numba
     import numpy as np
 
@@ -195,7 +195,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
     motion = drive_args[6]
     rows = np.arange(len(eng._F_out))
-    bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (yade_io._SET_PERM, eng.forced.ids, eng._F_out.copy(), rows,
+    write = yade_io._ADD_UNSYNCED if eng._reset_last else yade_io._SET_PERM  # as the run writes them
+    bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (write, eng.forced.ids, eng._F_out.copy(), rows,
                                                       eng.held, eng._F_out)
     W0 = wm.water.W.copy()
     alone = {
@@ -207,11 +208,11 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "  of which the update (kernels.darcy_update)": (kernels.darcy_update, update),
         "  of which eq 33 forces (kernels.pressure_forces)": (kernels.pressure_forces, forces),
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
-        "bridge: write forces (set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
+        "bridge: write forces (add_force_unsynced or set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
         "base motion (kernels.cosine_base_step)": (kernels.cosine_base_step, (motion, core.k)),
     }
     times = {name: [] for name in alone}
-    times["YADE's own step (ForceResetter, NewtonIntegrator: bridge steps())"] = []
+    times["YADE's own step (NewtonIntegrator, ForceResetter: bridge steps())"] = []
     for f, args in alone.values():
         repeat(1, f, args)  # compiled for these arguments
     for _ in range(repeats):
@@ -222,7 +223,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
             wm.water.W[:] = W0  # the same state for every call
         c0 = time.process_time()
         yadebulk.steps(calls // 4)
-        times["YADE's own step (ForceResetter, NewtonIntegrator: bridge steps())"].append(
+        times["YADE's own step (NewtonIntegrator, ForceResetter: bridge steps())"].append(
             1e6 * (time.process_time() - c0) / (calls // 4))
     step = {name: float(np.median(v)) for name, v in times.items()}
     measured = float(np.median(per_kernel_step))

@@ -61,7 +61,7 @@ def _loop(n, bridge, junk, read, water, write, steps, ids_in, xz, ids_out, F_out
             kernels.water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
                                       ints, i_at, floats, f_at)
         if write:
-            kernels._write_forces(0, bridge[kernels.BRIDGE.set_perm], ids_out, F_out)
+            kernels._write_forces(0, bridge[kernels.BRIDGE.write_forces], ids_out, F_out)
         if steps:
             kernels._c_bulk_call(bridge[kernels.BRIDGE.steps], 0, 1, 0)
 

@@ -552,8 +552,10 @@ def water_forces_step_args(rows, held, water):
     return (rows, held) + water
 
 # The addresses of the C functions of engines.yade.yadebulk a kernel calls: the position read, the
-# permanent-force write, the velocity write and YADE's steps (yadebulk.c_steps).
-BRIDGE = Layout("BRIDGE", ("get_pos", "set_perm", "set_vel", "steps"))
+# force write (set_perm_force_xz, or add_force_unsynced_xz in a scene that resets the forces after
+# NewtonIntegrator: engines.yade.yade_io.forces_reset_after_newton), the velocity write and YADE's
+# steps (yadebulk.c_steps).
+BRIDGE = Layout("BRIDGE", ("get_pos", "write_forces", "set_vel", "steps"))
 
 
 @intrinsic
@@ -573,9 +575,9 @@ def _read_positions(get_pos, ids, xz):
 
 
 @jit
-def _write_forces(status, set_perm, ids, F):
-    """set_perm(ids <- F) when status >= 0; the bridge's error code (0 when nothing was written)."""
-    return _c_bulk_call(set_perm, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
+def _write_forces(status, write, ids, F):
+    """write(ids <- F) when status >= 0; the bridge's error code (0 when nothing was written)."""
+    return _c_bulk_call(write, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
 
 
 # The two steps between a position read and a force write. Their arguments are spelled out: numba
@@ -587,7 +589,7 @@ def dem_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held, water_due,
                      F, M, acc_j, lost,
                      h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                      tie_pairs, tie_rest, tie_prm, T):
-    """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), set_perm(ids_out <- F_out) if its status
+    """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), write_forces(ids_out <- F_out) if its status
     is >= 0 (bridge: BRIDGE). Returns (the C functions' error code, dem_step's status, its info)."""
     rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
     if rc != 0:
@@ -597,7 +599,7 @@ def dem_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held, water_due,
                             spring, F, M, acc_j, lost,
                             h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                             tie_pairs, tie_rest, tie_prm, T)
-    return _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out), status, info
+    return _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out), status, info
 
 
 Layout.of(dem_step_bulk_io, 5).check(DEM_STEP)
@@ -612,7 +614,7 @@ def water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
         return rc, -1, 0
     status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
                                      ints, i_at, floats, f_at)
-    return _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out), status, info
+    return _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out), status, info
 
 
 Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
@@ -644,7 +646,7 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
                                               F_water, ints, i_at, floats, f_at)
             if n_sub == AREAS_OUT_OF_RANGE:
                 return s, n_water, 1, 0
-            rc = _write_forces(status, bridge[BRIDGE.set_perm], ids_out, F_out)
+            rc = _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out)
             if rc != 0:
                 return s, n_water, n_sub, rc
             n_water += 1
@@ -812,7 +814,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, mot
                       tie_pairs, tie_rest, tie_prm, T):
     """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
     -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
-    wet), set_perm(ids_out <- F_out), then the water's balance of the step added to totals (3,)
+    wet), write_forces(ids_out <- F_out), then the water's balance of the step added to totals (3,)
     [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
     walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
     bridge's steps() (O.step()).
@@ -838,7 +840,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, mot
                                  tie_pairs, tie_rest, tie_prm, T)
         if n_lost == LIST_STALE:
             return s, n_lost, 0, 0
-        rc = _write_forces(0, bridge[BRIDGE.set_perm], ids_out, F_out)
+        rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
         if rc != 0 or n_sub != 1:
             return s, n_lost, n_sub, rc
         if adjust and n_lost > 0:
@@ -874,13 +876,13 @@ def read_bulk_io(get_pos, ids, xz):
 
 
 @jit
-def write_rows_bulk_io(set_perm, ids, F, rows, add, out):
-    """out = F[rows] + add, then set_perm(ids <- out): the bridge's permanent-force write of
-    some rows of F plus held forces; returns its error code."""
+def write_rows_bulk_io(write, ids, F, rows, add, out):
+    """out = F[rows] + add, then write(ids <- out): the bridge's force write (BRIDGE.write_forces)
+    of some rows of F plus held forces; returns its error code."""
     for k in range(len(rows)):
         out[k, 0] = F[rows[k], 0] + add[k, 0]
         out[k, 1] = F[rows[k], 1] + add[k, 1]
-    return _write_forces(0, set_perm, ids, out)
+    return _write_forces(0, write, ids, out)
 
 
 with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}

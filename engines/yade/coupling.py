@@ -1,11 +1,13 @@
 """YADE glue for scenes: discs as spheres in the x-z plane, the scene's contact law, the water engine.
 
-[contact] law = "paper" (the presets): ForceResetter, NewtonIntegrator; before each O.step() ``run``
-drives the PaperLawEngine (engines.model.paper_law; it calls PoreDEM.step: the paper's law, spin, the
-water in the paper's order), holds its forces plus buoyancy as permanent forces and sets the
-velocity of the walls that follow the input: no PyRunner (its dispatch costs ~50 us a call), and
-between pore rebuilds many steps in one compiled call with the bridge (PaperLawEngine.drive). No
-collider: the law keeps its own Verlet list.
+[contact] law = "paper" (the presets): NewtonIntegrator, then ForceResetter; before each O.step()
+``run`` drives the PaperLawEngine (engines.model.paper_law; it calls PoreDEM.step: the paper's law,
+spin, the water in the paper's order), adds its forces plus buoyancy to the forces ForceResetter
+reset at the end of the last step (no permanent forces: they cost YADE a sync pass over all bodies
+every step; O.forces reads 0 between steps) and sets the velocity of the walls that follow the
+input: no PyRunner (its dispatch costs ~50 us a call), and between pore rebuilds many steps in
+one compiled call with the bridge (PaperLawEngine.drive). No collider: the law keeps its own
+Verlet list.
 Discs translate only (blockedDOFs 'yXYZ'); their spin about y is integrated by the law. Run these
 scenes with ``YadeCoupling.run``, not O.run.
 
@@ -194,7 +196,12 @@ class YadeCoupling:
         self.io = yade_io.Bodies(self.ids)
         self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()
-        O.engines = [ForceResetter()] + loop + walls + [NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)]
+        newton = NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)
+        if self.law == "paper":  # forces reset after the integration: the engine adds the next step's (no sync pass)
+            newton.warnNoForceReset = False
+            O.engines = [newton, ForceResetter()]
+        else:
+            O.engines = [ForceResetter()] + loop + walls + [newton]
         self.hooks = []
         self.run_every, self.stops, self._hooked_at = None, set(), None
         self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS

@@ -17,8 +17,14 @@ class PaperLawEngine:
         O.engines = [ForceResetter(), law.runner(), NewtonIntegrator(gravity=(0, 0, -9.81))]
 
     or without a PyRunner, driven from Python: ``law.drive(n)`` does the same work before each of n
-    O.step() calls and holds the forces as permanent forces (with ``held`` added, e.g. buoyancy);
-    this saves the PyRunner's dispatch at every step, and with a core that offers
+    O.step() calls and writes the forces (with ``held`` added, e.g. buoyancy) for the step: as
+    permanent forces, or, when the engine list resets the forces after NewtonIntegrator::
+
+        O.engines = [NewtonIntegrator(gravity=(0, 0, -9.81), warnNoForceReset=False), ForceResetter()]
+
+    (engines.yade.yade_io.forces_reset_after_newton), added to the reset forces, which spares YADE
+    the sync pass that permanent forces cost at every step (engines.yade.coupling does this). This
+    saves the PyRunner's dispatch at every step, and with a core that offers
     ``kernel_drive_args`` (PoreDEM) and the bridge runs the steps between pore rebuilds in one
     compiled call (kernels.dem_drive_bulk_io), back in Python only for the steps that need it.
 
@@ -58,6 +64,7 @@ class PaperLawEngine:
         self.hooks = []
         self._set_velocities, self._run_kernel, self._check = yade_io.set_velocities, yade_io.run_kernel, yade_io.check
         self._drive_dem = yade_io.drive_dem if yade_io.BACKEND == "yadebulk" else None
+        self._reset_last = False  # how drive writes the forces (set by drive from the engine list)
         self.drive_walls([])
 
     def drive_walls(self, ids):
@@ -96,6 +103,10 @@ class PaperLawEngine:
         step made from Python and after each compiled run of steps). A core that offers
         ``kernel_step_args`` (PoreDEM) does a step in one compiled call where it can, and with
         ``kernel_drive_args`` and the bridge many steps in one call (``_kernel_steps``)."""
+        from yade import O
+
+        from engines.yade import yade_io
+        self._reset_last = yade_io.forces_reset_after_newton(O.engines)
         many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
         done, n = 0, int(n)
         while done < n:
@@ -128,7 +139,7 @@ class PaperLawEngine:
             steps, water_interval, adjust, e, mass, totals, motion, args = drive
             done, n_lost, n_sub, rc = self._drive_dem(steps, core.k, water_interval, adjust, e, mass, totals, motion,
                                                       self.walls, self._wall_vel, self.io, self._xz, self.forced,
-                                                      self._F_out, args)
+                                                      self._F_out, args, self._reset_last)
             core.finish_kernel_drive(done, totals, motion)
             self._check(rc)
             if done == steps:
@@ -154,7 +165,8 @@ class PaperLawEngine:
             args = core.kernel_step_args(self._dynamic, self.held)
             if args is None:
                 return False
-            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args)
+            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args,
+                                             self._reset_last)
             if n_lost != kernels.LIST_STALE:
                 break
             core.law.contact._update_list(self._xz)
@@ -163,4 +175,4 @@ class PaperLawEngine:
         return True
 
     def _write_held(self, F):
-        self.forced.set_permanent_forces(F, self._dynamic, self.held)
+        self.forced.write_forces(F, self._dynamic, self.held, self._reset_last)

@@ -43,10 +43,24 @@ def _load_bulk():
 _BULK = _load_bulk()
 BACKEND = "yadebulk" if _BULK is not None else "python"
 if _BULK is not None:  # addresses of the bridge's position read, force and velocity writes and step, for kernels
-    _GET_POS, _SET_PERM, _SET_VEL, _STEPS = (
+    _GET_POS, _SET_PERM, _ADD_UNSYNCED, _SET_VEL, _STEPS = (
         ctypes.cast(f, ctypes.c_void_p).value
-        for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_set_vel_xz, _BULK.c_steps))
-    _BRIDGE = kernels.BRIDGE.values(get_pos=_GET_POS, set_perm=_SET_PERM, set_vel=_SET_VEL, steps=_STEPS)
+        for f in (_BULK.c_get_pos_xz, _BULK.c_set_perm_force_xz, _BULK.c_add_force_unsynced_xz, _BULK.c_set_vel_xz,
+                  _BULK.c_steps))
+    _BRIDGE = kernels.BRIDGE.values(get_pos=_GET_POS, write_forces=_SET_PERM, set_vel=_SET_VEL, steps=_STEPS)
+    _BRIDGE_RESET_LAST = kernels.BRIDGE.values(get_pos=_GET_POS, write_forces=_ADD_UNSYNCED, set_vel=_SET_VEL,
+                                               steps=_STEPS)
+
+
+def forces_reset_after_newton(engines):
+    """Does the engine list reset the forces only after its one NewtonIntegrator ([...,
+    NewtonIntegrator, ..., ForceResetter])? Then forces written between two steps reach the next
+    step's integration as they are, and ``Bodies.write_forces`` adds them straight into YADE's
+    summed forces (no permanent forces, whose sync() pass over all bodies costs every step)."""
+    names = [type(e).__name__ for e in engines]
+    if names.count("NewtonIntegrator") != 1 or "ForceResetter" not in names:
+        return False
+    return "ForceResetter" not in names[:names.index("NewtonIntegrator")]
 
 
 class Bodies:
@@ -119,28 +133,37 @@ class Bodies:
     def set_permanent_forces(self, F, rows=None, add=None):
         """O.forces.setPermF for every body (held until set again): F (n, 2) [N], or with ``rows``
         (n,) F[rows] + add, F (m, 2) over some larger set of which these bodies are the rows."""
+        self.write_forces(F, rows, add, False)
+
+    def write_forces(self, F, rows, add, reset_last):
+        """The forces of the next step, as ``set_permanent_forces``, or with ``reset_last`` (the
+        engine list resets the forces after NewtonIntegrator: ``forces_reset_after_newton``) added
+        to the reset forces: by the bridge's add_force_unsynced_xz, else O.forces.addF."""
         if rows is None:
             rows, add = self._all, self._zero
         if _BULK is not None:
-            check(kernels.write_rows_bulk_io(_SET_PERM, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
-                   self.ids)
+            write = _ADD_UNSYNCED if reset_last else _SET_PERM
+            check(kernels.write_rows_bulk_io(write, self.ids, np.ascontiguousarray(F, float), rows, add, self._F),
+                  self.ids)
         else:
             np.add(F[rows], add, out=self._F)
-            list(map(O.forces.setPermF, self.id_list, self._rows(self._F)))
+            list(map(O.forces.addF if reset_last else O.forces.setPermF, self.id_list, self._rows(self._F)))
 
 
-def run_kernel(kernel, reader, xz, writer, out, args):
+def run_kernel(kernel, reader, xz, writer, out, args, reset_last=False):
     """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
     into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
-    (m, 2) [N] as the permanent forces of ``writer`` (Bodies). With the bridge this is one compiled
-    call (engines.compiled.kernels.with_bulk_io). Returns (status, info)."""
+    (m, 2) [N] as the permanent forces of ``writer`` (Bodies), or with ``reset_last`` added to its
+    reset forces (``Bodies.write_forces``). With the bridge this is one compiled call
+    (engines.compiled.kernels.with_bulk_io). Returns (status, info)."""
     if _BULK is None:
         xz[:] = reader.positions()
         status, info = kernel(xz, out, *args)
         if status >= 0:
-            writer.set_permanent_forces(out)
+            writer.write_forces(out, None, None, reset_last)
         return status, info
-    rc, status, info = kernels.with_bulk_io[kernel](_BRIDGE, reader.ids, xz, writer.ids, out, *args)
+    rc, status, info = kernels.with_bulk_io[kernel](_BRIDGE_RESET_LAST if reset_last else _BRIDGE, reader.ids, xz,
+                                                    writer.ids, out, *args)
     check(rc, reader.ids if status < 0 else writer.ids)
     return status, info
 
@@ -155,15 +178,17 @@ def drive_water(n, k, k0, water_interval, totals, xz_built, moved2, reader, xz, 
                                        writer.ids, out, *args)
 
 
-def drive_dem(n, k, water_interval, adjust, e, mass, totals, motion, walls, wall_vel, reader, xz, writer, out, args):
+def drive_dem(n, k, water_interval, adjust, e, mass, totals, motion, walls, wall_vel, reader, xz, writer, out, args,
+              reset_last):
     """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
     step k (``adjust``: the eq 18-24 adjustment is on, with restitution e and the discs' masses
     mass (N,) [kg/m]), the positions read from ``reader`` and the forces out written to ``writer``
-    (Bodies), the velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set
-    from the base motion ``motion``, args those of dem_drive_bulk_io after F_out. Returns its
-    (steps done, n_lost, n_sub, error code)."""
-    return kernels.dem_drive_bulk_io(_BRIDGE, n, k, water_interval, adjust, e, mass, totals, motion, walls.ids, wall_vel,
-                                     reader.ids, xz, writer.ids, out, *args)
+    (Bodies; held, or with ``reset_last`` added to the reset forces: ``Bodies.write_forces``), the
+    velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base
+    motion ``motion``, args those of dem_drive_bulk_io after F_out. Returns its (steps done,
+    n_lost, n_sub, error code)."""
+    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, water_interval, adjust, e,
+                                     mass, totals, motion, walls.ids, wall_vel, reader.ids, xz, writer.ids, out, *args)
 
 
 def check(rc, ids=None):

@@ -212,17 +212,27 @@ def test_yade_law_head_on_collision_matches_the_paper_law():
 
 
 def _fused_and_general(sc, packing, n=200):
-    """The same run of n steps through PaperLawEngine.drive three ways: many steps in one compiled
-    call where it can (kernels.dem_drive_bulk_io), one compiled call a step (kernels.dem_step)
-    and the general path only: (x, v, omega, pair-list builds, W, O.iter) of each, and the steps
-    the first two made in compiled calls."""
+    """The same run of n steps through PaperLawEngine.drive four ways: many steps in one compiled
+    call where it can (kernels.dem_drive_bulk_io), the same with the forces held as permanent
+    forces (ForceResetter first in the engine list, as a user's script may have it), one compiled
+    call a step (kernels.dem_step) and the general path only: (x, v, omega, pair-list builds, W,
+    O.iter) of each, and the steps the first three made in compiled calls."""
     from yade import O
+    from yade.wrapper import ForceResetter
+
+    from engines.yade import yade_io
     runs, compiled_steps = [], []
-    for how in ("many", "one", "general"):
+    for how in ("many", "held", "one", "general"):
         cp = YadeCoupling(sc, packing)
+        assert yade_io.forces_reset_after_newton(O.engines)  # the coupling's list: no permanent forces
+        if how == "held":
+            newton = O.engines[0]
+            newton.warnNoForceReset = True
+            O.engines = [ForceResetter(), newton]
+            assert not yade_io.forces_reset_after_newton(O.engines)
         cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
         counted = 0
-        if how == "many":
+        if how in ("many", "held"):
             drive = cp.engine._drive_dem
 
             def many(*args):
@@ -247,7 +257,7 @@ def _fused_and_general(sc, packing, n=200):
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
         compiled_steps.append(counted)
-    return runs, compiled_steps[:2]
+    return runs, compiled_steps[:3]
 
 
 def _assert_same_runs(runs, n=200):
@@ -266,7 +276,7 @@ def test_paper_law_compiled_steps_equal_the_general_path(packing, law_override):
     """PaperLawEngine.drive runs many steps in one compiled call (kernels.dem_drive_bulk_io), or
     kernels.dem_step (read, law, water, write in one call) where it can; the general path
     (PoreDEM.step between yade_io calls) gives the same run, bit for bit, through pair-list and
-    pore rebuilds and steps without water."""
+    pore rebuilds and steps without water, and so do the forces held as permanent forces."""
     over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
     over.update(law_override)
     runs, compiled_steps = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
@@ -293,7 +303,7 @@ def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
 def test_compiled_steps_leave_a_disc_set_free_to_the_velocity_adjustment():
     """The head-on collision with the eq 18-24 adjustment: the compiled runs of steps adjust the
     velocities of the discs the separation sets free (kernels.separation_velocities, -Vn''/Vn = e)
-    without leaving the compiled call, and the run is bit for bit that of the other two paths (the
+    without leaving the compiled call, and the run is bit for bit that of the other paths (the
     NumPy adjustment)."""
     from engines.run.crosscheck import contact_scene, launcher_packing
     sc = contact_scene("head_on_adjusted", spring="a", separation_adjustment=True)
@@ -392,3 +402,47 @@ def test_the_scene_option_rebuild_distance_rebuilds_by_displacement_in_both_laws
         model.rebuild = lambda xz, k=None: moved.append(model.max_sq_moved(xz)) or rebuild(xz, k)
         cp.run(300)
         assert (len(moved) >= 2 and min(moved) > d * d) if d else moved == [], (law, d, moved)
+
+
+def test_forces_are_added_unheld_only_where_the_engine_list_resets_them_after_newton():
+    """forces_reset_after_newton: the engine writes the next step's forces unheld (no permanent
+    forces) only when no ForceResetter runs before the one NewtonIntegrator, so a user's list
+    with ForceResetter first keeps its forces held (the runs above: bit for bit the same)."""
+    from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
+
+    from engines.yade.yade_io import forces_reset_after_newton
+    fr, newton, other = ForceResetter, NewtonIntegrator, lambda: PyRunner(command="pass")
+    assert forces_reset_after_newton([newton(), fr()])
+    assert forces_reset_after_newton([other(), newton(), other(), fr()])
+    assert not forces_reset_after_newton([fr(), newton()])
+    assert not forces_reset_after_newton([fr(), newton(), fr()])
+    assert not forces_reset_after_newton([newton()])
+    assert not forces_reset_after_newton([newton(), newton(), fr()])
+
+
+def test_the_python_backend_writes_the_forces_of_each_step_as_the_bridge_does(monkeypatch):
+    """Without the bulk bridge (yade_io's Python backend: O.forces.addF into the forces reset after
+    NewtonIntegrator, or O.forces.setPermF with ForceResetter first), the seismic box runs bit for
+    bit as with it, through a pore rebuild."""
+    from yade import O
+    from yade.wrapper import ForceResetter
+
+    from engines.yade import yade_io
+    sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 30}})
+    packing = Packing.load(sc.packing.file)
+    runs = []
+    for backend, held in (("yadebulk", False), ("python", False), ("python", True)):
+        if backend == "python":
+            monkeypatch.setattr(yade_io, "_BULK", None)
+            monkeypatch.setattr(yade_io, "BACKEND", "python")
+        cp = YadeCoupling(sc, packing)
+        if held:
+            O.engines = [ForceResetter(), O.engines[0]]
+        assert yade_io.forces_reset_after_newton(O.engines) != held
+        cp.run(60)
+        runs.append((cp.positions(), cp.velocities(), cp.water_model.n_rebuilds))
+    for x, v, built in runs[1:]:
+        np.testing.assert_array_equal(x, runs[0][0])
+        np.testing.assert_array_equal(v, runs[0][1])
+        assert built == runs[0][2] >= 1
+    assert np.abs(runs[0][0] - packing.xz).max() > 0

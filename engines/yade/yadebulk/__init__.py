@@ -46,7 +46,7 @@ KNOWN_LIBYADE = {
 }
 STEP_THREW = -4  # c_steps: an engine threw; _lib.yb_error() holds its message
 NAMES = ("get_pos_xz", "get_vel_xz", "set_vel_xz", "get_angvel_y", "add_torque_y", "add_force_xz",
-         "set_perm_force_xz", "steps")
+         "set_perm_force_xz", "add_force_unsynced_xz", "steps")
 
 
 def _open():
@@ -75,7 +75,7 @@ _final = False       # available() has its answer for this process
 _layout = {}
 
 c_get_pos_xz, c_get_vel_xz, c_set_vel_xz, c_get_angvel_y, c_add_torque_y, c_add_force_xz, \
-    c_set_perm_force_xz, c_steps = (getattr(_lib, "yb_" + name) if _lib else None for name in NAMES)
+    c_set_perm_force_xz, c_add_force_unsynced_xz, c_steps = (getattr(_lib, "yb_" + name) if _lib else None for name in NAMES)
 
 
 def available():
@@ -196,6 +196,13 @@ def add_force_xz(ids, F):
 def set_perm_force_xz(ids, F):
     """O.forces.setPermF(ids[k], (F[k, 0], 0, F[k, 1])) for every k (N), held until changed."""
     _call(c_set_perm_force_xz, ids, F, 2, False)
+
+
+def add_force_unsynced_xz(ids, F):
+    """F[k] (N) added to body ids[k]'s summed force of this step, (F[k, 0], 0, F[k, 1]), without
+    the sync() pass that O.forces.addF and setPermF lead to (ForceContainer::addForceUnsynced):
+    for scenes whose ForceResetter runs after NewtonIntegrator, between steps."""
+    _call(c_add_force_unsynced_xz, ids, F, 2, False)
 
 
 def steps(n):

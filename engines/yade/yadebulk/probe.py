@@ -197,6 +197,10 @@ def _verify(bridge, ids, rnd):
     bridge.set_perm_force_xz(ids, F)
     _expect(all(tuple(O.forces.permF(int(i))) == (F[k, 0], 0.0, F[k, 1]) for k, i in enumerate(ids)),
             "O.forces.permF reads set_perm_force_xz")
+    f0 = [tuple(O.forces.f(int(i), True)) for i in ids]  # synced: add_force_unsynced_xz adds to these
+    bridge.add_force_unsynced_xz(ids, F)
+    _expect(all(tuple(O.forces.f(int(i), True)) == (f[0] + F[k, 0], f[1], f[2] + F[k, 1])
+                for k, (i, f) in enumerate(zip(ids, f0))), "O.forces.f adds what add_force_unsynced_xz added")
 
 
 _step_forces = None  # what the Newton check's PyRunner applies each step
@@ -208,8 +212,9 @@ def _apply_step_forces():
 
 def _verify_newton_step(bridge, n):
     """Bodies n..2n-1 are twins of 0..n-1; each step (after ForceResetter) the twins get their forces
-    through the bridge, the originals through O.forces; after two steps (O.step(), then the bridge's
-    steps(1)) each pair must be identical."""
+    through the bridge (add_force_xz, add_force_unsynced_xz, add_torque_y, set_perm_force_xz), the
+    originals through O.forces; after two steps (O.step(), then the bridge's steps(1)) each pair
+    must be identical."""
     global _step_forces
     hook = f"__import__('sys').modules[{__name__!r}]._apply_step_forces()"
     # updateGlobals=False: by default PyRunner copies the locals of O.step()'s caller into __main__
@@ -226,14 +231,16 @@ def _verify_newton_step(bridge, n):
     F = np.array([probe_value(4, i, 0)[::2] for i in range(n)])
     P = np.array([probe_value(3, i, 0)[::2] for i in range(n)])
     T = np.array([probe_value(5, i, 0)[1] for i in range(n)])
+    G = np.array([probe_value(3, i, 1)[::2] for i in range(n)])
     for i in range(n):
         O.forces.setPermF(i, Vector3(P[i, 0], 0.0, P[i, 1]))
     bridge.set_perm_force_xz(twins, P)
 
     def forces():
-        for i in range(n):
-            O.forces.addF(i, Vector3(F[i, 0], 0.0, F[i, 1]))
+        for i in range(n):  # probe values have few significant bits: F + G is exact
+            O.forces.addF(i, Vector3(F[i, 0] + G[i, 0], 0.0, F[i, 1] + G[i, 1]))
             O.forces.addT(i, Vector3(0.0, T[i], 0.0))
+        bridge.add_force_unsynced_xz(twins, G)
         bridge.add_force_xz(twins, F)
         bridge.add_torque_y(twins, T)
     _step_forces = forces

@@ -14,7 +14,8 @@
  * against the current scene's body count and for a live body before it reads or writes anything,
  * and returns 0, a negative YB_E* code, or k >= 1 when ids[k-1] is out of range or erased.
  * Forces and torques go through ForceContainer::addForce/addTorque/setPermForce, the functions
- * O.forces.addF/addT/setPermF call, so YADE's per-thread buffers and sync flags behave as theirs.
+ * O.forces.addF/addT/setPermF call, so YADE's per-thread buffers and sync flags behave as theirs;
+ * yb_add_force_unsynced_xz through ForceContainer::addForceUnsynced (see there).
  * yb_steps (steps.cpp, C++ to catch what YADE throws) is O.step(): Scene::moveToNextTimeStep.
  */
 #define _GNU_SOURCE
@@ -37,6 +38,7 @@ typedef size_t (*bodies_size_fn)(const void *);        /* size_t BodyContainer::
 typedef void *const *(*bodies_at_fn)(void *, unsigned); /* shared_ptr<Body>& BodyContainer::operator[](unsigned) */
 typedef void (*force_fn)(void *, int, const double *); /* void ForceContainer::xxx(int, const Vector3r&) */
 typedef void (*scene_step_fn)(void *);                 /* void Scene::moveToNextTimeStep() */
+typedef void (*sync_sizes_fn)(void *);                 /* void ForceContainer::syncSizesOfContainers() */
 
 static struct {
     omega_instance_fn omega;
@@ -44,7 +46,8 @@ static struct {
     body_by_id_fn body_by_id;
     bodies_size_fn bodies_size;
     bodies_at_fn bodies_at;
-    force_fn add_force, add_torque, set_perm_force;
+    force_fn add_force, add_torque, set_perm_force, add_force_unsynced;
+    sync_sizes_fn sync_sizes;
     scene_step_fn scene_step;
 } Y;
 
@@ -72,6 +75,9 @@ int yb_open(const char *path)
         {"_ZN4yade14ForceContainer9addTorqueEiRKN5Eigen6MatrixIdLi3ELi1ELi0ELi3ELi1EEE", (void **)&Y.add_torque},
         {"_ZN4yade14ForceContainer12setPermForceEiRKN5Eigen6MatrixIdLi3ELi1ELi0ELi3ELi1EEE",
          (void **)&Y.set_perm_force},
+        {"_ZN4yade14ForceContainer16addForceUnsyncedEiRKN5Eigen6MatrixIdLi3ELi1ELi0ELi3ELi1EEE",
+         (void **)&Y.add_force_unsynced},
+        {"_ZN4yade14ForceContainer21syncSizesOfContainersEv", (void **)&Y.sync_sizes},
         {"_ZN4yade5Scene18moveToNextTimeStepEv", (void **)&Y.scene_step},
     };
     L.ready = 0;
@@ -237,4 +243,21 @@ int64_t yb_add_force_xz(const int64_t *ids, int64_t n, const double *F) { return
 int64_t yb_set_perm_force_xz(const int64_t *ids, int64_t n, const double *F)
 {
     return apply_xz(Y.set_perm_force, ids, n, F);
+}
+
+/* ForceContainer::addForceUnsynced(ids[k], (F[k,0], 0, F[k,1])): straight into the summed forces
+ * that NewtonIntegrator reads, with no sync() pass over all bodies (the one that permanent forces
+ * cost every step). For a scene whose ForceResetter runs after its NewtonIntegrator: the forces
+ * of the next step are written between steps into a reset container. syncSizesOfContainers()
+ * first, so that every live body has its slot (addForceUnsynced does not check). */
+int64_t yb_add_force_unsynced_xz(const int64_t *ids, int64_t n, const double *F)
+{
+    BULK_PROLOGUE
+    void *fc = c.scene + L.forces;
+    Y.sync_sizes(fc);
+    for (int64_t k = 0; k < n; k++) {
+        const double f[3] = {F[2 * k], 0.0, F[2 * k + 1]};
+        Y.add_force_unsynced(fc, (int)ids[k], f);
+    }
+    return 0;
 }
