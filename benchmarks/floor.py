@@ -14,14 +14,17 @@ from yade.wrapper import (
 )
 
 from engines.model.pore_dem import disc_masses
+from engines.yade import coupling
 from engines.yade.coupling import run_blocking, yade_law_material
 
 
-def native_floor(scene, packing):
+def native_floor(scene, packing, undamped=True):
     """The same discs in plain YADE with its collider and its native linear spring-dashpot law
     (ViscElMat / Law2_ScGeom_ViscElPhys_Basic with the scene's kn, eta_n, ks, eta_s, mu: the same
     pair constants as [contact] law = "yade"), radii enlarged by eps_m/2 so the same pairs touch as
-    with the paper's eps_m (eq 26). No Python engine."""
+    with the paper's eps_m (eq 26). No Python engine. NewtonIntegrator as in our scenes: damping 0,
+    its damping pass off on every body (engines.yade.coupling.undamped; ``undamped=False``:
+    YADE's default, the pass on)."""
     O.reset()
     mat = O.materials.append(yade_law_material(scene))
     mass, inertia = disc_masses(scene, packing)
@@ -32,10 +35,12 @@ def native_floor(scene, packing):
         if mob:
             b.state.blockedDOFs = "yXZ"
         O.bodies.append(b)
+    newton = NewtonIntegrator(gravity=(0, 0, -scene.material.g), damping=0.0)
     O.engines = [ForceResetter(), InsertionSortCollider([Bo1_Sphere_Aabb()]),
                  InteractionLoop([Ig2_Sphere_Sphere_ScGeom()], [Ip2_ViscElMat_ViscElMat_ViscElPhys()],
-                                 [Law2_ScGeom_ViscElPhys_Basic()]),
-                 NewtonIntegrator(gravity=(0, 0, -scene.material.g), damping=0.0)]
+                                 [Law2_ScGeom_ViscElPhys_Basic()]), newton]
+    if undamped:
+        coupling.undamped(newton)
     O.dt = scene.numerics.dt
 
 

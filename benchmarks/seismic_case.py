@@ -39,15 +39,17 @@ def compare(scene, packing, steps, repeats):
     kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
     path and with the NumPy path, in turns (benchmarks.coupling.paired_runs: YADE alone and the
     compiled runs next to each other, the order swapped every repeat); medians of wall and CPU
-    microseconds per step and their ratios to YADE alone."""
+    microseconds per step and their ratios to YADE alone. YADE alone has NewtonIntegrator's
+    damping pass off, as our scenes do (engines.yade.coupling.undamped); ``yade_alone_defaults``
+    is YADE with the pass on (its default), and our CPU ratio to it is given too."""
     import numpy as np
 
     from benchmarks.coupling import paired_runs
     from benchmarks.floor import native_floor, run_steps
     from engines.yade.coupling import YadeCoupling
 
-    def floor():
-        native_floor(scene, packing)
+    def floor(undamped=True):
+        native_floor(scene, packing, undamped)
         return run_steps, lambda: 0
 
     def coupling(one_call=True, many=True, compiled=True):
@@ -58,13 +60,13 @@ def compare(scene, packing, steps, repeats):
             cp.core.kernel_step_args = lambda rows, held: None
         return cp.run, lambda: cp.water_model.n_rebuilds
 
-    setups = {"yade_alone": floor, "compiled": coupling,
+    setups = {"yade_alone": floor, "compiled": coupling, "yade_alone_defaults": lambda: floor(False),
               "compiled_one_call_a_step": lambda: coupling(many=False),
               "compiled_general_path": lambda: coupling(one_call=False, many=False),
               "numpy": lambda: coupling(compiled=False)}
     wall, cpu, built = paired_runs(setups, steps, repeats)
     out = {"steps": steps, "repeats": repeats,  # the pore rebuilds in each timed run (the run's share: steps / 1000)
-           "rebuilds_per_run": {k: sorted(set(v)) for k, v in built.items() if k != "yade_alone"}}
+           "rebuilds_per_run": {k: sorted(set(v)) for k, v in built.items() if not k.startswith("yade_alone")}}
     for label, d in (("wall_us", wall), ("cpu_us", cpu)):
         med = {k: float(np.median(v)) for k, v in d.items()}
         out[label] = med
@@ -73,6 +75,9 @@ def compare(scene, packing, steps, repeats):
         paired = {k: [a / y for a, y in zip(v, d["yade_alone"])] for k, v in d.items() if k != "yade_alone"}
         out[label.replace("_us", "_paired_ratio")] = {k: {"median": float(np.median(v)), "min": min(v), "max": max(v)}
                                                       for k, v in paired.items()}
+    to_defaults = [a / y for a, y in zip(cpu["compiled"], cpu["yade_alone_defaults"])]
+    out["cpu_paired_ratio_to_yade_alone_defaults"] = {"median": float(np.median(to_defaults)), "min": min(to_defaults),
+                                                      "max": max(to_defaults)}
     return out
 
 

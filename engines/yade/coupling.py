@@ -97,6 +97,15 @@ def yade_law_material(scene):
                      density=scene.material.rho, label="discs")
 
 
+def undamped(newton):
+    """With NewtonIntegrator's damping 0 its damping of each body's accelerations multiplies them by
+    exactly 1: switch it off on every body (State.isDamped; bit for bit the same run, ~25 % of
+    YADE's step on the seismic discs)."""
+    if newton.damping == 0:
+        for b in O.bodies:
+            b.state.isDamped = False
+
+
 def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=None):
     """Reset YADE and create one sphere per disc (radius r + radius_add) with per-unit-thickness
     mass and inertia; returns the body ids (same order as packing). ``x_only`` (N,) bool: wall
@@ -197,6 +206,7 @@ class YadeCoupling:
         self.per_step = self.law == "paper" or self.water_engine is not None
         walls = self._wall_motion()
         newton = NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)
+        undamped(newton)
         if self.law == "paper":  # forces reset after the integration: the engine adds the next step's (no sync pass)
             newton.warnNoForceReset = False
             O.engines = [newton, ForceResetter()]

@@ -446,3 +446,25 @@ def test_the_python_backend_writes_the_forces_of_each_step_as_the_bridge_does(mo
         np.testing.assert_array_equal(v, runs[0][1])
         assert built == runs[0][2] >= 1
     assert np.abs(runs[0][0] - packing.xz).max() > 0
+
+
+def test_newtons_damping_pass_switched_off_changes_no_bit_of_a_run():
+    """engines.yade.coupling.undamped: with NewtonIntegrator's damping 0 the scenes switch its
+    per-body damping pass off (State.isDamped), and the seismic box runs bit for bit as with it;
+    with a damping that acts the pass stays on."""
+    from yade import O
+    sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 30}})
+    packing = Packing.load(sc.packing.file)
+    runs = []
+    for damped in (False, True):
+        cp = YadeCoupling(sc, packing)
+        assert not any(b.state.isDamped for b in O.bodies)
+        if damped:
+            for b in O.bodies:
+                b.state.isDamped = True
+        cp.run(60)
+        runs.append((cp.positions(), cp.velocities()))
+    np.testing.assert_array_equal(runs[1][0], runs[0][0])
+    np.testing.assert_array_equal(runs[1][1], runs[0][1])
+    YadeCoupling(sc, packing, newton_damping=0.2)  # a damping that acts: every body keeps it
+    assert all(b.state.isDamped for b in O.bodies)
