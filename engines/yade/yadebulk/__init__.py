@@ -23,9 +23,9 @@ simulation.
 its own work. For numba: ``c_get_pos_xz`` ... ``c_set_perm_force_xz`` and ``c_steps`` are the
 ctypes function objects, ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success, -1 not ready
 (``available()`` not yet True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps``
-(``yb_error`` says what), -5 no memory for the lookup of the ids, k >= 1 when ``ids[k-1]`` is out of range or erased. An ``@njit``
-function calls them as ``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after
-``available()``. Like YADE's Python API, call them from the thread that runs the simulation (a
+(``yb_error`` says what), -5 no memory for the lookup of the ids, k >= 1 when ``ids[k-1]`` is out
+of range or erased. An ``@njit`` function calls them as
+``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``. Like YADE's Python API, call them from the thread that runs the simulation (a
 PyRunner) or while it is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
 """
 import ctypes
@@ -75,7 +75,8 @@ _final = False       # available() has its answer for this process
 _layout = {}
 
 c_get_pos_xz, c_get_vel_xz, c_set_vel_xz, c_get_angvel_y, c_add_torque_y, c_add_force_xz, \
-    c_set_perm_force_xz, c_add_force_unsynced_xz, c_steps = (getattr(_lib, "yb_" + name) if _lib else None for name in NAMES)
+    c_set_perm_force_xz, c_add_force_unsynced_xz, c_steps = (getattr(_lib, "yb_" + name) if _lib else None
+                                                             for name in NAMES)
 
 
 def available():
