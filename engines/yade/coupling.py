@@ -207,6 +207,7 @@ class YadeCoupling:
         walls = self._wall_motion()
         newton = NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)
         undamped(newton)
+        self._undamped = newton.damping == 0  # the bodies' damping pass is off (checked by run)
         if self.law == "paper":  # forces reset after the integration: the engine adds the next step's (no sync pass)
             newton.warnNoForceReset = False
             O.engines = [newton, ForceResetter()]
@@ -278,6 +279,9 @@ class YadeCoupling:
         O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
         once per step index, before the step. An error inside an engine stops YADE and is
         re-raised here."""
+        if self._undamped and any(isinstance(e, NewtonIntegrator) and e.damping != 0 for e in O.engines):
+            raise ValueError("NewtonIntegrator.damping was set after the scene was built with damping 0, whose bodies "
+                             "have its damping pass off (coupling.undamped): pass newton_damping to YadeCoupling")
         stop = stop or _never
         end = O.iter + int(n_steps)
         while True:

@@ -451,7 +451,7 @@ def test_the_python_backend_writes_the_forces_of_each_step_as_the_bridge_does(mo
 def test_newtons_damping_pass_switched_off_changes_no_bit_of_a_run():
     """engines.yade.coupling.undamped: with NewtonIntegrator's damping 0 the scenes switch its
     per-body damping pass off (State.isDamped), and the seismic box runs bit for bit as with it;
-    with a damping that acts the pass stays on."""
+    with a damping that acts the pass stays on, and a damping set after the build is refused."""
     from yade import O
     sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 30}})
     packing = Packing.load(sc.packing.file)
@@ -468,3 +468,7 @@ def test_newtons_damping_pass_switched_off_changes_no_bit_of_a_run():
     np.testing.assert_array_equal(runs[1][1], runs[0][1])
     YadeCoupling(sc, packing, newton_damping=0.2)  # a damping that acts: every body keeps it
     assert all(b.state.isDamped for b in O.bodies)
+    cp = YadeCoupling(sc, packing)
+    O.engines[0].damping = 0.2  # set after the build, it would not act: refused in one line
+    with pytest.raises(ValueError, match="newton_damping"):
+        cp.run(1)

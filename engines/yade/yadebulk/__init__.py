@@ -25,8 +25,9 @@ ctypes function objects, ``(ids_ptr, n, array_ptr) -> int64`` with 0 for success
 (``available()`` not yet True), -2 no scene, -4 (STEP_THREW) when an engine threw in ``c_steps``
 (``yb_error`` says what), -5 no memory for the lookup of the ids, k >= 1 when ``ids[k-1]`` is out
 of range or erased. An ``@njit`` function calls them as
-``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``. Like YADE's Python API, call them from the thread that runs the simulation (a
-PyRunner) or while it is stopped. Set ``YADEBULK=0`` in the environment to switch the bridge off.
+``c_add_force_xz(ids.ctypes.data, ids.size, F.ctypes.data)`` after ``available()``. Like YADE's
+Python API, call them from the thread that runs the simulation (a PyRunner) or while it is stopped.
+Set ``YADEBULK=0`` in the environment to switch the bridge off.
 """
 import ctypes
 import hashlib
