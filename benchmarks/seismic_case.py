@@ -9,8 +9,8 @@ saturated and undrained (k1 = 1e3, k2 = 1e2 1/s), the base shaken by the 1500 ga
 dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.18 s). The paper's
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}, "breakdown_cpu_us": {...}}: the comparison times YADE alone on the same discs
-(fixed walls), our step with the compiled kernels (the steps between pore rebuilds in compiled
-runs: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+(fixed walls), our step with the compiled kernels (the steps from one pore rebuild to the next in
+one compiled run: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
 path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and with the NumPy
 path, interleaved in the same run (ratios hold on a shared machine; absolute times do not); the
 breakdown splits the run's CPU time a step into its parts, their sum against the measured mean
@@ -111,7 +111,8 @@ RUN_PARTS = {  # (object, method) of a run's parts, timed where they run (Clock)
         ("engine", "_drive_dem"),
     "steps finished in Python after a compiled run (water sub-steps: books, O.step)":
         ("engine", "_finish_in_python"),
-    "steps made in Python (the pore rebuilds: PoreDEM.step, bridge, O.step)": ("engine", "_python_step"),
+    "steps made in Python (PoreDEM.step, bridge, O.step: none after the first)": ("engine", "_python_step"),
+    "pore rebuilds, each before its step's compiled run (PoreDEM.rebuild_pores)": ("core", "rebuild_pores"),
     "pair-list rebuilds (ContactLaw._update_list)": ("contact", "_update_list"),
 }
 
@@ -123,8 +124,9 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     of the measured mean; the same runs without timers alternate with them. A step of the
     compiled runs: its parts timed alone, ``calls`` times in a compiled loop at one state (no
     Python between calls): the law, the side-wall ties, the water (the pore measure, the flows,
-    the update, the eq 33 forces, the rest), the bridge's position read and force write, the
-    base motion, and YADE's own step (NewtonIntegrator, ForceResetter: the bridge's steps());
+    the update, the eq 33 forces, the rest), the bridge's position read, force write and the
+    driven walls' velocity write, the base motion, and YADE's own step (NewtonIntegrator,
+    ForceResetter: the bridge's steps());
     against the compiled runs' time a step, the residual stated. Medians."""
     import numba
     import numpy as np
@@ -141,7 +143,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     cp = YadeCoupling(scene, packing)
     cp.run(warmup)
     eng, core = cp.engine, cp.core
-    owners = {"engine": eng, "contact": core.law.contact}
+    owners = {"engine": eng, "core": core, "contact": core.law.contact}
     plain = {label: getattr(owners[o], n) for label, (o, n) in RUN_PARTS.items()}
     kernel_steps = [0]
     drive = eng._drive_dem
@@ -198,7 +200,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[6]
+    motion = drive_args[7]
     rows = np.arange(len(eng._F_out))
     write = yade_io._ADD_UNSYNCED if eng._reset_last else yade_io._SET_PERM  # as the run writes them
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (write, eng.forced.ids, eng._F_out.copy(), rows,
@@ -215,6 +217,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
         "bridge: write forces (add_force_unsynced or set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
         "base motion (kernels.cosine_base_step)": (kernels.cosine_base_step, (motion, core.k)),
+        "bridge: the driven walls' velocities (set_vel)": (kernels.read_bulk_io,  # the same bulk call, of set_vel
+                                                           (yade_io._SET_VEL, eng.walls.ids, eng._wall_vel)),
     }
     times = {name: [] for name in alone}
     times["YADE's own step (NewtonIntegrator, ForceResetter: bridge steps())"] = []
@@ -236,8 +240,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     step["  of which the rest (the parts' views, eq 32 pressures, the sub-step count)"] = (
         step["water (kernels.water_step)"] - sum(v for name, v in step.items() if name.startswith("  of which")))
     out["a compiled run: CPU us a step (its time in the run / its steps)"] = measured
-    out["a compiled run: parts a step, timed alone"] = dict(step, **{"residual (the loop, the wall velocity write)":
-                                                                     measured - named})
+    out["a compiled run: parts a step, timed alone"] = dict(step, **{
+        "residual (the loop, the pair lists rebuilt inside, the parts slower in sequence)": measured - named})
     return out
 
 

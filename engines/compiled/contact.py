@@ -29,6 +29,15 @@ class ContactLaw(contact.ContactLaw):
                                                 lost=self._lost)
         return self._args
 
+    def _pairs_near(self, xz):
+        """As engines.model.contact.ContactLaw._pairs_near, by kernels.near_pairs."""
+        i, j, state = kernels.near_pairs(np.ascontiguousarray(xz, float), self.r, self.mobile, self.s.eps_m,
+                                         self.skin, self.i, self.j, self.state)
+        if self.pair_filter is not None:
+            keep = self.pair_filter(i, j)
+            i, j, state = i[keep], j[keep], state[keep]
+        return i, j, state
+
     def _max_sq_moved(self, xz):
         return kernels.max_sq_displacement(xz, self.xz_list)
 
@@ -38,6 +47,13 @@ class ContactLaw(contact.ContactLaw):
         self._lost = np.zeros(len(self.i), np.int64)
         self._args = None
         return True
+
+    def take_list(self, builds, i, j, state, lost):
+        """The pair list that a kernel rebuilt ``builds`` times (kernels.dem_drive_bulk_io:
+        near_pairs, with xz_list overwritten in place), and its ``lost`` buffer."""
+        self.i, self.j, self.state, self._lost = i, j, state, lost
+        self.list_builds += builds
+        self._args = None
 
     def forces(self, xz, du, dpsi, dt):
         self._update_list(xz)

@@ -11,6 +11,8 @@ reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 r
   pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
   tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
   separation_velocities  engines.model.contact.separation_adjustment   (eq 18-24, bit for bit)
+  near_pairs        engines.model.contact.ContactLaw._pairs_near    (the pair list, on a grid of cells:
+                    ``_grid``, which engines.compiled.pores uses too)
   gershgorin_limit, substep_count   engines.model.limits (the Darcy check of a water step)
 
 and per-step kernels chain them, so that a step costs one call from Python (each array passed to
@@ -30,7 +32,8 @@ rows, held, water_due, LAW, WATER, TIES), and passes them on under their own nam
 network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
 name. These lists stay in this file: numba's cache is renewed when this file changes (not when a
 module it imports does: the contact state's columns, engines.model.contact.TOUCHING ..., are read
-as constants; after changing them, delete engines/compiled/__pycache__).
+as constants; after changing them, delete engines/compiled/__pycache__; likewise after changing
+``_groups``, ``_grid``, ``_within`` or ``_grown``, which engines.compiled.pores calls).
 
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
 functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that this module stays cacheable
@@ -188,6 +191,96 @@ LAW_OWN = Layout("LAW_OWN", LAW.names[:-len(CONTACT.names)])
 LAW.check(LAW_OWN, CONTACT)
 
 
+@jit
+def _groups(key, n_groups):
+    """Counting sort: (ptr (n_groups + 1,), order) with order[ptr[g]:ptr[g + 1]] the indices of the
+    entries of key == g, increasing."""
+    ptr = np.zeros(n_groups + 1, np.int64)
+    for g in key:
+        ptr[g + 1] += 1
+    for g in range(n_groups):
+        ptr[g + 1] += ptr[g]
+    fill = ptr[:-1].copy()
+    order = np.empty(len(key), np.int64)
+    for e in range(len(key)):
+        order[fill[key[e]]] = e
+        fill[key[e]] += 1
+    return ptr, order
+
+
+@jit
+def _grid(x, z, cell):
+    """Square cells of side >= cell over the points (x, z): (x0, z0, cell, nx, nz, start, members),
+    the points of cell (gx, gz) being members[start[g]:start[g + 1]], g = gx nz + gz, where
+    gx = floor((x - x0) / cell)."""
+    x0, z0 = x.min(), z.min()
+    nx = int((x.max() - x0) / cell) + 1
+    nz = int((z.max() - z0) / cell) + 1
+    while nx * nz > 4 * len(x) + 16:  # scattered points: fewer, larger cells
+        cell *= 2.0
+        nx = int((x.max() - x0) / cell) + 1
+        nz = int((z.max() - z0) / cell) + 1
+    start, members = _groups(((x - x0) / cell).astype(np.int64) * nz + ((z - z0) / cell).astype(np.int64), nx * nz)
+    return x0, z0, cell, nx, nz, start, members
+
+
+@jit
+def _within(dx, dz, s):
+    """np.hypot(dx, dz) <= s, the hypot (~20 ns) computed only where dx^2 + dz^2 does not already
+    exceed s^2 by more than its round-off (relative 1e-12 where it is a few 1e-16)."""
+    if dx * dx + dz * dz > s * s * (1.0 + 1e-12):
+        return False
+    return np.hypot(dx, dz) <= s
+
+
+@jit
+def _grown(x, m):
+    """x with room for twice its m entries."""
+    out = np.empty(2 * m, x.dtype)
+    out[:m] = x[:m]
+    return out
+
+
+@jit
+def near_pairs(xz, r, mobile, eps_m, skin, old_i, old_j, old_state):
+    """engines.model.contact.ContactLaw._pairs_near before its pair filter: the pairs (i, j), i < j,
+    with a mobile disc and R_ij <= r_i + r_j + eps_m + skin [m], sorted by (i, j), and their
+    state (m, 6): the row of the same pair in (old_i, old_j, old_state) (sorted by (i, j)), else
+    zeros. A grid of cells of side 2 max(r) + eps_m + skin finds them."""
+    n = len(r)
+    x0, z0, cell, nx, nz, start, in_cell = _grid(xz[:, 0], xz[:, 1], 2.0 * r.max() + eps_m + skin)
+    pi = np.empty(8 * n + 16, np.int64)
+    pj = np.empty(8 * n + 16, np.int64)
+    partners = np.empty(n, np.int64)  # those j > i of disc i
+    m = 0
+    for i in range(n):
+        cx, cz = int((xz[i, 0] - x0) / cell), int((xz[i, 1] - z0) / cell)
+        k = 0
+        for gx in range(max(cx - 1, 0), min(cx + 2, nx)):
+            for gz in range(max(cz - 1, 0), min(cz + 2, nz)):
+                g = gx * nz + gz
+                for s in range(start[g], start[g + 1]):
+                    j = in_cell[s]
+                    if j > i and (mobile[i] or mobile[j]) and \
+                            _within(xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1], r[i] + r[j] + eps_m + skin):
+                        partners[k] = j
+                        k += 1
+        partners[:k].sort()
+        while m + k > len(pi):
+            pi, pj = _grown(pi, m), _grown(pj, m)
+        pi[m:m + k] = i
+        pj[m:m + k] = partners[:k]
+        m += k
+    state = np.zeros((m, old_state.shape[1]))
+    o = 0
+    for p in range(m):  # both lists sorted by (i, j): one merge
+        while o < len(old_i) and (old_i[o] < pi[p] or (old_i[o] == pi[p] and old_j[o] < pj[p])):
+            o += 1
+        if o < len(old_i) and old_i[o] == pi[p] and old_j[o] == pj[p]:
+            state[p] = old_state[o]
+    return pi[:m].copy(), pj[:m].copy(), state
+
+
 # atan(t) = t (1 - t^2/3 + t^4/5 - ...) for |t| <= SMALL_TURN: 5 terms leave < 6e-17 relative
 # (half an ulp), and each of them moves turn(s, c) by more than 2 ulp somewhere in that range
 SMALL_TURN = 0.03
@@ -250,7 +343,9 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
 
     wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
-    exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j (Np,) are scratch.
+    exchange (PoreWater._limit; 0 without open pores), as (...) E_w A / W^2: one division a pore
+    where the quotient of quotients takes two (the same bound to round-off, 11 % of this kernel on
+    the seismic case); acc_i, acc_j (Np,) are scratch.
     """
     E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
     for p in range(len(W)):
@@ -276,7 +371,7 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     lam = 0.0
     for p in range(len(W)):
         if A[p] > a_min:
-            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) / (W[p] ** 2 / (E_w * A[p])))
+            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) * (E_w * A[p]) / (W[p] * W[p]))
     return lam
 
 
@@ -806,8 +901,8 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, motion, wall_ids, wall_vel, ids_in, xz,
-                      ids_out, F_out, rows, held,
+def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel, ids_in,
+                      xz, ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
@@ -820,36 +915,47 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, mot
     bridge's steps() (O.step()).
     With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``
     (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
-    (``free_discs``) give those discs their ``separation_velocities`` by set_vel. It stops after
-    the force write of a step that needs Python (a water step that needed sub-steps or failed), at
-    the start of a step whose pair list is stale (LIST_STALE: nothing done of it) or at an error
-    code.
-    Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code)."""
+    (``free_discs``) give those discs their ``separation_velocities`` by set_vel. A stale pair
+    list is rebuilt at the step's centres (``near_pairs`` with the list's skin [m]: pi, pj, state
+    and lost become new arrays, xz_list is overwritten); with skin 0 (a list with a pair filter)
+    the call stops at the start of that step instead (LIST_STALE: nothing done of it). It also
+    stops after the force write of a step that needs Python (a water step that needed sub-steps
+    or failed) or at an error code.
+    Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code,
+    the pair lists built, pi, pj, state, lost)."""
     wet = len(W) > 0
     V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
+    builds = 0
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
-            return s, 0, 1, rc
+            return s, 0, 1, rc, builds, pi, pj, state, lost
         water_due = wet and (k + s) % water_interval == 0
-        n_lost, n_sub = dem_step(xz, F_out, rows, held, water_due,
-                                 xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state,
-                                 prm, spring, F, M, acc_j, lost,
-                                 h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
-                                 tie_pairs, tie_rest, tie_prm, T)
+        for attempt in range(2):  # a stale list rebuilt once
+            n_lost, n_sub = dem_step(xz, F_out, rows, held, water_due,
+                                     xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj,
+                                     state, prm, spring, F, M, acc_j, lost,
+                                     h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
+                                     tie_pairs, tie_rest, tie_prm, T)
+            if n_lost != LIST_STALE or skin <= 0.0 or attempt == 1:
+                break
+            pi, pj, state = near_pairs(xz, r, mobile, prm[6], skin, pi, pj, state)  # prm[6]: eps_m
+            lost = np.zeros(len(pi), np.int64)
+            xz_list[:] = xz
+            builds += 1
         if n_lost == LIST_STALE:
-            return s, n_lost, 0, 0
+            return s, n_lost, 0, 0, builds, pi, pj, state, lost
         rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
         if rc != 0 or n_sub != 1:
-            return s, n_lost, n_sub, rc
+            return s, n_lost, n_sub, rc, builds, pi, pj, state, lost
         if adjust and n_lost > 0:
             free = free_discs(lost, n_lost, pi, pj, state, mobile)
             if free.any():
                 separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e, V)
                 rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, V)
                 if rc != 0:
-                    return s, n_lost, n_sub, rc
+                    return s, n_lost, n_sub, rc, builds, pi, pj, state, lost
         if water_due:
             for a in range(3):
                 totals[a] += balance[a]
@@ -859,14 +965,14 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, totals, mot
                 wall_vel[b, 0], wall_vel[b, 1] = motion[MOTION.wall_velocity], 0.0
             rc = _c_bulk_call(bridge[BRIDGE.set_vel], wall_ids.ctypes.data, wall_ids.size, wall_vel.ctypes.data)
             if rc != 0:
-                return s, 0, 1, rc
+                return s, 0, 1, rc, builds, pi, pj, state, lost
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
-            return s, 0, 1, rc
-    return n, 0, 1, 0
+            return s, 0, 1, rc, builds, pi, pj, state, lost
+    return n, 0, 1, 0, builds, pi, pj, state, lost
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 15).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 16).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit
@@ -913,10 +1019,12 @@ def pore_pressures(W, A, E_w, U):
 def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
     """Force of the pore pressures U on every disc, F (N, 2) [N] (eq 33); Fj (N, 2) is scratch.
     The outer face and closed faces (link_pores = -1) have U = 0. Vertices past the N discs (the
-    flat walls', radius 0) take nothing."""
+    flat walls', radius 0) take nothing. The links come sorted by i: disc i's sum is kept in
+    registers while its links follow one another (the same sums in the same order)."""
     F[:] = 0.0
     Fj[:] = 0.0
     n = len(F)
+    a_sum, fx, fz = _at(0), 0.0, 0.0  # the disc summed in (fx, fz), F[a_sum] not yet written
     for l in range(len(links)):
         p0, p1 = link_pores[l, 0], link_pores[l, 1]
         s = ((U[_at(p1)] if p1 >= 0 else 0.0) - (U[_at(p0)] if p0 >= 0 else 0.0)) / length[l]
@@ -924,12 +1032,17 @@ def pressure_forces(links, link_pores, r, U, length, vec, F, Fj):
         i, j = links[l, 0], links[l, 1]
         if i < n:
             a = _at(i)
-            F[a, 0] += r[a] * px
-            F[a, 1] += r[a] * pz
+            if a != a_sum:
+                F[a_sum, 0], F[a_sum, 1] = fx, fz
+                a_sum, fx, fz = a, F[a, 0], F[a, 1]
+            fx += r[a] * px
+            fz += r[a] * pz
         if j < n:
             b = _at(j)
             Fj[b, 0] += r[b] * px
             Fj[b, 1] += r[b] * pz
+    if n:
+        F[a_sum, 0], F[a_sum, 1] = fx, fz
     for a in range(len(F)):
         F[a, 0] += Fj[a, 0]
         F[a, 1] += Fj[a, 1]

@@ -36,6 +36,19 @@ class PoreDEM(pore_dem.PoreDEM):
         return kernels.dem_step_args(rows, held, self.water_due(), law.kernel_args(),
                                      wm.kernel_args(wm.water_interval * self.dt), self._tie_args)
 
+    def pores_due(self):
+        """Is step k one that ``kernel_step_args`` leaves to the general path only for its pore
+        rebuild on the interval (no rebuild_distance)? Then ``rebuild_pores`` makes it first."""
+        law, wm = self.law, self.water_model
+        return (wm is not None and law.xz_prev is not None and law.walls is None and wm.rebuild_distance == 0
+                and wm.rebuild_due(self.k))
+
+    def rebuild_pores(self, xz):
+        """The pore rebuild of step k at its centres xz (N, 2) [m], before its law: ``step`` makes
+        it after the law, which reads no pore, so the step is the same, and its law and water
+        then run in one compiled call."""
+        self.water_model.rebuild(xz, self.k)
+
     def finish_kernel_step(self, xz, n_lost, n_sub, water_due, vel=None):
         """The Python part of a dem_step at xz that returned (n_lost, n_sub), with the water when
         water_due: velocity fixes (eq 18-24, returned), the water's books, the walls."""
@@ -51,9 +64,10 @@ class PoreDEM(pore_dem.PoreDEM):
         return self.water_model is not None and self.k % self.water_model.water_interval == 0
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_interval, adjust, e, mass, totals, motion, args) for kernels.dem_drive_bulk_io:
-        up to n steps from step k (none of them a pore rebuild), whether the eq 18-24 adjustment is on,
-        its restitution and the discs' masses, the water's balance so far (3,) [m^2], the base
+        """(steps, water_interval, adjust, e, mass, skin, totals, motion, args) for
+        kernels.dem_drive_bulk_io: up to n steps from step k (none of them a pore rebuild), whether
+        the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
+        lists it rebuilds (0: none, a list with a pair filter), the water's balance so far (3,) [m^2], the base
         motion (kernels.MOTION; empty without one) and the arguments after F_out (DEM_DRIVE), or
         None when step k needs ``kernel_step_args``'s other paths or the input acceleration is not
         a Cosine. ``finish_kernel_drive`` books what the call did."""
@@ -67,12 +81,13 @@ class PoreDEM(pore_dem.PoreDEM):
         motion = np.zeros(0) if base is None else np.array(kernels.MOTION.values(
             amplitude=base.accel.amplitude, w=base.accel.w, dt=base.dt, acc=base.acc, vel=base.vel, disp=base.disp,
             wall_velocity=self.wall_velocity))
-        s = self.law.settings
+        s, c = self.law.settings, self.law.contact
+        skin = c.skin if c.pair_filter is None else 0.0
         if wm is None:
-            return n, 1, s.separation_adjustment, s.restitution, self.law.mass, np.zeros(3), motion, args
+            return n, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, args
         b = wm.water.balance
         steps = min(n, steps_to_rebuild(self.k, wm.k_built, wm.k0, wm.rebuild_interval, 1))
-        return (steps, wm.water_interval, s.separation_adjustment, s.restitution, self.law.mass,
+        return (steps, wm.water_interval, s.separation_adjustment, s.restitution, self.law.mass, skin,
                 np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args)
 
     def finish_kernel_drive(self, done, totals, motion):

@@ -34,6 +34,7 @@ engines.model.pore_water.PoreWater.remesh (``steps=``), what the compiled WaterM
 import numba as nb
 import numpy as np
 
+from engines.compiled.kernels import _grid, _groups, _grown, _within
 from engines.model import pore_water
 from engines.model import pores as pg
 
@@ -82,23 +83,6 @@ def _signed_area(xz, i, j, k):
 
 
 @jit
-def _groups(key, n_groups):
-    """Counting sort: (ptr (n_groups + 1,), order) with order[ptr[g]:ptr[g + 1]] the indices of the
-    entries of key == g, increasing."""
-    ptr = np.zeros(n_groups + 1, np.int64)
-    for g in key:
-        ptr[g + 1] += 1
-    for g in range(n_groups):
-        ptr[g + 1] += ptr[g]
-    fill = ptr[:-1].copy()
-    order = np.empty(len(key), np.int64)
-    for e in range(len(key)):
-        order[fill[key[e]]] = e
-        fill[key[e]] += 1
-    return ptr, order
-
-
-@jit
 def _sort_by(idx, key):
     """Sort the entries of idx in place by key[idx], stably (insertion sort when they are few)."""
     if len(idx) > 32:
@@ -134,22 +118,6 @@ def _twin(a, b, ptr, order, h):
 
 
 @jit
-def _grid(x, z, cell):
-    """Square cells of side >= cell over the points (x, z): (x0, z0, cell, nx, nz, start, members),
-    the points of cell (gx, gz) being members[start[g]:start[g + 1]], g = gx nz + gz, where
-    gx = floor((x - x0) / cell)."""
-    x0, z0 = x.min(), z.min()
-    nx = int((x.max() - x0) / cell) + 1
-    nz = int((z.max() - z0) / cell) + 1
-    while nx * nz > 4 * len(x) + 16:  # scattered points: fewer, larger cells
-        cell *= 2.0
-        nx = int((x.max() - x0) / cell) + 1
-        nz = int((z.max() - z0) / cell) + 1
-    start, members = _groups(((x - x0) / cell).astype(np.int64) * nz + ((z - z0) / cell).astype(np.int64), nx * nz)
-    return x0, z0, cell, nx, nz, start, members
-
-
-@jit
 def _is_link(xz, r, reach, a, b, owner, bits, n_discs):
     """engines.model.flat_walls.WallVertices.is_link of the vertices a, b: two discs (< n_discs) by
     eq 28 (reach = eps_m + l_m); a disc and a wall vertex when it is the disc's foot (owner: the
@@ -159,7 +127,7 @@ def _is_link(xz, r, reach, a, b, owner, bits, n_discs):
         if a >= n_discs and b >= n_discs:
             return (bits[a] & bits[b]) != 0
         return owner[a] == owner[b]
-    return r[a] + r[b] + reach >= np.hypot(xz[b, 0] - xz[a, 0], xz[b, 1] - xz[a, 1])  # eq 28
+    return _within(xz[b, 0] - xz[a, 0], xz[b, 1] - xz[a, 1], r[a] + r[b] + reach)  # eq 28
 
 
 @jit
@@ -620,14 +588,6 @@ def pore_overlaps(to, tp_old, tn, tp_new, xz, n_new):
             out_p[k], out_q[k], out_a[k] = p[keep[e]], q[keep[e]], 0.0
         out_a[k] += area[keep[e]]
     return out_p[:k + 1].copy(), out_q[:k + 1].copy(), out_a[:k + 1].copy()
-
-
-@jit
-def _grown(x, m):
-    """x with room for twice its m entries."""
-    out = np.empty(2 * m, x.dtype)
-    out[:m] = x[:m]
-    return out
 
 
 def _lifted_points(xz, r):

@@ -135,11 +135,15 @@ class PaperLawEngine:
         while True:
             drive = core.kernel_drive_args(self._dynamic, self.held, n)
             if drive is None:
-                return 0
-            steps, water_interval, adjust, e, mass, totals, motion, args = drive
-            done, n_lost, n_sub, rc = self._drive_dem(steps, core.k, water_interval, adjust, e, mass, totals, motion,
-                                                      self.walls, self._wall_vel, self.io, self._xz, self.forced,
-                                                      self._F_out, args, self._reset_last)
+                if not self._rebuild_pores():
+                    return 0
+                continue
+            steps, water_interval, adjust, e, mass, skin, totals, motion, args = drive
+            done, n_lost, n_sub, rc, builds, *pairs = self._drive_dem(
+                steps, core.k, water_interval, adjust, e, mass, skin, totals, motion, self.walls, self._wall_vel,
+                self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
+            if builds:
+                core.law.contact.take_list(builds, *pairs)
             core.finish_kernel_drive(done, totals, motion)
             self._check(rc)
             if done == steps:
@@ -164,7 +168,9 @@ class PaperLawEngine:
         while True:
             args = core.kernel_step_args(self._dynamic, self.held)
             if args is None:
-                return False
+                if not self._rebuild_pores():
+                    return False
+                continue
             n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args,
                                              self._reset_last)
             if n_lost != kernels.LIST_STALE:
@@ -172,6 +178,14 @@ class PaperLawEngine:
             core.law.contact._update_list(self._xz)
         fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due])
         self._after(fixes)
+        return True
+
+    def _rebuild_pores(self):
+        """The core's pore rebuild of this step at the positions read now, when that is all that
+        keeps the step from a compiled call (``pores_due``); True if it was made."""
+        if not (hasattr(self.core, "pores_due") and self.core.pores_due()):
+            return False
+        self.core.rebuild_pores(self.io.positions())
         return True
 
     def _write_held(self, F):

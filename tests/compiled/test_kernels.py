@@ -96,6 +96,46 @@ def test_paper_law_step_compiled_equals_numpy():
     assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
 
 
+@pytest.mark.parametrize("spread", [1.0, 40.0])
+def test_the_pair_list_compiled_equals_numpy(spread):
+    """ContactLaw._pairs_near by the grid kernel (kernels.near_pairs) against the
+    k-d tree of the NumPy path: the same pairs in the same order, the state of the listed pairs
+    carried over row by row, a new pair's zero, pairs of two fixed discs left out, and the pair
+    filter. spread: discs packed, or some scattered over 40 times the box (a sparse grid)."""
+    xz, r, walls, rng = _column(seed=9)
+    xz[::7] *= spread
+    mobile = walls == 0
+    s = ContactSettings(spring="d", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0, eps_m=0.01)
+    laws = [law(s, r, mobile) for law in (model_contact.ContactLaw, contact.ContactLaw)]
+    for law in laws:
+        law._update_list(xz)
+        law.state = np.arange(law.state.size, dtype=float).reshape(law.state.shape)  # rows told apart
+    moved = xz + 0.3 * r.min() * rng.standard_normal(xz.shape)
+    (i0, j0, s0), (i1, j1, s1) = (law._pairs_near(moved) for law in laws)
+    assert i1.dtype == j1.dtype == np.int64
+    np.testing.assert_array_equal(i1, i0)
+    np.testing.assert_array_equal(j1, j0)
+    np.testing.assert_array_equal(s1, s0)
+    kept = np.isin(i0 * len(r) + j0, laws[0].i * len(r) + laws[0].j)
+    assert 0 < kept.sum() < len(i0) and not s0[~kept].any()  # carried over and new pairs both
+    assert not (~mobile[i0] & ~mobile[j0]).any() and (~mobile[i0] | ~mobile[j0]).any()
+    laws[1].pair_filter = lambda i, j: (i + j) % 3 != 0
+    i2, j2, s2 = laws[1]._pairs_near(moved)
+    keep = (i0 + j0) % 3 != 0
+    np.testing.assert_array_equal(i2, i0[keep])
+    np.testing.assert_array_equal(s2, s0[keep])
+
+
+@pytest.mark.parametrize("law", [model_contact.ContactLaw, contact.ContactLaw])
+def test_a_pair_exactly_at_the_lists_reach_is_listed(law):
+    """R = r_i + r_j + eps_m + skin is in the list, the next float beyond it is not."""
+    r = np.array([1e-3, 1.5e-3])
+    c = law(ContactSettings(spring="a", kn=1e3, eps_m=1e-4), r, np.ones(2, bool))
+    reach = r[0] + r[1] + 1e-4 + c.skin
+    for x, listed in ((reach, 1), (np.nextafter(reach, 1.0), 0)):
+        assert len(c._pairs_near(np.array([[0.0, 0.0], [x, 0.0]]))[0]) == listed
+
+
 def _kernel_measure(net, xz, r):
     n_p, n_l = net.n_pores, len(net.links)
     out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),

@@ -216,12 +216,13 @@ def _fused_and_general(sc, packing, n=200):
     call where it can (kernels.dem_drive_bulk_io), the same with the forces held as permanent
     forces (ForceResetter first in the engine list, as a user's script may have it), one compiled
     call a step (kernels.dem_step) and the general path only: (x, v, omega, pair-list builds, W,
-    O.iter) of each, and the steps the first three made in compiled calls."""
+    O.iter) of each, the steps the first three made in compiled calls, and the pair lists that
+    the first one's compiled calls rebuilt themselves (kernels.near_pairs inside the drive)."""
     from yade import O
     from yade.wrapper import ForceResetter
 
     from engines.yade import yade_io
-    runs, compiled_steps = [], []
+    runs, compiled_steps, kernel_lists = [], [], 0
     for how in ("many", "held", "one", "general"):
         cp = YadeCoupling(sc, packing)
         assert yade_io.forces_reset_after_newton(O.engines)  # the coupling's list: no permanent forces
@@ -236,9 +237,10 @@ def _fused_and_general(sc, packing, n=200):
             drive = cp.engine._drive_dem
 
             def many(*args):
-                nonlocal counted
+                nonlocal counted, kernel_lists
                 out = drive(*args)
                 counted += out[0]
+                kernel_lists += out[4] if how == "many" else 0
                 return out
             cp.engine._drive_dem = many
         else:
@@ -257,7 +259,7 @@ def _fused_and_general(sc, packing, n=200):
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
         compiled_steps.append(counted)
-    return runs, compiled_steps[:3]
+    return runs, compiled_steps[:3], kernel_lists
 
 
 def _assert_same_runs(runs, n=200):
@@ -279,8 +281,9 @@ def test_paper_law_compiled_steps_equal_the_general_path(packing, law_override):
     pore rebuilds and steps without water, and so do the forces held as permanent forces."""
     over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
     over.update(law_override)
-    runs, compiled_steps = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
+    runs, compiled_steps, kernel_lists = _fused_and_general(scenes.preset("quicksand_case1", over), packing)
     _assert_same_runs(runs)
+    assert kernel_lists == runs[0][3] - 1  # every list but the first step's rebuilt inside the compiled calls
     assert min(compiled_steps) > 150
 
 
@@ -291,8 +294,9 @@ def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
     (SideWallTies.forces in NumPy, BaseMotion in Python), the side walls and the base moving."""
     sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 60, "water_interval": 3}})
     packing = Packing.load(sc.packing.file)
-    runs, compiled_steps = _fused_and_general(sc, packing)
+    runs, compiled_steps, kernel_lists = _fused_and_general(sc, packing)
     _assert_same_runs(runs)
+    assert kernel_lists == runs[0][3] - 1  # every list but the first step's rebuilt inside the compiled calls
     assert min(compiled_steps) > 150
     side = side_wall_ties(sc, packing).moving
     assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)
@@ -307,8 +311,9 @@ def test_compiled_steps_leave_a_disc_set_free_to_the_velocity_adjustment():
     NumPy adjustment)."""
     from engines.run.crosscheck import contact_scene, launcher_packing
     sc = contact_scene("head_on_adjusted", spring="a", separation_adjustment=True)
-    runs, compiled_steps = _fused_and_general(sc, launcher_packing(), n=2500)
+    runs, compiled_steps, kernel_lists = _fused_and_general(sc, launcher_packing(), n=2500)
     _assert_same_runs(runs, n=2500)
+    assert kernel_lists == runs[0][3] - 1  # every list but the first step's rebuilt inside the compiled calls
     assert min(compiled_steps) > 2000
     assert compiled_steps[0] == 2499  # all but the first step (du = 0): none finished in Python
     v = runs[0][1]

@@ -250,6 +250,21 @@ def test_bad_ids_are_refused_and_nothing_is_done(bulk):
     bulk.get_pos_xz(ids[:3], out)  # good ids still work after refusals
 
 
+def test_unsynced_force_writes_refuse_ids_out_of_range_only(bulk):
+    """add_force_unsynced_xz checks the ids against the body range, not body by body: an id out of
+    range is refused before anything is written, an erased body's slot takes its force (the
+    compiled steps read the positions of the same bodies first, and that read refuses it)."""
+    _discs(10)
+    O.bodies.erase(4)
+    F = np.ones((3, 2))
+    for bad, k in (([0, 1, 10], 2), ([0, -1, 2], 1), ([0, 2, 2**40], 2)):
+        with pytest.raises(IndexError, match=f"ids\\[{k}\\]"):
+            bulk.add_force_unsynced_xz(np.array(bad, dtype=np.int64), F)
+    bulk.add_force_unsynced_xz(np.array([0, 4, 2], dtype=np.int64), F)
+    with pytest.raises(IndexError, match="ids\\[1\\]"):
+        bulk.get_pos_xz(np.array([0, 4, 2], dtype=np.int64), np.empty((3, 2)))
+
+
 def test_bad_arrays_are_refused(bulk):
     ids = _discs(6)
     xz = np.empty((6, 2))

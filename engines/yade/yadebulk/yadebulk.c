@@ -130,7 +130,10 @@ typedef struct {
     char *scene;
     void *bodies;
     int64_t n_bodies;
+    char *slots; /* &body[0] of the BodyContainer's vector of shared_ptr<Body>, or NULL */
 } Ctx;
+
+#define SLOT_BYTES 16 /* sizeof(shared_ptr<Body>) */
 
 static int begin(Ctx *c, int64_t n)
 {
@@ -141,6 +144,14 @@ static int begin(Ctx *c, int64_t n)
     c->bodies = *(void **)(c->scene + L.bodies);
     if (!c->bodies) return YB_ENOSCENE;
     c->n_bodies = (int64_t)Y.bodies_size(c->bodies);
+    /* the bodies' slots indexed directly when the first and the last lie one vector apart, as in
+     * YADE's BodyContainer (std::vector<shared_ptr<Body>>); else body by body through YADE */
+    c->slots = NULL;
+    if (c->n_bodies > 0) {
+        char *first = (char *)Y.bodies_at(c->bodies, 0u);
+        char *last = (char *)Y.bodies_at(c->bodies, (unsigned)(c->n_bodies - 1));
+        if (last == first + (c->n_bodies - 1) * SLOT_BYTES) c->slots = first;
+    }
     return 0;
 }
 
@@ -148,7 +159,7 @@ static int begin(Ctx *c, int64_t n)
 static char *state_of(const Ctx *c, int64_t id)
 {
     if (id < 0 || id >= c->n_bodies) return NULL;
-    char *body = *(char *const *)Y.bodies_at(c->bodies, (unsigned)id);
+    char *body = *(char *const *)(c->slots ? c->slots + id * SLOT_BYTES : (char *)Y.bodies_at(c->bodies, (unsigned)id));
     return body ? *(char **)(body + L.state) : NULL;
 }
 
@@ -249,10 +260,17 @@ int64_t yb_set_perm_force_xz(const int64_t *ids, int64_t n, const double *F)
  * that NewtonIntegrator reads, with no sync() pass over all bodies (the one that permanent forces
  * cost every step). For a scene whose ForceResetter runs after its NewtonIntegrator: the forces
  * of the next step are written between steps into a reset container. syncSizesOfContainers()
- * first, so that every live body has its slot (addForceUnsynced does not check). */
+ * first, so that every body id has its slot (addForceUnsynced does not check). The ids are
+ * checked against that range only, not looked up: an erased body's slot takes its force unread
+ * (the compiled steps write the forces of bodies whose positions they read in the same step,
+ * and that read refuses an erased body). */
 int64_t yb_add_force_unsynced_xz(const int64_t *ids, int64_t n, const double *F)
 {
-    BULK_PROLOGUE
+    Ctx c;
+    int64_t err = begin(&c, n);
+    if (err) return err;
+    for (int64_t k = 0; k < n; k++)
+        if (ids[k] < 0 || ids[k] >= c.n_bodies) return k + 1;
     void *fc = c.scene + L.forces;
     Y.sync_sizes(fc);
     for (int64_t k = 0; k < n; k++) {
