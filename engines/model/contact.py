@@ -59,9 +59,10 @@ class ContactLaw:
     a disc has moved by more than half the skin; state is carried over by pair key.
 
     ``state`` (m, 6) holds per pair the columns TOUCHING, U_N, E_N, E_S, VN_COLL, F_N: touching flag,
-    accumulated overlap u_n [m], elastic forces e_n, e_s [N], approach velocity at first touch [m/s],
-    last normal force [N]. Its compiled twin engines.compiled.contact.ContactLaw runs the per-step loop
-    in a kernel (the same arithmetic as the NumPy code here, which stays the readable path).
+    accumulated overlap u_n [m] (kept as it was while the pair is apart), elastic forces e_n, e_s [N],
+    approach velocity at first touch [m/s], last normal force [N]. Its compiled twin
+    engines.compiled.contact.ContactLaw runs the per-step loop in a kernel (the same arithmetic as
+    the NumPy code here, which stays the readable path).
     """
 
     def __init__(self, settings, r, mobile, skin=None, pair_filter=None):
@@ -182,7 +183,8 @@ class ContactLaw:
         F = np.column_stack([np.bincount(i, fx, minlength=n) - np.bincount(j, fx, minlength=n),
                              np.bincount(i, fz, minlength=n) - np.bincount(j, fz, minlength=n)])
         M = -(np.bincount(i, r[i] * f_s, minlength=n) + np.bincount(j, r[j] * f_s, minlength=n))  # eq 13c
-        new_state = np.column_stack([now, u_n, e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
+        new_state = np.column_stack([now, np.where(now | touching, u_n, u_n_old),  # apart: u_n kept, unread
+                                     e_n, np.where(now, e_s, 0.0), np.where(new, dun / dt, vn_coll),
                                      np.where(now, f_n, 0.0)])
         return F, M, new_state, np.flatnonzero(touching & ~now)
 
