@@ -97,7 +97,7 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
         delta = r[i] + r[j] + eps_m - R
         now = delta >= 0                                        # eq 1, 26
         was = state[k, TOUCHING] != 0.0
-        if not (now or was):  # apart before and now: no force, the state as it was (zero forces)
+        if not (now or was):  # apart before and now: no force; its state stays (forces 0 since it parted)
             continue
         nx, nz = dx / R, dz / R                                 # eq 2
         new = now and not was
@@ -343,9 +343,9 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
     exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j (Np,) are scratch.
-    Two divisions fewer than PoreWater.flows, the same values to round-off (on the seismic case
-    this kernel 0.89x, then 0.92x): g = (k / E_w) A_ij with k / E_w once per call, and the bound as
-    (...) E_w A / W^2.
+    One division fewer per throat and per pore than PoreWater.flows, the same values to round-off
+    (on the seismic case this kernel 0.89x, then 0.92x): g = (k / E_w) A_ij with k / E_w taken
+    once per call, and the bound as (...) E_w A / W^2.
     """
     E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
     for p in range(len(W)):

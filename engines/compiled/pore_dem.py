@@ -67,10 +67,10 @@ class PoreDEM(pore_dem.PoreDEM):
         """(steps, water_interval, adjust, e, mass, skin, totals, motion, args) for
         kernels.dem_drive_bulk_io: up to n steps from step k (none of them a pore rebuild), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
-        lists it rebuilds (0: none, a list with a pair filter), the water's balance so far (3,) [m^2], the base
-        motion (kernels.MOTION; empty without one) and the arguments after F_out (DEM_DRIVE), or
-        None when step k needs ``kernel_step_args``'s other paths or the input acceleration is not
-        a Cosine. ``finish_kernel_drive`` books what the call did."""
+        lists it rebuilds (0: none, a list with a pair filter), the water's balance so far (3,)
+        [m^2], the base motion (kernels.MOTION; empty without one) and the arguments after F_out
+        (DEM_DRIVE), or None when step k needs ``kernel_step_args``'s other paths or the input
+        acceleration is not a Cosine. ``finish_kernel_drive`` books what the call did."""
         base, wm = self.base, self.water_model
         if base is not None and not isinstance(base.accel, Cosine):
             return None

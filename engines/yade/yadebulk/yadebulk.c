@@ -159,7 +159,8 @@ static int begin(Ctx *c, int64_t n)
 static char *state_of(const Ctx *c, int64_t id)
 {
     if (id < 0 || id >= c->n_bodies) return NULL;
-    char *body = *(char *const *)(c->slots ? c->slots + id * SLOT_BYTES : (char *)Y.bodies_at(c->bodies, (unsigned)id));
+    char *slot = c->slots ? c->slots + id * SLOT_BYTES : (char *)Y.bodies_at(c->bodies, (unsigned)id);
+    char *body = *(char *const *)slot;
     return body ? *(char **)(body + L.state) : NULL;
 }
 
