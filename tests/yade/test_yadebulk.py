@@ -252,8 +252,8 @@ def test_bad_ids_are_refused_and_nothing_is_done(bulk):
 
 def test_unsynced_force_writes_refuse_ids_out_of_range_only(bulk):
     """add_force_unsynced_xz checks the ids against the body range, not body by body: an id out of
-    range is refused before anything is written, an erased body's slot takes its force (the
-    compiled steps read the positions of the same bodies first, and that read refuses it)."""
+    range is refused, naming its place, and an erased body's slot takes its force (the compiled
+    steps read the positions of the same bodies first, and that read refuses it)."""
     _discs(10)
     O.bodies.erase(4)
     F = np.ones((3, 2))
