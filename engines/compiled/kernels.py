@@ -918,10 +918,10 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
     (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
     (``free_discs``) give those discs their ``separation_velocities`` by set_vel. A stale pair
     list is rebuilt at the step's centres (``near_pairs`` with the list's skin [m]: pi, pj, state
-    and lost become new arrays, xz_list is overwritten); with skin 0 (a list with a pair filter)
-    the call stops at the start of that step instead (LIST_STALE: nothing done of it). It also
-    stops after the force write of a step that needs Python (a water step that needed sub-steps
-    or failed) or at an error code.
+    and lost become new arrays, xz_list is overwritten); a list still stale then (skin 0) stops
+    the call at the start of that step (LIST_STALE: nothing done of it). It also stops after the
+    force write of a step that needs Python (a water step that needed sub-steps or failed) or at
+    an error code.
     Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code,
     the pair lists built, pi, pj, state, lost)."""
     wet = len(W) > 0
@@ -939,7 +939,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
                                      state, prm, spring, F, M, acc_j, lost,
                                      h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                                      tie_pairs, tie_rest, tie_prm, T)
-            if n_lost != LIST_STALE or skin <= 0.0 or attempt == 1:
+            if n_lost != LIST_STALE or attempt == 1:
                 break
             pi, pj, state = near_pairs(xz, r, mobile, prm[6], skin, pi, pj, state)  # prm[6]: eps_m
             lost = np.zeros(len(pi), np.int64)

@@ -27,7 +27,7 @@ class PoreDEM(pore_dem.PoreDEM):
         first step, a rebuild of the pores, every step with a rebuild_distance: the positions
         it checks are read inside the kernel call, and every step with flat walls)."""
         law, wm = self.law, self.water_model
-        if law.xz_prev is None or law.walls is not None:
+        if not self._law_compiled():
             return None
         if wm is None:
             return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
@@ -39,9 +39,12 @@ class PoreDEM(pore_dem.PoreDEM):
     def pores_due(self):
         """Is step k one that ``kernel_step_args`` leaves to the general path only for its pore
         rebuild on the interval (no rebuild_distance)? Then ``rebuild_pores`` makes it first."""
-        law, wm = self.law, self.water_model
-        return (wm is not None and law.xz_prev is not None and law.walls is None and wm.rebuild_distance == 0
-                and wm.rebuild_due(self.k))
+        wm = self.water_model
+        return self._law_compiled() and wm is not None and wm.rebuild_distance == 0 and wm.rebuild_due(self.k)
+
+    def _law_compiled(self):
+        """Can the law of step k run in kernels.law_step (after the first step, without flat walls)?"""
+        return self.law.xz_prev is not None and self.law.walls is None
 
     def rebuild_pores(self, xz):
         """The pore rebuild of step k at its centres xz (N, 2) [m], before its law: ``step`` makes
@@ -67,8 +70,7 @@ class PoreDEM(pore_dem.PoreDEM):
         """(steps, water_interval, adjust, e, mass, skin, totals, motion, args) for
         kernels.dem_drive_bulk_io: up to n steps from step k (none of them a pore rebuild), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
-        lists it rebuilds (0: none, a list with a pair filter), the water's balance so far (3,)
-        [m^2], the base motion (kernels.MOTION; empty without one) and the arguments after F_out
+        lists it rebuilds [m], the water's balance so far (3,) [m^2], the base motion (kernels.MOTION; empty without one) and the arguments after F_out
         (DEM_DRIVE), or None when step k needs ``kernel_step_args``'s other paths or the input
         acceleration is not a Cosine. ``finish_kernel_drive`` books what the call did."""
         base, wm = self.base, self.water_model
@@ -81,8 +83,7 @@ class PoreDEM(pore_dem.PoreDEM):
         motion = np.zeros(0) if base is None else np.array(kernels.MOTION.values(
             amplitude=base.accel.amplitude, w=base.accel.w, dt=base.dt, acc=base.acc, vel=base.vel, disp=base.disp,
             wall_velocity=self.wall_velocity))
-        s, c = self.law.settings, self.law.contact
-        skin = c.skin if c.pair_filter is None else 0.0
+        s, skin = self.law.settings, self.law.contact.skin  # no flat walls here: no pair filter
         if wm is None:
             return n, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, args
         b = wm.water.balance

@@ -182,7 +182,7 @@ def drive_dem(n, k, water_interval, adjust, e, mass, skin, totals, motion, walls
               args, reset_last):
     """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
     step k (``adjust``: the eq 18-24 adjustment is on, with restitution e and the discs' masses
-    mass (N,) [kg/m]; stale pair lists rebuilt with ``skin`` [m], 0: not), the positions read from
+    mass (N,) [kg/m]; stale pair lists rebuilt with ``skin`` [m]), the positions read from
     ``reader`` and the forces out written to ``writer`` (Bodies; held, or with ``reset_last``
     added to the reset forces: ``Bodies.write_forces``), the velocities of the driven walls
     ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base motion ``motion``, args those of
