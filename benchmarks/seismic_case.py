@@ -187,13 +187,13 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     law.contact._update_list(xz)
     law_args, water_args = law.kernel_args(), wm.kernel_args(wm.water_interval * law.dt)
     part, net = wm._part, wm.water.net
-    geometry = (xz, part("r"), net.links, part("vec0").reshape(-1, 2), net.corner_pore, net.corner_sign,
-                net.corner_link, net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, wm.eps_m,
-                part("poly"), part("sect"), part("void"), part("length"), part("contact"), part("theta"),
-                part("vec").reshape(-1, 2), part("rot"), part("cross"))
+    geometry = (xz, part("r"), net.links, net.link_pores, part("vec0").reshape(-1, 2), part("turn_weight"),
+                part("sector0"), wm.eps_m, part("poly"), part("sect"), part("void"), part("length"), part("contact"),
+                part("vec").reshape(-1, 2), part("right").reshape(-1, 2))
     flow = (wm.water.W, part("void"), part("contact"), net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
-            part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"))
+            part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"),
+            part("rate"))
     wa = dict(zip(kernels.WATER.names, water_args))
     update = (wm.water.W, wa["h"], flow[3], flow[4], part("q"), part("q_s"), part("q_d"), part("q_in"), part("acc_i"),
               part("acc_j"), part("balance"))

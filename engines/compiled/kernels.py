@@ -30,7 +30,7 @@ parameters (``LAW = Layout.of(law_step, 1)``), and its callers build its argumen
 arguments of those it calls has its list checked to be theirs one after the other (DEM_STEP is
 rows, held, water_due, LAW, WATER, TIES), and passes them on under their own names (tested). The
 network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
-name. These lists stay in this file: numba's cache is renewed when this file changes (not when a
+name as a WaterNet of views that hold no reference count (``water_net``, ``_view``). These lists stay in this file: numba's cache is renewed when this file changes (not when a
 module it imports does: the contact state's columns, engines.model.contact.TOUCHING ..., are read
 as constants; after changing them, delete engines/compiled/__pycache__; likewise after changing
 ``_groups``, ``_grid``, ``_within`` or ``_grown``, which engines.compiled.pores calls).
@@ -42,8 +42,10 @@ bridge's O.step()) between its water steps: many DEM steps in one call.
 
 The pore measure takes each link's turn since the build with ``turn`` (a short series for the
 small turns between rebuilds, else atan2) where engines.model.pores.measure calls arctan2: the same
-angles to round-off, the measure 30 % cheaper. ``darcy_flows`` divides by E_w once per call where
-the NumPy flows divide each conductance: the same conductances to round-off.
+angles to round-off, the measure 30 % cheaper. It sums each link's terms over the pores on its left
+and on its right apart, as NumPy does. ``darcy_flows`` divides by E_w once per call and by
+W once per pore where the NumPy flows divide each conductance, pressure and capacity: the same
+values to round-off.
 
 Sums over pairs are accumulated in the same order as np.bincount, into the same partial sums
 (the i side and the j side apart), so most results are bit for bit those of NumPy. Outputs are
@@ -51,11 +53,13 @@ written into arrays the caller owns (allocated once per network or contact list)
 first use and caches the machine code beside this file (``cache=True``); fastmath is off.
 """
 import math
+from collections import namedtuple
 
 import numba as nb
 import numpy as np
 from llvmlite import ir
 from numba.extending import intrinsic
+from numba.np.arrayobj import populate_array
 
 from engines.compiled.layout import Layout
 from engines.model.contact import E_N, E_S, F_N, TOUCHING, U_N, VN_COLL  # the state columns, numba constants
@@ -300,65 +304,66 @@ def turn(s, c):
 
 
 @jit
-def measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
-            poly, sect, void, length, contact, theta, vec, rot, cross):
-    """Pore areas and link states at xz (eq 29, 43b); outputs as in engines.model.pores.PoreMeasures.
-
-    vec0 (L, 2): the link vectors at the build (PoreNetwork.link_vec0). rot, cross (L,) are
-    scratch: rot is each link's turn since the build, so that a corner's change is the difference
-    of two turns, as in engines.model.pores.measure. ``contact`` is a bool array.
-    """
+def measure(xz, r, links, link_pores, vec0, turn_weight, sector0, eps_m, poly, sect, void, length, contact, vec,
+            right):
+    """Pore areas and link states at xz (eq 29, 43b); outputs as in engines.model.pores.PoreMeasures
+    (no corner angles): one pass over the links, each adding its shoelace term and its turn since
+    the build (vec0 (L, 2): PoreNetwork.link_vec0) times turn_weight to the pore on its left
+    (link_pores[l, 0]) and taking them from the pore on its right; sector0: PoreNetwork.sector_area0.
+    ``contact`` is a bool array. right (Np, 2) is scratch: the sums of the right sides, kept apart
+    as NumPy's (the same sums to the bit where the turns are)."""
+    for p in range(len(poly)):
+        poly[p] = sect[p] = right[p, 0] = right[p, 1] = 0.0
     for l in range(len(links)):
         i, j = _at(links[l, 0]), _at(links[l, 1])
         xi, zi = xz[i, 0], xz[i, 1]
         dx, dz = xz[j, 0] - xi, xz[j, 1] - zi
         length[l] = math.sqrt(dx * dx + dz * dz)
-        rot[l] = turn(vec0[l, 0] * dz - vec0[l, 1] * dx, vec0[l, 0] * dx + vec0[l, 1] * dz)
-        cross[l] = xi * dz - dx * zi
         vec[l, 0], vec[l, 1] = dx, dz
-        contact[l] = r[i] + r[j] + eps_m >= length[l]
-    poly[:] = 0.0
-    sect[:] = 0.0
-    two_pi = 2 * math.pi
-    for c in range(len(c_pore)):
-        p, l = _at(c_pore[c]), _at(c_link[c])
-        poly[p] += c_sign[c] * cross[l]
-        x = rot[l] - rot[_at(c_next[c])] + math.pi
-        if not 0.0 <= x < two_pi:  # np.mod(x, 2 pi) is x itself in [0, 2 pi): skip the fmod
-            x = x % two_pi
-        theta[c] = c_theta0[c] + x - math.pi                    # eq 29
-        sect[p] += theta[c] * c_r2[c]
+        contact[l] = r[i] + r[j] + eps_m >= length[l]          # eq 43b
+        cross = xi * dz - dx * zi
+        sector = turn_weight[l] * turn(vec0[l, 0] * dz - vec0[l, 1] * dx, vec0[l, 0] * dx + vec0[l, 1] * dz)  # eq 29
+        p0, p1 = link_pores[l, 0], link_pores[l, 1]
+        if p0 >= 0:
+            poly[_at(p0)] += cross
+            sect[_at(p0)] += sector
+        if p1 >= 0:
+            right[_at(p1), 0] += cross
+            right[_at(p1), 1] += sector
     for p in range(len(poly)):
-        poly[p] = 0.5 * poly[p]
-        sect[p] = 0.5 * sect[p] + rattler_area[p]
+        poly[p] = 0.5 * (poly[p] - right[p, 0])
+        sect[p] = sector0[p] + (sect[p] - right[p, 1])
         void[p] = poly[p] - sect[p]
 
 
 @jit
 def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bottom, wp,
-                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j):
+                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j, rate):
     """Throat flows q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and inflow
     q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too.
 
     wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
-    exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j (Np,) are scratch.
-    One division fewer per throat and per pore than PoreWater.flows, the same values to round-off
-    (on the seismic case this kernel 0.89x, then 0.92x): g = (k / E_w) A_ij with k / E_w taken
-    once per call, and the bound as (...) E_w A / W^2.
+    exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j and rate (1 / c_p) (Np,) are
+    scratch. Two divisions fewer per pore and one per throat than PoreWater.flows, the same values
+    to round-off: 1 / W once per pore (for U and 1 / c_p = E_w A / W^2), and 1 / E_w once per call
+    (for W / E_w and g = (k / E_w) A_ij).
     """
     E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
+    per_E = 1.0 / E_w
     for p in range(len(W)):
-        U[p] = E_w * (W[p] - A[p]) / W[p]                       # eq 32
-        per_k = W[p] / E_w if A[p] > a_min else 0.0             # outside at U = 0: A_ij -> W_i
+        per_W = 1.0 / W[p]
+        U[p] = E_w * (W[p] - A[p]) * per_W                      # eq 32
+        per_k = W[p] * per_E if A[p] > a_min else 0.0           # outside at U = 0: A_ij -> W_i
         g_s = k1 * surface[p] * per_k
         g_d = k3 * drained[p] * per_k
         q_s[p] = g_s * U[p]
         q_d[p] = g_d * U[p]
         q_in[p] = q_w * bottom[p]
         g_b[p] = g_s + g_d
+        rate[p] = E_w * A[p] * per_W * per_W
         acc_i[p] = acc_j[p] = 0.0
-    k1_E, k2_E = k1 / E_w, k2 / E_w
+    k1_E, k2_E = k1 * per_E, k2 * per_E
     for t in range(len(ti)):
         i, j = _at(ti[t]), _at(tj[t])
         if A[i] > a_min and A[j] > a_min:
@@ -372,7 +377,7 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     lam = 0.0
     for p in range(len(W)):
         if A[p] > a_min:
-            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) * (E_w * A[p]) / (W[p] * W[p]))
+            lam = max(lam, (2 * (acc_i[p] + acc_j[p]) + g_b[p]) * rate[p])
     return lam
 
 
@@ -401,27 +406,44 @@ def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
 
 
 # The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
-# unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack).
-WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "corner_pore", "corner_link", "corner_next_link",
-                                   "throat_i", "throat_j", "throat_link", "wall_axis", "wall_edge", "wall_edge_wall"))
+# unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack). Inside a
+# compiled call they are a WaterNet of views (``water_net``), made once a call: each view made costs
+# a reference count (~20 ns), so a run of many steps makes them once, not at every step.
+WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "throat_i", "throat_j", "throat_link", "wall_axis",
+                                   "wall_edge", "wall_edge_wall"))
 WATER_FLOATS = Layout("WATER_FLOATS", (
-    "corner_sign", "vec0", "corner_theta0", "corner_r2", "rattler_area", "surface", "drained", "bottom",  # inputs
-    "wp", "eps_m", "a_min", "r",
-    "poly", "sect", "void", "length", "contact", "theta", "vec", "rot", "cross",                         # measure
-    "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j",                                    # flows
-    "balance", "Fj", "lam", "has_q_prev", "check_areas",                  # update, forces, eq 46, rebuild trigger
-    "wall_position", "vertices", "F_walls"))                                              # flat walls
+    "vec0", "turn_weight", "sector0", "surface", "drained", "bottom", "wp", "eps_m", "a_min", "r",  # inputs
+    "poly", "sect", "void", "length", "contact", "vec", "right",                                # measure
+    "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j", "rate",                       # flows
+    "balance", "Fj", "lam", "has_q_prev", "check_areas",              # update, forces, eq 46, rebuild trigger
+    "wall_position", "vertices", "F_walls"))                                          # flat walls
+WaterNet = namedtuple("WaterNet", WATER_INTS.names + WATER_FLOATS.names)
+
+
+@intrinsic
+def _view(typingctx, buf, start, stop):
+    """buf[start:stop] of a contiguous 1-d array without a reference to buf's memory: no reference
+    count (an atomic add, ~20 ns, where buf[start:stop] makes one), so it is valid only while the
+    call that made it holds buf, and must not leave compiled code."""
+    def codegen(context, builder, signature, args):
+        src = context.make_array(signature.args[0])(context, builder, args[0])
+        out = context.make_array(signature.return_type)(context, builder)
+        populate_array(out, data=builder.gep(src.data, [args[1]]), shape=[builder.sub(args[2], args[1])],
+                       strides=[src.itemsize], itemsize=src.itemsize, meminfo=None)
+        return out._getvalue()
+    return buf.copy(layout="C")(buf, start, stop), codegen
 
 
 @jit
 def _part(buf, at, k):
-    return buf[at[k]:at[k + 1]]
+    """Part k of a buffer made by Layout.pack, a ``_view`` (only while the call holds buf)."""
+    return _view(buf, at[k], at[k + 1])
 
 
 @jit
 def _part2(buf, at, k):
     """Part k as an (n, 2) array."""
-    p = buf[at[k]:at[k + 1]]
+    p = _part(buf, at, k)
     return p.reshape((len(p) // 2, 2))
 
 
@@ -476,85 +498,100 @@ def flat_wall_forces(wall_edge, wall_edge_wall, link_pores, U, length, F_walls):
 
 
 @jit
+def water_net(ints, i_at, floats, f_at):
+    """The parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at) (Layout.pack) as a
+    WaterNet, in the layouts' order (a call of more than a few keywords is not compiled): views,
+    (n, 2) where the network's array is, and eps_m, a_min and check_areas as numbers (fixed for a
+    network)."""
+    return WaterNet(
+        _part2(ints, i_at, WATER_INTS.links), _part2(ints, i_at, WATER_INTS.link_pores),
+        _part(ints, i_at, WATER_INTS.throat_i), _part(ints, i_at, WATER_INTS.throat_j),
+        _part(ints, i_at, WATER_INTS.throat_link), _part(ints, i_at, WATER_INTS.wall_axis),
+        _part(ints, i_at, WATER_INTS.wall_edge), _part(ints, i_at, WATER_INTS.wall_edge_wall),
+        _part2(floats, f_at, WATER_FLOATS.vec0), _part(floats, f_at, WATER_FLOATS.turn_weight),
+        _part(floats, f_at, WATER_FLOATS.sector0), _part(floats, f_at, WATER_FLOATS.surface),
+        _part(floats, f_at, WATER_FLOATS.drained), _part(floats, f_at, WATER_FLOATS.bottom),
+        _part(floats, f_at, WATER_FLOATS.wp), floats[f_at[WATER_FLOATS.eps_m]], floats[f_at[WATER_FLOATS.a_min]],
+        _part(floats, f_at, WATER_FLOATS.r),
+        _part(floats, f_at, WATER_FLOATS.poly), _part(floats, f_at, WATER_FLOATS.sect),
+        _part(floats, f_at, WATER_FLOATS.void), _part(floats, f_at, WATER_FLOATS.length),
+        _part(floats, f_at, WATER_FLOATS.contact), _part2(floats, f_at, WATER_FLOATS.vec),
+        _part2(floats, f_at, WATER_FLOATS.right),
+        _part(floats, f_at, WATER_FLOATS.q), _part(floats, f_at, WATER_FLOATS.q_s),
+        _part(floats, f_at, WATER_FLOATS.q_d), _part(floats, f_at, WATER_FLOATS.q_in),
+        _part(floats, f_at, WATER_FLOATS.g), _part(floats, f_at, WATER_FLOATS.g_b),
+        _part(floats, f_at, WATER_FLOATS.U), _part(floats, f_at, WATER_FLOATS.acc_i),
+        _part(floats, f_at, WATER_FLOATS.acc_j), _part(floats, f_at, WATER_FLOATS.rate),
+        _part(floats, f_at, WATER_FLOATS.balance), _part2(floats, f_at, WATER_FLOATS.Fj),
+        _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev),
+        floats[f_at[WATER_FLOATS.check_areas]],
+        _part(floats, f_at, WATER_FLOATS.wall_position), _part2(floats, f_at, WATER_FLOATS.vertices),
+        _part(floats, f_at, WATER_FLOATS.F_walls))
+
+
+@jit
 def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
     """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
     n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
     throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
     arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at)
-    (Layout.pack). Flat walls ("wall_axis" not empty): the pores' vertices are the discs and the
-    walls' ("vertices", ``place_wall_vertices``; "r" holds 0 for the wall vertices) and "F_walls"
-    gets the water's force on each wall (``flat_wall_forces``). "lam" gets the Gershgorin bound of the first and of the last flows, "balance"
-    the water of this step, "has_q_prev" is 1 once q_prev holds the flows of an earlier water step.
+    (Layout.pack), read as the WaterNet ``net`` (``water_net``). Flat walls (wall_axis not empty):
+    the pores' vertices are the discs and the walls' (vertices, ``place_wall_vertices``; r holds 0
+    for the wall vertices) and F_walls gets the water's force on each wall (``flat_wall_forces``).
+    lam gets the Gershgorin bound of the first and of the last flows, balance the water of this
+    step, has_q_prev is 1 once q_prev holds the flows of an earlier water step.
     Returns n >= 1; 0 when h exceeds the Darcy limit without ``substep`` (W unchanged); -1 - p
     when pore p would fall dry (W as after the previous sub-step); AREAS_OUT_OF_RANGE, nothing
-    changed, when "check_areas" is 1 and a measured void area is out of range (``areas_in_range``)."""
-    links, link_pores = _part2(ints, i_at, WATER_INTS.links), _part2(ints, i_at, WATER_INTS.link_pores)
-    c_pore = _part(ints, i_at, WATER_INTS.corner_pore)
-    c_link = _part(ints, i_at, WATER_INTS.corner_link)
-    c_next = _part(ints, i_at, WATER_INTS.corner_next_link)
-    ti, tj = _part(ints, i_at, WATER_INTS.throat_i), _part(ints, i_at, WATER_INTS.throat_j)
-    t_link = _part(ints, i_at, WATER_INTS.throat_link)
-    c_sign, vec0 = _part(floats, f_at, WATER_FLOATS.corner_sign), _part2(floats, f_at, WATER_FLOATS.vec0)
-    c_theta0, c_r2 = _part(floats, f_at, WATER_FLOATS.corner_theta0), _part(floats, f_at, WATER_FLOATS.corner_r2)
-    rattler_area = _part(floats, f_at, WATER_FLOATS.rattler_area)
-    surface, drained = _part(floats, f_at, WATER_FLOATS.surface), _part(floats, f_at, WATER_FLOATS.drained)
-    bottom, wp = _part(floats, f_at, WATER_FLOATS.bottom), _part(floats, f_at, WATER_FLOATS.wp)
-    eps_m, a_min = floats[f_at[WATER_FLOATS.eps_m]], floats[f_at[WATER_FLOATS.a_min]]
-    r = _part(floats, f_at, WATER_FLOATS.r)
-    poly, sect = _part(floats, f_at, WATER_FLOATS.poly), _part(floats, f_at, WATER_FLOATS.sect)
-    void, length = _part(floats, f_at, WATER_FLOATS.void), _part(floats, f_at, WATER_FLOATS.length)
-    contact, theta = _part(floats, f_at, WATER_FLOATS.contact), _part(floats, f_at, WATER_FLOATS.theta)
-    vec, rot = _part2(floats, f_at, WATER_FLOATS.vec), _part(floats, f_at, WATER_FLOATS.rot)
-    cross, q = _part(floats, f_at, WATER_FLOATS.cross), _part(floats, f_at, WATER_FLOATS.q)
-    q_s, q_d = _part(floats, f_at, WATER_FLOATS.q_s), _part(floats, f_at, WATER_FLOATS.q_d)
-    q_in, g = _part(floats, f_at, WATER_FLOATS.q_in), _part(floats, f_at, WATER_FLOATS.g)
-    g_b, U = _part(floats, f_at, WATER_FLOATS.g_b), _part(floats, f_at, WATER_FLOATS.U)
-    acc_i, acc_j = _part(floats, f_at, WATER_FLOATS.acc_i), _part(floats, f_at, WATER_FLOATS.acc_j)
-    balance, Fj = _part(floats, f_at, WATER_FLOATS.balance), _part2(floats, f_at, WATER_FLOATS.Fj)
-    lam, has_q_prev = _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev)
-    wall_axis = _part(ints, i_at, WATER_INTS.wall_axis)
-
-    if len(wall_axis):
-        vertices = _part2(floats, f_at, WATER_FLOATS.vertices)
-        place_wall_vertices(xz, vertices, wall_axis, _part(floats, f_at, WATER_FLOATS.wall_position))
-        measure(vertices, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
-                poly, sect, void, length, contact, theta, vec, rot, cross)
-    else:
-        measure(xz, r, links, vec0, c_pore, c_sign, c_link, c_next, c_theta0, c_r2, rattler_area, eps_m,
-                poly, sect, void, length, contact, theta, vec, rot, cross)
-    if floats[f_at[WATER_FLOATS.check_areas]] != 0.0 and not areas_in_range(void, poly):
+    changed, when check_areas is 1 and a measured void area is out of range (``areas_in_range``)."""
+    net = water_net(ints, i_at, floats, f_at)
+    points = xz
+    if len(net.wall_axis):
+        place_wall_vertices(xz, net.vertices, net.wall_axis, net.wall_position)
+        points = net.vertices
+    measure(points, net.r, net.links, net.link_pores, net.vec0, net.turn_weight, net.sector0, net.eps_m,
+            net.poly, net.sect, net.void, net.length, net.contact, net.vec, net.right)
+    if net.check_areas != 0.0 and not areas_in_range(net.void, net.poly):
         return AREAS_OUT_OF_RANGE
-    A = void
+    A = net.void
     if smoothing:  # eq 45
         for p in range(len(A_prev)):
-            A_prev[p] = 0.5 * (A_prev[p] + void[p])
+            A_prev[p] = 0.5 * (A_prev[p] + net.void[p])
         A = A_prev
-    flow = (ti, tj, t_link, a_min, surface, drained, bottom, wp, q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j)
-    lam[0] = lam[1] = darcy_flows(W, A, contact, *flow)
+    lam = net.lam
+    lam[0] = lam[1] = _flows(W, A, net)
     n_sub = substep_count(h, gershgorin_limit(lam[0]))
     if n_sub > 1 and not substep:
         return 0
-    balance[:] = 0.0
+    q = net.q
+    net.balance[:] = 0.0
     for sub in range(n_sub):
         if sub > 0:
-            lam[1] = darcy_flows(W, A, contact, *flow)
+            lam[1] = _flows(W, A, net)
         if smoothing:  # eq 46
-            running = has_q_prev[0] != 0.0
+            running = net.has_q_prev[0] != 0.0
             for t in range(len(q)):
                 if running:
                     q[t] = 0.5 * (q_prev[t] + q[t])
                 q_prev[t] = q[t]
-            has_q_prev[0] = 1.0
-        bad = darcy_update(W, h / n_sub, ti, tj, q, q_s, q_d, q_in, acc_i, acc_j, balance)
+            net.has_q_prev[0] = 1.0
+        bad = darcy_update(W, h / n_sub, net.throat_i, net.throat_j, q, net.q_s, net.q_d, net.q_in, net.acc_i,
+                           net.acc_j, net.balance)
         if bad >= 0:
             return -1 - bad
-    pore_pressures(W, A, wp[0], U)  # eq 32 at the area used (eq 45)
-    pressure_forces(links, link_pores, r, U, length, vec, F_water, Fj)
-    if len(wall_axis):
-        flat_wall_forces(_part(ints, i_at, WATER_INTS.wall_edge), _part(ints, i_at, WATER_INTS.wall_edge_wall),
-                         link_pores, U, length, _part(floats, f_at, WATER_FLOATS.F_walls))
+    pore_pressures(W, A, net.wp[0], net.U)  # eq 32 at the area used (eq 45)
+    pressure_forces(net.links, net.link_pores, net.r, net.U, net.length, net.vec, F_water, net.Fj)
+    if len(net.wall_axis):
+        flat_wall_forces(net.wall_edge, net.wall_edge_wall, net.link_pores, net.U, net.length, net.F_walls)
     return n_sub
+
+
+@jit
+def _flows(W, A, net):
+    """``darcy_flows`` at the areas A of the WaterNet ``net``; its Gershgorin bound."""
+    return darcy_flows(W, A, net.contact, net.throat_i, net.throat_j, net.throat_link, net.a_min, net.surface,
+                       net.drained, net.bottom, net.wp, net.q, net.q_s, net.q_d, net.q_in, net.g, net.g_b, net.U,
+                       net.acc_i, net.acc_j, net.rate)
 
 
 WATER = Layout.of(water_step, 1)  # the arguments of water_step after xz
@@ -590,21 +627,29 @@ def dem_step(xz, F_out, rows, held, water_due,
              h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
              tie_pairs, tie_rest, tie_prm, T):
     """One step of PoreDEM (its order a-e) without Python: ``law_step`` (LAW: its arguments from
-    xz_prev to lost), ``tie_forces`` of the side walls (TIES: from tie_pairs on; no ties: empty
-    arrays), ``water_step`` when water_due (WATER: from h to f_at; a dry scene passes an empty
-    F_water), then F_out = (F + T + F_water)[rows] + held (n, 2) [N], the forces to write. Returns
-    (law_step's answer, water_step's or 1): (LIST_STALE, 0) having changed nothing when the list
-    is stale."""
+    xz_prev to lost), ``water_step`` when water_due (WATER: from h to f_at; a dry scene passes an
+    empty F_water), then ``forces_to_write`` (the side-wall ties, TIES: from tie_pairs on; no
+    ties: empty arrays). Returns (law_step's answer, water_step's or 1): (LIST_STALE, 0) having
+    changed nothing when the list is stale."""
     n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
                       r, pi, pj, state, prm, spring, F, M, acc_j, lost)
     if n_lost == LIST_STALE:
         return n_lost, 0
-    tied = len(tie_rest) > 0
-    if tied:
-        tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T)
     n_sub = 1
     if water_due:
         n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
+    forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T)
+    return n_lost, n_sub
+
+
+@jit
+def forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T):
+    """The forces of a step to write, F_out = (F + T + F_water)[rows] + held (n, 2) [N]: the law's
+    F, the x-forces T of the side-wall ties (``tie_forces`` at xz, du / dt; none when tie_rest
+    is empty) and the water's F_water (none when it is empty: a dry scene)."""
+    tied = len(tie_rest) > 0
+    if tied:
+        tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T)
     wet = len(F_water) > 0
     for k in range(len(rows)):
         a = rows[k]
@@ -614,7 +659,6 @@ def dem_step(xz, F_out, rows, held, water_due,
         if wet:
             fx, fz = fx + F_water[a, 0], fz + F_water[a, 1]
         F_out[k, 0], F_out[k, 1] = fx + held[k, 0], fz + held[k, 1]
-    return n_lost, n_sub
 
 
 DEM_STEP = Layout.of(dem_step, 2).check(("rows", "held", "water_due"), LAW, WATER, TIES)
@@ -910,7 +954,8 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
                       tie_pairs, tie_rest, tie_prm, T):
     """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
     -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
-    wet), write_forces(ids_out <- F_out), then the water's balance of the step added to totals (3,)
+    wet; its parts called one by one: numba leaves a reference count of each array around a call
+    of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the water's balance of the step added to totals (3,)
     [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
     walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
     bridge's steps() (O.step()).
@@ -933,12 +978,9 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
         if rc != 0:
             return s, 0, 1, rc, builds, pi, pj, state, lost
         water_due = wet and (k + s) % water_interval == 0
-        for attempt in range(2):  # a stale list rebuilt once
-            n_lost, n_sub = dem_step(xz, F_out, rows, held, water_due,
-                                     xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj,
-                                     state, prm, spring, F, M, acc_j, lost,
-                                     h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
-                                     tie_pairs, tie_rest, tie_prm, T)
+        for attempt in range(2):  # dem_step's parts, a stale list rebuilt once
+            n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+                              r, pi, pj, state, prm, spring, F, M, acc_j, lost)
             if n_lost != LIST_STALE or attempt == 1:
                 break
             pi, pj, state = near_pairs(xz, r, mobile, prm[6], skin, pi, pj, state)  # prm[6]: eps_m
@@ -947,6 +989,10 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
             builds += 1
         if n_lost == LIST_STALE:
             return s, n_lost, 0, 0, builds, pi, pj, state, lost
+        n_sub = 1
+        if water_due:
+            n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
+        forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T)
         rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
         if rc != 0 or n_sub != 1:
             return s, n_lost, n_sub, rc, builds, pi, pj, state, lost

@@ -29,11 +29,14 @@ NumPy makes in another order (means of rules (b), (c), overlap sums) agree to ro
 compiles on first use and caches the machine code beside this file (``cache=True``); fastmath is off.
 
 ``BUILD`` and ``REMESH`` are these kernels as the steps of engines.model.pores.build_pores and
-engines.model.pore_water.PoreWater.remesh (``steps=``), what the compiled WaterModel uses.
+engines.model.pore_water.PoreWater.remesh (``steps=``), what the compiled WaterModel uses. BUILD
+triangulates by engines.compiled.regular where that is certain (the same triangles as the hull's,
+without Qhull), else by the hull.
 """
 import numba as nb
 import numpy as np
 
+from engines.compiled import regular
 from engines.compiled.kernels import _grid, _groups, _grown, _within
 from engines.model import pore_water
 from engines.model import pores as pg
@@ -596,7 +599,14 @@ def _lifted_points(xz, r):
 
 def _lower_triangles(hull, n, xz):
     tri = lower_ccw(hull.simplices, hull.equations[:, 2], n, xz, pg.LOWER_FACET_TOL)
-    return tri if len(tri) else None
+    return regular.canonical(tri) if len(tri) else None
+
+
+def _certain_triangles(xz, r):
+    answer, tri = regular.regular_triangles(np.ascontiguousarray(xz, float), np.ascontiguousarray(r, float))
+    if answer == regular.UNSURE:
+        return False, None
+    return True, (tri if answer == regular.DONE else None)
 
 
 def _wall_rule(wall_vertices, n):
@@ -626,5 +636,5 @@ def _pore_overlaps(old_net, new_net, xz):
                          pg.vertex_positions(old_net, xz), new_net.n_pores)
 
 
-BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, links_and_corners)
+BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, links_and_corners, _certain_triangles)
 REMESH = pore_water.RemeshSteps(_pore_overlaps, _near_vertex_sets, spread_to_neighbours)

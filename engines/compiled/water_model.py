@@ -27,26 +27,26 @@ class WaterModel(water_model.WaterModel):
     def _buffers(self):
         """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
         net, n = self.water.net, len(self.r)
-        n_p, n_l, n_t, n_k = net.n_pores, len(net.links), len(net.throat_conns), len(net.corner_pore)
+        n_p, n_l, n_t = net.n_pores, len(net.links), len(net.throat_conns)
         surface, drained, bottom = self.water._boundary_masks()
         walls = net.flat_walls
         edge, edge_wall = pg.wall_edges(net)
-        ints = {"links": net.links, "link_pores": net.link_pores, "corner_pore": net.corner_pore,
-                "corner_link": net.corner_link, "corner_next_link": net.corner_next_link,
-                "throat_i": net.throat_conns[:, 0], "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link,
+        ints = {"links": net.links, "link_pores": net.link_pores, "throat_i": net.throat_conns[:, 0],
+                "throat_j": net.throat_conns[:, 1], "throat_link": net.throat_link,
                 "wall_axis": [w.axis for w in walls], "wall_edge": edge, "wall_edge_wall": edge_wall}
-        floats = {"corner_sign": net.corner_sign, "vec0": net.link_vec0, "corner_theta0": net.corner_theta0,
-                  "corner_r2": net.corner_r2, "rattler_area": net.rattler_area, "surface": surface,
-                  "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m, "a_min": net.a_min,
-                  "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "Fj": np.zeros((n, 2)),
+        floats = {"vec0": net.link_vec0, "turn_weight": net.link_turn_weight, "sector0": net.sector_area0,
+                  "surface": surface, "drained": drained, "bottom": bottom, "wp": self.wp, "eps_m": self.eps_m,
+                  "a_min": net.a_min,
+                  "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "right": np.zeros((n_p, 2)),
+                  "Fj": np.zeros((n, 2)),
                   "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
                   "check_areas": float(self.rebuild_distance > 0),
                   "wall_position": self.wall_vertices.faces() if walls else [],
                   "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
                   "F_walls": np.zeros(len(walls))}
         # the rest: outputs and scratch of the kernels, by length
-        for names, size in (("poly sect void", n_p), ("length contact rot cross", n_l), ("theta", n_k),
-                            ("q g", n_t), ("q_s q_d q_in g_b U acc_i acc_j", n_p)):
+        for names, size in (("poly sect void", n_p), ("length contact", n_l), ("q g", n_t),
+                            ("q_s q_d q_in g_b U acc_i acc_j rate", n_p)):
             floats.update((name, np.zeros(size)) for name in names.split())
         self._ints, self._i_at = kernels.WATER_INTS.pack(ints, np.int64)
         self._floats, self._f_at = kernels.WATER_FLOATS.pack(floats, float)
@@ -92,12 +92,12 @@ class WaterModel(water_model.WaterModel):
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
-        n_p, n_l, n_k = net.n_pores, len(net.links), len(net.corner_pore)
+        n_p, n_l = net.n_pores, len(net.links)
         void = np.empty(n_p)
-        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link,
-                        net.corner_next_link, net.corner_theta0, net.corner_r2, net.rattler_area, self.eps_m,
-                        np.empty(n_p), np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty(n_k),
-                        np.empty((n_l, 2)), np.empty(n_l), np.empty(n_l))
+        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), net.links, net.link_pores,
+                        net.link_vec0, net.link_turn_weight, net.sector_area0, self.eps_m, np.empty(n_p),
+                        np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty((n_l, 2)),
+                        np.empty((n_p, 2)))
         return void
 
     def advance(self, h, xz, k=None):

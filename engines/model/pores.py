@@ -5,7 +5,8 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 * A *link* joins two discs i, j when r_i + r_j + eps_m + l_m >= R_ij (eq 28). Candidates are the
   edges of a triangulation of the centres, so links never cross and the link graph is planar.
   The triangulation is the regular (radius-weighted, power) triangulation: the lower convex hull
-  of the lifted points (x, z, x^2 + z^2 - r^2). Where one of its edges that is not a link hides an
+  of the lifted points (x, z, x^2 + z^2 - r^2), its triangles in a canonical order
+  (``canonical_triangles``), so that networks are numbered alike however it was found. Where one of its edges that is not a link hides an
   eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
   can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
   *every eq 28 pair that crosses no link is a link*; of two such pairs that cross each other,
@@ -13,9 +14,12 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
   it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
-  are neglected, as in the paper. Each step, the polygon area is the shoelace sum and theta the
-  interior angle (eq 29) over the pore's boundary links, walked as in the paper (turn clockwise at
-  each disc); a rattler inside a pore (a disc without links) is subtracted whole. The tests check
+  are neglected, as in the paper. The pore's boundary is walked as in the paper (turn clockwise at
+  each disc) at the build, which gives each corner its interior angle theta0; a rattler inside a
+  pore (a disc without links) is subtracted whole. Each step, both areas are sums over the pore's
+  boundary links (``measure``): the polygon area the shoelace sum, and the sectors their build-time
+  area plus the links' turns since the build, each corner's angle having changed by the
+  difference of its two links' turns (eq 29 telescoped over links, as eq 33 is). The tests check
   these areas against the pore's triangles.
 * The pressure force of eq 33 on the arc of a disc inside a pore, summed over the pores around the
   disc, telescopes to a sum over the disc's links of (U_right - U_left) * r * perp(u_link):
@@ -104,6 +108,10 @@ class PoreNetwork:
       link_vec0      (L, 2) the link vectors x_j - x_i at the build [m]: ``measure`` turns the
                      corner angles by the links' turns since
       rattler_area   (Np,) area of the unlinked discs inside each pore [m^2]
+      sector_area0   (Np,) the pore's sector area at the build, its rattlers whole [m^2] (eq 29)
+      link_turn_weight  (L,) (r_j^2 - r_i^2) / 2 [m^2]: the sector area the pore on the left of
+                     i->j gains, and the pore on its right loses, per radian the link turns
+                     (``measure``)
       a_min          area below which a face is closed [m^2]; n_closed faces closed at build
       n_inserted     eq 28 pairs the regular triangulation hid, put in by edge flips at build
     """
@@ -133,6 +141,8 @@ class PoreNetwork:
     corner_theta0: np.ndarray
     rattler_area: np.ndarray
     link_vec0: np.ndarray
+    sector_area0: np.ndarray
+    link_turn_weight: np.ndarray
     a_min: float
     n_closed: int = 0
     eps_m: float = 0.0
@@ -191,7 +201,8 @@ def _empty_network(n, a_min, eps_m, l_m):
         pore_vertex_ptr=np.zeros(1, np.int64), pore_vertex_idx=zi, pore_signature=np.zeros(0, np.uint64),
         he_org=zi, he_dst=zi, he_left=zi, he_next=zi, corner_pore=zi, corner_disc=zi, corner_link=zi,
         corner_next_link=zi, corner_sign=zf, corner_r2=zf, corner_theta0=zf,
-        rattler_area=zf, link_vec0=np.zeros((0, 2)), a_min=a_min, eps_m=eps_m, l_m=l_m,
+        rattler_area=zf, link_vec0=np.zeros((0, 2)), sector_area0=zf, link_turn_weight=zf, a_min=a_min,
+        eps_m=eps_m, l_m=l_m,
     )
 
 
@@ -225,6 +236,10 @@ def regular_triangulation(xz, r, steps=None):
     n = len(xz)
     if n < 3:
         return None
+    if steps.certain_triangles is not None:
+        certain, tri = steps.certain_triangles(xz, r)
+        if certain:
+            return tri
     points = steps.lifted_points(xz, r)
     if points is None:
         return None
@@ -237,9 +252,17 @@ def regular_triangulation(xz, r, steps=None):
 
 def _lower_triangles(hull, n, xz):
     """The counter-clockwise triangles (T, 3) of the lower facets of regular_triangulation's hull
-    of n discs at xz, or None."""
+    of n discs at xz (``canonical_triangles``), or None."""
     lower = (hull.equations[:, 2] < -LOWER_FACET_TOL) & (hull.simplices < n).all(axis=1)
-    return _ccw(xz, hull.simplices[lower]) if lower.any() else None
+    return canonical_triangles(_ccw(xz, hull.simplices[lower])) if lower.any() else None
+
+
+def canonical_triangles(tri):
+    """Triangles (T, 3), each from its smallest vertex (the cyclic order kept), in lexicographic
+    order: the same array for the same triangles, whatever order a triangulation found them in."""
+    k = np.argmin(tri, axis=1)
+    out = np.take_along_axis(tri, (k[:, None] + np.arange(3)) % 3, axis=1)
+    return out[np.lexsort(out.T[::-1])]
 
 
 def _lifted_points(xz, r):
@@ -471,10 +494,22 @@ def _network(xz, r, walls, tri, n_inserted, eps_m, l_m, a_min, faces, links_and_
     arrays = dict(zip(NETWORK_ARRAYS, arrays))
     links = arrays["links"]
     return PoreNetwork(
-        n_discs=len(r), **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]],
+        n_discs=len(r), **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]], **_sector_terms(r, arrays),
         pore_touches={name: touches[code] for code, name in WALL_NAMES.items()},
         a_min=a_min, n_closed=int(n_closed), eps_m=float(eps_m), l_m=float(l_m), n_inserted=n_inserted,
     )
+
+
+def _sector_terms(r, a):
+    """sector_area0 (Np,) and link_turn_weight (L,) [m^2] of PoreNetwork from the radii r of its
+    vertices and the arrays ``a`` of ``_links_and_corners`` (by name). The corner at the end d of
+    a half-edge turns by the turn of its link minus that of the next link (eq 29), so over a pore's
+    corners each link's turn counts with r^2 of the disc it leads to (+) and of the disc it leaves
+    (-): (r_j^2 - r_i^2) / 2 for the pore on the left of i->j, the opposite on its right."""
+    links, n_p = a["links"], len(a["pore_surface"])
+    sector0 = 0.5 * np.bincount(a["corner_pore"], a["corner_theta0"] * a["corner_r2"], minlength=n_p)
+    return {"sector_area0": sector0 + a["rattler_area"],
+            "link_turn_weight": 0.5 * (r[links[:, 1]] ** 2 - r[links[:, 0]] ** 2)}
 
 
 def _build_with_flat_walls(xz, r, eps_m, l_m, walls, a_min, steps, wv):
@@ -636,13 +671,15 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
 
 
 class BuildSteps(NamedTuple):
-    """The parts of ``build_pores`` that have compiled twins (engines.compiled.pores.BUILD)."""
+    """The parts of ``build_pores`` that have compiled twins (engines.compiled.pores.BUILD), and a
+    triangulation that spares the hull where it is certain (none in NumPy: the hull always)."""
 
     lifted_points: Callable      # (xz, r) -> the hull's points (N + 1, 3), or None
-    lower_triangles: Callable    # (hull, n, xz) -> the lower facets, counter-clockwise (T, 3), or None
+    lower_triangles: Callable    # (hull, n, xz) -> the lower facets (canonical_triangles), or None
     missing_pairs: Callable      # as _missing_pairs
     faces: Callable              # as _faces
     links_and_corners: Callable  # as _links_and_corners
+    certain_triangles: Callable = None  # (xz, r) -> (True, regular_triangulation's answer) or (False, None)
 
 
 NUMPY_BUILD = BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, _links_and_corners)
@@ -704,10 +741,13 @@ def _link_half_edges(xz, links, link_pores):
 def measure(net, xz, r):
     """Areas of the pores and state of the links at positions ``xz`` [m] (eq 29, 43).
 
-    Polygon area: shoelace over each pore's boundary links. Interior angle at each corner (eq 29):
-    the build-time angle plus the difference of its two links' turns since the build (from
-    ``link_vec0``), taken in (-pi, pi] (valid while no corner turns by pi between rebuilds).
-    Flat walls: their vertices are placed from the discs (``vertex_positions``), with radius 0.
+    Sums over each pore's boundary links, the pore on the left of i->j taking + and the one on its
+    right -: the polygon area, the shoelace sum of x_i z_j - x_j z_i over 2; the sector area, the
+    build-time one (sector_area0) plus link_turn_weight times the link's turn since the build
+    (from ``link_vec0``). The same sectors as the interior angle of each corner (eq 29), the
+    build-time angle plus the difference of its two links' turns, given as corner_angle (valid
+    while no corner turns by pi between rebuilds). Flat walls: their vertices are placed from the
+    discs (``vertex_positions``), with radius 0.
     """
     xz, r = vertex_positions(net, xz), vertex_radii(net, r)
     i, j = net.links[:, 0], net.links[:, 1]
@@ -718,13 +758,19 @@ def measure(net, xz, r):
     d0 = net.link_vec0
     turn = np.arctan2(d0[:, 0] * dz - d0[:, 1] * dx, d0[:, 0] * dx + d0[:, 1] * dz)
     cross = xi * dz - dx * zi  # x_i z_j - x_j z_i
-    n_p = net.n_pores
-    poly = 0.5 * np.bincount(net.corner_pore, net.corner_sign * cross[net.corner_link], minlength=n_p)
-    change = turn[net.corner_link] - turn[net.corner_next_link]
-    theta = net.corner_theta0 + np.mod(change + np.pi, 2 * np.pi) - np.pi  # eq 29
-    sect = 0.5 * np.bincount(net.corner_pore, theta * net.corner_r2, minlength=n_p) + net.rattler_area
+    poly = 0.5 * _left_minus_right(net, cross)
+    sect = net.sector_area0 + _left_minus_right(net, net.link_turn_weight * turn)  # eq 29
+    theta = net.corner_theta0 + turn[net.corner_link] - turn[net.corner_next_link]  # eq 29
     contact = r[i] + r[j] + net.eps_m >= length  # eq 43b
     return PoreMeasures(poly, sect, poly - sect, length, contact, theta, np.column_stack([dx, dz]))
+
+
+def _left_minus_right(net, v):
+    """(Np,): the sum of v (L,) over the links with the pore on their left less that over the links
+    with the pore on their right."""
+    left, right = net.link_pores[:, 0], net.link_pores[:, 1]
+    return (np.bincount(left[left >= 0], v[left >= 0], minlength=net.n_pores)
+            - np.bincount(right[right >= 0], v[right >= 0], minlength=net.n_pores))
 
 
 def pressure_forces(net, r, U, meas):

@@ -5,6 +5,7 @@ cancel to ~0 from large contact forces; its round-off is relative to those).
 """
 import numpy as np
 import pytest
+from numba import literal_unroll, njit
 
 from engines.compiled import contact, kernels, paper_law, water_model
 from engines.model import contact as model_contact
@@ -138,10 +139,9 @@ def test_a_pair_exactly_at_the_lists_reach_is_listed(law):
 
 def _kernel_measure(net, xz, r):
     n_p, n_l = net.n_pores, len(net.links)
-    out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool),
-           np.zeros(len(net.corner_pore)), np.zeros((n_l, 2)), np.zeros(n_l), np.zeros(n_l))
-    kernels.measure(xz, r, net.links, net.link_vec0, net.corner_pore, net.corner_sign, net.corner_link, net.corner_next_link,
-                    net.corner_theta0, net.corner_r2, net.rattler_area, net.eps_m, *out)
+    out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool), np.zeros((n_l, 2)))
+    kernels.measure(xz, r, net.links, net.link_pores, net.link_vec0, net.link_turn_weight, net.sector_area0,
+                    net.eps_m, *out, np.zeros((n_p, 2)))
     return out
 
 
@@ -154,14 +154,18 @@ def test_measure_compiled_equals_numpy(layout):
     else:
         xz, r, walls, rng = _column()
         net = pg.build_pores(xz, r, eps_m=0.01, l_m=0.3, walls=walls)
-    if layout == "moved":  # corners turn after the build (eq 29 relative to the build angles)
+    if layout == "moved":  # links turn after the build (eq 29 relative to the build angles)
         xz = xz + 0.12 * rng.standard_normal(xz.shape)
-    m = pg.measure(net, xz, r)
-    poly, sect, void, length, contact, theta, vec, turns, _ = _kernel_measure(net, xz, r)
-    if layout == "moved":  # links that turned both less and more than the series' range
+        v = xz[net.links[:, 1]] - xz[net.links[:, 0]]
+        v0 = net.link_vec0
+        turns = np.arctan2(v0[:, 0] * v[:, 1] - v0[:, 1] * v[:, 0], np.einsum("ij,ij->i", v0, v))
+        # links that turned both less and more than the series' range, with both signs of weight
         assert (np.abs(turns) < 0.5 * kernels.SMALL_TURN).sum() > 50 and (np.abs(turns) > 0.15).sum() > 5
+        assert (net.link_turn_weight > 0).sum() > 50 and (net.link_turn_weight < 0).sum() > 50
+    m = pg.measure(net, xz, r)
+    poly, sect, void, length, contact, vec = _kernel_measure(net, xz, r)
     for a, b, what in ((poly, m.polygon_area, "polygon"), (sect, m.sector_area, "sectors"), (void, m.void_area, "void"),
-                       (length, m.link_length, "length"), (theta, m.corner_angle, "angles"), (vec, m.link_vector, "vectors")):
+                       (length, m.link_length, "length"), (vec, m.link_vector, "vectors")):
         assert_close(a, b, what)
     np.testing.assert_array_equal(contact, m.link_contact)
     assert net.n_pores > 40
@@ -198,6 +202,30 @@ SETTINGS = {
     "smoothing": WaterSettings(E_w=240.0, k1=200.0, k2=20.0, q_w=0.05, smoothing=True),
     "substep": WaterSettings(E_w=240.0, k1=2e5, k2=2e3, q_w=0.05, substep=True),
 }
+
+
+@njit
+def _last_of_each_part(ints, i_at, floats, f_at, out):
+    """out gets the last value of every field of kernels.water_net, in its order."""
+    net, k = kernels.water_net(ints, i_at, floats, f_at), 0
+    for v in literal_unroll(net):  # the name itself: numba does not unroll numba.literal_unroll
+        out[k] = np.asarray(v).ravel()[-1]
+        k += 1
+
+
+def test_water_net_reads_each_part_of_the_buffers_by_name():
+    """Part k of the packed buffers holds k + 1 as its last value: each field of the WaterNet, by
+    name, is its own part (views of 1 or 2 columns, numbers)."""
+    names = kernels.WATER_INTS.names + kernels.WATER_FLOATS.names
+    assert kernels.WaterNet._fields == names
+    parts = {name: np.arange(4.0) + k - 2 for k, name in enumerate(names)}  # last value k + 1
+    for name in ("eps_m", "a_min", "check_areas"):
+        parts[name] = parts[name][-1:]
+    ints, i_at = kernels.WATER_INTS.pack({n: parts[n] for n in kernels.WATER_INTS.names}, np.int64)
+    floats, f_at = kernels.WATER_FLOATS.pack({n: parts[n] for n in kernels.WATER_FLOATS.names}, float)
+    last = np.zeros(len(names))
+    _last_of_each_part(ints, i_at, floats, f_at, last)
+    assert last.tolist() == list(range(1, len(names) + 1))
 
 
 @pytest.mark.parametrize("case", sorted(SETTINGS))

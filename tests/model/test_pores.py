@@ -252,7 +252,8 @@ def test_a_network_without_pores_is_well_formed_and_usable(xz):
     assert net.tri.shape == (0, 3) and net.pore_vertex_ptr.tolist() == [0]
     for name in ("tri_pore", "throat_link", "pore_surface", "pore_vertex_idx", "pore_signature", "he_org",
                  "he_dst", "he_left", "he_next", "corner_pore", "corner_disc", "corner_link",
-                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "rattler_area"):
+                 "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "rattler_area", "sector_area0",
+                 "link_turn_weight"):
         assert getattr(net, name).shape == (0,), name
     assert sorted(net.pore_touches) == ["bottom", "left", "right"]
     assert all(v.shape == (0,) and v.dtype == bool for v in net.pore_touches.values())

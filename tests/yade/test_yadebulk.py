@@ -326,22 +326,33 @@ def _snapshot():
 def test_the_probe_leaves_the_user_scene_untouched(bulk):
     _user_scene()
     before = _snapshot()
-    assert probe.run(bulk._lib, bulk) == {k: bulk.layout()[k] for k in ("forces", "bodies", "state", "pos",
-                                                                         "vel", "angvel")}
+    assert probe.run(bulk._lib, bulk) == {k: bulk.layout()[k] for k in ("forces", "force_data", "bodies", "state",
+                                                                         "pos", "vel", "angvel")}
     assert _snapshot() == before
 
 
-def test_the_probe_rejects_a_wrong_layout_and_switches_the_bridge_off(bulk, monkeypatch):
-    ids = _user_scene()
-    before = _snapshot()
-    find = probe._find_state_offsets
+def _next_vector(find):
+    """``find`` of a data pointer, moved to the next std::vector's (24 bytes on): plausible, wrong."""
+    return lambda *args: find(*args) + 24
 
-    def swapped(*args):  # pos and vel offsets exchanged: unique, plausible, wrong
+
+def _swapped(find):
+    """``find`` of the State offsets with pos and vel exchanged: unique, plausible, wrong."""
+    def swapped(*args):
         state, pos, vel, angvel = find(*args)
         return state, vel, pos, angvel
-    monkeypatch.setattr(probe, "_find_state_offsets", swapped)
+    return swapped
+
+
+@pytest.mark.parametrize("finder, fix, failed", [
+    ("_find_state_offsets", _swapped, "get_pos_xz reads what the Python API wrote"),
+    ("_find_force_data_offset", _next_vector, "O.forces.f adds what add_force_unsynced_xz added")])
+def test_the_probe_rejects_a_wrong_layout_and_switches_the_bridge_off(bulk, monkeypatch, finder, fix, failed):
+    ids = _user_scene()
+    before = _snapshot()
+    monkeypatch.setattr(probe, finder, fix(getattr(probe, finder)))
     try:
-        with pytest.raises(probe.ProbeError, match="get_pos_xz reads what the Python API wrote"):
+        with pytest.raises(probe.ProbeError, match=failed):
             probe.run(bulk._lib, bulk)
         assert _snapshot() == before
         with pytest.raises(RuntimeError, match="not configured"):

@@ -62,7 +62,7 @@ def _open():
     lib.yb_body_slot.argtypes, lib.yb_body_slot.restype = [ctypes.c_int], ctypes.c_void_p
     lib.yb_bodies_size.argtypes, lib.yb_bodies_size.restype = [ctypes.c_void_p], ctypes.c_int64
     lib.yb_bodies_at.argtypes, lib.yb_bodies_at.restype = [ctypes.c_void_p, ctypes.c_uint], ctypes.c_void_p
-    lib.yb_configure.argtypes, lib.yb_configure.restype = [ctypes.c_int64] * 6 + [ctypes.c_int], None
+    lib.yb_configure.argtypes, lib.yb_configure.restype = [ctypes.c_int64] * 7 + [ctypes.c_int], None
     for name in NAMES:
         fn = getattr(lib, "yb_" + name)
         fn.argtypes, fn.restype = [ctypes.c_void_p, ctypes.c_int64, ctypes.c_void_p], ctypes.c_int64

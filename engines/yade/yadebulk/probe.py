@@ -22,6 +22,7 @@ from yade.wrapper import ForceResetter, NewtonIntegrator, PyRunner
 
 N_PROBE = 6          # probe bodies; the Newton check uses as many twins
 SCENE_SCAN = 4096    # bytes of Scene searched for the BodyContainer pointer and the ForceContainer,
+FORCES_SCAN = 512    # of the ForceContainer for its summed forces' data pointer,
 BODY_SCAN = 512      # of Body for the State pointer, of State for pos, vel, angVel: at most, and no
 STATE_SCAN = 1024    # further than the object's heap block where that can be read (Memory.extent)
 CONTAINER_SCAN = 256  # bytes of BodyContainer that must be readable (it holds the body vector)
@@ -155,6 +156,18 @@ def _find_forces_offset(mem, scene, forces):
     return _unique(found, "ForceContainer in Scene")
 
 
+def _find_force_data_offset(mem, scene, forces_off, forces):
+    """Offset in the ForceContainer of the data pointer of its summed forces (the vector that
+    addForceUnsynced adds to and a sync fills): the one word there that points straight at the
+    forces of bodies 0..n-1, after a sync (the per-thread buffers are one pointer further)."""
+    expected = b"".join(_pack(f) for f in forces)
+    words = mem.words(scene + forces_off, min(FORCES_SCAN, (mem.extent(scene, SCENE_SCAN) - forces_off) & ~7))
+    if words is None:
+        raise ProbeError("the ForceContainer is not readable")
+    found = {8 * k for k, w in enumerate(words) if mem.read(w, len(expected)) == expected}
+    return _unique(found, "summed forces' data pointer in ForceContainer")
+
+
 def _expect(cond, what):
     if not cond:
         raise ProbeError(f"verification failed: {what}")
@@ -280,8 +293,10 @@ def _discover_and_verify(lib, bridge, mem):
     for i, f in enumerate(forces):
         O.forces.addF(i, Vector3(*f))
     forces_off = _find_forces_offset(mem, scene, forces)
+    O.forces.f(0, True)  # a sync: the summed forces hold them too
+    force_data_off = _find_force_data_offset(mem, scene, forces_off, forces)
 
-    lib.yb_configure(forces_off, bodies_off, *state_offs, 1)
+    lib.yb_configure(forces_off, force_data_off, bodies_off, *state_offs, 1)
     ids = np.arange(n, dtype=np.int64)
     for rnd in range(2):
         _verify(bridge, ids, rnd)
@@ -293,8 +308,8 @@ def _discover_and_verify(lib, bridge, mem):
             "BodyContainer::size and operator[] agree with Body::byId after the body vector grew")
     _verify(bridge, np.arange(2 * n, dtype=np.int64)[::-1].copy(), 2)
     _verify_newton_step(bridge, n)
-    return {"forces": forces_off, "bodies": bodies_off, "state": state_offs[0], "pos": state_offs[1],
-            "vel": state_offs[2], "angvel": state_offs[3]}
+    return {"forces": forces_off, "force_data": force_data_off, "bodies": bodies_off, "state": state_offs[0],
+            "pos": state_offs[1], "vel": state_offs[2], "angvel": state_offs[3]}
 
 
 def run(lib, bridge):
@@ -310,12 +325,12 @@ def run(lib, bridge):
     try:
         return _discover_and_verify(lib, bridge, mem)
     except BaseException:
-        lib.yb_configure(0, 0, 0, 0, 0, 0, 0)
+        lib.yb_configure(0, -1, 0, 0, 0, 0, 0, 0)
         raise
     finally:
         O.resetThisScene()
         O.switchToScene(home)
         mem.close()
         if lib.yb_scene() != home_scene or repr((O.iter, O.time, O.dt, len(O.bodies))) != before:
-            lib.yb_configure(0, 0, 0, 0, 0, 0, 0)
+            lib.yb_configure(0, -1, 0, 0, 0, 0, 0, 0)
             raise ProbeError("switching back to the user's scene did not restore it")

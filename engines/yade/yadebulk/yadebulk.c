@@ -5,17 +5,18 @@
  *   - functions are YADE's own exported C++ symbols, looked up with dlsym in the libyade.so that
  *     the process already has loaded (RTLD_NOLOAD), and called with `this` passed explicitly
  *     (Itanium C++ ABI); Eigen::Matrix<double,3,1> is three contiguous doubles;
- *   - the few data offsets (ForceContainer in Scene, BodyContainer pointer in Scene, State pointer
- *     in Body, pos/vel/angVel in State) are not compiled in: the Python side discovers them by
- *     probing a scratch scene and hands them over with yb_configure() only after it has verified
- *     them (engines/yade/yadebulk/probe.py). Until then every bulk function returns YB_ENOTREADY.
+ *   - the few data offsets (ForceContainer in Scene, its summed forces' data pointer, BodyContainer
+ *     pointer in Scene, State pointer in Body, pos/vel/angVel in State) are not compiled in: the
+ *     Python side discovers them by probing a scratch scene and hands them over with
+ *     yb_configure() only after it has verified them (engines/yade/yadebulk/probe.py). Until then
+ *     every bulk function returns YB_ENOTREADY.
  *
  * Every bulk function takes (const int64_t *ids, int64_t n, double *array), checks every id
  * against the current scene's body count and for a live body before it reads or writes anything,
  * and returns 0, a negative YB_E* code, or k >= 1 when ids[k-1] is out of range or erased.
  * Forces and torques go through ForceContainer::addForce/addTorque/setPermForce, the functions
  * O.forces.addF/addT/setPermF call, so YADE's per-thread buffers and sync flags behave as theirs;
- * yb_add_force_unsynced_xz through ForceContainer::addForceUnsynced (see there).
+ * yb_add_force_unsynced_xz adds as ForceContainer::addForceUnsynced does (see there).
  * yb_steps (steps.cpp, C++ to catch what YADE throws) is O.step(): Scene::moveToNextTimeStep.
  */
 #define _GNU_SOURCE
@@ -52,7 +53,7 @@ static struct {
 } Y;
 
 static struct {
-    ptrdiff_t forces, bodies, state, pos, vel, angvel; /* byte offsets, see yb_configure */
+    ptrdiff_t forces, force_data, bodies, state, pos, vel, angvel; /* byte offsets, see yb_configure */
     int ready;
 } L;
 
@@ -111,13 +112,16 @@ void *yb_body_slot(int id) { void *s = yb_scene(); return s ? (void *)Y.body_by_
 int64_t yb_bodies_size(const void *bodies) { return bodies ? (int64_t)Y.bodies_size(bodies) : -1; }
 void *yb_bodies_at(void *bodies, unsigned id) { return bodies ? (void *)Y.bodies_at(bodies, id) : NULL; }
 
-/* Accept the verified offsets (bytes): Scene -> ForceContainer (embedded), Scene -> BodyContainer*
- * (first word of a shared_ptr), Body -> State* (first word of a shared_ptr), State -> pos, vel,
- * angVel (three doubles each). ready = 0 withdraws them. */
-void yb_configure(int64_t forces, int64_t bodies, int64_t state, int64_t pos, int64_t vel, int64_t angvel,
-                  int ready)
+/* Accept the verified offsets (bytes): Scene -> ForceContainer (embedded), ForceContainer -> the
+ * data pointer of its summed forces (std::vector<Vector3r>, the one addForceUnsynced adds to; < 0:
+ * unknown, that function is called), Scene -> BodyContainer* (first word of a shared_ptr), Body ->
+ * State* (first word of a shared_ptr), State -> pos, vel, angVel (three doubles each). ready = 0
+ * withdraws them. */
+void yb_configure(int64_t forces, int64_t force_data, int64_t bodies, int64_t state, int64_t pos, int64_t vel,
+                  int64_t angvel, int ready)
 {
-    L.forces = forces, L.bodies = bodies, L.state = state, L.pos = pos, L.vel = vel, L.angvel = angvel;
+    L.forces = forces, L.force_data = force_data, L.bodies = bodies, L.state = state, L.pos = pos, L.vel = vel;
+    L.angvel = angvel;
     L.ready = ready && Y.omega;
 }
 
@@ -264,7 +268,9 @@ int64_t yb_set_perm_force_xz(const int64_t *ids, int64_t n, const double *F)
  * first, so that every body id has its slot (addForceUnsynced does not check). The ids are
  * checked against that range only, not looked up: an erased body's slot takes its force unread
  * (the compiled steps write the forces of bodies whose positions they read in the same step,
- * and that read refuses an erased body). */
+ * and that read refuses an erased body). With the summed forces' data pointer known
+ * (L.force_data), the same additions are made there, component by component, without a call
+ * per body (addForceUnsynced is `_force[id] += f`). */
 int64_t yb_add_force_unsynced_xz(const int64_t *ids, int64_t n, const double *F)
 {
     Ctx c;
@@ -272,8 +278,16 @@ int64_t yb_add_force_unsynced_xz(const int64_t *ids, int64_t n, const double *F)
     if (err) return err;
     for (int64_t k = 0; k < n; k++)
         if (ids[k] < 0 || ids[k] >= c.n_bodies) return k + 1;
-    void *fc = c.scene + L.forces;
+    char *fc = c.scene + L.forces;
     Y.sync_sizes(fc);
+    if (L.force_data >= 0) {
+        double *sum = *(double **)(fc + L.force_data); /* read after the resize: it may have moved */
+        for (int64_t k = 0; k < n; k++) {
+            double *f = sum + 3 * ids[k];
+            f[0] += F[2 * k], f[1] += 0.0, f[2] += F[2 * k + 1];
+        }
+        return 0;
+    }
     for (int64_t k = 0; k < n; k++) {
         const double f[3] = {F[2 * k], 0.0, F[2 * k + 1]};
         Y.add_force_unsynced(fc, (int)ids[k], f);
