@@ -193,10 +193,10 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     flow = (wm.water.W, part("void"), part("contact"), net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
             net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
             part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"),
-            part("rate"))
+            part("rate"), part("out_i"), part("out_j"))
     wa = dict(zip(kernels.WATER.names, water_args))
-    update = (wm.water.W, wa["h"], flow[3], flow[4], part("q"), part("q_s"), part("q_d"), part("q_in"), part("acc_i"),
-              part("acc_j"), part("balance"))
+    update = (wm.water.W, wa["h"], part("out_i"), part("out_j"), part("q_s"), part("q_d"), part("q_in"),
+              part("balance"), part("void"), wm.wp[0], part("U"))
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
@@ -212,7 +212,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "water (kernels.water_step)": (kernels.water_step, (xz,) + water_args),
         "  of which pore measure (kernels.measure)": (kernels.measure, geometry),
         "  of which flows (kernels.darcy_flows)": (kernels.darcy_flows, flow),
-        "  of which the update (kernels.darcy_update)": (kernels.darcy_update, update),
+        "  of which the update and eq 32 (kernels.darcy_update)": (kernels.darcy_update, update),
         "  of which eq 33 forces (kernels.pressure_forces)": (kernels.pressure_forces, forces),
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
         "bridge: write forces (add_force_unsynced or set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
@@ -237,7 +237,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     step = {name: float(np.median(v)) for name, v in times.items()}
     measured = float(np.median(per_kernel_step))
     named = sum(v for name, v in step.items() if not name.startswith(" "))
-    step["  of which the rest (the parts' views, eq 32 pressures, the sub-step count)"] = (
+    step["  of which the rest (the parts' views, the sub-step count)"] = (
         step["water (kernels.water_step)"] - sum(v for name, v in step.items() if name.startswith("  of which")))
     out["a compiled run: CPU us a step (its time in the run / its steps)"] = measured
     out["a compiled run: parts a step, timed alone"] = dict(step, **{

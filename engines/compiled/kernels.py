@@ -7,7 +7,7 @@ reference path and is tested against it (tests/compiled/test_kernels.py, 1e-12 r
   contact_forces    engines.model.contact.ContactLaw.forces          (eq 1-13, 26-27)
   measure           engines.model.pores.measure              (eq 29, 43b; ``turn`` below)
   darcy_flows       engines.model.pore_water.PoreWater.flows, _limit (eq 32, 38-43, boundaries, stability)
-  darcy_update      engines.model.pore_water.PoreWater._step         (eq 42; eq 46 stays in Python)
+  darcy_update      engines.model.pore_water.PoreWater._step         (eq 42, the new U; eq 46 in water_step)
   pressure_forces   engines.model.pores.pressure_forces      (eq 33, telescoped over links)
   tie_forces        engines.model.side_walls.SideWallTies.forces    (Fig. 27, the side-wall springs)
   separation_velocities  engines.model.contact.separation_adjustment   (eq 18-24, bit for bit)
@@ -97,10 +97,14 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
     for k in range(len(pi)):
         i, j = _at(pi[k]), _at(pj[k])
         dx, dz = xz[j, 0] - xz[i, 0], xz[j, 1] - xz[i, 1]
-        R = math.sqrt(dx * dx + dz * dz)
-        delta = r[i] + r[j] + eps_m - R
-        now = delta >= 0                                        # eq 1, 26
+        reach = r[i] + r[j] + eps_m
         was = state[k, TOUCHING] != 0.0
+        d2 = dx * dx + dz * dz
+        if not was and d2 > reach * reach * (1.0 + 1e-12):  # apart before and, past its round-off, now
+            continue                                        # (no force; its state stays): the sqrt spared
+        R = math.sqrt(d2)
+        delta = reach - R
+        now = delta >= 0                                        # eq 1, 26
         if not (now or was):  # apart before and now: no force; its state stays (forces 0 since it parted)
             continue
         nx, nz = dx / R, dz / R                                 # eq 2
@@ -338,9 +342,11 @@ def measure(xz, r, links, link_pores, vec0, turn_weight, sector0, eps_m, poly, s
 
 @jit
 def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bottom, wp,
-                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j, rate):
+                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j, rate, out_i, out_j):
     """Throat flows q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and inflow
-    q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too.
+    q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too, and the
+    sums of q over the throats of each pore as their first (out_i) and second (out_j) pore, in
+    throat order (``darcy_update``'s, as PoreWater._step's np.bincount).
 
     wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
@@ -362,7 +368,7 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
         q_in[p] = q_w * bottom[p]
         g_b[p] = g_s + g_d
         rate[p] = E_w * A[p] * per_W * per_W
-        acc_i[p] = acc_j[p] = 0.0
+        acc_i[p] = acc_j[p] = out_i[p] = out_j[p] = 0.0
     k1_E, k2_E = k1 * per_E, k2 * per_E
     for t in range(len(ti)):
         i, j = _at(ti[t]), _at(tj[t])
@@ -374,6 +380,8 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
         q[t] = g[t] * (U[i] - U[j])                             # eq 39, 41
         acc_i[i] += g[t]
         acc_j[j] += g[t]
+        out_i[i] += q[t]
+        out_j[j] += q[t]
     lam = 0.0
     for p in range(len(W)):
         if A[p] > a_min:
@@ -382,20 +390,29 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
 
 
 @jit
-def darcy_update(W, h, ti, tj, q, q_s, q_d, q_in, out_i, out_j, balance):
-    """W <- W - (sum of throat outflow + q_s + q_d - q_in) h (eq 42); balance += (inflow, surface,
-    side) volumes [m^2]. Returns the first pore whose W would fall to <= 0 (nothing changed), or -1."""
+def throat_sums(ti, tj, q, out_i, out_j):
+    """The sums of q (Nt,) over the throats of each pore as their first (out_i) and second (out_j)
+    pore, in throat order (as np.bincount)."""
     out_i[:] = 0.0
     out_j[:] = 0.0
     for t in range(len(ti)):
         out_i[_at(ti[t])] += q[t]
         out_j[_at(tj[t])] += q[t]
+
+
+@jit
+def darcy_update(W, h, out_i, out_j, q_s, q_d, q_in, balance, A, E_w, U):
+    """W <- W - ((out_i - out_j) + q_s + q_d - q_in) h (eq 42), out_i, out_j the throat flows'
+    sums (``throat_sums``), and U = E_w (W - A) / W [N/m] at the new W (eq 32); balance +=
+    (inflow, surface, side) volumes [m^2]. Returns the first pore whose W would fall to <= 0
+    (nothing changed), or -1."""
     for p in range(len(W)):
         if W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h <= 0:
             return p
     s_in = s_s = s_d = 0.0
     for p in range(len(W)):
         W[p] = W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h
+        U[p] = E_w * (W[p] - A[p]) / W[p]                      # eq 32
         s_in += q_in[p]
         s_s += q_s[p]
         s_d += q_d[p]
@@ -414,7 +431,7 @@ WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "throat_i", "throat_j"
 WATER_FLOATS = Layout("WATER_FLOATS", (
     "vec0", "turn_weight", "sector0", "surface", "drained", "bottom", "wp", "eps_m", "a_min", "r",  # inputs
     "poly", "sect", "void", "length", "contact", "vec", "right",                                # measure
-    "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j", "rate",                       # flows
+    "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j", "rate", "out_i", "out_j",     # flows
     "balance", "Fj", "lam", "has_q_prev", "check_areas",              # update, forces, eq 46, rebuild trigger
     "wall_position", "vertices", "F_walls"))                                          # flat walls
 WaterNet = namedtuple("WaterNet", WATER_INTS.names + WATER_FLOATS.names)
@@ -440,11 +457,24 @@ def _part(buf, at, k):
     return _view(buf, at[k], at[k + 1])
 
 
+@intrinsic
+def _view2(typingctx, buf, start, stop):
+    """``_view`` of buf[start:stop] as an (n, 2) array (row after row)."""
+    def codegen(context, builder, signature, args):
+        src = context.make_array(signature.args[0])(context, builder, args[0])
+        out = context.make_array(signature.return_type)(context, builder)
+        two = context.get_constant(nb.types.intp, 2)
+        populate_array(out, data=builder.gep(src.data, [args[1]]),
+                       shape=[builder.sdiv(builder.sub(args[2], args[1]), two), two],
+                       strides=[builder.mul(src.itemsize, two), src.itemsize], itemsize=src.itemsize, meminfo=None)
+        return out._getvalue()
+    return nb.types.Array(buf.dtype, 2, "C")(buf, start, stop), codegen
+
+
 @jit
 def _part2(buf, at, k):
-    """Part k as an (n, 2) array."""
-    p = _part(buf, at, k)
-    return p.reshape((len(p) // 2, 2))
+    """Part k as an (n, 2) array (``_view2``, only while the call holds buf)."""
+    return _view2(buf, at[k], at[k + 1])
 
 
 @jit
@@ -522,6 +552,7 @@ def water_net(ints, i_at, floats, f_at):
         _part(floats, f_at, WATER_FLOATS.g), _part(floats, f_at, WATER_FLOATS.g_b),
         _part(floats, f_at, WATER_FLOATS.U), _part(floats, f_at, WATER_FLOATS.acc_i),
         _part(floats, f_at, WATER_FLOATS.acc_j), _part(floats, f_at, WATER_FLOATS.rate),
+        _part(floats, f_at, WATER_FLOATS.out_i), _part(floats, f_at, WATER_FLOATS.out_j),
         _part(floats, f_at, WATER_FLOATS.balance), _part2(floats, f_at, WATER_FLOATS.Fj),
         _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev),
         floats[f_at[WATER_FLOATS.check_areas]],
@@ -534,7 +565,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     """Advance the water by h [s] at centres xz and recompute the pressure forces F_water (N, 2) [N]
     (WaterModel.advance): ``measure``, eq 45 smoothing of the areas into A_prev, ``darcy_flows``,
     n = 1 or ceil(h / Darcy limit) sub-steps of ``darcy_update`` by h / n (eq 46 smoothing of the
-    throat flows into q_prev), U at the areas used (eq 32, 45), ``pressure_forces``. The network's
+    throat flows into q_prev) with U at the areas used (eq 32, 45), ``pressure_forces``. The network's
     arrays are the parts WATER_INTS of (ints, i_at) and WATER_FLOATS of (floats, f_at)
     (Layout.pack), read as the WaterNet ``net`` (``water_net``). Flat walls (wall_axis not empty):
     the pores' vertices are the discs and the walls' (vertices, ``place_wall_vertices``; r holds 0
@@ -568,18 +599,18 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     for sub in range(n_sub):
         if sub > 0:
             lam[1] = _flows(W, A, net)
-        if smoothing:  # eq 46
+        if smoothing:  # eq 46: the flows' sums are those of the smoothed flows
             running = net.has_q_prev[0] != 0.0
             for t in range(len(q)):
                 if running:
                     q[t] = 0.5 * (q_prev[t] + q[t])
                 q_prev[t] = q[t]
             net.has_q_prev[0] = 1.0
-        bad = darcy_update(W, h / n_sub, net.throat_i, net.throat_j, q, net.q_s, net.q_d, net.q_in, net.acc_i,
-                           net.acc_j, net.balance)
+            throat_sums(net.throat_i, net.throat_j, q, net.out_i, net.out_j)
+        bad = darcy_update(W, h / n_sub, net.out_i, net.out_j, net.q_s, net.q_d, net.q_in, net.balance, A,
+                           net.wp[0], net.U)  # U at the area used (eq 45)
         if bad >= 0:
             return -1 - bad
-    pore_pressures(W, A, net.wp[0], net.U)  # eq 32 at the area used (eq 45)
     pressure_forces(net.links, net.link_pores, net.r, net.U, net.length, net.vec, F_water, net.Fj)
     if len(net.wall_axis):
         flat_wall_forces(net.wall_edge, net.wall_edge_wall, net.link_pores, net.U, net.length, net.F_walls)
@@ -591,7 +622,7 @@ def _flows(W, A, net):
     """``darcy_flows`` at the areas A of the WaterNet ``net``; its Gershgorin bound."""
     return darcy_flows(W, A, net.contact, net.throat_i, net.throat_j, net.throat_link, net.a_min, net.surface,
                        net.drained, net.bottom, net.wp, net.q, net.q_s, net.q_d, net.q_in, net.g, net.g_b, net.U,
-                       net.acc_i, net.acc_j, net.rate)
+                       net.acc_i, net.acc_j, net.rate, net.out_i, net.out_j)
 
 
 WATER = Layout.of(water_step, 1)  # the arguments of water_step after xz
@@ -1053,13 +1084,6 @@ def no_tie_args():
     """The arguments of dem_step from tie_pairs on (TIES) for a scene without side-wall ties."""
     return TIES.values(tie_pairs=np.zeros((0, 2), np.int64), tie_rest=np.zeros(0), tie_prm=np.zeros(2),
                        T=np.zeros((2, 0)))
-
-
-@jit
-def pore_pressures(W, A, E_w, U):
-    """U = E_w (W - A) / W [N/m] (eq 32) into U."""
-    for p in range(len(W)):
-        U[p] = E_w * (W[p] - A[p]) / W[p]
 
 
 @jit

@@ -46,7 +46,7 @@ class WaterModel(water_model.WaterModel):
                   "F_walls": np.zeros(len(walls))}
         # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact", n_l), ("q g", n_t),
-                            ("q_s q_d q_in g_b U acc_i acc_j rate", n_p)):
+                            ("q_s q_d q_in g_b U acc_i acc_j rate out_i out_j", n_p)):
             floats.update((name, np.zeros(size)) for name in names.split())
         self._ints, self._i_at = kernels.WATER_INTS.pack(ints, np.int64)
         self._floats, self._f_at = kernels.WATER_FLOATS.pack(floats, float)
