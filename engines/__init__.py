@@ -26,6 +26,7 @@ the YADE law skips a-c and e):
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24
   d. pores: build, measure, re-mesh rules a-d         model/pores.py, model/pore_water.py  eq 28-31
+     the regular triangulation without Qhull          compiled/regular.py
      flat walls as pore boundaries (SPEC §2.6)        model/flat_walls.py
      water: pressure, Darcy flows, update, forces    model/pore_water.py, model/water_model.py
                                                                                 eq 32-46

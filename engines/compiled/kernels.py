@@ -423,9 +423,9 @@ def darcy_update(W, h, out_i, out_j, q_s, q_d, q_in, balance, A, E_w, U):
 
 
 # The per-network arrays of water_step, in two buffers (one int64, one float64: a numba call
-# unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack). Inside a
-# compiled call they are a WaterNet of views (``water_net``), made once a call: each view made costs
-# a reference count (~20 ns), so a run of many steps makes them once, not at every step.
+# unboxes each array argument, ~0.2 us each), each array a part by name (Layout.pack). A water step
+# reads them as a WaterNet of views that take no reference count (``water_net``, ``_view``): a
+# slice would cost an atomic add (~20 ns) for each of its ~40 parts at every step.
 WATER_INTS = Layout("WATER_INTS", ("links", "link_pores", "throat_i", "throat_j", "throat_link", "wall_axis",
                                    "wall_edge", "wall_edge_wall"))
 WATER_FLOATS = Layout("WATER_FLOATS", (
@@ -986,8 +986,8 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
     """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
     -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
     wet; its parts called one by one: numba leaves a reference count of each array around a call
-    of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the water's balance of the step added to totals (3,)
-    [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
+    of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the
+    water's balance of the step added to totals (3,) [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
     walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
     bridge's steps() (O.step()).
     With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``

@@ -75,7 +75,7 @@ def _sure(value, magnitude):
 
 
 @jit
-def _point_back(tv, tn, u, old, new):
+def _point_back(tn, u, old, new):
     """In triangle u (>= 0), the neighbour pointer to ``old`` made to point to ``new``."""
     for k in range(3):
         if tn[u, k] == old:
@@ -108,7 +108,7 @@ def _locate(x, z, tv, tn, q, t, max_steps):
         g = _ghost_at(tv, t)
         if g >= 0:
             a, b = tv[t, (g + 1) % 3], tv[t, (g + 2) % 3]
-            o, m = _orient(x, z, a, b, q)
+            o = _orient(x, z, a, b, q)[0]
             if o > 0:
                 return t, 4
             if o == 0:
@@ -120,8 +120,8 @@ def _locate(x, z, tv, tn, q, t, max_steps):
             continue
         zero, moved = -1, False
         for i in range(3):
-            k = (i + step) % 3  # a rotating first edge: the walk cannot cycle
-            o, m = _orient(x, z, tv[t, (k + 1) % 3], tv[t, (k + 2) % 3], q)
+            k = (i + step) % 3  # a rotating first edge keeps the walk from cycling (max_steps bounds it)
+            o = _orient(x, z, tv[t, (k + 1) % 3], tv[t, (k + 2) % 3], q)[0]
             if o < 0:
                 t, moved = tn[t, k], True
                 break
@@ -177,8 +177,8 @@ def _flip(tv, tn, t, k):
     n3, n4 = tn[u, (m + 1) % 3], tn[u, (m + 2) % 3]  # across (p1, o) and (o, p2): u = (o, p2, p1)
     _set(tv, tn, t, p0, p1, o, n3, u, n2)
     _set(tv, tn, u, p0, o, p2, n4, n1, t)
-    _point_back(tv, tn, n3, u, t)
-    _point_back(tv, tn, n1, t, u)
+    _point_back(tn, n3, u, t)
+    _point_back(tn, n1, t, u)
     return u
 
 
@@ -256,8 +256,8 @@ def _regular_from(x, z, w, order):
             _set(tv, tn, t, q, p1, p2, n0, m, m + 1)
             _set(tv, tn, m, q, p2, p0, n1, m + 1, t)
             _set(tv, tn, m + 1, q, p0, p1, n2, t, m)
-            _point_back(tv, tn, n1, t, m)
-            _point_back(tv, tn, n2, t, m + 1)
+            _point_back(tn, n1, t, m)
+            _point_back(tn, n2, t, m + 1)
             for e, tri in enumerate((t, m, m + 1)):
                 stack[e, 0], stack[e, 1] = tri, 0
             top, m = 3, m + 2
@@ -268,15 +268,15 @@ def _regular_from(x, z, w, order):
             _set(tv, tn, t, q, p1, p2, real, m, m + 1)      # the real triangle (q, p1, p2)
             _set(tv, tn, m, q, p2, GHOST, n_after, m + 1, t)  # hull edge q -> p2
             _set(tv, tn, m + 1, q, GHOST, p1, n_before, t, m)  # hull edge p1 -> q
-            _point_back(tv, tn, n_after, t, m)
-            _point_back(tv, tn, n_before, t, m + 1)
+            _point_back(tn, n_after, t, m)
+            _point_back(tn, n_before, t, m + 1)
             stack[0, 0], stack[0, 1] = t, 0
             stack[1, 0], stack[1, 1] = m, 0
             stack[2, 0], stack[2, 1] = m + 1, 0
             top, m = 3, m + 2
         else:  # on an edge: of the hull only (where 5: of ghost t; k: of real t, whose neighbour is a ghost)
             if where != 5:
-                if tv[tn[t, where], 0] != GHOST and tv[tn[t, where], 1] != GHOST and tv[tn[t, where], 2] != GHOST:
+                if _ghost_at(tv, tn[t, where]) < 0:
                     return UNSURE, tv, tn, m, hidden  # on an inner edge
                 t = tn[t, where]
             g = _ghost_at(tv, t)
@@ -298,8 +298,8 @@ def _regular_from(x, z, w, order):
             _set(tv, tn, m, q, p1, c, n_c1, real, m + 1)     # (q, p1, c)
             _set(tv, tn, t, q, p2, GHOST, n_after, m + 1, real)  # hull edge q -> p2
             _set(tv, tn, m + 1, q, GHOST, p1, n_before, m, t)    # hull edge p1 -> q
-            _point_back(tv, tn, n_c1, real, m)
-            _point_back(tv, tn, n_before, t, m + 1)
+            _point_back(tn, n_c1, real, m)
+            _point_back(tn, n_before, t, m + 1)
             for e, tri in enumerate((real, m, t, m + 1)):
                 stack[e, 0], stack[e, 1] = tri, 0
             top, m = 4, m + 2

@@ -11,7 +11,7 @@ from packing.layouts import hex_lattice, random_discs
 from packing.packing import Packing
 from packing.psd import sample_diameters
 from tests.compiled.test_pores import FLAT, PACKINGS
-from tests.layouts import random_sequential
+from tests.layouts import random_sequential, square_lattice
 
 ANSWER = {regular.UNSURE: "unsure", regular.COLLINEAR: "collinear", regular.DONE: "done"}
 
@@ -91,9 +91,9 @@ def test_the_power_test_and_the_chord():
     power circle, and more so the larger its disc; a small disc between two large ones on a line
     lies above their chord (hidden) where they overlap, an equal one below it."""
     x, z = np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, 0.0])
-    assert regular._power(x, z, np.zeros(4), 0, 1, 2, 3)[0] > 0
-    assert regular._power(x, z, np.array([0, 0, 0, 0.5]), 0, 1, 2, 3)[0] > regular._power(x, z, np.zeros(4), 0, 1, 2, 3)[0]
-    assert regular._power(np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, 2.0]), np.zeros(4), 0, 1, 2, 3)[0] < 0
+    inside = regular._power(x, z, np.zeros(4), 0, 1, 2, 3)[0]
+    assert 0 < inside < regular._power(x, z, np.array([0, 0, 0, 0.5]), 0, 1, 2, 3)[0]
+    assert regular._power(x, z + np.array([0, 0, 0, 2.0]), np.zeros(4), 0, 1, 2, 3)[0] < 0  # (0, 2): outside
     line_x, line_z = np.array([0.0, 1.0, 2.0]), np.zeros(3)
     assert regular._above_chord(line_x, line_z, np.array([2.25, 0.01, 2.25]), 0, 1, 2)[0] > 0
     assert regular._above_chord(line_x, line_z, np.full(3, 0.25), 0, 1, 2)[0] < 0
@@ -109,3 +109,22 @@ def test_the_compiled_build_skips_the_hull_in_a_run(monkeypatch):
         net = pg.build_pores(xz, r, 2e-4, 3.5e-4, steps=kp.BUILD)
         assert net.n_pores > 250
     assert calls == []
+
+
+def test_a_tie_within_round_off_is_left_to_the_hull():
+    """A square lattice moved by 1e-12 of its spacing: its cocircular quadruples are no longer exact
+    ties, but too close to them to be decided: unsure, the hull's."""
+    xz = square_lattice(7, 6, 2.0) + 2e-12 * np.random.default_rng(4).standard_normal((42, 2))
+    assert triangulate(xz, np.ones(42))[0] == "unsure"
+
+
+def test_a_disc_that_a_later_one_hides_is_unsure():
+    """Inserted before the larger disc that covers it, a small disc would have to leave the
+    triangulation, which flips cannot do (a quadrilateral to flip is not convex): the insertion
+    answers unsure. The insertion order puts such discs last: regular_triangles is certain here."""
+    xz = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 3.5], [2.1, 1.2], [2.0, 1.0]])
+    r = np.array([1.0, 1.0, 1.0, 0.1, 1.5])
+    answer = regular._regular_from(xz[:, 0].copy(), xz[:, 1].copy(), r ** 2, np.arange(5))[0]
+    assert answer == regular.UNSURE
+    assert triangulate(xz, r)[0] == "done"
+    np.testing.assert_array_equal(triangulate(xz, r)[1], pg.regular_triangulation(xz, r))
