@@ -9,7 +9,7 @@ it), each insertion restored to regular by flips of the edges around the new dis
   - a real edge (a, b) between triangles (a, b, c) and (b, a, d) flips to (c, d) when d lies inside
     the power circle of (a, b, c): its lifted point (x, z, x^2 + z^2 - r^2) below their plane
     (``_power``);
-  - a hull vertex between ghost triangles flips out of the hull when its two hull edges turn right
+  - a hull vertex between two ghost triangles leaves the hull where the hull is not convex there
     (``_orient``): a disc inserted outside the hull joins it;
   - a disc inside a triangle whose lifted point lies above its plane has an empty power cell: it is
     in no triangle, as in the lower hull.
@@ -19,7 +19,7 @@ round-off (``CERTAIN``, relative to the sum of the magnitudes of its terms), and
 edge, hull vertex, triangle and hidden disc is checked again with the same bound: then the lower
 hull is unique and the triangles are Qhull's. Anything closer to a tie than that (cocircular discs of
 lattices, a disc on an inner edge or on another, a flip that needs a disc removed) answers
-``certain = False`` and the caller builds the hull. Discs on a straight edge of the hull (a row of
+UNSURE and the caller builds the hull. Discs on a straight edge of the hull (a row of
 wall discs) are exact ties of the orientation, settled by the lifted heights along the edge
 (``_above_chord``).
 

@@ -6,11 +6,12 @@ Vocabulary (per unit thickness, SI): discs have centres ``xz`` (N, 2) [m] and ra
   edges of a triangulation of the centres, so links never cross and the link graph is planar.
   The triangulation is the regular (radius-weighted, power) triangulation: the lower convex hull
   of the lifted points (x, z, x^2 + z^2 - r^2), its triangles in a canonical order
-  (``canonical_triangles``), so that networks are numbered alike however it was found. Where one of its edges that is not a link hides an
-  eq 28 pair (the other diagonal of a quadrilateral, which a Delaunay or regular triangulation
-  can leave out at a long l_m), that pair is put in by edge flips (``insert_missing_links``), so that
-  *every eq 28 pair that crosses no link is a link*; of two such pairs that cross each other,
-  the one with the smaller gap R - r_i - r_j is put in first.
+  (``canonical_triangles``), so that networks are numbered alike however it was found. Where one
+  of its edges that is not a link hides an eq 28 pair (the other diagonal of a quadrilateral,
+  which a Delaunay or regular triangulation can leave out at a long l_m), that pair is put in by
+  edge flips (``insert_missing_links``), so that *every eq 28 pair that crosses no link is a
+  link*; of two such pairs that cross each other, the one with the smaller gap R - r_i - r_j is
+  put in first.
 * A *pore* is a bounded face of the link graph. It is stored as the set of triangles that lie in
   it (triangles joined across non-link edges). The unbounded outer face is not a pore.
 * Void area A = polygon area - sum of the disc sectors theta * r^2 / 2 inside it (eq 29); overlaps
@@ -230,7 +231,9 @@ def regular_triangulation(xz, r, steps=None):
     point lifted above all others, at the centroid, is never on the lower hull; it makes a 3D hull
     of three discs or of lifted points that lie in one plane (cocircular equal discs). Collinear
     centres stay flat: None. Discs whose power cell is empty are in no triangle. ``steps``:
-    BuildSteps (default NUMPY_BUILD).
+    BuildSteps (default NUMPY_BUILD); with its certain_triangles (engines.compiled.pores.BUILD),
+    the hull is built only where that answers it is not certain. The triangles in the order of
+    ``canonical_triangles``.
     """
     steps = steps or NUMPY_BUILD
     n = len(xz)
