@@ -20,8 +20,8 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us):
 
   law_step          engines.model.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.model.water_model.WaterModel.advance  (measure, flows, update, eq 32, 33)
-  dem_step          engines.model.pore_dem.PoreDEM.step: law_step, tie_forces, water_step when due, the
-                    forces to write
+  dem_step          engines.model.pore_dem.PoreDEM.step: law_step, water_step when due, forces_to_write
+                    (the side-wall ties by tie_forces, the forces to write)
   water_forces_step engines.yade.water_engine.WaterEngine: water_step and the forces to write
 
 Arguments by name (engines.compiled.layout): each kernel called from Python has the layout of its
@@ -30,10 +30,12 @@ parameters (``LAW = Layout.of(law_step, 1)``), and its callers build its argumen
 arguments of those it calls has its list checked to be theirs one after the other (DEM_STEP is
 rows, held, water_due, LAW, WATER, TIES), and passes them on under their own names (tested). The
 network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
-name as a WaterNet of views that hold no reference count (``water_net``, ``_view``). These lists stay in this file: numba's cache is renewed when this file changes (not when a
-module it imports does: the contact state's columns, engines.model.contact.TOUCHING ..., are read
-as constants; after changing them, delete engines/compiled/__pycache__; likewise after changing
-``_groups``, ``_grid``, ``_within`` or ``_grown``, which engines.compiled.pores calls).
+name as a WaterNet of views that hold no reference count (``water_net``, ``_view``). These lists
+stay in this file: numba's cache is renewed when this file changes (not when a module it imports
+does: the contact state's columns, engines.model.contact.TOUCHING ..., are read as constants;
+after changing them, delete engines/compiled/__pycache__; likewise after changing ``_groups``,
+``_grid``, ``_within``, ``_beyond`` or ``_grown``, which engines.compiled.pores and
+engines.compiled.regular call).
 
 ``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
 functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that this module stays cacheable
@@ -77,6 +79,13 @@ def _at(i):
     return np.uint64(i)
 
 
+@jit
+def _beyond(d2, s):
+    """Does a squared distance d2 exceed s^2 by more than its round-off (relative 1e-12 where it is
+    a few 1e-16), so that sqrt(d2) > s without the square root?"""
+    return d2 > s * s * (1.0 + 1e-12)
+
+
 def contact_params(s, dt):
     """The float parameters of ``contact_forces`` from ContactSettings ``s`` and dt [s]."""
     return np.array([s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m, dt])
@@ -100,8 +109,8 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
         reach = r[i] + r[j] + eps_m
         was = state[k, TOUCHING] != 0.0
         d2 = dx * dx + dz * dz
-        if not was and d2 > reach * reach * (1.0 + 1e-12):  # apart before and, past its round-off, now
-            continue                                        # (no force; its state stays): the sqrt spared
+        if not was and _beyond(d2, reach):  # apart before and now (no force; its state stays): no sqrt
+            continue
         R = math.sqrt(d2)
         delta = reach - R
         now = delta >= 0                                        # eq 1, 26
@@ -233,9 +242,8 @@ def _grid(x, z, cell):
 
 @jit
 def _within(dx, dz, s):
-    """np.hypot(dx, dz) <= s, the hypot (~20 ns) computed only where dx^2 + dz^2 does not already
-    exceed s^2 by more than its round-off (relative 1e-12 where it is a few 1e-16)."""
-    if dx * dx + dz * dz > s * s * (1.0 + 1e-12):
+    """np.hypot(dx, dz) <= s, the hypot (~20 ns) computed only where dx^2 + dz^2 is not ``_beyond`` s."""
+    if _beyond(dx * dx + dz * dz, s):
         return False
     return np.hypot(dx, dz) <= s
 
@@ -987,9 +995,9 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
     -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
     wet; its parts called one by one: numba leaves a reference count of each array around a call
     of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the
-    water's balance of the step added to totals (3,) [m^2], the base motion advanced (``cosine_base_step`` when motion is not empty: MOTION; the
-    walls wall_ids get its wall velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and
-    bridge's steps() (O.step()).
+    water's balance of the step added to totals (3,) [m^2], the base motion advanced
+    (``cosine_base_step`` when motion is not empty: MOTION; the walls wall_ids get its wall
+    velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and bridge's steps() (O.step()).
     With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``
     (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
     (``free_discs``) give those discs their ``separation_velocities`` by set_vel. A stale pair

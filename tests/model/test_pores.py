@@ -126,7 +126,8 @@ def test_eq33_against_arc_integrals_with_non_uniform_pressure(seed):
 
 def test_measure_matches_triangles_after_motion():
     """Per-step areas (walk + eq 29) equal the triangle reference, also after the discs moved
-    between rebuilds; link directions crossing the +-pi cut do not matter."""
+    between rebuilds; link directions crossing the +-pi cut do not matter. The corner angles give
+    the same sectors."""
     rng = np.random.default_rng(4)
     xz, r = random_discs(300, rng)
     net = pg.build_pores(xz, r, l_m=0.7 * r.mean())
@@ -134,6 +135,9 @@ def test_measure_matches_triangles_after_motion():
         xz = xz + 0.02 * r.mean() * rng.standard_normal(xz.shape)
         m = pg.measure(net, xz, r)
         np.testing.assert_allclose(m.void_area, void_area_by_triangles(net, xz, r), rtol=1e-9, atol=1e-13)
+        # the corner angles are the sectors' (eq 29 corner by corner, against its sum over links)
+        by_corners = 0.5 * np.bincount(net.corner_pore, m.corner_angle * net.corner_r2, minlength=net.n_pores)
+        np.testing.assert_allclose(by_corners + net.rattler_area, m.sector_area, rtol=1e-12)
 
 
 def test_eq33_single_arc():

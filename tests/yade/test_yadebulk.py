@@ -363,6 +363,19 @@ def test_the_probe_rejects_a_wrong_layout_and_switches_the_bridge_off(bulk, monk
     bulk.get_pos_xz(ids, np.empty((len(ids), 2)))
 
 
+def test_without_the_summed_forces_pointer_the_bridge_adds_through_yade(bulk, monkeypatch):
+    """A YADE whose summed forces the probe cannot find uniquely: the probe still passes (its checks
+    of add_force_unsynced_xz and the Newton twins run through ForceContainer::addForceUnsynced)."""
+    def not_found(*args):
+        raise probe.ProbeError("summed forces' data pointer in ForceContainer: 0 candidates")
+    monkeypatch.setattr(probe, "_find_force_data_offset", not_found)
+    try:
+        assert probe.run(bulk._lib, bulk)["force_data"] == -1
+    finally:
+        monkeypatch.undo()
+        probe.run(bulk._lib, bulk)  # the real layout back for the other tests
+
+
 def test_the_probe_refuses_to_run_during_a_simulation(bulk):
     _user_scene()
     O.run(20000)  # about a second in the background (O.pause() would not wait for the thread)

@@ -294,7 +294,10 @@ def _discover_and_verify(lib, bridge, mem):
         O.forces.addF(i, Vector3(*f))
     forces_off = _find_forces_offset(mem, scene, forces)
     O.forces.f(0, True)  # a sync: the summed forces hold them too
-    force_data_off = _find_force_data_offset(mem, scene, forces_off, forces)
+    try:
+        force_data_off = _find_force_data_offset(mem, scene, forces_off, forces)
+    except ProbeError:  # not found uniquely: add_force_unsynced_xz calls addForceUnsynced, as before
+        force_data_off = -1
 
     lib.yb_configure(forces_off, force_data_off, bodies_off, *state_offs, 1)
     ids = np.arange(n, dtype=np.int64)
