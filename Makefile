@@ -40,7 +40,7 @@ test: deps
 # The NumPy core alone (tests of engines/model, engines/compiled, engines/reference, packing/ and the
 # layering of the tree): no YADE needed, about 15 s. Run `make deps` once first.
 test-fast:
-	$(PY) -m pytest -q tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
+	$(PY) -m pytest -q tests/files tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
 
 # The reference in float32, float64 and longdouble on the quick-sand column (a measurement, README):
 # $(OUT)/precision/precision.json.

@@ -2,6 +2,7 @@
 
 The packages, each importing only those before it (tests/test_layers.py checks it):
 
+  files/      writing a file whole or not at all (temporary file, fsync, rename); one line on failure
   model/      the seed-000 physics, NumPy only, no YADE
   compiled/   its numba twins (the same arithmetic, tested equal to round-off): the kernels, and the
               model's classes by the same names (contact, paper_law, water_model, pore_dem), which

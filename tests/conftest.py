@@ -19,7 +19,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 TESTS = os.path.dirname(os.path.abspath(__file__))
-LAYERS = ("model", "compiled", "reference", "yade", "run", "studies", "seeds", "packing", "postproc")
+LAYERS = ("files", "model", "compiled", "reference", "yade", "run", "studies", "seeds", "packing", "postproc")
 
 
 def pytest_collection_modifyitems(items):

@@ -9,9 +9,9 @@ import sys
 from engines import ROOT
 
 # each package imports only those before it (engines.ROOT, the root package, is open to all)
-ORDER = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.yade", "engines.seeds",
+ORDER = ["engines.files", "engines.model", "engines.compiled", "engines.reference", "packing", "engines.yade", "engines.seeds",
          "engines.studies", "postproc", "engines.run"]
-NO_YADE = ["engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
+NO_YADE = ["engines.files", "engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
 LIBRARY = ["engines", "packing", "postproc"]
 SCRIPTS = ["yade_scripts", "benchmarks"]
 SYS_PATH_EDIT = re.compile(r"sys\.path\.(insert|append|extend|remove|pop)\(|sys\.path\s*(\[[^]]*\])?\s*\+?=(?!=)")
