@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext demo test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -35,7 +35,12 @@ demo: deps
 # (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests instead of skipping).
 test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
-	YADEBULK_REQUIRED=1 $(PY) -m pytest -q tests
+	YADEBULK_REQUIRED=1 $(PY) -m pytest -q -m "not check" tests
+
+# The batteries that start YADE processes or send real signals (tests marked `check`: stops at chosen
+# moments, two runs on one folder, a full disk, YADE's listeners; docs/RELIABILITY.md); at most 30 min.
+check: deps
+	YADEBULK_REQUIRED=1 $(PY) -m pytest -q -m check tests
 
 # The NumPy core alone (tests of engines/model, engines/compiled, engines/reference, packing/ and the
 # layering of the tree): no YADE needed, about 15 s. Run `make deps` once first.
