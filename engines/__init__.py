@@ -57,4 +57,5 @@ Where to add ...
 """
 import os
 
+__version__ = "0.2.0.dev0"  # the one version: pyproject.toml reads it, every summary.json records it
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's folder

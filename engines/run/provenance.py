@@ -4,7 +4,7 @@ import os
 import subprocess
 import sys
 
-from engines import ROOT
+from engines import ROOT, __version__
 
 
 def yade_version():
@@ -36,13 +36,13 @@ def git_state(root=ROOT):
 
 
 def provenance(argv=None, overrides=None):
-    """JSON-ready dict: yade_version, git_commit, git_dirty, python, command_line (the process's
+    """JSON-ready dict: version (the project's, engines.__version__), yade_version, git_commit, git_dirty, python, command_line (the process's
     own argv, interpreter included: under ``yade -x`` the yade launcher and its options), cwd,
     overrides ({table: {field: value}} applied on top of the scene file, e.g. a --duration) and
     yade_batch (the job's table:line under yade-batch, else None)."""
     if argv is None:
         argv = getattr(sys, "orig_argv", sys.argv)
     commit, dirty = git_state()
-    return {"yade_version": yade_version(), "git_commit": commit, "git_dirty": dirty,
+    return {"version": __version__, "yade_version": yade_version(), "git_commit": commit, "git_dirty": dirty,
             "python": sys.version.split()[0], "command_line": list(argv), "cwd": os.getcwd(),
             "overrides": overrides or {}, "yade_batch": os.environ.get("YADE_BATCH") or None}

@@ -19,3 +19,19 @@ def test_provenance_names_the_commit_the_command_and_the_overrides():
 def test_outside_git_the_commit_is_none(tmp_path):
     from engines.run import provenance as prov
     assert prov.git_state(str(tmp_path)) == (None, None)
+
+
+def test_one_version_read_by_pyproject_the_citation_and_every_summary():
+    import os
+    import re
+    import tomllib
+
+    from engines import __version__
+    pyproject = tomllib.load(open(os.path.join(ROOT, "pyproject.toml"), "rb"))
+    assert pyproject["project"]["dynamic"] == ["version"] and "version" not in pyproject["project"]
+    assert pyproject["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "engines.__version__"}
+    cff = open(os.path.join(ROOT, "CITATION.cff"), encoding="utf-8").read()
+    assert re.search(r"^version: (\S+)$", cff, re.M).group(1) == __version__
+    assert re.fullmatch(r"\d+\.\d+\.\d+(\.dev\d+)?", __version__)
+    assert provenance([])["version"] == __version__
+    assert open(os.path.join(ROOT, "LICENSE")).read().startswith("                    GNU GENERAL PUBLIC LICENSE\n                       Version 2")
