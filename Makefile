@@ -4,12 +4,12 @@ PY      := /usr/bin/python3
 YADE    := yade
 OUT     ?= out
 DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc g++ libc6-dev \
-           python3-distributed python3-venv
+           python3-distributed python3-venv python3-pip python3-setuptools
 EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext demo test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext install demo test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -20,6 +20,14 @@ deps:
 	  $$SUDO apt-get update && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y $$missing; \
 	fi
 	@$(MAKE) --no-print-directory ext || echo "warning: engines/yade/yadebulk not built: YADE I/O falls back to per-body calls"
+	@$(MAKE) --no-print-directory install
+
+# The project for Debian's python3 (the interpreter `yade` runs), editable: a script of your own
+# anywhere imports engines, packing and postproc without PYTHONPATH (the last checkout installed wins).
+install:
+	@cd / && env -u PYTHONPATH $(PY) -c "import engines, os, sys; sys.exit(os.path.dirname(engines.ROOT + '/') != '$(CURDIR)')" 2>/dev/null || \
+	  { echo "installing the project for $(PY) (editable, $(CURDIR))"; \
+	    $(PY) -m pip install -q --no-build-isolation --no-deps --break-system-packages --root-user-action=ignore -e $(CURDIR); }
 
 # The bulk-I/O bridge to YADE (engines/yade/yadebulk: C and a little C++, no YADE headers, seconds to build).
 ext: $(EXT_SO)
