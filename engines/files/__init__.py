@@ -1,6 +1,6 @@
 """Writing a file so that it is either whole or absent: every write of the project goes through here.
 
-``write_bytes``, ``write_text``, ``write_json``, ``savez`` and ``saved`` (a context for writers that
+``write_bytes``, ``write_text``, ``write_json``, ``savez``, ``save_figure`` and ``saved`` (a context for writers that
 want a path, e.g. matplotlib's savefig) write to a temporary file in the target's folder (named
 ``.NAME.tmp-*``), flush and fsync it, then rename it over the target, so a reader never sees a half
 file and a kill at any moment leaves the old file or the new one. A failed write (a full disk, a
@@ -92,6 +92,13 @@ def savez(path, compressed=True, **arrays):
             raise TypeError(f"{path}: array {name!r} holds Python objects; only numbers and strings are written")
     with saved(path) as tmp, open(tmp, "wb") as f:
         (np.savez_compressed if compressed else np.savez)(f, **arrays)
+
+
+def save_figure(fig, path, **kw):
+    """``fig.savefig`` (matplotlib) to ``path`` atomically, in the format of its extension."""
+    fmt = os.path.splitext(path)[1][1:] or "png"
+    with saved(path) as tmp:
+        fig.savefig(tmp, format=fmt, **kw)
 
 
 def remove_stale_temporaries(folder):

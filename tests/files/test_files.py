@@ -60,3 +60,17 @@ def test_new_files_have_ordinary_permissions(tmp_path):
     finally:
         os.umask(umask)
     assert (os.stat(tmp_path / "t.txt").st_mode & 0o777) == 0o644
+
+
+def test_save_figure_writes_the_format_of_the_extension(tmp_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1])
+    files.save_figure(fig, str(tmp_path / "f.png"), dpi=50)
+    files.save_figure(fig, str(tmp_path / "f.svg"))
+    plt.close(fig)
+    assert (tmp_path / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert b"<svg" in (tmp_path / "f.svg").read_bytes()[:500]
+    assert sorted(os.listdir(tmp_path)) == ["f.png", "f.svg"]
