@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.seeds.biaxial.specimen import mohr_coulomb_fit  # noqa: E402
 from engines.seeds.biaxial.study import KN, PAPER, SENS_PHI, SENS_SIGMA3, SMALL_DISCS  # noqa: E402
 
@@ -16,7 +17,7 @@ PHI_COLOURS = {5.0: "C0", 10.0: "C1", 15.0: "C2"}
 
 def _save(fig, path):
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -275,8 +276,10 @@ def plot_judged(res, path):
             ax.plot(list(paper), list(paper.values()), "k*", ms=11, label="paper")
         ax.set(xlabel="inter-element friction angle φe [°]", ylabel=ylabel, xlim=(0, 20), ylim=(0, None), title=title)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left")
     axes[2].text(0.98, 0.02, "the paper: figures only", transform=axes[2].transAxes, ha="right", fontsize=8, color="0.4")
     fig.suptitle(f"Judged points on the default reading: 1000 discs, σ3 = 100, 200, 300 Pa, "
                  f"n = {'/'.join(map(str, n))} packings per φe", fontsize=10)
-    _save(fig, path)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))  # one key for the three panels, under them: it covers no point
+    fig.legend(*axes[1].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8.5, frameon=False)
+    files.save_figure(fig, path, dpi=120)
+    plt.close(fig)

@@ -27,6 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.studies.tradeoffs import systematic  # noqa: E402
 from postproc.plots import HISTORY_PANELS  # noqa: E402
 from postproc.run_files import read_history, read_summary  # noqa: E402
@@ -69,7 +70,7 @@ def figures(out_dir):
                      fontsize=9)
         fig.tight_layout()
         written.append(os.path.join(out_dir, "ensemble_pressure_blocks.png"))
-        fig.savefig(written[-1], dpi=110)
+        files.save_figure(fig, written[-1], dpi=110)
         plt.close(fig)
     if len(t_ms) >= 2:
         fig, axes = plt.subplots(2, 2, figsize=(9, 6), sharex=True)
@@ -84,7 +85,7 @@ def figures(out_dir):
         fig.suptitle(title, fontsize=10)
         fig.tight_layout()
         written.append(os.path.join(out_dir, "ensemble_history.png"))
-        fig.savefig(written[-1], dpi=120)
+        files.save_figure(fig, written[-1], dpi=120)
         plt.close(fig)
     return written
 
@@ -126,7 +127,7 @@ def compare(dirs, figure, times):
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"{docs[0]['scene']}: standard deviation of the starts against time, by perturbation size", fontsize=10)
     fig.tight_layout()
-    fig.savefig(figure, dpi=110)
+    files.save_figure(fig, figure, dpi=110)
     plt.close(fig)
     return rows
 

@@ -31,6 +31,7 @@ from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
 from engines.model.observe import Window, porosity  # noqa: E402
 from engines.studies.ensemble import CONFIDENCE, t_half_width  # noqa: E402
@@ -154,24 +155,27 @@ def depth_figure(history, snaps, bounds, title):
     n = np.array([band_porosity(s, bounds, top) for s in snaps])
     ts = np.array([float(s["t"]) for s in snaps]) * 1e3
     t_edges = np.r_[ts[0], 0.5 * (ts[1:] + ts[:-1]), ts[-1]] if len(ts) > 1 else np.r_[ts, ts + 1]
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.8), sharey=True, layout="constrained",
+    fig, axes = plt.subplots(1, 3, figsize=(14, 5.6), sharey=True, layout="constrained",
                              gridspec_kw={"width_ratios": (1.4, 1.4, 0.7)})
+    t_end = float(history["t"][-1]) * 1e3
     lim = max(float(np.nanpercentile(np.abs(U), 99)), 1e-9)  # the surface block's rare spikes saturate
     im = axes[0].pcolormesh(history["t"] * 1e3, edges, U[:-1].T if len(U) > 1 else U.T, cmap="RdBu_r",
                             vmin=-lim, vmax=lim, shading="flat")
-    fig.colorbar(im, ax=axes[0], extend="both",
+    fig.colorbar(im, ax=axes[0], extend="both", location="bottom", shrink=0.9,
                  label=f"block-mean excess pore pressure U [N/m]\n(beyond ±{lim:.0f}: the end colours; max |U| "
                        f"{np.nanmax(np.abs(U)):.0f})")
     dn = n - n[0]
     dlim = max(float(np.nanmax(np.abs(dn[:, :-1] if dn.shape[1] > 1 else dn))), 1e-9)  # the bands below the surface
     im = axes[1].pcolormesh(t_edges, edges, dn.T, cmap="RdBu_r",  # a cell about each snapshot's time
                             vmin=-dlim, vmax=dlim, shading="flat")
-    fig.colorbar(im, ax=axes[1], extend="both", label="porosity change since t = 0 [-]\n(scaled to the bands "
-                 f"below the surface; max |Δn| {np.nanmax(np.abs(dn)):.3f})")
+    fig.colorbar(im, ax=axes[1], extend="both", location="bottom", shrink=0.9,
+                 label="porosity change since t = 0 [-], a cell about each snapshot\n"
+                       f"(scaled to the bands below the surface; max |Δn| {np.nanmax(np.abs(dn)):.3f})")
     axes[2].step(np.r_[n[0], n[0][-1]], edges, where="post", color="k")
     axes[2].set_xlabel("porosity at t = 0 [-]\n(top band: to the highest disc)", fontsize=9)
     for ax, what in zip(axes[:2], ("pore pressure", "porosity (at the snapshots)")):
         ax.set_xlabel("t [ms]")
+        ax.set_xlim(0.0, max(t_end, t_edges[-1]))  # both panels over the run's whole time
         ax.set_title(f"{what} by height", fontsize=9)
     axes[0].set_ylabel("z [mm]")
     for ax in axes:
@@ -188,17 +192,17 @@ def run_figures(run_dir):
     params = summary.get("parameters", {})
     if len(history.get("t", [])) < 2 or not params.get("water", {}).get("enabled", False):
         return []
-    files = snapshot_files(run_dir)
-    snap0 = read_snapshot(files[0]) if files and float(read_snapshot(files[0])["t"]) == 0.0 else None
+    snap_files = snapshot_files(run_dir)
+    snap0 = read_snapshot(snap_files[0]) if snap_files and float(read_snapshot(snap_files[0])["t"]) == 0.0 else None
     fig = blocks_figure(history, summary.get("scene", run_dir), summary.get("block_bounds_m"), snap0)
     paths = [os.path.join(run_dir, "blocks.png")]
-    fig.savefig(paths[-1], dpi=110)
+    files.save_figure(fig, paths[-1], dpi=110)
     plt.close(fig)
     bounds = summary.get("block_bounds_m")
-    if len(files) > 1 and bounds:
-        fig = depth_figure(history, [read_snapshot(f) for f in files], bounds, summary.get("scene", run_dir))
+    if len(snap_files) > 1 and bounds:
+        fig = depth_figure(history, [read_snapshot(f) for f in snap_files], bounds, summary.get("scene", run_dir))
         paths.append(os.path.join(run_dir, "depth.png"))
-        fig.savefig(paths[-1], dpi=110)
+        files.save_figure(fig, paths[-1], dpi=110)
         plt.close(fig)
     return paths
 
@@ -510,12 +514,10 @@ def study(root):
            "notes": {"porosity_end": f"mean over the last {PERIOD:g} s (one input period)",
                      "U_low": f"mean of the block means of blocks 1-{LOW_BLOCKS} (below the two surface blocks)"}}
     path = os.path.join(root, "summary.json")
-    with open(path, "w") as f:
-        json.dump(out, f, indent=1)
+    files.write_json(path, out, indent=1)
     written.append(path)
     path = os.path.join(root, "trends.md")
-    with open(path, "w") as f:
-        f.write(trends_markdown(rows))
+    files.write_text(path, trends_markdown(rows))
     written.append(path)
     n_all = np.concatenate([_drawn(r, "porosity") for r in runs.values()]) if runs else np.zeros(1)
     pad = 0.05 * (np.nanmax(n_all) - np.nanmin(n_all) + 1e-9)
@@ -526,13 +528,13 @@ def study(root):
         if have:
             fig = porosity_figure(have, title, n_lim, u_lim)
             written.append(os.path.join(root, name))
-            fig.savefig(written[-1], dpi=110)
+            files.save_figure(fig, written[-1], dpi=110)
             plt.close(fig)
     pairs = {k: (runs[k][0], conserving_runs[k][0]) for k in conserving if k in runs}  # the (mean) histories
     if pairs:
         fig = transfer_figure(pairs)
         written.append(os.path.join(root, "transfer_comparison.png"))
-        fig.savefig(written[-1], dpi=110)
+        files.save_figure(fig, written[-1], dpi=110)
         plt.close(fig)
     return written
 
@@ -575,12 +577,10 @@ def reconstruction(out, baseline, packings=None):
                                for key in ("porosity_initial", "porosity_change", "U_low_mean") if key in cases[k][0]}
                            for k in done},
             "trends": trends(cases)}
-    with open(os.path.join(out, "reconstruction.json"), "w") as f:
-        json.dump(doc, f, indent=1)
-    with open(os.path.join(out, "reconstruction.md"), "w") as f:
-        f.write(reconstruction_markdown(doc))
+    files.write_json(os.path.join(out, "reconstruction.json"), doc, indent=1)
+    files.write_text(os.path.join(out, "reconstruction.md"), reconstruction_markdown(doc))
     fig = reconstruction_figure(doc)
-    fig.savefig(os.path.join(out, "reconstruction.png"), dpi=110)
+    files.save_figure(fig, os.path.join(out, "reconstruction.png"), dpi=110)
     plt.close(fig)
     return doc
 

@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.seeds.particle_potential.model import find_pairs, pa_to_tf_m2  # noqa: E402
 from engines.seeds.particle_potential.specimen import HALF_COLUMNS, SPACING, bottom_stress  # noqa: E402
 
@@ -36,7 +37,7 @@ def plot_stress_strain(runs, summary, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -55,7 +56,7 @@ def plot_top_vs_bottom(runs, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -82,7 +83,7 @@ def plot_deformed(spec, inc, title, path):
                                     va="center", fontsize=6, color="C3")
     ax.set(aspect="equal", xlabel="x [m]", ylabel="z [m]", title=title)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

@@ -15,6 +15,7 @@ from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.model.groups import GROUP_NAMES, WALL_NONE  # noqa: E402
 from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402,F401
 
@@ -45,9 +46,9 @@ def block_label(k, n, bounds=None):
 
 
 def plot_block_pressures(history, E_w, path, title, bounds=None):
-    """block_pressure_figure saved to ``path``."""
+    """block_pressure_figure saved to ``path`` (grown to hold the key and the note under the axes)."""
     fig = block_pressure_figure(history, E_w, title, bounds)
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120, bbox_inches="tight", pad_inches=0.15)
     plt.close(fig)
 
 
@@ -88,12 +89,15 @@ def block_pressure_figure(history, E_w, title, bounds=None):
     ax.set_ylabel("block-mean excess pore pressure U [N/m]")
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
-    if any_gap:
-        ax.text(0.0, -0.33, "Hatched: no pore centroid lies in the block at that time (its discs lost their\n"
+    key = ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8,
+                    frameon=False)
+    fig.tight_layout()
+    if any_gap:  # the note goes under the key, wherever the key's rows end
+        fig.canvas.draw()
+        below = key.get_window_extent().transformed(ax.transAxes.inverted()).y0
+        ax.text(0.0, below - 0.02, "Hatched: no pore centroid lies in the block at that time (its discs lost their\n"
                 "links as the bed loosened), so the block has no mean U and the line breaks.",
                 transform=ax.transAxes, fontsize=8, color="0.3", va="top")
-    fig.tight_layout()
     return fig
 
 
@@ -110,7 +114,7 @@ def plot_history_panels(history, path, title):
         ax.set_xlabel("t [ms]")
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -175,11 +179,11 @@ def _nice(x):
 def plot_snapshots(snaps, path, title, blocks=None):
     """snapshot_figure saved to ``path``."""
     fig = snapshot_figure(snaps, title, blocks)
-    fig.savefig(path, dpi=110)
+    files.save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
-SNAPSHOT_COLUMNS = 3  # panels per row of a snapshot figure
+SNAPSHOT_COLUMNS = (3, 2)  # panels per row of a snapshot figure: the count that leaves fewest cells empty, the first on a tie
 KEY_ENTRY_WIDTH = 2.7  # [in]: one column of a snapshot figure's key (a handle and a label of ~30 characters)
 WINDOW_DISCS = 2000    # a scene of more discs is drawn in a window of its middle with about this many
 KEY_SHARE = 0.78       # of the figure's width: the key's columns; the velocity arrow's key on the right
@@ -191,7 +195,7 @@ def snapshot_figure(snaps, title, blocks=None):
     axis limits. Titles give each panel's own maxima; a key explains discs, walls, line widths and
     arrows. ``blocks``: [(z0, z1)] [m] of the pressure blocks, drawn as brackets on the right."""
     n = len(snaps)
-    cols = min(n, SNAPSHOT_COLUMNS)
+    cols = min(n, min(SNAPSHOT_COLUMNS, key=lambda c: -n % c))
     rows = -(-n // cols)
     lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
     hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
@@ -310,7 +314,7 @@ def plot_packing(packing, path, title, flat_walls=()):
     bounds = f"{len(flat_walls)} flat walls" if flat_walls else f"{int((~packing.mobile).sum())} wall discs"
     ax.set_title(f"{title}: {int(packing.mobile.sum())} particles, {bounds}")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from engines import files  # noqa: E402
 from engines.seeds.sand_layer.layer import (  # noqa: E402
     DISCRETE_LEVELS,
     discrete_diameters,
@@ -58,7 +59,7 @@ def plot_grain_size(study, path):
     fig.suptitle(f"Grain-size distribution: D50 = {study.gsd.d50 * MM:.2f} mm by mass, "
                  f"σ = {study.gsd.sigma}; number-based ln-mean = μ − 3σ²")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -107,7 +108,7 @@ def plot_void_ratio(study, path):
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -149,7 +150,7 @@ def plot_stress(study, path):
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
@@ -208,7 +209,7 @@ def plot_settlement(study, path):
     for ax in fig.axes:
         ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

@@ -4,6 +4,7 @@ import os
 
 import numpy as np
 
+from engines import files
 from engines.studies.stability import LIQ, QS
 
 COLORS = {"bounded": "tab:green", "refused": "tab:orange", "unbounded": "tab:red"}
@@ -55,7 +56,7 @@ def figure(points, path):
     fig.legend(handles=handles, loc="lower center", ncol=6, fontsize=9)
     fig.suptitle("Stability map: short runs at the extremes (quick-sand case 1; dt also on the seismic box)")
     fig.tight_layout(rect=(0, 0.05, 1, 0.96))
-    fig.savefig(path, dpi=110)
+    files.save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 

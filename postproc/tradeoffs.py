@@ -25,6 +25,7 @@ import os
 
 import numpy as np
 
+from engines import files
 from engines.studies import tradeoffs as tr
 
 METRICS = ("pressure_rms", "porosity_change", "settlement")  # judged; pressure_rms_below_surface: a diagnostic
@@ -136,10 +137,8 @@ def analyse(out, jobs, meta, log=print):
             doc["speed_interleaved"] = json.load(f)
         if doc["defaults"] is not None:
             doc["defaults"]["speedup_interleaved"] = doc["speed_interleaved"]["speedup"].get("defaults=fast")
-    with open(os.path.join(out, "tradeoffs.json"), "w") as f:
-        json.dump(doc, f, indent=1, default=float)
-    with open(os.path.join(out, "table.md"), "w") as f:
-        f.write(table(doc))
+    files.write_json(os.path.join(out, "tradeoffs.json"), doc, indent=1, default=float)
+    files.write_text(os.path.join(out, "table.md"), table(doc))
     for case in doc["reference"]:
         log("figure:", figure(doc, case, os.path.join(out, f"tradeoffs_{case}.png")))
         shown = [n for n, (c, k, v) in meta.items() if c == case and k in ("reference", "perturbation")
@@ -181,7 +180,7 @@ def histories_figure(series, path, title, n_blocks=4):
     fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8)
     fig.suptitle(f"{title}: mean over the starts ± its standard error (band)", fontsize=10)
     fig.tight_layout(rect=(0, 0.14, 1, 0.95))
-    fig.savefig(path, dpi=100)
+    files.save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
@@ -307,7 +306,7 @@ def figure(doc, case, path):
     fig.suptitle(f"{case}: noise-corrected error (± σ, bootstrap) against cost, {ref['window_s']:g} s window, "
                  f"reference dt = {ref['dt']:g} s from {ref['starts']} starts; bottom edge: estimate 0", fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
-    fig.savefig(path, dpi=110)
+    files.save_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -354,10 +353,8 @@ def validate(out, jobs, meta, log=print):
                     "settings": next(v for v in tr.CASES[case]["candidate"] if v["name"] == name), **row}
         doc["scenes"][scene] = entry
         log(f"{scene}: {entry['verdict']}" + "".join(f"; {n}: {c['verdict']}" for n, c in entry.get("candidates", {}).items()))
-    with open(os.path.join(out, "validation.json"), "w") as f:
-        json.dump(doc, f, indent=1, default=float)
-    with open(os.path.join(out, "validation.md"), "w") as f:
-        f.write(validation_table(doc))
+    files.write_json(os.path.join(out, "validation.json"), doc, indent=1, default=float)
+    files.write_text(os.path.join(out, "validation.md"), validation_table(doc))
     return doc
 
 

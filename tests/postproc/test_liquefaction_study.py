@@ -155,6 +155,10 @@ def test_band_porosity_of_a_square_lattice_is_one_minus_pi_over_4():
     assert lifted == pytest.approx(1 - (2 * np.pi - cap) / 8, rel=1e-9)  # per column: 2 r x 4 r
 
 
+def _overlap(a, b):
+    return a.x0 + 1 < b.x1 and b.x0 + 1 < a.x1 and a.y0 + 1 < b.y1 and b.y0 + 1 < a.y1
+
+
 def test_depth_figure_draws_pressure_and_porosity_by_height(tmp_path):
     r = 1e-3
     snaps = [_square_box(6, 4, r), {**_square_box(6, 4, r, dz=-0.1 * r), "t": 0.01}]
@@ -163,3 +167,11 @@ def test_depth_figure_draws_pressure_and_porosity_by_height(tmp_path):
     fig = depth_figure(h, snaps, [[0.0, 4 * r], [4 * r, 10.0]], "square lattice")
     fig.savefig(tmp_path / "d.png")
     assert assert_drawn(str(tmp_path / "d.png")) is None
+    panels = [ax for ax in fig.axes if ax.get_title().endswith("by height")]
+    assert [ax.get_xlim() for ax in panels] == [(0.0, 10.0)] * 2  # both over the run's whole time
+    fig.canvas.draw()  # no colour bar, nor its label, on another panel or on the other's label
+    bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    assert [ax.get_xlabel().split(" [")[0] for ax in bars] == ["block-mean excess pore pressure U",
+                                                                "porosity change since t = 0"]
+    boxes = [ax.get_tightbbox() for ax in fig.axes]
+    assert not any(_overlap(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1:])

@@ -182,3 +182,32 @@ def test_figures_of_a_run_from_its_files(snaps, tmp_path):
     assert [os.path.basename(p) for p in written] == ["pressure_blocks.png", "history_panels.png", "snapshots.png"]
     for path in written:
         assert_drawn(path)
+
+
+def _overlap(a, b):
+    """Do two display-space boxes overlap (by more than a pixel each way)?"""
+    return a.x0 + 1 < b.x1 and b.x0 + 1 < a.x1 and a.y0 + 1 < b.y1 and b.y0 + 1 < a.y1
+
+
+@pytest.mark.parametrize("n, cols", [(3, 3), (4, 2), (5, 3), (6, 3)])
+def test_snapshot_panels_leave_the_fewest_cells_empty(snaps, n, cols):
+    many = [dict(s, t=np.float64(0.01 * k)) for k, s in enumerate((snaps * 2)[:n])]
+    fig = plots.snapshot_figure(many, "test")
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("t = ")]
+    assert len(panels) == n
+    assert len({round(ax.get_position().x0, 3) for ax in panels}) == cols
+
+
+def test_the_gap_note_lies_under_the_key_and_inside_the_saved_figure(tmp_path):
+    t = np.linspace(0, 0.01, 101)
+    gappy = np.where((t > 0.003) & (t < 0.005), np.nan, 100 * t / 0.01)
+    hist = {"t": t, **{f"U_block{k}": gappy * k for k in range(1, 7)}}
+    fig = plots.block_pressure_figure(hist, 2400.0, "test", [[1e-3 * k, 1e-3 * (k + 1)] for k in range(6)])
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    (note,) = [x for x in ax.texts if "no mean U" in x.get_text()]
+    key = ax.get_legend().get_window_extent()
+    assert not _overlap(note.get_window_extent(), key) and note.get_window_extent().y1 <= key.y0 + 1
+    path = tmp_path / "p.png"
+    plots.plot_block_pressures(hist, 2400.0, str(path), "test")
+    assert_drawn(str(path))

@@ -9,6 +9,7 @@ from scipy import stats
 
 from engines.seeds.biaxial.calibration import Calibration
 from engines.studies import biaxial_judged as bj
+from tests.figures import assert_drawn
 from tests.seeds.test_calibration import fake_run
 
 
@@ -134,5 +135,24 @@ def test_judged_part_with_its_calibration_round_trip_from_synthetic_runs(tmp_pat
     assert c["packings"] == 5 and c["m"] == pytest.approx(-0.3, rel=1e-3)
     assert c["kn_factor"] == pytest.approx(math.exp(math.log(1 + c["e50_half_width"]) / 0.3), rel=1e-3)
     assert "Calibration round trip" in table and "+10.0 %" in table and "fixes kn only within a factor" in table
-    assert (tmp_path / "fig_judged.png").stat().st_size > 10000
+    assert_drawn(str(tmp_path / "fig_judged.png"))
     assert Calibration.load(str(tmp_path / "judged_fit.json")).packings == [5, 5]
+
+
+def test_the_judged_figure_s_key_covers_no_panel(monkeypatch):
+    """docs/biaxial/fig_judged.png from its committed record: one key, under the three panels."""
+    import os
+
+    from engines import ROOT, files
+    from postproc.biaxial_plots import plot_judged
+    drawn = []
+    monkeypatch.setattr(files, "save_figure", lambda fig, path, **kw: drawn.append(fig))
+    plot_judged(json.load(open(os.path.join(ROOT, "docs", "biaxial", "judged.json"))), "unused.png")
+    (fig,) = drawn
+    fig.canvas.draw()
+    (key,) = fig.legends
+    assert [t.get_text() for t in key.get_texts()] == ["one packing", "paper", "model: mean, 95 % interval"]
+    box = key.get_window_extent()
+    for ax in fig.axes:
+        panel = ax.get_window_extent()
+        assert box.y1 <= panel.y0 or box.x1 <= panel.x0 or panel.x1 <= box.x0
