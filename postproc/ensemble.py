@@ -156,9 +156,17 @@ def differences(dirs, window):
     return rows
 
 
+def ensemble_dir(path):
+    """argparse type of an ensemble folder: ``path`` if it holds ensemble.json, else one line."""
+    if not os.path.isfile(os.path.join(path, "ensemble.json")):
+        raise argparse.ArgumentTypeError(f"{path}: not an ensemble folder (no ensemble.json; give the --out folder "
+                                         "of a run with --starts N)")
+    return path
+
+
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("dirs", nargs="+", help="ensemble folders (holding ensemble.json)")
+    ap.add_argument("dirs", nargs="+", type=ensemble_dir, help="ensemble folders (holding ensemble.json)")
     ap.add_argument("--compare", action="store_true", help="their spreads side by side (needs --figure)")
     ap.add_argument("--figure", help="the comparison's figure")
     ap.add_argument("--times", type=float, nargs="+", default=[0.002, 0.004, 0.006, 0.01], help="[s]")

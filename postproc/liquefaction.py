@@ -43,6 +43,7 @@ from postproc.run_files import (  # noqa: E402
     read_history,
     read_snapshot,
     read_summary,
+    run_dir,
     run_folders,
     snapshot_files,
 )
@@ -672,9 +673,21 @@ def reconstruction_figure(doc):
 
 
 if __name__ == "__main__":
-    import sys
-    args = sys.argv[1:]
-    if not args or args[0] == "--study" and len(args) != 2:
-        sys.exit("usage: python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...] | --study ROOT")
-    paths = study(args[1]) if args[0] == "--study" else [p for run in args for p in run_figures(run)]
+    import argparse
+    ap = argparse.ArgumentParser(prog="python3 -m postproc.liquefaction",
+                                 description="Redraw seismic runs' blocks.png and depth.png, or (--study ROOT) the "
+                                             "study of `make liquefaction`'s ensembles: summary.json, trends.md, "
+                                             "Fig. 40, 41, 46.")
+    what = ap.add_mutually_exclusive_group(required=True)
+    what.add_argument("runs", nargs="*", type=run_dir, metavar="RUN_DIR", default=[], help="a run's --out folder")
+    what.add_argument("--study", metavar="ROOT", help="the folder of make liquefaction (case1 ... case7)")
+    args = ap.parse_args()
+    if args.study:
+        found = [k for k in CASES if _case_runs(os.path.join(args.study, f"case{k}")) is not None]
+        if not found:
+            ap.error(f"--study {args.study}: no finished case (case1 ... case7 with their summary.json); "
+                     "run `make liquefaction` first")
+        paths = study(args.study)
+    else:
+        paths = [p for run in args.runs for p in run_figures(run)]
     print("\n".join(paths))

@@ -17,7 +17,7 @@ from matplotlib.patches import Circle, Patch  # noqa: E402
 
 from engines import files  # noqa: E402
 from engines.model.groups import GROUP_NAMES, WALL_NONE  # noqa: E402
-from postproc.run_files import read_history, read_snapshot, read_summary, snapshot_files  # noqa: E402,F401
+from postproc.run_files import read_history, read_snapshot, read_summary, run_dir, snapshot_files  # noqa: E402,F401
 
 GROUP_COLOURS = {code: "0.85" if code == WALL_NONE else "0.35" for code in GROUP_NAMES}  # particles light
 U_CMAP = "RdBu_r"           # diverging: blue suction, white U = 0, red excess pressure
@@ -319,8 +319,10 @@ def plot_packing(packing, path, title, flat_walls=()):
 
 
 if __name__ == "__main__":
-    import sys
-    if len(sys.argv) < 2:
-        sys.exit("usage: python3 -m postproc.plots RUN_DIR [RUN_DIR ...]  (redraws the run's figures)")
-    for run in sys.argv[1:]:
+    import argparse
+    ap = argparse.ArgumentParser(prog="python3 -m postproc.plots",
+                                 description="Redraw the figures of runs from their files (history.csv, snapshots, "
+                                             "summary.json): pressure_blocks.png, history_panels.png, snapshots.png.")
+    ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")
+    for run in ap.parse_args().runs:
         print("\n".join(figures_of_run(run)))

@@ -8,6 +8,17 @@ import re
 import numpy as np
 
 
+def run_dir(path):
+    """argparse type of a run folder argument: ``path`` if it holds a run's history.csv, else one line
+    saying what it is and what to give instead."""
+    import argparse
+    if not os.path.isdir(path):
+        raise argparse.ArgumentTypeError(f"{path}: no such folder (give the --out folder of a run)")
+    if not os.path.isfile(os.path.join(path, "history.csv")):
+        raise argparse.ArgumentTypeError(f"{path}: not a run folder (no history.csv; give the --out folder of a run)")
+    return path
+
+
 def read_history(path):
     """history.csv as {column: array}."""
     with open(path) as f:

@@ -24,7 +24,7 @@ from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
-from postproc.run_files import read_snapshot, snapshot_files
+from postproc.run_files import read_snapshot, run_dir, snapshot_files
 
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
 SERIES = ("discs", "forces", "pores")
@@ -242,8 +242,11 @@ def convert_run(run_dir, out_dir=None):
 
 
 if __name__ == "__main__":
-    import sys
-    if len(sys.argv) < 2:
-        sys.exit("usage: python3 -m postproc.vtk RUN_DIR [RUN_DIR ...]  (writes RUN_DIR/vtk/*.pvd)")
-    for run in sys.argv[1:]:
+    import argparse
+    ap = argparse.ArgumentParser(prog="python3 -m postproc.vtk",
+                                 description="Write a ParaView series of runs' snapshots into RUN_DIR/vtk/*.pvd.")
+    ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")
+    for run in ap.parse_args().runs:
+        if not snapshot_files(run):
+            ap.error(f"{run}: the run wrote no snapshot_*.npz (give [output] snapshot_times, or run with --vtk)")
         print(f"{run}: {len(convert_run(run).entries['discs'])} frames -> {os.path.join(run, 'vtk')}")
