@@ -8,7 +8,7 @@ import sys
 
 from engines import ROOT
 
-# each package imports only those before it (engines.ROOT, the root package, is open to all)
+# each package imports only those before it (the root package, engines.ROOT and engines.__version__, is open to all)
 ORDER = ["engines.files", "engines.model", "engines.compiled", "engines.reference", "packing", "engines.yade", "engines.seeds",
          "engines.studies", "postproc", "engines.run"]
 NO_YADE = ["engines.files", "engines.model", "engines.compiled", "engines.reference", "packing", "engines.studies", "postproc"]
@@ -55,7 +55,7 @@ def package(dotted):
     """The layer a dotted name belongs to: engines.<sub>, packing, postproc, yade, or None."""
     parts = dotted.split(".")
     if parts[0] == "engines":
-        return "engines" if len(parts) == 1 or parts[1] == "ROOT" else f"engines.{parts[1]}"
+        return "engines" if len(parts) == 1 or parts[1] in ("ROOT", "__version__") else f"engines.{parts[1]}"
     return parts[0] if parts[0] in ("packing", "postproc", "yade") else None
 
 
