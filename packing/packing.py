@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from engines import files
 from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
 from engines.model.pores import check_discs
 
@@ -145,8 +146,9 @@ class Packing:
     def save(self, path):
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         data = np.column_stack([self.xz, self.r, self.group, self.density_factor])
-        np.savetxt(path, data, delimiter=",", header="x_m,z_m,r_m,group,density_factor", comments="",
-                   fmt=["%.12e", "%.12e", "%.12e", "%d", "%.6g"])
+        with files.saved(path) as tmp:
+            np.savetxt(tmp, data, delimiter=",", header="x_m,z_m,r_m,group,density_factor", comments="",
+                       fmt=["%.12e", "%.12e", "%.12e", "%d", "%.6g"])
 
     @classmethod
     def load(cls, path):

@@ -2,6 +2,8 @@
 import numpy as np
 from scipy import stats
 
+from engines import files
+
 
 def lognormal_parameters(mean, std):
     """(lambda, zeta) of ln d from the mean and standard deviation of d (eq 54)."""
@@ -47,5 +49,5 @@ def plot_distribution(diameters, mean, std, d_min, d_max, path):
     ax.set_title(f"Diameter distribution (mean {mean*1e3:.2f} mm, s.d. {std*1e3:.2f} mm)")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    files.save_figure(fig, path, dpi=120)
     plt.close(fig)

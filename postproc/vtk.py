@@ -15,6 +15,7 @@ discs lie in the x-z plane, y = 0, in metres.
 ``convert_run(run_dir)`` turns the ``snapshot_*.npz`` files of a run into this series.
 Written with VTK's own XML writers (Debian's python3-vtk9).
 """
+import errno
 import os
 from xml.sax.saxutils import quoteattr
 
@@ -22,8 +23,10 @@ import numpy as np
 from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray
 from vtkmodules.vtkCommonCore import vtkPoints, vtkStringArray
 from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+from vtkmodules.vtkCommonMisc import vtkErrorCode
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
+from engines import files
 from postproc.run_files import read_snapshot, run_dir, snapshot_files
 
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
@@ -61,13 +64,18 @@ def _in_plane(v):
 
 
 def _write(poly, path):
+    """``poly`` as an XML PolyData file at ``path``, whole or not at all (engines.files)."""
     w = vtkXMLPolyDataWriter()
-    w.SetFileName(path)
     w.SetInputData(poly)
     w.SetDataModeToAppended()
     w.EncodeAppendedDataOff()  # raw binary: exact float64, small files
-    if not w.Write():
-        raise OSError(f"VTK could not write {path}")
+    with files.saved(path) as tmp:
+        w.SetFileName(tmp)
+        if not w.Write() or w.GetErrorCode():
+            code = w.GetErrorCode()
+            if code == vtkErrorCode.OutOfDiskSpaceError:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            raise OSError(f"VTK's writer failed ({vtkErrorCode.GetStringFromErrorCode(code)})")
 
 
 def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
@@ -136,8 +144,7 @@ def write_collection(path, entries):
              '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
     lines += [f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(f)}/>' for t, f in entries]
     lines += ["  </Collection>", "</VTKFile>", ""]
-    with open(path, "w") as fh:
-        fh.write("\n".join(lines))
+    files.write_text(path, "\n".join(lines))
 
 
 class VtkSeries:

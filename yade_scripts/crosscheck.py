@@ -13,6 +13,7 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+from engines import files
 from engines.run.crosscheck import crosscheck, precision_study
 from engines.run.preflight import announce_output
 
@@ -29,8 +30,7 @@ def main(argv):
         result = precision_study()
         print("precision:", json.dumps(result, indent=1), flush=True)
         os.makedirs(args.out, exist_ok=True)
-        with open(os.path.join(args.out, "precision.json"), "w") as f:
-            json.dump(result, f, indent=1)
+        files.write_json(os.path.join(args.out, "precision.json"), result)
         return 0
     from engines.yade.coupling import simulate  # needs YADE: run under `yade -n -x`
     try:

@@ -10,7 +10,6 @@ Writes {case: {k_scale: {"t": [...], "U_low": [...], "tau": [...]}}}: the mean U
 blocks 1-4 [N/m] at the times t [s], and the three slowest drainage time constants of the network
 [s] (``time_constants``), to set against the input period (0.02 s) and the run (0.18 s).
 """
-import json
 import os
 import sys
 
@@ -19,6 +18,7 @@ import numpy as np
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+from engines import files
 from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
 from engines.model.pore_dem import water_model
@@ -84,8 +84,7 @@ def main(argv):
                   ", ".join(f"{u:.1f} at {t:g} s" for t, u in zip(TIMES, U)) +
                   "; slowest time constants " + ", ".join(f"{x:.3g}" for x in tau) + " s", flush=True)
     os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-    with open(args.json, "w") as f:
-        json.dump(result, f, indent=1)
+    files.write_json(args.json, result)
 
 
 if __name__ == "__main__":

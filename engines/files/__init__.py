@@ -2,11 +2,13 @@
 
 ``write_bytes``, ``write_text``, ``write_json``, ``savez``, ``save_figure`` and ``saved`` (a context for writers that
 want a path, e.g. matplotlib's savefig) write to a temporary file in the target's folder (named
-``.NAME.tmp-*``), flush and fsync it, then rename it over the target, so a reader never sees a half
-file and a kill at any moment leaves the old file or the new one. A failed write (a full disk, a
-missing folder, no permission) removes the temporary file and raises ``WriteError``, one line
-naming the path and the cause. ``remove_stale_temporaries(folder)`` removes what a killed process
-left (the next start of a run calls it).
+``.NAME.tmp-*`` and ending in NAME's extension, so that a writer going by the name it is given, as
+numpy.save and VTK's XML writers do, writes there what it would write to NAME), flush and fsync it,
+then rename it over the target, so a reader never sees a half file and a kill at any moment leaves
+the old file or the new one. A failed write (a full disk, a missing folder, no permission) removes
+the temporary file and raises ``WriteError``, one line naming the path and the cause.
+``remove_stale_temporaries(folder)`` removes what a killed process left (the next start of a run
+calls it).
 """
 import contextlib
 import errno
@@ -39,7 +41,7 @@ def saved(path, mode=0o666):
     folder = os.path.dirname(os.path.abspath(path))
     base = os.path.basename(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{base}{TEMP_MARK}", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{base}{TEMP_MARK}", suffix=os.path.splitext(base)[1], dir=folder)
     except OSError as e:
         raise WriteError(f"cannot write {path}: {_reason(e)}") from None
     os.close(fd)

@@ -17,7 +17,6 @@ underscores: phi_e, sigma3, seed, ...; readParamsFromTable); the output director
 table's ``out`` column, else the sweep runner's job directory, else out/biaxial-batch/DESCRIPTION.
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -25,6 +24,7 @@ import time
 
 import numpy as np
 
+from engines import files
 from engines.run.command_line import batch_out
 from engines.run.preflight import ArgumentParser, number, output_dir
 from engines.seeds.biaxial.cem_contact import ROTATIONS
@@ -147,8 +147,9 @@ def write_outputs(out, args, contact, blocks, results, wall_s, error=None):
         c = res.curve
         rows.append(np.column_stack([np.full(len(c.strain), c.sigma3), c.strain, c.deviator, c.sigma1, c.sigma1_bottom,
                                      c.sigma3_applied, c.volumetric_strain]))
-    np.savetxt(os.path.join(out, "curves.csv"), np.vstack(rows), delimiter=",", comments="", fmt="%.8g",
-               header="sigma3_pa,axial_strain,deviator_pa,sigma1_pa,sigma1_bottom_pa,sigma3_applied_pa,volumetric_strain")
+    with files.saved(os.path.join(out, "curves.csv")) as tmp:
+        np.savetxt(tmp, np.vstack(rows), delimiter=",", comments="", fmt="%.8g",
+                   header="sigma3_pa,axial_strain,deviator_pa,sigma1_pa,sigma1_bottom_pa,sigma3_applied_pa,volumetric_strain")
     per = [res.summary() for res in results]
     s3 = np.array([p["sigma3_pa"] for p in per])
     s1 = np.array([p["sigma1_at_peak_pa"] for p in per])
@@ -173,8 +174,7 @@ def write_outputs(out, args, contact, blocks, results, wall_s, error=None):
     }
     if error:
         summary["error"] = error
-    with open(os.path.join(out, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    files.write_json(os.path.join(out, "summary.json"), summary)
     plot_deviator_strain([res.curve for res in results], os.path.join(out, "deviator_strain.png"), title)
     if len(per) >= 1:
         plot_mohr(s3, s1, phi, c_star, os.path.join(out, "mohr.png"), title)

@@ -9,6 +9,7 @@ import os
 
 import numpy as np
 
+from engines import files
 from engines import ROOT
 from engines.run.sweep import Job, is_done, read_record, run_sweep
 from engines.seeds.biaxial.cem_contact import TABLE2_DT
@@ -320,8 +321,7 @@ def run_study(out, parts, seeds, workers=2, scheduler=None, estimate_only=False,
     except OSError:
         pass
     study_figures(out, main_res, sens)
-    with open(os.path.join(out, "study.json"), "w") as f:
-        json.dump(study, f, indent=1)
+    files.write_json(os.path.join(out, "study.json"), study)
     return write_table(study, os.path.join(out, "table.md"))
 
 
@@ -356,6 +356,5 @@ def calibrate(cal, inverted, target, fit, out, seeds, workers=2, scheduler=None,
             print(f"verified: phi* = {v['phi_star_deg']['mean']:.2f} deg ({100 * v['phi_star_error']:+.1f} %), "
                   f"E50 at {sigma3:g} Pa = {v['e50_pa']['mean']:.4g} Pa ({100 * v['e50_error']:+.1f} %)")
     os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "calibration.json"), "w") as f:
-        json.dump(record, f, indent=1)
+    files.write_json(os.path.join(out, "calibration.json"), record)
     return record

@@ -31,13 +31,13 @@ in float32, float64 and longdouble, a measurement reported in DIR/precision.json
 every case (or some) against the YADE path and writes DIR/crosscheck.json. No YADE import here:
 the YADE side is given (engines.yade.coupling.simulate).
 """
-import json
 import os
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from engines import files
 from engines.model.flat_walls import as_tables
 from engines.model.pore_dem import moving_flat_walls, scene_flat_walls
 from engines.reference.model import mesh_void_fraction, simulate_reference
@@ -611,8 +611,7 @@ def precision_study(ref_simulate=simulate_reference, build=None, n_steps=2000, r
 def write_json(result, out_dir):
     os.makedirs(out_dir, exist_ok=True)
     path = os.path.join(out_dir, "crosscheck.json")
-    with open(path, "w") as f:
-        json.dump(result, f, indent=1)
+    files.write_json(path, result)
     return path
 
 

@@ -2,12 +2,12 @@
 for a short window inside YADE against its reference, classified; OUT/map.json and the figure
 (postproc.stability).
 """
-import json
 import os
 import time
 
 import numpy as np
 
+from engines import files
 from engines.studies import stability as st
 from engines.studies.stability import DT_WINDOW, REF_DIVISOR, map_points, resolved
 
@@ -85,6 +85,5 @@ def run_map(out, window_s):
     doc = {"points": points, "reference_divisor": REF_DIVISOR,
            "criteria": {"ke_factor": st.KE_FACTOR, "ke_slack": st.KE_SLACK, "escape_radii": st.ESCAPE_RADII,
                         "balance_tol": st.BALANCE_TOL}}
-    with open(os.path.join(out, "map.json"), "w") as f:
-        json.dump(doc, f, indent=1, default=float)
+    files.write_json(os.path.join(out, "map.json"), doc, default=float)
     return points, figure(points, os.path.join(out, "map.png"))

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from engines import files
 from engines import ROOT
 from engines.studies.ensemble import perturbed
 from engines.studies.tradeoffs import (
@@ -141,8 +142,7 @@ def run_point(case, sets, window, record, n_starts, out_dir, perturbation):
     over.setdefault("numerics", {})["duration"] = window
     result = run_setting(case, over, window, record, n_starts, out_dir, perturbation)
     os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "result.json"), "w") as f:
-        json.dump(result, f)
+    files.write_json(os.path.join(out_dir, "result.json"), result, indent=None)
     return over, result
 
 
@@ -167,8 +167,7 @@ def measure_speed(case, settings, repeats, out):
     doc = {"case": case, "window_s": window_of(case), "repeats": repeats, "cpu_s": cpu, "median_cpu_s": med,
            "speedup": {p: med[settings[0]] / m for p, m in med.items()}}
     os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "speed.json"), "w") as f:
-        json.dump(doc, f, indent=1)
+    files.write_json(os.path.join(out, "speed.json"), doc)
     return doc
 
 

@@ -6,11 +6,11 @@ t, engines.studies.ensemble.statistics) beside the paper and the judged toleranc
 curves they give (Calibration, with the packing-to-packing scatter of E50 and φ*).
 No YADE: engines.run.biaxial_study runs the jobs, postproc.biaxial_plots.plot_judged draws the figure.
 """
-import json
 import math
 
 import numpy as np
 
+from engines import files
 from engines.seeds.biaxial.calibration import Calibration, fit_eq4
 from engines.seeds.biaxial.specimen import mohr_coulomb_fit
 from engines.seeds.biaxial.study import KN, KS, PAPER, calibration_lines, job_status, read_run
@@ -166,8 +166,7 @@ def _ci(st, fmt="{:.1f}", unit=""):
 
 def write_judged(res, json_path, md_path):
     """judged.json and the markdown tables of analyse_judged's record; returns the markdown."""
-    with open(json_path, "w") as f:
-        json.dump(res, f, indent=1)
+    files.write_json(json_path, res)
     paper_q = PAPER["peak_deviator_200_pa"]
     lines = [f"Judged points (1000 discs, σ3 = {', '.join(f'{v:g}' for v in JUDGED_SIGMA3)} Pa from one placement per "
              f"packing, 6 % strain; mean [{100 * res['confidence']:g} % interval, Student's t] over packings"
@@ -205,8 +204,7 @@ def write_judged(res, json_path, md_path):
     if t:
         lines += ["", f"Cost: {t['jobs']} jobs, {t['cpu_min']:.1f} CPU minutes recorded ({t['jobs_with_cpu']} jobs), "
                   f"{t['wall_min']:.1f} wall minutes."]
-    with open(md_path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    files.write_text(md_path, "\n".join(lines) + "\n")
     return "\n".join(lines)
 
 

@@ -74,3 +74,12 @@ def test_save_figure_writes_the_format_of_the_extension(tmp_path):
     assert (tmp_path / "f.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert b"<svg" in (tmp_path / "f.svg").read_bytes()[:500]
     assert sorted(os.listdir(tmp_path)) == ["f.png", "f.svg"]
+
+
+def test_the_temporary_keeps_the_extension_for_writers_that_go_by_it(tmp_path):
+    """numpy.save appends .npy to a name without it (VTK's writers drop a trailing '_'): given the
+    temporary, such a writer must write the temporary itself."""
+    with files.saved(str(tmp_path / "a.npy")) as tmp:
+        np.save(tmp, np.arange(3.0))
+    assert np.load(tmp_path / "a.npy").tolist() == [0.0, 1.0, 2.0]
+    assert os.listdir(tmp_path) == ["a.npy"]

@@ -19,6 +19,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from engines import files
+
 
 def fit_eq4(sigma3, kn, e50):
     """(A, m) of eq 4 by least squares of log(E50/σ3) on log(σ3/kn). Arrays [Pa], [Pa/m], [Pa]."""
@@ -89,8 +91,7 @@ class Calibration:
         return phi_e, float(eq6_kn(e50, sigma3, A, m))
 
     def save(self, path):
-        with open(path, "w") as f:
-            json.dump(asdict(self), f, indent=1)
+        files.write_json(path, asdict(self))
 
     @classmethod
     def load(cls, path):

@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from engines import files
 from packing.packing import Packing
 
 TABLE1_RADII = (1.4e-3, 2.8e-3, 3.2e-3)  # m
@@ -87,10 +88,10 @@ class PeriodicBlock:
     def save(self, path):
         """CSV of x, z, r beside a JSON of cell, sigma and info (``path`` without extension)."""
         os.makedirs(os.path.dirname(os.path.abspath(path)) or ".", exist_ok=True)
-        np.savetxt(path + ".csv", np.column_stack([self.xz, self.r]), delimiter=",", header="x_m,z_m,r_m",
-                   comments="", fmt="%.15e")
-        with open(path + ".json", "w") as f:
-            json.dump({"cell_m": list(self.cell), "sigma_pa": list(self.sigma), "info": self.info}, f, indent=1)
+        with files.saved(path + ".csv") as tmp:
+            np.savetxt(tmp, np.column_stack([self.xz, self.r]), delimiter=",", header="x_m,z_m,r_m",
+                       comments="", fmt="%.15e")
+        files.write_json(path + ".json", {"cell_m": list(self.cell), "sigma_pa": list(self.sigma), "info": self.info})
 
     @classmethod
     def load(cls, path):

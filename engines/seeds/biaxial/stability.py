@@ -8,11 +8,11 @@ falls towards 1e-5 and the stresses stop changing over the second 0.1 s); an uns
 (the ratio stays above 0.01, the stresses keep drifting) or blows up. yade_scripts/biaxial_stability.py
 is the command line.
 """
-import json
 import os
 
 import numpy as np
 
+from engines import files
 from engines.seeds.biaxial.cem_contact import CemContact, add_discs, disc_mass, pair_constants, stable_dt, yade_engines
 from engines.seeds.biaxial.periodic import yade_cell_stress
 
@@ -71,9 +71,9 @@ def run_cases(block, name, out):
         print(f"f_w {fw:g}, kn {kn:.0e}, ks/kn {ks:g}, dt {dt:.2e} s: unbalanced {unbalanced:.2g}, "
               f"stress change over the last 0.1 s {100 * change:.2f} % -> {r['outcome']}", flush=True)
     os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "stability.json"), "w") as f:
-        json.dump({"block": name, "n_discs": len(block.r), "rest_time_s": REST_TIME, "at_rest_below": AT_REST,
-                   "cases": rows}, f, indent=1)
+    files.write_json(os.path.join(out, "stability.json"),
+                     {"block": name, "n_discs": len(block.r), "rest_time_s": REST_TIME, "at_rest_below": AT_REST,
+                      "cases": rows})
 
 
 def network_dt_limit(xz, r, cell, contact, rel_tol=1e-4):

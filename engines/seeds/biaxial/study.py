@@ -10,6 +10,7 @@ import os
 
 import numpy as np
 
+from engines import files
 from engines.seeds.biaxial.calibration import Calibration, eq4_e50, fit_eq4
 from engines.seeds.biaxial.cem_contact import TABLE2_DT
 from engines.seeds.biaxial.specimen import Curve, mohr_coulomb_fit
@@ -274,8 +275,7 @@ def analyse_hypotheses(runs, seeds):
 
 def write_hypotheses(res, json_path, md_path):
     """hypotheses.json and the markdown table of analyse_hypotheses; returns the table."""
-    with open(json_path, "w") as f:
-        json.dump(res, f, indent=1)
+    files.write_json(json_path, res)
     lines = [f"Hypotheses (1000 discs, σ3 = {', '.join(f'{v:g}' for v in SIGMA3)} Pa, one packing per σ3 and seed, "
              f"{HYP_STRAIN:g} % strain; mean ± s.d. over packings; {res['jobs_done']} of {res['jobs_total']} jobs done"
              + (f", {len(res['jobs_failed'])} failed" if res["jobs_failed"] else "") + "):", "",
@@ -290,8 +290,7 @@ def write_hypotheses(res, json_path, md_path):
                      f"{_ms(r['size_ratio'], '{:.2f}')} | {r['verdict']} |")
     lines += ["", f"Paper: φ* = {PAPER['phi_star_deg'][15.0]}° at φe = 15°; peak q at 200 Pa ≈ "
               + ", ".join(f"{v:g} Pa (φe = {k:g}°)" for k, v in PAPER["peak_deviator_200_pa"].items()) + "."]
-    with open(md_path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    files.write_text(md_path, "\n".join(lines) + "\n")
     return "\n".join(lines)
 
 
@@ -406,6 +405,5 @@ def write_table(study, path):
         lines += ["", f"Cost: {t['jobs']} jobs, {t['cpu_min']:.1f} CPU minutes recorded ({t['jobs_with_cpu']} jobs), "
                   f"{t['wall_min']:.1f} wall minutes; {_ms(t['ms_cpu_per_step_1000_discs'], '{:.2f}')} CPU ms per "
                   "1000-disc step."]
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    files.write_text(path, "\n".join(lines) + "\n")
     return "\n".join(lines)

@@ -29,12 +29,12 @@ settlement over the 12 m height. Outputs are in t/m² as in the paper (SI inside
 
 postproc/particle_potential.py draws the figures; yade_scripts/particle_potential.py is the command line.
 """
-import json
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
+from engines import files
 from engines.seeds.particle_potential.model import (
     TONNE_FORCE,
     Kind,
@@ -249,8 +249,7 @@ def run_one(alpha, out, *, C, Am, load_max, dload, disp_max, ddisp, figures=None
               "spacing_m": SPACING, "height_m": HEIGHT, "half_width_m": runs["loaded"].half_width,
               "dload_t_m2": dload, "ddisp_m": ddisp, "trust_box_m": SolverSettings().max_step}
     summary = summarise(runs, params)
-    with open(os.path.join(out, "summary.json"), "w") as fh:
-        json.dump(summary, fh, indent=2)
+    files.write_json(os.path.join(out, "summary.json"), summary, indent=2)
     if figures:
         figures(runs, summary, out)
     return summary
@@ -261,6 +260,5 @@ def run_study(alphas, out, figures=None, **options):
     returns (the summaries, the comparison table)."""
     summaries = [run_one(alpha, out, figures=figures, **options) for alpha in alphas]
     table = comparison_table(summaries)
-    with open(os.path.join(out, "comparison.md"), "w") as fh:
-        fh.write(table + "\n")
+    files.write_text(os.path.join(out, "comparison.md"), table + "\n")
     return summaries, table

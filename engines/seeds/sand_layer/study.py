@@ -3,12 +3,12 @@ load on the surface centre (LOAD_WIDTH central columns under LOAD_STRESS), their
 stress and settlement (mechanics), and the numbers of summary.json. Plain NumPy/SciPy, no YADE;
 postproc/sand_layer.py draws the figures, yade_scripts/sand_layer.py is the command line.
 """
-import json
 import os
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from engines import files
 from engines.seeds.sand_layer.layer import (
     GrainSizeDistribution,
     SandLayerSettings,
@@ -138,8 +138,7 @@ def write_outputs(study, out, figures=None):
     draws the four); returns the summary."""
     os.makedirs(out, exist_ok=True)
     result = summary(study)
-    with open(os.path.join(out, "summary.json"), "w") as f:
-        json.dump(result, f, indent=1)
+    files.write_json(os.path.join(out, "summary.json"), result)
     if figures:
         figures(study, out)
     return result
