@@ -15,7 +15,7 @@ from engines import ROOT
 from engines.model.contact import CONTACT_FIELDS, ContactSettings
 from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, check, describe_check
 from engines.model.pore_water import WATER_FIELDS, WaterSettings
-from engines.model.time_step import VALIDATED_FACTOR
+from engines.studies.tradeoffs import VALIDATED_FACTOR
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
 
@@ -89,13 +89,14 @@ SCHEMA = {
         "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
     },
     "numerics": {
-        "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.model.time_step)"),
+        "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.model.start)"),
         "duration": (float, 0.06, POS, "simulated time [s]"),
         "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2)); with rebuild_distance > 0 an upper bound"),
         "rebuild_distance": (float, 0.0, (0.0, math.inf), "> 0: the pores are also rebuilt as soon as a disc has moved more than this [m] since the last build (WaterEngine's default in users' scripts: 0.25 l_m, docs/ENGINE.md); 0: off, every rebuild_interval steps as the paper does"),
         "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
         "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
-        # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
+        # the automatic time step (engines.model.start; dt = "auto") and its safety factor (validated:
+        # engines.studies.tradeoffs)
         "dt_auto_factor": (float, VALIDATED_FACTOR, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),
     },
     "output": {

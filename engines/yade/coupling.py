@@ -55,6 +55,7 @@ from engines.model import pores as pg
 from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
 from engines.model.pore_water import buoyancy
+from engines.model.start import Start
 from engines.reference.trajectory import Trajectory
 from engines.yade import yade_io
 from engines.yade.paper_law_engine import PaperLawEngine
@@ -154,19 +155,22 @@ def wall_boxes(walls, packing, material):
 class YadeCoupling:
     """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
     between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
-    or the water engine's model by compiled kernels, else their NumPy classes (engines.model)."""
+    or the water engine's model by compiled kernels, else their NumPy classes (engines.model).
+    ``prepared``: the Start of scene on packing (engines.model.start: the walls, the discs to move,
+    their masses; preflight's limits are those of its pores), made here if None."""
 
-    def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
+    def __init__(self, scene, packing, newton_damping=0.0, compiled=True, prepared=None):
         self.scene = scene
-        self.flat_walls = pore_dem.scene_flat_walls(scene, packing)  # {wall code: FlatWall}, {} with wall discs
+        prepared = Start(scene, packing) if prepared is None else prepared
+        self.flat_walls = prepared.flat_walls  # {wall code: FlatWall}, {} with wall discs
         # the blocks and the porosity window in the box of the flat walls, else of the wall discs' inner faces
-        faces = {code: wall.position for code, wall in self.flat_walls.items()} or packing.inner_faces()
+        faces = prepared.faces
         self.block_bounds = packing.block_bounds(scene.output.block_z, faces.get(pg.WALL_BOTTOM))
         self.window = pore_dem.porosity_window(scene, packing, faces)
-        self.packing = packing = packing.particles() if self.flat_walls else packing
+        self.packing = packing = prepared.packing
         self.wall_ids = {}  # {wall code: YADE body id} of the flat walls
         self.law = scene.contact.law
-        self.mass, self.inertia = disc_masses(scene, packing)
+        self.mass, self.inertia = prepared.mass, prepared.inertia
         g = scene.material.g
         wet = scene.water.enabled
         self.core = self.water_engine = None

@@ -13,7 +13,7 @@ from engines import ROOT
 from engines.compiled.pore_dem import PoreDEM
 from engines.model.limits import DarcyStabilityError, critical_time_step
 from engines.model.pore_dem import disc_masses
-from engines.model.time_step import limits
+from engines.model.start import Start
 from engines.run import scene as scenes
 from engines.run.preflight import (RUN_OUTPUTS, InputError, check_fresh_output, check_output_dir, check_packing,
                                    max_overlap, number, preflight)
@@ -151,7 +151,7 @@ def test_eq52_check_agrees_with_the_engine(packing):
 def test_darcy_check_agrees_with_the_engine_at_step_0(packing):
     """Just below the start limit the engine's first water step passes, just above it raises."""
     sc = scenes.preset("quicksand_case1", {"water": {"k1": 1e5, "substep": False}})  # the strict mode
-    limit = limits(sc, packing)["darcy_check"] * sc.numerics.water_interval
+    limit = Start(sc, packing).limits["darcy_check"] * sc.numerics.water_interval
     assert 1e-6 < limit < 1e-5
     for dt, ok in ((0.999 * limit, True), (1.001 * limit, False)):
         s = sc.with_overrides({"numerics": {"dt": dt}})
