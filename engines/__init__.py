@@ -54,9 +54,12 @@ Where to add ...
     coupling (yade/coupling.py) measured at the step.
   a scene option: a constant of the contact law or of the water goes into CONTACT_FIELDS
     (model/contact.py) or WATER_FIELDS (model/pore_water.py), which make both the settings class
-    and the scene's table; any other into SCHEMA in run/scene.py (field, unit, default, range:
-    model/fields.py validates both), read where it is used (yade/coupling.py, run/runner.py);
-    a stability limit into model/limits.py; run/preflight.py if it needs a check before the run.
+    and the scene's table; another option the model reads into its table's field list in
+    model/settings.py (walls, material, contact, water, loading, numerics, output: one typed
+    dataclass each, made by model/fields.py, which checks each value once as the table is made);
+    one only the run layer reads ([scene], [packing]) into SCHEMA in run/scene.py. The model is
+    given the typed Settings (a validated scene's ``settings``), never the scene itself; a stability
+    limit goes into model/limits.py; run/preflight.py if it needs a check before the run.
 """
 import os
 

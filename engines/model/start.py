@@ -1,9 +1,10 @@
 """The start of a run, computed once: the walls, the discs the engines move, the pores at the start,
 the stability limits and the time step. No YADE.
 
-``Start(scene, packing)`` is handed to preflight (engines.run.preflight), to ``dt = "auto"`` and to
-the engines (engines.yade.coupling.YadeCoupling, engines.run.runner.run_scene), so that the limits a
-user is told are those of the network that runs:
+``Start(settings, packing)`` (settings: engines.model.settings.Settings, a validated scene's
+``settings``) is handed to preflight (engines.run.preflight), to ``dt = "auto"`` and to the engines
+(engines.yade.coupling.YadeCoupling, engines.run.runner.run_scene), so that the limits a user is told
+are those of the network that runs:
 
 * ``flat_walls``: {wall code: FlatWall} of [walls] kind = "flat" (engines.model.pore_dem.scene_flat_walls),
   {} with wall discs; ``faces``: {wall code: position [m]} of the box (the flat walls', else the wall
@@ -16,8 +17,8 @@ user is told are those of the network that runs:
   [loading] side_walls = "springs"), water stiffness, darcy (2 / lambda_max from eigsh, divided by
   water_interval since the water step is water_interval x dt) and darcy_check (the engines' Gershgorin
   check of the water step, per DEM step);
-* ``scene``: the scene with its time step: itself for a numeric dt, for dt = "auto" a copy with the
-  chosen dt (``auto``: dt, the binding limit's name, the sub-steps per water step at the start).
+* ``settings``: the settings with their time step: ``given`` for a numeric dt, for dt = "auto" a copy
+  with the chosen dt (``auto``: dt, the binding limit's name, the sub-steps per water step at the start).
 
 dt = "auto": with [water] substep = true (the default) the Darcy limits do not bound dt: dt =
 dt_auto_factor x min(contact, ties, water stiffness), the water is sub-stepped where a water step
@@ -39,18 +40,18 @@ AUTO = "auto"
 
 
 class Start:
-    """The start of a run of ``scene`` on ``packing`` (its wall discs included): see the module
+    """The start of a run of ``settings`` on ``packing`` (its wall discs included): see the module
     docstring. The pores, limits and dt = "auto" are computed on first use, once."""
 
-    def __init__(self, scene, packing):
-        self.given = scene
-        self.flat_walls = scene_flat_walls(scene, packing)
+    def __init__(self, settings, packing):
+        self.given = settings
+        self.flat_walls = scene_flat_walls(settings, packing)
         self.faces = {code: w.position for code, w in self.flat_walls.items()} or packing.inner_faces()
         self.full_packing = packing
         self.packing = packing.particles() if self.flat_walls else packing
-        self.mass, self.inertia = disc_masses(scene, self.packing)
-        self.ties = side_wall_ties(scene, self.packing)
-        self._pores = self._limits = self._auto = self._scene = None
+        self.mass, self.inertia = disc_masses(settings, self.packing)
+        self.ties = side_wall_ties(settings, self.packing)
+        self._pores = self._limits = self._auto = None
 
     @property
     def pores(self):
@@ -76,55 +77,49 @@ class Start:
         return self._auto
 
     @property
-    def scene(self):
-        """The scene with its time step: ``given`` itself for a numeric dt, else a copy whose dt is
-        ``auto``'s ("auto" stays the recorded choice in ``overrides``)."""
-        if self.auto is None:
-            return self.given
-        if self._scene is None:
-            self._scene = self.given.with_overrides({"numerics": {"dt": self.auto[0]}})
-            self._scene.overrides = self.given.overrides
-        return self._scene
+    def settings(self):
+        """The settings with their time step: ``given`` for a numeric dt, else with ``auto``'s."""
+        return self.given if self.auto is None else self.given.with_dt(self.auto[0])
 
     def check(self):
-        """``check_start`` of the scene with its time step."""
-        check_start(self.scene, self.packing, self.mass, self.ties, self.limits)
+        """``check_start`` of the settings with their time step."""
+        check_start(self.settings, self.packing, self.mass, self.ties, self.limits)
 
 
-def start_pores(scene, packing, flat_walls):
+def start_pores(settings, packing, flat_walls):
     """(network, measures, PoreWater) of the pores of ``packing`` (the discs the engines move) and
     the FlatWalls {code: FlatWall} at the start (W = A), built as WaterModel builds its first."""
     walls = tuple(flat_walls.values())
     vertices = fw.WallVertices(walls, len(packing.r)) if walls else ()
-    net = pg.build_pores(packing.xz, packing.r, eps_m=scene.contact.eps_m, l_m=scene.water.l_m, walls=packing.group,
+    net = pg.build_pores(packing.xz, packing.r, eps_m=settings.contact.eps_m, l_m=settings.water.l_m, walls=packing.group,
                          flat_walls=vertices)
     m = pg.measure(net, packing.xz, packing.r)
-    return net, m, PoreWater(net, m.void_area, scene.water_settings())
+    return net, m, PoreWater(net, m.void_area, settings.water_settings())
 
 
-def limits(scene, packing, mass, ties, pores):
+def limits(settings, packing, mass, ties, pores):
     """{name: limit [s]} per DEM step (module docstring) of the discs of ``packing`` with masses
     ``mass``, the ties (or None) and the pores (``start_pores``, or None for a dry scene)."""
     mob = packing.mobile
-    out = {"contact": lim.critical_time_step(mass[mob], scene.contact.kn)}
+    out = {"contact": lim.critical_time_step(mass[mob], settings.contact.kn)}
     if ties is not None:
         out["ties"] = lim.tie_limit(ties, mass)
     if pores is not None:
         net, m, water = pores
-        M = scene.numerics.water_interval
-        out["water_stiffness"] = lim.water_stiffness_limit(net, m.void_area, packing.r, scene.water.E_w, mass, mob)
+        M = settings.numerics.water_interval
+        out["water_stiffness"] = lim.water_stiffness_limit(net, m.void_area, packing.r, settings.water.E_w, mass, mob)
         out["darcy"] = lim.darcy_eigen_limit(water, m.void_area, m.link_contact) / M
         out["darcy_check"] = water.darcy_limit(m.void_area, m.link_contact) / M
     return out
 
 
-def check_start(scene, packing, mass, ties, lims):
-    """Refuse (ValueError, one line naming the field and the limit) a scene whose numeric dt is
+def check_start(settings, packing, mass, ties, lims):
+    """Refuse (ValueError, one line naming the field and the limit) settings whose numeric dt is
     above a limit at its start (``lims``, of ``limits``): eq 52 x dt_safety, the ties, the water
     stiffness, and a water step water_interval x dt above the Darcy check without [water] substep,
     or needing more than [water] max_substeps sub-steps with it."""
-    num, w = scene.numerics, scene.water
-    lim.check_contact(num.dt, num.dt_safety, mass[packing.mobile], scene.contact.kn)
+    num, w = settings.numerics, settings.water
+    lim.check_contact(num.dt, num.dt_safety, mass[packing.mobile], settings.contact.kn)
     lim.check_ties(num.dt, ties, mass)
     if not w.enabled:
         return

@@ -198,7 +198,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             else:
                 if args.start is not None:
                     packing = perturbed(packing, args.start, ensemble.size_of(args))
-                prepared = Start(sc, packing)  # the one start: preflight checks what the run runs on
+                prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
                 notes = preflight(sc, packing, args.out, prepared)
             for note in notes:
                 print(note)

@@ -150,7 +150,7 @@ def check_record(scene):
         return
     from engines.model.ground_motion import input_acceleration
     try:
-        input_acceleration(scene)
+        input_acceleration(scene.settings)
     except ValueError as e:
         raise InputError(str(e)) from None
 
@@ -163,8 +163,8 @@ def preflight(scene, packing, out_dir, prepared=None):
     a dt = "auto" is checked as it will be chosen."""
     if prepared is None:
         from engines.model.start import Start
-        prepared = Start(scene, packing)
-    scene = prepared.scene
+        prepared = Start(scene.settings, packing)
+    scene = timed(scene, prepared)
     check_output_dir(out_dir)
     check_duration(scene)
     check_record(scene)
@@ -192,6 +192,16 @@ def describe_auto_dt(dt, lims, name, n_sub, factor):
                  f"{lims['darcy_check']:.3g} s per DEM step); each costs about {lim.SUBSTEP_COST:.0%} of a water step, "
                  f"so the water costs about {lim.substep_cost(n_sub):.2g}x a water step without sub-steps")
     return text
+
+
+def timed(scene, prepared):
+    """``scene`` with the time step of its Start ``prepared``: itself for a numeric dt, for dt =
+    "auto" a copy with the chosen dt ("auto" stays the recorded choice in ``overrides``)."""
+    if prepared.auto is None:
+        return scene
+    out = scene.with_overrides({"numerics": {"dt": prepared.auto[0]}})
+    out.overrides = scene.overrides
+    return out
 
 
 def announce_dt(prepared, log=print):

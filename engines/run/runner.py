@@ -30,7 +30,7 @@ from yade import O
 from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
 from engines.model.start import Start
-from engines.run.preflight import announce_dt
+from engines.run.preflight import announce_dt, timed
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
@@ -340,9 +340,9 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, 
     the history, summary and failure state. ``prepared``: the Start of scene on packing
     (engines.model.start) preflight checked, made here if None; it holds the time step of dt =
     "auto", whose choice is printed here (engines.run.preflight.announce_dt)."""
-    prepared = Start(scene, packing) if prepared is None else prepared
+    prepared = Start(scene.settings, packing) if prepared is None else prepared
     announce_dt(prepared)
-    scene = prepared.scene
+    scene = timed(scene, prepared)
     os.makedirs(out_dir, exist_ok=True)
     clear_outputs(out_dir)
     duration = scene.numerics.duration if duration is None else duration

@@ -20,7 +20,7 @@ def run_point(sc, packing, window, out_dir):
     from engines.run.preflight import InputError, preflight
     from engines.yade.coupling import YadeCoupling
 
-    prepared = Start(sc, packing)
+    prepared = Start(sc.settings, packing)
     try:
         preflight(sc, packing, out_dir, prepared)
     except InputError as e:
@@ -63,7 +63,7 @@ def run_map(out, window_s):
     for case, knob, value, over in map_points():
         sc0 = scenes.preset(case, {"output": {"progress_seconds": 1e9}})
         packing = scene_packing(sc0)
-        mass, _ = disc_masses(sc0, packing)
+        mass, _ = disc_masses(sc0.settings, packing)
         dt_crit = critical_time_step(mass[packing.mobile], sc0.contact.kn)
         window = DT_WINDOW if knob == "dt/dt_crit" else window_s
         if knob == "dt/dt_crit":

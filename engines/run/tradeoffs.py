@@ -75,15 +75,15 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
 
     from engines.model.start import Start
     from engines.run import scene as scenes
-    from engines.run.preflight import InputError, announce_dt, preflight
+    from engines.run.preflight import InputError, announce_dt, preflight, timed
     from engines.yade.coupling import YadeCoupling
     from engines.yade.deposition import scene_packing
 
     sc = scenes.preset(case, overrides)
     packing = scene_packing(sc)
-    first = Start(sc, packing)
+    first = Start(sc.settings, packing)
     announce_dt(first)
-    sc = first.scene
+    sc = timed(sc, first)
     dt = sc.numerics.dt
     every = max(1, int(round(record / dt)))
     n_steps = int(round(window / dt))
@@ -93,7 +93,7 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
         pk = perturbed(packing, s, PERTURBATION if perturbation is None else perturbation)
         rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
         try:
-            prepared = Start(sc, pk)
+            prepared = Start(sc.settings, pk)
             preflight(sc, pk, out_dir, prepared)
             c0, w0 = time.process_time(), time.time()
             cp = YadeCoupling(sc, pk, prepared=prepared)

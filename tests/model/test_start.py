@@ -20,9 +20,9 @@ def quicksand(kind):
 @pytest.mark.parametrize("kind", ["discs", "flat"])
 def test_the_start_pores_are_the_water_models_first(kind):
     sc, pk = quicksand(kind)
-    start = Start(sc, pk)
+    start = Start(sc.settings, pk)
     assert bool(start.flat_walls) == (kind == "flat") and start.packing.mobile.all() == (kind == "flat")
-    wm = pore_dem.water_model(sc, start.packing, WaterModel, tuple(start.flat_walls.values()))
+    wm = pore_dem.water_model(sc.settings, start.packing, WaterModel, tuple(start.flat_walls.values()))
     net, m, water = start.pores
     assert net.n_pores == wm.water.net.n_pores
     np.testing.assert_array_equal(net.tri, wm.water.net.tri)
@@ -33,7 +33,7 @@ def test_the_start_pores_are_the_water_models_first(kind):
 def test_flat_walls_change_the_start_pores_and_their_limits():
     """The flat walls close the pores at the particles' faces: fewer pores than with the wall discs,
     and a Darcy limit of their own (preflight used to report the wall discs' one for both)."""
-    discs, flat = (Start(*quicksand(kind)) for kind in ("discs", "flat"))
+    discs, flat = (Start(sc.settings, pk) for sc, pk in map(quicksand, ("discs", "flat")))
     assert flat.pores[0].n_pores < discs.pores[0].n_pores
     assert flat.limits["darcy"] != pytest.approx(discs.limits["darcy"], rel=0.05)
     assert flat.limits["contact"] == discs.limits["contact"]  # the same particles
@@ -41,7 +41,7 @@ def test_flat_walls_change_the_start_pores_and_their_limits():
 
 def test_each_part_is_computed_once(monkeypatch):
     sc, pk = quicksand("flat")
-    start = Start(sc.with_overrides({"numerics": {"dt": "auto"}}), pk)
+    start = Start(sc.with_overrides({"numerics": {"dt": "auto"}}).settings, pk)
     calls = []
     eigen = lim.darcy_eigen_limit
     monkeypatch.setattr(lim, "darcy_eigen_limit", lambda *a: calls.append(1) or eigen(*a))
@@ -49,12 +49,12 @@ def test_each_part_is_computed_once(monkeypatch):
     monkeypatch.setattr(pg, "build_pores", lambda *a, **k: calls.append(2) or built(*a, **k))
     for _ in range(3):
         start.check()
-        assert start.scene.numerics.dt == start.auto[0] == pytest.approx(sc.numerics.dt_auto_factor * start.limits["contact"])
+        assert start.settings.numerics.dt == start.auto[0] == pytest.approx(sc.numerics.dt_auto_factor * start.limits["contact"])
     assert sorted(calls) == [1, 2]
-    assert start.scene.overrides == start.given.overrides  # "auto" stays the recorded choice
+    assert start.given.numerics.dt == "auto"
 
 
 def test_a_dry_start_has_no_pores():
     sc, pk = quicksand("discs")
-    start = Start(sc.with_overrides({"water": {"enabled": False}}), pk)
+    start = Start(sc.with_overrides({"water": {"enabled": False}}).settings, pk)
     assert start.pores is None and set(start.limits) == {"contact"}

@@ -12,21 +12,21 @@ from engines.model.limits import critical_time_step
 from engines.model.pore_dem import disc_masses
 from engines.run import scene as scenes
 from engines.model.start import Start, choose
-from engines.run.preflight import InputError, announce_dt, describe_auto_dt, preflight
+from engines.run.preflight import InputError, announce_dt, describe_auto_dt, preflight, timed
 from engines.studies import stability as st
 from engines.yade.deposition import scene_packing
 
 
 def limits(sc, pk):
     """The Start's limits of ``sc`` on ``pk``."""
-    return Start(sc, pk).limits
+    return Start(sc.settings, pk).limits
 
 
 def auto_time_step(sc, pk):
     """(dt, limits, binding name, sub-steps) of dt = "auto" by the Start."""
-    s = Start(sc, pk)
+    s = Start(sc.settings, pk)
     dt, name, n_sub = s.auto
-    assert s.scene.numerics.dt == dt
+    assert s.settings.numerics.dt == dt
     return dt, s.limits, name, n_sub
 
 
@@ -56,7 +56,7 @@ def test_auto_dt_on_the_presets_is_below_every_limit_and_equals_the_binding_one(
         dt, lims, name, n_sub = auto_time_step(sc, pk)
         assert all(dt <= v for v in lims.values())
         assert dt == pytest.approx(0.3 * lims[name], rel=1e-12) and n_sub == 1
-        m, _ = disc_masses(sc, pk)
+        m, _ = disc_masses(sc.settings, pk)
         assert lims["contact"] == critical_time_step(m[pk.mobile], sc.contact.kn)
     assert "ties" in lims and name == "contact"  # the seismic box: eq 52 binds at its E_w
 
@@ -66,7 +66,7 @@ def test_auto_dt_of_a_dry_scene_is_the_contact_limit(qs):
     dry = sc.with_overrides({"water": {"enabled": False}, "numerics": {"dt": "auto", "dt_auto_factor": 0.5}})
     dt, lims, name, _ = auto_time_step(dry, pk)
     assert set(lims) == {"contact"} and name == "contact"
-    m, _ = disc_masses(sc, pk)
+    m, _ = disc_masses(sc.settings, pk)
     assert dt == 0.5 * 2 * math.sqrt(m[pk.mobile].min() / sc.contact.kn)
 
 
@@ -83,14 +83,15 @@ def test_water_stiffness_binds_when_E_w_is_large(qs):
 def test_the_start_announces_the_choice_and_keeps_numbers(qs):
     sc, pk = qs
     said = []
-    numeric = Start(sc, pk)
+    numeric = Start(sc.settings, pk)
     announce_dt(numeric, log=said.append)
-    assert numeric.scene is sc and numeric.auto is None and said == []
+    assert timed(sc, numeric) is sc and numeric.settings is sc.settings and numeric.auto is None and said == []
     auto = sc.with_overrides({"numerics": {"dt": "auto"}})
-    start = Start(auto, pk)
+    start = Start(auto.settings, pk)
     announce_dt(start, log=said.append)
-    out = start.scene
-    assert isinstance(out.numerics.dt, float) and out.numerics.dt > 0 and start.scene is out
+    out = timed(auto, start)
+    assert isinstance(out.numerics.dt, float) and out.numerics.dt > 0
+    assert out.settings == start.settings and out.numerics.dt == start.auto[0]
     assert "dt = auto" in said[0] and "bound by the" in said[0]
     assert out.overrides["numerics"]["dt"] == "auto"
 
@@ -168,8 +169,8 @@ def test_substepping_by_default_keeps_the_water_bounded_and_conserved(qs, tmp_pa
     preflight(s, pk, str(tmp_path / "out"))
     n = math.ceil(1e-6 / limits(s, pk)["darcy_check"])
     assert 2 <= n <= s.water.max_substeps
-    sub = PoreDEM(s, pk)
-    fine = PoreDEM(s.with_overrides({"numerics": {"dt": 1e-6 / n}, "water": {"substep": False}}), pk)
+    sub = PoreDEM(s.settings, pk)
+    fine = PoreDEM(s.with_overrides({"numerics": {"dt": 1e-6 / n}, "water": {"substep": False}}).settings, pk)
     for k in range(30):
         sub.step(pk.xz.copy())
         for _ in range(n):
