@@ -82,11 +82,14 @@ def _table(name, fields, table, doc):
 
 Walls = _table("Walls", WALLS_FIELDS, "walls", "[walls]: what bounds the box (wall discs or flat walls).")
 Material = _table("Material", MATERIAL_FIELDS, "material", "[material]: densities [kg/m^3] and gravity [m/s^2].")
-Contact = _table("Contact", CONTACT_TABLE, "contact", "[contact]: the contact law's constants, the law, the side-wall ties.")
+Contact = _table("Contact", CONTACT_TABLE, "contact",
+                 "[contact]: the contact law's constants, the law, the side-wall ties.")
 Water = _table("Water", WATER_TABLE, "water", "[water]: the water's constants, on or off, the link range, sub-steps.")
 Loading = _table("Loading", LOADING_FIELDS, "loading", "[loading]: the ground motion and the side walls.")
-Numerics = _table("Numerics", NUMERICS_FIELDS, "numerics", "[numerics]: time step, duration, rebuild and water intervals.")
-Output = _table("Output", OUTPUT_FIELDS, "output", "[output]: history, snapshots, blocks, porosity window, VTK, checkpoints.")
+Numerics = _table("Numerics", NUMERICS_FIELDS, "numerics",
+                  "[numerics]: time step, duration, rebuild and water intervals.")
+Output = _table("Output", OUTPUT_FIELDS, "output",
+                "[output]: history, snapshots, blocks, porosity window, VTK, checkpoints.")
 TABLES = {"walls": Walls, "material": Material, "contact": Contact, "water": Water, "loading": Loading,
           "numerics": Numerics, "output": Output}  # in the scene file's order
 

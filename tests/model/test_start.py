@@ -49,7 +49,8 @@ def test_each_part_is_computed_once(monkeypatch):
     monkeypatch.setattr(pg, "build_pores", lambda *a, **k: calls.append(2) or built(*a, **k))
     for _ in range(3):
         start.check()
-        assert start.settings.numerics.dt == start.auto[0] == pytest.approx(sc.numerics.dt_auto_factor * start.limits["contact"])
+        dt = sc.numerics.dt_auto_factor * start.limits["contact"]
+        assert start.settings.numerics.dt == start.auto[0] == pytest.approx(dt)
     assert sorted(calls) == [1, 2]
     assert start.given.numerics.dt == "auto"
 
