@@ -27,7 +27,7 @@ def native_floor(scene, packing, undamped=True):
     YADE's default, the pass on)."""
     O.reset()
     mat = O.materials.append(yade_law_material(scene))
-    mass, inertia = disc_masses(scene, packing)
+    mass, inertia = disc_masses(scene.settings, packing)
     grow = 0.5 * scene.contact.eps_m
     for (x, z), r, mob, m, I in zip(packing.xz, packing.r, packing.mobile, mass, inertia):
         b = utils.sphere((float(x), 0.0, float(z)), float(r + grow), fixed=not mob, material=mat, color=(0.5, 0.5, 0.5))

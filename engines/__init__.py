@@ -33,8 +33,11 @@ the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
-Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py; a scene's
-limits at its start and dt = "auto": model/time_step.py.
+Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py. The start
+of a run, computed once (model/start.py, Start): the walls, the discs that move and their masses, the
+pores at the start as the water model builds them (flat walls included), their limits and dt = "auto";
+run/preflight.py checks it and announces dt = "auto", run/runner.py and yade/coupling.py run on it;
+where dt_auto_factor was validated: studies/tradeoffs.py (VALIDATED_ON).
 Observables: the window porosity and block means (model/observe.py); block pressures from one
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
 without taking it (ContactLaw.touching_at: the bottom wall's normal force).
@@ -51,9 +54,12 @@ Where to add ...
     coupling (yade/coupling.py) measured at the step.
   a scene option: a constant of the contact law or of the water goes into CONTACT_FIELDS
     (model/contact.py) or WATER_FIELDS (model/pore_water.py), which make both the settings class
-    and the scene's table; any other into SCHEMA in run/scene.py (field, unit, default, range:
-    model/fields.py validates both), read where it is used (yade/coupling.py, run/runner.py);
-    a stability limit into model/limits.py; run/preflight.py if it needs a check before the run.
+    and the scene's table; another option the model reads into its table's field list in
+    model/settings.py (walls, material, contact, water, loading, numerics, output: one typed
+    dataclass each, made by model/fields.py, which checks each value once as the table is made);
+    one only the run layer reads ([scene], [packing]) into SCHEMA in run/scene.py. The model is
+    given the typed Settings (a validated scene's ``settings``), never the scene itself; a stability
+    limit goes into model/limits.py; run/preflight.py if it needs a check before the run.
 """
 import os
 

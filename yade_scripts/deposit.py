@@ -59,7 +59,7 @@ def main(argv):
     p = sc.packing
     stem = os.path.splitext(out)[0]
     plot_distribution(2 * pk.r[pk.mobile], p.mean_diameter, p.std_diameter, p.d_min, p.d_max, stem + "_fig14_diameters.png")
-    faces = [(w.axis, w.position) for w in scene_flat_walls(sc, pk).values()]  # none with wall discs
+    faces = [(w.axis, w.position) for w in scene_flat_walls(sc.settings, pk).values()]  # none with wall discs
     plot_packing(pk, stem + "_fig15_packing.png", sc.scene.name, faces)
     print(f"deposited {int(pk.mobile.sum())} particles + {int((~pk.mobile).sum())} wall discs -> {out} "
           f"(figures {stem}_fig14_diameters.png, {stem}_fig15_packing.png)")

@@ -37,7 +37,7 @@ def drainage(case, k_scale, U0=100.0, times=TIMES):
     w = sc.water
     sc = sc.with_overrides({"water": {"k1": w.k1 * k_scale, "k2": w.k2 * k_scale, "k3": w.k3 * k_scale}})
     pk = Packing.load(sc.packing.file)
-    wm = water_model(sc, pk, WaterModel)
+    wm = water_model(sc.settings, pk, WaterModel)
     water = wm.water
     A = pg.measure(water.net, pk.xz, pk.r).void_area
     water.W = A * sc.water.E_w / (sc.water.E_w - U0)  # eq 32 inverted: U = U0 in every pore

@@ -17,8 +17,8 @@ class PoreDEM(pore_dem.PoreDEM):
 
     law_class, water_class = PaperLaw, WaterModel
 
-    def __init__(self, scene, packing, flat_walls=()):
-        super().__init__(scene, packing, flat_walls)
+    def __init__(self, settings, packing, flat_walls=()):
+        super().__init__(settings, packing, flat_walls)
         self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
 
     def kernel_step_args(self, rows, held):

@@ -1,10 +1,12 @@
 """Settings declared once: each field's type, default, range or choices and meaning. No YADE.
 
-The model's settings classes (ContactSettings, WaterSettings) are made from their FIELDS by
-``settings_class``; the scene schema (engines.run.scene) takes the same FIELDS as its [contact] and
-[water] tables, so a scene file and a Python script get the same defaults and the same checks
-(``check``), with errors that name the field as the scene file does ("[water] k1: ...").
+The model's settings classes (ContactSettings, WaterSettings, and the tables of engines.model.settings)
+are made from their FIELDS by ``settings_class``; the scene schema (engines.run.scene) takes the same
+FIELDS as its tables, so a scene file and a Python script get the same defaults and the same checks
+(``check``, run once, when a table is made), with errors that name the field as the scene file does
+("[water] k1: ...").
 """
+import copy
 import dataclasses
 import math
 import numbers
@@ -74,10 +76,23 @@ def settings_class(name, fields, table, module, doc):
         for key, spec in fields.items():
             setattr(self, key, check(f"[{table}] {key}", getattr(self, key), spec))
 
-    cls = dataclasses.make_dataclass(name, [(k, f.type, dataclasses.field(default=f.default)) for k, f in fields.items()],
+    def default(f):  # a list's default copied for each instance
+        if isinstance(f.default, list):
+            return dataclasses.field(default_factory=lambda: copy.deepcopy(f.default))
+        return dataclasses.field(default=f.default)
+
+    cls = dataclasses.make_dataclass(name, [(k, f.type, default(f)) for k, f in fields.items()],
                                      namespace={"__post_init__": __post_init__, "FIELDS": fields, "__doc__": doc})
     cls.__module__ = module  # where pickle (checkpoints) finds it
     return cls
+
+
+def checked(cls, values):
+    """An instance of the settings class ``cls`` (``settings_class``) from {field: value} already
+    checked against the same fields (a table of validated settings): made without a second check."""
+    obj = object.__new__(cls)
+    obj.__dict__.update({k: values[k] for k in cls.FIELDS})
+    return obj
 
 
 POSITIVE = Field(float, REQUIRED, POS, "a number > 0")

@@ -119,10 +119,11 @@ def record_acceleration(path, time_scale=1.0, amplitude_scale=1.0, units="g"):
     return Sampled(t_s, a_s)
 
 
-def input_acceleration(scene):
-    """a(t) [m/s^2] of a scene's [loading] table, or None for type = none: the one input of the
-    YADE path (engines.model.pore_dem.PoreDEM, engines.yade.coupling) and of engines.run.preflight."""
-    ld = scene.loading
+def input_acceleration(settings):
+    """a(t) [m/s^2] of the [loading] table of ``settings`` (engines.model.settings.Settings), or None
+    for type = none: the one input of the YADE path (engines.model.pore_dem.PoreDEM,
+    engines.yade.coupling) and of engines.run.preflight."""
+    ld = settings.loading
     if ld.type == "none":
         return None
     if ld.type == "cosine":

@@ -1,7 +1,7 @@
 """The stability limits of the seed-000 step [s], and the checks that refuse a step above them. No YADE.
 
 Every "is this step stable?" question is answered here: preflight (engines.run.preflight) asks
-them of a scene at its start, dt = "auto" (engines.model.time_step) takes the smallest, the
+them of a scene at its start, dt = "auto" (engines.model.start) takes the smallest, the
 engines ask the contact and tie limits at construction and the Darcy limit at every water step
 (the compiled water step runs the twins of ``substep_count`` and ``gershgorin_limit`` in
 engines.compiled.kernels, tested equal).

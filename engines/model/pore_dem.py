@@ -25,6 +25,7 @@ Side walls on springs ([loading] side_walls = "springs", Fig. 27): the side-wall
 under the contact forces, the pore pressure forces of eq 33 (they bound pores like any disc) and
 the ties of engines.model.side_walls (added to the law's forces in b, with the tie velocities du/dt of
 this step); the caller integrates them in x only.
+The settings are engines.model.settings.Settings (a validated scene's ``settings``), typed by table.
 Gravity -m g and buoyancy +rho_w pi r^2 g (water scenes: the buoyant weight of eq 34b) are
 constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent forces).
 """
@@ -40,14 +41,14 @@ from engines.model.side_walls import SideWallTies
 from engines.model.water_model import WaterModel
 
 
-def disc_masses(scene, packing):
+def disc_masses(settings, packing):
     """Mass rho f pi r^2 [kg per m thickness] and moment of inertia m r^2/2 (SPEC §1, eq 15)."""
-    m = scene.material.rho * packing.density_factor * np.pi * packing.r**2
+    m = settings.material.rho * packing.density_factor * np.pi * packing.r**2
     return m, 0.5 * m * packing.r**2
 
 
-def weight_carried(scene, packing, which=None):
-    """The vertical force of the normal springs (the packing law: spring a, eps_m of the scene) on
+def weight_carried(settings, packing, which=None):
+    """The vertical force of the normal springs (the packing law: spring a, eps_m of the settings) on
     the discs ``which`` (a mask; default: every mobile disc) at the packing's positions, over their
     weight: ~1 when they rest on the others and the walls. Of every mobile disc: the overburden the
     walls carry; of the discs above a depth: the overburden the discs below carry; of the denser top:
@@ -55,10 +56,10 @@ def weight_carried(scene, packing, which=None):
     it was settled before the top was marked. With [walls] kind = "flat" the flat walls replace the
     wall discs, each meeting a disc as a wall disc of radius 0 at the disc's foot (engines.model.paper_law)."""
     which = packing.mobile if which is None else which
-    weight = float((disc_masses(scene, packing)[0][which] * scene.material.g).sum())
-    c = scene.contact
+    weight = float((disc_masses(settings, packing)[0][which] * settings.material.g).sum())
+    c = settings.contact
     xz, r, mobile = packing.xz, packing.r, packing.mobile
-    walls = scene_flat_walls(scene, packing)
+    walls = scene_flat_walls(settings, packing)
     if walls:
         m = np.flatnonzero(mobile)
         feet = []
@@ -72,46 +73,46 @@ def weight_carried(scene, packing, which=None):
         which = np.concatenate([which[m], np.zeros(len(xz) - len(m), bool)])
     # at rest (du = 0): no dashpot and no shear force, the normal springs alone
     law = ContactLaw(ContactSettings(spring="a", kn=c.kn, eps_m=c.eps_m), r, mobile)
-    F, _, _ = law.forces(xz, np.zeros_like(xz), np.zeros(len(r)), scene.numerics.dt)
+    F, _, _ = law.forces(xz, np.zeros_like(xz), np.zeros(len(r)), settings.numerics.dt)
     return float(F[which, 1].sum()) / weight
 
 
-def side_wall_ties(scene, packing):
+def side_wall_ties(settings, packing):
     """The Fig. 27 ties of the side-wall columns (engines.model.side_walls.SideWallTies) when
     [loading] side_walls = "springs", else None."""
-    if scene.loading.side_walls != "springs":
+    if settings.loading.side_walls != "springs":
         return None
-    c = scene.contact
+    c = settings.contact
     return SideWallTies(packing.xz, packing.group, c.ks_wall, c.eta_s_wall)
 
 
-def moving_walls(scene, packing):
+def moving_walls(settings, packing):
     """(N,) bool: the wall discs that follow the input acceleration ([loading] moves)."""
-    if scene.loading.type == "none":
+    if settings.loading.type == "none":
         return np.zeros(len(packing.r), bool)
-    groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[scene.loading.moves]
+    groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[settings.loading.moves]
     return np.isin(packing.group, groups)
 
 
-def moving_flat_walls(scene, flat_walls):
+def moving_flat_walls(settings, flat_walls):
     """(W,) bool: the flat walls (FlatWall, ...) that follow the input acceleration ([loading]
     moves = "bottom": the bottom face, z = const below the discs; "box": every wall)."""
-    if scene.loading.type == "none":
+    if settings.loading.type == "none":
         return np.zeros(len(flat_walls), bool)
-    if scene.loading.moves == "box":
+    if settings.loading.moves == "box":
         return np.ones(len(flat_walls), bool)
     return np.array([w.axis == 1 and w.inward == 1 for w in flat_walls], bool)
 
 
-def scene_flat_walls(scene, packing):
+def scene_flat_walls(settings, packing):
     """{wall code: FlatWall} of [walls] kind = "flat", {} for kind = "discs": each wall-disc group of
     the packing replaced by a flat wall at its inner face (Packing.inner_faces), moved back to the
     outermost particle where one reaches past it (a particle resting in the dip between two wall
     discs would start overlapping the face); the bottom lets in q_w when [water] q_w > 0, the sides
     drain when [water] sides = "drained", else undrained."""
-    if scene.walls.kind != "flat":
+    if settings.walls.kind != "flat":
         return {}
-    w = scene.water
+    w = settings.water
     side = "drained" if w.sides == "drained" else "undrained"
     # (axis, inward, boundary): the bottom a face z = const below the discs, the left and right x = const
     kinds = {pg.WALL_BOTTOM: (1, 1, "inflow" if w.q_w > 0 else "undrained"), pg.WALL_LEFT: (0, 1, side),
@@ -125,14 +126,14 @@ def scene_flat_walls(scene, packing):
     return walls
 
 
-def water_model(scene, packing, cls=WaterModel, flat_walls=()):
-    """The scene's WaterModel (``cls``: engines.model.water_model.WaterModel or its compiled twin) on
+def water_model(settings, packing, cls=WaterModel, flat_walls=()):
+    """The WaterModel of ``settings`` (``cls``: engines.model.water_model.WaterModel or its compiled twin) on
     the packing's discs (true radii) and the flat walls, or None for a dry scene."""
-    settings = scene.water_settings()
-    if settings is None:
+    water = settings.water_settings()
+    if water is None:
         return None
-    num = scene.numerics
-    return cls(settings, packing.r, packing.group, packing.xz, scene.contact.eps_m, scene.water.l_m,
+    num = settings.numerics
+    return cls(water, packing.r, packing.group, packing.xz, settings.contact.eps_m, settings.water.l_m,
                num.dt, num.rebuild_interval, num.water_interval, rebuild_distance=num.rebuild_distance,
                flat_walls=flat_walls)
 
@@ -155,14 +156,14 @@ def block_pressures(water_model, xz, bounds):
     return block_means(pg.pore_centroids(net, xz)[:, 1], U, bounds)
 
 
-def porosity_window(scene, packing, faces=None):
+def porosity_window(settings, packing, faces=None):
     """The fixed rectangle whose void fraction is the reported porosity ([output] porosity_window,
     engines.model.observe.box_window) in the box of ``faces`` {wall code: position [m]} (default: the
     wall discs' inner faces, Packing.inner_faces), or None for a box without both side walls."""
     faces = packing.inner_faces() if faces is None else faces
     if not (pg.WALL_LEFT in faces and pg.WALL_RIGHT in faces):
         return None
-    return box_window(packing, scene.output.porosity_window, faces)
+    return box_window(packing, settings.output.porosity_window, faces)
 
 
 def window_porosity(packing, window, xz, base_disp=0.0):
@@ -181,7 +182,8 @@ def kinetic_energy(mass, inertia, mobile, vel, omega):
 
 
 class PoreDEM:
-    """State and per-step work of one scene (see the module docstring for the order).
+    """State and per-step work of one run of ``settings`` (engines.model.settings.Settings) on
+    ``packing`` (see the module docstring for the order).
 
     ``law``: the paper's contact law (engines.model.paper_law.PaperLaw); ``water_model``: the pores and
     water (engines.model.water_model.WaterModel) or None for a dry scene: the readable NumPy path of
@@ -193,24 +195,24 @@ class PoreDEM:
 
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
 
-    def __init__(self, scene, packing, flat_walls=()):
-        self.scene, self.packing = scene, packing
+    def __init__(self, settings, packing, flat_walls=()):
+        self.settings, self.packing = settings, packing
         self.r = packing.r
         self.mobile = packing.mobile
-        self.mass, self.inertia = disc_masses(scene, packing)
-        self.dt = scene.numerics.dt
-        num = scene.numerics
-        limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], scene.contact.kn)
-        self.law = self.law_class(scene.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt,
+        self.mass, self.inertia = disc_masses(settings, packing)
+        self.dt = settings.numerics.dt
+        num = settings.numerics
+        limits.check_contact(self.dt, num.dt_safety, self.mass[self.mobile], settings.contact.kn)
+        self.law = self.law_class(settings.contact_settings(), self.r, self.mobile, self.mass, self.inertia, self.dt,
                                   flat_walls)
         self.k = 0
-        accel = ground_motion.input_acceleration(scene)
+        accel = ground_motion.input_acceleration(settings)
         self.base = None if accel is None else ground_motion.BaseMotion(accel, self.dt)
         self.wall_velocity = 0.0
-        self.moving_flat = moving_flat_walls(scene, tuple(flat_walls)) if self.base is not None else None
-        self.ties = side_wall_ties(scene, packing)
+        self.moving_flat = moving_flat_walls(settings, tuple(flat_walls)) if self.base is not None else None
+        self.ties = side_wall_ties(settings, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
-        self.water_model = water_model(scene, packing, self.water_class, flat_walls)
+        self.water_model = water_model(settings, packing, self.water_class, flat_walls)
 
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""

@@ -190,6 +190,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             sc = load_scene(overrides_of(args))
             if check is not None:
                 check(sc)
+            from engines.model.start import Start
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
             if many:
@@ -197,7 +198,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             else:
                 if args.start is not None:
                     packing = perturbed(packing, args.start, ensemble.size_of(args))
-                notes = preflight(sc, packing, args.out)
+                prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
+                notes = preflight(sc, packing, args.out, prepared)
             for note in notes:
                 print(note)
     except ValueError as e:
@@ -213,7 +215,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         summary = runner.resume_run(args.resume, args.duration)
     else:
         start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
-        summary = runner.run_scene(sc, packing, args.out, start=start)
+        summary = runner.run_scene(sc, packing, args.out, start=start, prepared=prepared)
     if summary["status"] == "interrupted":
         stop = summary.get("interrupt", {})
         print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "

@@ -339,12 +339,12 @@ def reference_inputs(scene, packing):
     """(tables, packing) of the reference for a scene and its packing: with [walls] kind = "flat",
     its flat walls (engines.model.pore_dem.scene_flat_walls) as the tables' list and the particles
     alone (the YADE side replaces the wall discs so); else the scene and packing as they are."""
-    walls = scene_flat_walls(scene, packing)
+    walls = scene_flat_walls(scene.settings, packing)
     if not walls:
         return scene, packing
     tables = scene.as_dict()
     walls = tuple(walls.values())
-    tables["walls"] = {"flat": as_tables(walls, moving_flat_walls(scene, walls))}
+    tables["walls"] = {"flat": as_tables(walls, moving_flat_walls(scene.settings, walls))}
     return tables, packing.particles()
 
 

@@ -1,11 +1,12 @@
 """Checks made before a run writes anything, and the scripts' argument parsing.
 
-``preflight(scene, packing, out_dir)`` checks what can be known before the first step: the time
-step against the stability limits at the start (engines.model.time_step.check_start: eq 52, the
-side-wall ties, the water stiffness, the Darcy limit and the sub-step count), the duration, the
+``preflight(scene, packing, out_dir, prepared)`` checks what can be known before the first step: the
+time step against the stability limits at the start (engines.model.start: eq 52, the side-wall ties,
+the water stiffness, the Darcy limit and the sub-step count; ``prepared``, the run's Start, is the one
+the engines then run on, so the limits checked are those of the network that runs), the duration, the
 loading record, the packing against the walls' box and the contact law (``check_packing``) and the
 output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs;
-``announce_output`` prints the folder a script writes into.
+``announce_output`` prints the folder a script writes into, ``announce_dt`` the choice of dt = "auto".
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -110,11 +111,10 @@ def output_dir(path):
 
 
 # -- the scene against its packing ----------------------------------------------------------------
-def check_limits(scene, packing):
-    """The numeric dt against every stability limit at the start (engines.model.time_step.check_start)."""
-    from engines.model.time_step import check_start
+def check_limits(prepared):
+    """The dt of the Start ``prepared`` against every stability limit at the start (Start.check)."""
     try:
-        check_start(scene, packing)
+        prepared.check()
     except ValueError as e:
         raise InputError(str(e)) from None
 
@@ -150,25 +150,62 @@ def check_record(scene):
         return
     from engines.model.ground_motion import input_acceleration
     try:
-        input_acceleration(scene)
+        input_acceleration(scene.settings)
     except ValueError as e:
         raise InputError(str(e)) from None
 
 
-def preflight(scene, packing, out_dir):
+def preflight(scene, packing, out_dir, prepared=None):
     """Every check of a run that can be made before its first step; raises InputError.
 
     Returns notes (one line each) on what the run will silently skip, for the script to print.
-    A dt = "auto" is checked as it will be chosen (engines.model.time_step)."""
-    from engines.model.time_step import resolve_dt
-    scene = resolve_dt(scene, packing, log=None)
+    ``prepared``: the run's Start of scene on packing (engines.model.start; made here if None);
+    a dt = "auto" is checked as it will be chosen."""
+    if prepared is None:
+        from engines.model.start import Start
+        prepared = Start(scene.settings, packing)
+    scene = timed(scene, prepared)
     check_output_dir(out_dir)
     check_duration(scene)
     check_record(scene)
     check_packing(scene, packing)
-    check_limits(scene, packing)
+    check_limits(prepared)
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:
         return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
                 f"({scene.numerics.duration:g} s) and are skipped"]
     return []
+
+
+# -- dt = "auto" ----------------------------------------------------------------------------------
+def describe_auto_dt(dt, lims, name, n_sub, factor):
+    """The lines a run prints about its automatic time step dt [s], chosen from the limits ``lims``
+    {name: limit [s]} at the start, bound by ``name``, with n_sub water sub-steps at the start."""
+    from engines.model import limits as lim
+    from engines.studies.tradeoffs import validation_note
+    shown = ", ".join(f"{k} {v:.3g} s" for k, v in lims.items())
+    text = (f"dt = auto: {dt:.3g} s, bound by the {name} limit"
+            + ("" if name == "darcy_check" else f" x dt_auto_factor {factor:g}") + f" (limits at the start: {shown})")
+    text += "\n" + validation_note(factor)
+    if n_sub > 1:
+        text += (f"\nwater: {n_sub} sub-steps per water step at the start (substep = true, Gershgorin Darcy limit "
+                 f"{lims['darcy_check']:.3g} s per DEM step); each costs about {lim.SUBSTEP_COST:.0%} of a water step, "
+                 f"so the water costs about {lim.substep_cost(n_sub):.2g}x a water step without sub-steps")
+    return text
+
+
+def timed(scene, prepared):
+    """``scene`` with the time step of its Start ``prepared``: itself for a numeric dt, for dt =
+    "auto" a copy with the chosen dt ("auto" stays the recorded choice in ``overrides``)."""
+    if prepared.auto is None:
+        return scene
+    out = scene.with_overrides({"numerics": {"dt": prepared.auto[0]}})
+    out.overrides = scene.overrides
+    return out
+
+
+def announce_dt(prepared, log=print):
+    """Print through ``log`` how the Start ``prepared`` chose dt = "auto" (nothing for a numeric dt)."""
+    if prepared.auto is not None:
+        dt, name, n_sub = prepared.auto
+        log(describe_auto_dt(dt, prepared.limits, name, n_sub, prepared.given.numerics.dt_auto_factor))

@@ -104,6 +104,6 @@ def packing_facts(root):
         if v.deposit and os.path.exists(packing_path(root, name)):
             pk = Packing.load(packing_path(root, name))
             m = pk.mobile
-            out[name] = {"dense_top_support": weight_carried(sc, pk, pk.mobile & (pk.density_factor > 1)),
+            out[name] = {"dense_top_support": weight_carried(sc.settings, pk, pk.mobile & (pk.density_factor > 1)),
                          "bed_top_mm": float(1e3 * (pk.xz[m, 1] + pk.r[m]).max())}
     return out

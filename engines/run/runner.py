@@ -29,6 +29,8 @@ from yade import O
 
 from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
+from engines.model.start import Start
+from engines.run.preflight import announce_dt, timed
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
@@ -209,13 +211,14 @@ class Run:
     """One run of a scene in ``out_dir``: the coupling, its recorder and the bookkeeping of the
     run's segments (a start and each resume). Pickled whole into the checkpoints; it is also the
     coupling's last hook, which writes the periodic checkpoints. ``start``: which start of an
-    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None."""
+    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None;
+    ``prepared``: the Start of scene on packing (engines.model.start) the coupling runs on, or None."""
 
     start = None
 
-    def __init__(self, scene, packing, out_dir, n_steps, start=None):
+    def __init__(self, scene, packing, out_dir, n_steps, start=None, prepared=None):
         self.scene, self.out, self.n_steps, self.start = scene, out_dir, n_steps, start
-        self.cp = YadeCoupling(scene, packing)
+        self.cp = YadeCoupling(scene, packing, prepared=prepared)
         self.rec = Recorder(self.cp, out_dir, n_steps)
         self.cp.hooks += [self.rec, self]
         self.segments = []
@@ -329,18 +332,22 @@ def clear_outputs(out_dir):
     shutil.rmtree(os.path.join(out_dir, "vtk"), ignore_errors=True)
 
 
-def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None):
+def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, prepared=None):
     """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs
     (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later; ``start``:
     the ensemble's start the packing is, recorded in summary.json).
     Returns the summary ("status": completed or interrupted); re-raises an error after writing
-    the history, summary and failure state. A dt = "auto" is chosen here (engines.model.time_step; printed)."""
-    from engines.model.time_step import resolve_dt
-    scene = resolve_dt(scene, packing)
+    the history, summary and failure state. ``prepared``: the Start of scene on packing
+    (engines.model.start) preflight checked, made here if None; it holds the time step of dt =
+    "auto", whose choice is printed here (engines.run.preflight.announce_dt)."""
+    prepared = Start(scene.settings, packing) if prepared is None else prepared
+    announce_dt(prepared)
+    scene = timed(scene, prepared)
     os.makedirs(out_dir, exist_ok=True)
     clear_outputs(out_dir)
     duration = scene.numerics.duration if duration is None else duration
-    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start).go(scene.overrides, figures)
+    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start, prepared).go(scene.overrides,
+                                                                                                    figures)
 
 
 def resume_run(out_dir, duration=None, figures=True):

@@ -12,10 +12,8 @@ import tomllib
 from dataclasses import dataclass, field
 
 from engines import ROOT
-from engines.model.contact import CONTACT_FIELDS, ContactSettings
-from engines.model.fields import POS, POS_OR_AUTO, REQUIRED, check, describe_check
-from engines.model.pore_water import WATER_FIELDS, WaterSettings
-from engines.model.time_step import VALIDATED_FACTOR
+from engines.model.fields import POS, REQUIRED, check, checked, describe_check
+from engines.model.settings import TABLES, Settings
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
 
@@ -25,8 +23,8 @@ class SceneError(ValueError):
 
 
 # table -> field -> (type, default, check, unit/meaning) (engines.model.fields.Field). check: None,
-# (min, max) inclusive bounds (POS: > 0), a tuple of allowed strings, or POS_OR_AUTO. The [contact]
-# and [water] fields of the model's settings are declared with them (CONTACT_FIELDS, WATER_FIELDS).
+# (min, max) inclusive bounds (POS: > 0), a tuple of allowed strings, or POS_OR_AUTO. [scene] and
+# [packing] are the run layer's; the other tables are the model's settings (engines.model.settings).
 SCHEMA = {
     "scene": {
         "name": (str, REQUIRED, None, "run name"),
@@ -56,71 +54,20 @@ SCHEMA = {
         "guard_walls": (bool, False, None, "deposition only: side walls raised above the highest particle (removed afterwards) so that no particle bounces out of the box"),
         "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
     },
-    "walls": {
-        "kind": (str, "discs", ("discs", "flat"), "discs: the packing's wall discs (groups bottom, left, right) bound the box; flat: they are replaced by YADE Box bodies at their inner faces (bottom: max z + r, left: max x + r, right: min x - r; moved back to a particle that reaches past one), the pores' flat walls: the bottom one lets in q_w (if > 0), the sides drain when [water] sides = drained; with [loading] they follow the base as [loading] moves says, not on springs; with [contact] law = paper the paper's law meets them itself)"),
-    },
-    "material": {
-        "rho": (float, 2700.0, POS, "particle density [kg/m^3] (per unit thickness: mass = rho pi r^2)"),
-        "rho_w": (float, 1000.0, (0.0, math.inf), "water density [kg/m^3]"),
-        "g": (float, 9.81, (0.0, math.inf), "gravity [m/s^2], along -z"),
-    },
-    "contact": {
-        **CONTACT_FIELDS,
-        "law": (str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, docs/ENGINE.md)"),
-        # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
-        "ks_wall": (float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
-        "eta_s_wall": (float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
-    },
-    "water": {
-        "enabled": (bool, True, None, "false: a dry scene, no water code runs"),
-        **WATER_FIELDS,
-        "l_m": (float, 1.3e-4, (0.0, math.inf), "link range beyond touching [m] (eq 28)"),
-        "max_substeps": (int, 100, (1, math.inf), "with substep: refuse up front a water step that needs more sub-steps than this at the start"),
-    },
-    "loading": {
-        "type": (str, "none", ("none", "cosine", "record"), "horizontal acceleration of the moving walls"),
-        "moves": (str, "bottom", ("bottom", "box"), "which walls follow the input"),
-        "amplitude": (float, 15.0, (0.0, math.inf), "cosine amplitude [m/s^2] (1500 gal = 15)"),
-        "frequency": (float, 50.0, POS, "cosine frequency [Hz]"),
-        "record": (str, "", None, "two-column file time [s], acceleration [g]"),
-        "time_scale": (float, 1.0, POS, "record time is multiplied by this"),
-        "amplitude_scale": (float, 1.0, (0.0, math.inf), "record acceleration is multiplied by this"),
-        "record_units": (str, "g", ("g", "gal", "m/s2"), "unit of the record's acceleration column"),
-        "side_walls": (str, "fixed", ("fixed", "springs"), "side-wall columns: fixed, or moving in x tied by k'_s, eta'_s springs (Fig. 27; needs moves = bottom)"),
-    },
-    "numerics": {
-        "dt": (float, 1e-6, POS_OR_AUTO, "time step [s], or \"auto\": dt_auto_factor x the smallest stability limit (engines.model.time_step)"),
-        "duration": (float, 0.06, POS, "simulated time [s]"),
-        "rebuild_interval": (int, 1000, (1, math.inf), "steps between pore rebuilds (§3.4(2)); with rebuild_distance > 0 an upper bound"),
-        "rebuild_distance": (float, 0.0, (0.0, math.inf), "> 0: the pores are also rebuilt as soon as a disc has moved more than this [m] since the last build (WaterEngine's default in users' scripts: 0.25 l_m, docs/ENGINE.md); 0: off, every rebuild_interval steps as the paper does"),
-        "water_interval": (int, 1, (1, math.inf), "DEM steps per water step; pressure forces persist in between"),
-        "dt_safety": (float, 1.0, (0.0, 1.0), "dt must be <= dt_safety * 2 sqrt(m_min / kn) (eq 52)"),
-        # the automatic time step (engines.model.time_step; dt = "auto") and its safety factor
-        "dt_auto_factor": (float, VALIDATED_FACTOR, (0.0, 1.0), "dt = \"auto\": this fraction (> 0) of the smallest stability limit at the start (eq 52, side-wall ties, water stiffness, Darcy 2/lambda_max): the default is the study's fast setting (docs/TRADEOFFS.md)"),
-    },
-    "output": {
-        "history_interval": (int, 100, (1, math.inf), "steps between history rows"),
-        "snapshot_times": (list, [0.02, 0.04, 0.06], None, "times of the snapshot figures [s]"),
-        "block_z": (list, [[0.0, 0.34], [0.66, 10.0]], None, "pressure blocks as [z0, z1] fractions of the initial bed height above the bottom wall (block1 bottom, block2 surface)"),
-        "progress_seconds": (float, 10.0, POS, "wall seconds between progress lines"),
-        "porosity_window": (list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.model.observe)"),
-        # ParaView, checkpoints, headline results
-        "vtk": (bool, False, None, "write a ParaView time series to DIR/vtk/ during the run (postproc.vtk: discs, contact forces, pores)"),
-        "vtk_interval": (int, 0, (0, math.inf), "steps between VTK frames; 0: at the snapshot_times"),
-        "checkpoint_seconds": (float, 600.0, POS, "wall seconds between checkpoints during a run (one is also written at the start, at the end and on an interrupt)"),
-        "heave_rise": (float, 0.45e-3, POS, "rise of the bed top (highest particle top) above its initial height that marks the heave time in summary.json [m]"),
-    },
+    **{table: cls.FIELDS for table, cls in TABLES.items()},  # the model's tables (engines.model.settings)
 }
 
 
 @dataclass
 class Scene:
     """A validated scene: ``tables`` holds every field (defaults filled in), by table;
-    ``overrides`` the {table: {field: value}} applied on top of the file (recorded by runs)."""
+    ``overrides`` the {table: {field: value}} applied on top of the file (recorded by runs);
+    ``settings``: the model's typed settings (engines.model.settings.Settings), what the model is given."""
 
     tables: dict
     path: str = ""
     overrides: dict = field(default_factory=dict)
+    settings: Settings = None
 
     def __getattr__(self, table):
         try:
@@ -129,13 +76,11 @@ class Scene:
             raise AttributeError(table) from None
 
     def contact_settings(self):
-        c = self.tables["contact"]
-        return ContactSettings(**{k: c[k] for k in CONTACT_FIELDS})
+        return self.settings.contact_settings()
 
     def water_settings(self):
         """The WaterSettings of [water], or None for a dry scene."""
-        w = self.tables["water"]
-        return WaterSettings(**{k: w[k] for k in WATER_FIELDS}) if w["enabled"] else None
+        return self.settings.water_settings()
 
     def as_dict(self):
         return {t: dict(v) for t, v in self.tables.items()}
@@ -168,6 +113,13 @@ def validate(raw, path=""):
         extra = set(given) - set(fields)
         if extra:
             raise SceneError(f"[{table}] unknown field(s) {sorted(extra)}; known: {sorted(fields)}")
+        if table in TABLES:  # the model's settings check their fields as they are made
+            try:
+                made = TABLES[table](**given)
+            except ValueError as e:
+                raise SceneError(str(e)) from None
+            tables[table] = {name: getattr(made, name) for name in fields}
+            continue
         values = {}
         for name, spec in fields.items():
             if name in given:
@@ -177,8 +129,8 @@ def validate(raw, path=""):
             else:
                 values[name] = spec[1]
         tables[table] = values
-    _cross_checks(tables, path)
-    return Scene(tables, path)
+    _cross_checks(tables, path)  # (the paths it resolves are the settings' too)
+    return Scene(tables, path, settings=Settings(**{t: checked(cls, tables[t]) for t, cls in TABLES.items()}))
 
 
 def _cross_checks(t, path):

@@ -16,11 +16,13 @@ def run_point(sc, packing, window, out_dir):
     """Run ``sc`` for ``window`` seconds; the record of the run, or {"outcome": "refused", "reason"}."""
     from yade import O
 
+    from engines.model.start import Start
     from engines.run.preflight import InputError, preflight
     from engines.yade.coupling import YadeCoupling
 
+    prepared = Start(sc.settings, packing)
     try:
-        preflight(sc, packing, out_dir)
+        preflight(sc, packing, out_dir, prepared)
     except InputError as e:
         return {"outcome": "refused", "reason": str(e)}
     box = st.box_of(packing)
@@ -29,7 +31,7 @@ def run_point(sc, packing, window, out_dir):
     ke, error, xz = [0.0], None, packing.xz
     c0 = time.process_time()
     try:
-        cp = YadeCoupling(sc, packing)
+        cp = YadeCoupling(sc, packing, prepared=prepared)
         while O.iter < n:
             cp.run(min(every, n - O.iter))
             xz = cp.positions()
@@ -61,7 +63,7 @@ def run_map(out, window_s):
     for case, knob, value, over in map_points():
         sc0 = scenes.preset(case, {"output": {"progress_seconds": 1e9}})
         packing = scene_packing(sc0)
-        mass, _ = disc_masses(sc0, packing)
+        mass, _ = disc_masses(sc0.settings, packing)
         dt_crit = critical_time_step(mass[packing.mobile], sc0.contact.kn)
         window = DT_WINDOW if knob == "dt/dt_crit" else window_s
         if knob == "dt/dt_crit":

@@ -74,15 +74,17 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
     PERTURBATION); returns the result dict (yade_scripts/tradeoffs.py, ``run``, lists its fields)."""
     from yade import O
 
-    from engines.model.time_step import resolve_dt
+    from engines.model.start import Start
     from engines.run import scene as scenes
-    from engines.run.preflight import InputError, preflight
+    from engines.run.preflight import InputError, announce_dt, preflight, timed
     from engines.yade.coupling import YadeCoupling
     from engines.yade.deposition import scene_packing
 
     sc = scenes.preset(case, overrides)
     packing = scene_packing(sc)
-    sc = resolve_dt(sc, packing)
+    first = Start(sc.settings, packing)
+    announce_dt(first)
+    sc = timed(sc, first)
     dt = sc.numerics.dt
     every = max(1, int(round(record / dt)))
     n_steps = int(round(window / dt))
@@ -92,9 +94,10 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
         pk = perturbed(packing, s, PERTURBATION if perturbation is None else perturbation)
         rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
         try:
-            preflight(sc, pk, out_dir)
+            prepared = Start(sc.settings, pk)
+            preflight(sc, pk, out_dir, prepared)
             c0, w0 = time.process_time(), time.time()
-            cp = YadeCoupling(sc, pk)
+            cp = YadeCoupling(sc, pk, prepared=prepared)
             mob = pk.mobile
             k, c_rec, w_rec = 0, 0.0, 0.0  # the recording's own time, left out of the cost
             while True:

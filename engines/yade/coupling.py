@@ -55,6 +55,7 @@ from engines.model import pores as pg
 from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
 from engines.model.pore_water import buoyancy
+from engines.model.start import Start
 from engines.reference.trajectory import Trajectory
 from engines.yade import yade_io
 from engines.yade.paper_law_engine import PaperLawEngine
@@ -112,7 +113,7 @@ def build_bodies(scene, packing, material, radius_add=0.0, spin=False, x_only=No
     discs that are dynamic in x only (the side walls on springs, Fig. 27)."""
     O.reset()
     mat = O.materials.append(material)
-    mass, inertia = disc_masses(scene, packing)
+    mass, inertia = disc_masses(scene.settings, packing)
     x_only = np.zeros(len(packing.r), bool) if x_only is None else x_only
     bodies = []
     for (x, z), r, mob, xo, m, I in zip(packing.xz, packing.r, packing.mobile, x_only, mass, inertia):
@@ -154,24 +155,27 @@ def wall_boxes(walls, packing, material):
 class YadeCoupling:
     """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
     between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
-    or the water engine's model by compiled kernels, else their NumPy classes (engines.model)."""
+    or the water engine's model by compiled kernels, else their NumPy classes (engines.model).
+    ``prepared``: the Start of scene on packing (engines.model.start: the walls, the discs to move,
+    their masses; preflight's limits are those of its pores), made here if None."""
 
-    def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
+    def __init__(self, scene, packing, newton_damping=0.0, compiled=True, prepared=None):
         self.scene = scene
-        self.flat_walls = pore_dem.scene_flat_walls(scene, packing)  # {wall code: FlatWall}, {} with wall discs
+        prepared = Start(scene.settings, packing) if prepared is None else prepared
+        self.flat_walls = prepared.flat_walls  # {wall code: FlatWall}, {} with wall discs
         # the blocks and the porosity window in the box of the flat walls, else of the wall discs' inner faces
-        faces = {code: wall.position for code, wall in self.flat_walls.items()} or packing.inner_faces()
+        faces = prepared.faces
         self.block_bounds = packing.block_bounds(scene.output.block_z, faces.get(pg.WALL_BOTTOM))
-        self.window = pore_dem.porosity_window(scene, packing, faces)
-        self.packing = packing = packing.particles() if self.flat_walls else packing
+        self.window = pore_dem.porosity_window(scene.settings, packing, faces)
+        self.packing = packing = prepared.packing
         self.wall_ids = {}  # {wall code: YADE body id} of the flat walls
         self.law = scene.contact.law
-        self.mass, self.inertia = disc_masses(scene, packing)
+        self.mass, self.inertia = prepared.mass, prepared.inertia
         g = scene.material.g
         wet = scene.water.enabled
         self.core = self.water_engine = None
         if self.law == "paper":
-            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene, packing,
+            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene.settings, packing,
                                                                              tuple(self.flat_walls.values()))
             ties = self.core.ties
             x_only = ties.moving if ties is not None else None
@@ -231,10 +235,10 @@ class YadeCoupling:
         if self.law == "paper":  # the core moves its own flat walls (PoreDEM)
             self.base = self.core.base
         else:
-            self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene), self.scene.numerics.dt)
+            self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene.settings), self.scene.numerics.dt)
             self.per_step = True  # Python sets the velocity before each O.step
-        flat = pore_dem.moving_flat_walls(self.scene, tuple(self.flat_walls.values()))
-        ids = (self.ids[pore_dem.moving_walls(self.scene, self.packing)].tolist()
+        flat = pore_dem.moving_flat_walls(self.scene.settings, tuple(self.flat_walls.values()))
+        ids = (self.ids[pore_dem.moving_walls(self.scene.settings, self.packing)].tolist()
                + [self.wall_ids[code] for code, m in zip(self.flat_walls, flat) if m and code in self.wall_ids])
         if not ids:
             return []
@@ -343,7 +347,7 @@ class YadeCoupling:
         walls = tuple(self.flat_walls.values())
         faces = np.array([w.position for w in walls])
         if self.base is not None and walls:
-            carried = pore_dem.moving_flat_walls(self.scene, walls) & np.array([w.axis == 0 for w in walls])
+            carried = pore_dem.moving_flat_walls(self.scene.settings, walls) & np.array([w.axis == 0 for w in walls])
             faces = faces + self.base.disp * carried
         return faces
 

@@ -59,7 +59,7 @@ def wet_box_steps(n=12):
     s = s.with_overrides({"loading": {"type": "cosine", "amplitude": 0.0, "side_walls": "springs"},
                           "contact": {"ks_wall": 1e3, "eta_s_wall": 0.5}})
     pk = wet_box(jitter=0.05)
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     side = np.isin(pk.group, [pg.WALL_LEFT, pg.WALL_RIGHT])
     out, fused = [], 0
     for k in range(n):

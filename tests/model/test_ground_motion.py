@@ -95,7 +95,7 @@ def test_el_centro_preset_reading():
     assert os.path.isfile(sc.loading.record)
     t, a_g = gm.read_record(sc.loading.record)
     assert len(t) == 1560 and np.allclose(np.diff(t), 0.02)
-    a = gm.input_acceleration(sc)
+    a = gm.input_acceleration(sc.settings)
     t_peak = t[np.argmax(np.abs(a_g))] * sc.loading.time_scale
     assert t_peak == pytest.approx(0.0408)
     assert abs(a(t_peak)) == pytest.approx(15.0, rel=1e-4)
@@ -107,6 +107,6 @@ def test_el_centro_preset_reading():
 
 def test_scene_adapter_cosine_and_none():
     sc = scenes.preset("liquefaction_case1")
-    a = gm.input_acceleration(sc)
+    a = gm.input_acceleration(sc.settings)
     assert a(0.0) == pytest.approx(15.0) and a(0.01) == pytest.approx(-15.0)
-    assert gm.input_acceleration(scenes.preset("quicksand_case1")) is None
+    assert gm.input_acceleration(scenes.preset("quicksand_case1").settings) is None

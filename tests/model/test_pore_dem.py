@@ -33,7 +33,7 @@ def wet_box(seed=2, jitter=0.0):
 def test_masses_per_unit_thickness():
     """SPEC §1 (eq 15a's r^3 is a typo): m = rho f pi r^2, I = m r^2 / 2."""
     pk = Packing(np.array([[0.0, 0.0], [1e-3, 0.0]]), [0.4e-3, 0.5e-3], [0, 1], [5.0, 1.0])
-    m, inertia = disc_masses(scene(material={"rho": 2000.0}), pk)
+    m, inertia = disc_masses(scene(material={"rho": 2000.0}).settings, pk)
     np.testing.assert_allclose(m, 2000.0 * np.array([5.0, 1.0]) * np.pi * np.array([0.4e-3, 0.5e-3]) ** 2, rtol=1e-15)
     np.testing.assert_allclose(inertia, m * np.array([0.4e-3, 0.5e-3]) ** 2 / 2, rtol=1e-15)
 
@@ -45,16 +45,16 @@ def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
     s = scene(loading={"type": "cosine", "amplitude": 15.0, "frequency": 50.0, "moves": "box"},
               numerics={"dt": 1e-6})
     pk = wet_box()
-    core = PoreDEM(s, pk)
-    np.testing.assert_array_equal(moving_walls(s, pk), pk.group != 0)
+    core = PoreDEM(s.settings, pk)
+    np.testing.assert_array_equal(moving_walls(s.settings, pk), pk.group != 0)
     u, w = 0.0, 2 * np.pi * 50.0
     for k in range(1, 31):
         core.step(pk.xz)
         u += core.wall_velocity * 1e-6
         assert u == pytest.approx(15.0 / w**2 * (1 - np.cos(w * k * 1e-6)), rel=1e-6)
-    np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}), pk), pk.group == pg.WALL_BOTTOM)
-    assert moving_walls(scene(), pk).shape == (len(pk.r),) and not moving_walls(scene(), pk).any()
-    still = PoreDEM(scene(), pk)
+    np.testing.assert_array_equal(moving_walls(scene(loading={"type": "cosine"}).settings, pk), pk.group == pg.WALL_BOTTOM)
+    assert moving_walls(scene().settings, pk).shape == (len(pk.r),) and not moving_walls(scene().settings, pk).any()
+    still = PoreDEM(scene().settings, pk)
     still.step(pk.xz)
     assert still.base is None and still.wall_velocity == 0.0
 
@@ -62,7 +62,7 @@ def test_wall_velocity_lands_the_walls_on_the_cosine_displacement():
 def test_bad_numerics_are_refused():
     pk = wet_box()
     with pytest.raises(ValueError, match=r"\[numerics\] dt"):
-        PoreDEM(scene(numerics={"dt": 1e-3}), pk)
+        PoreDEM(scene(numerics={"dt": 1e-3}).settings, pk)
 
 
 def wet_scene(rebuild_interval=4, **water):
@@ -85,8 +85,8 @@ def test_step_order_rebuilds_water_steps_and_held_forces(compiled):
     """Rebuilds at k > 0, k % rebuild_interval == 0; water advanced only at k % water_interval == 0
     and by water_interval dt; the pressure forces of eq 33 recomputed then and held in between."""
     pk = wet_box()
-    core = PORE_DEM[compiled](wet_scene(q_w=1e-4), pk)
-    dry = PORE_DEM[compiled](scene(numerics={"dt": 1e-6}), pk)
+    core = PORE_DEM[compiled](wet_scene(q_w=1e-4).settings, pk)
+    dry = PORE_DEM[compiled](scene(numerics={"dt": 1e-6}).settings, pk)
     W_seen, F_seen = [], []
     for k in range(10):
         xz = moving_positions(pk, k)
@@ -110,7 +110,7 @@ def test_pressure_forces_use_the_area_of_eq45(compiled):
     ([A]_t = ([A]_{t-dt} + A'_t)/2), the same U that drives the flows."""
     pk = wet_box()
     s = wet_scene(rebuild_interval=1000, smoothing=True)
-    core = PORE_DEM[compiled](s, pk)
+    core = PORE_DEM[compiled](s.settings, pk)
     A_used = pg.measure(core.water.net, pk.xz, core.r).void_area
     for k in range(3):
         xz = moving_positions(pk, 3 * k)
@@ -129,9 +129,9 @@ def test_pressure_forces_use_the_area_of_eq45(compiled):
 def test_dry_scene_has_no_water_and_nan_pressures():
     pk = wet_box()
     s = scene()
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     assert core.water is None and core.water_model is None and pore_dem.pore_state(core.water_model, pk.xz) is None
-    assert pore_dem.water_model(s, pk) is None
+    assert pore_dem.water_model(s.settings, pk) is None
     bounds = pk.block_bounds(s.output.block_z)
     dry_blocks = pore_dem.block_pressures(core.water_model, pk.xz, bounds)
     assert dry_blocks.shape == (len(bounds),) and np.all(np.isnan(dry_blocks))
@@ -142,7 +142,7 @@ def test_dry_scene_has_no_water_and_nan_pressures():
 def test_block_pressures_are_means_of_the_pores_in_each_block():
     pk = wet_box()
     s = wet_scene()
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     rng = np.random.default_rng(0)
     core.water.W = core.water.W * (1 + 0.1 * rng.random(core.water.net.n_pores))
     net, A, U = pore_dem.pore_state(core.water_model, pk.xz)
@@ -163,7 +163,7 @@ def test_window_porosity_moves_with_the_base():
     the base until the particle's centre is on its edge sees half the disc."""
     xz = np.array([[0.0, 0.0], [4 * R, 0.0], [2 * R, -2 * R], [2 * R, 0.0]])
     pk = Packing(xz, np.full(4, R), [pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM, 0], np.ones(4))
-    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 1.0]}), pk)
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 1.0]}).settings, pk)
     assert (window.x0, window.x1) == pytest.approx((R, 3 * R), rel=1e-12)
     area = (window.x1 - window.x0) * (window.z1 - window.z0)
     big = type(window)(-5 * R, 5 * R, -R, R)
@@ -172,7 +172,7 @@ def test_window_porosity_moves_with_the_base():
     assert 0 < area and np.isnan(pore_dem.window_porosity(pk, None, xz))
     for keep in ([2, 3], [0, 2, 3], [1, 2, 3]):        # no side column, only the left, only the right
         part = Packing(xz[keep], np.full(len(keep), R), np.array(pk.group)[keep], np.ones(len(keep)))
-        assert pore_dem.porosity_window(scene(), part) is None
+        assert pore_dem.porosity_window(scene().settings, part) is None
 
 
 def test_kinetic_energy_with_spin_of_the_mobile_discs():
@@ -191,7 +191,7 @@ def test_a_disc_pressed_into_a_wall_feels_the_spring():
     law reported for these positions before the step (PaperLaw.contact_pairs)."""
     s = scene(contact={"spring": "a", "eta_n": 0.0}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R - 1e-7]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     ahead = core.law.contact_pairs(pk.xz)
     F, _ = core.step(pk.xz)
     for got, expected in zip(ahead, core.contact.contact_pairs()):
@@ -215,7 +215,7 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     comes back with -Vn''/Vn = e."""
     s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     xz = pk.xz.copy()
     core.step(xz.copy())
     xz[1, 1] = 2 * R - 5e-9                 # approach at 0.1 m/s: contact
@@ -226,7 +226,7 @@ def test_a_disc_leaving_a_wall_gets_the_separation_adjustment():
     assert set(fixes) == {1}
     np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6)
     # the caller's velocities, when given, are the ones adjusted (YADE's state.vel instead of du/dt)
-    twin = PoreDEM(s, pk)
+    twin = PoreDEM(s.settings, pk)
     for z in (2 * R + 5e-9, 2 * R - 5e-9):
         twin.step(np.array([[0.0, 0.0], [0.0, z]]))
     _, fixes = twin.step(xz.copy(), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
@@ -238,7 +238,7 @@ def step_beside_the_reference(core, model, s, pk, moving, n=400):
     (v += (F/m + g) dt, x += v dt, the ``moving`` walls at the input velocity, adjusted velocities
     set before) beside those of the reference ``model``: positions equal to 1e-10 R and spins to
     1e-9 at every step. Returns the largest displacement [m]."""
-    m, _ = disc_masses(s, pk)
+    m, _ = disc_masses(s.settings, pk)
     mob, dt, g = pk.mobile, s.numerics.dt, s.material.g
     up = s.material.rho_w * np.pi * pk.r**2 * g
     x, v = pk.xz.copy(), np.zeros_like(pk.xz)
@@ -278,9 +278,9 @@ def test_steps_match_the_reference_without_yade(variant):
     s = scene(material={"g": 1000.0}, loading=loading, numerics={"dt": 1e-6, "rebuild_interval": 25, "water_interval": 2},
               **tables)
     pk = wet_box(seed=5, jitter=0.05)
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     model = ref.ReferenceModel(s.as_dict(), pk)   # the paper's readings, walls included (READINGS D1)
-    moved = step_beside_the_reference(core, model, s, pk, moving_walls(s, pk))
+    moved = step_beside_the_reference(core, model, s, pk, moving_walls(s.settings, pk))
     np.testing.assert_allclose(core.water.total_water(), model.water.total(), rtol=1e-12)
     assert core.water_model.n_rebuilds == model.counts["rebuilds"] == 15 and moved > 0.01 * R
     assert np.abs(model.omega).max() > 0 and core.water.balance_error() < 1e-12
@@ -288,7 +288,7 @@ def test_steps_match_the_reference_without_yade(variant):
 
 def test_rebuild_every_step_when_asked():
     pk = wet_box()
-    core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}), pk)
+    core = PoreDEM(scene(water={"enabled": True}, numerics={"dt": 1e-6, "rebuild_interval": 1}).settings, pk)
     for k in range(4):
         core.step(moving_positions(pk, k))
     assert core.water_model.n_rebuilds == 3     # at k = 1, 2, 3 (never at k = 0)
@@ -302,8 +302,8 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
     ks, eta, dx, dt = 1e3, 0.5, 1e-8, 1e-7
     tables = dict(contact={"ks_wall": ks, "eta_s_wall": eta}, numerics={"dt": dt})
     pk = wet_box()
-    ties = PORE_DEM[compiled](scene(loading={"type": "cosine", "amplitude": 0.0, "side_walls": "springs"}, **tables), pk)
-    fixed = PORE_DEM[compiled](scene(loading={"type": "cosine", "amplitude": 0.0}, **tables), pk)
+    ties = PORE_DEM[compiled](scene(loading={"type": "cosine", "amplitude": 0.0, "side_walls": "springs"}, **tables).settings, pk)
+    fixed = PORE_DEM[compiled](scene(loading={"type": "cosine", "amplitude": 0.0}, **tables).settings, pk)
     left = np.flatnonzero(pk.group == pg.WALL_LEFT)
     left = left[np.argsort(pk.xz[left, 1])]
     d, below, above = left[2], left[1], left[3]
@@ -323,15 +323,15 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
 def test_side_wall_ties_refuse_a_step_above_their_limit():
     """dt must stay below sqrt(m_min / k's) of the moving wall discs (engines.model.side_walls)."""
     pk = wet_box()
-    m_wall = disc_masses(scene(), pk)[0][pk.group == pg.WALL_LEFT].min()
+    m_wall = disc_masses(scene().settings, pk)[0][pk.group == pg.WALL_LEFT].min()
     dt = 1e-7
     for ks, ok in ((0.98 * m_wall / dt**2, True), (1.02 * m_wall / dt**2, False)):
         s = scene(loading={"type": "cosine", "side_walls": "springs"}, contact={"ks_wall": ks}, numerics={"dt": dt})
         if ok:
-            PoreDEM(s, pk)
+            PoreDEM(s.settings, pk)
         else:
             with pytest.raises(ValueError, match="side-wall ties"):
-                PoreDEM(s, pk)
+                PoreDEM(s.settings, pk)
 
 
 def fused_step(core, xz, vel=None):
@@ -365,7 +365,7 @@ def test_one_compiled_call_per_step_equals_the_general_step(wet):
     else:
         s = wet_scene(q_w=1e-4, k1=2e6, smoothing=True, substep=True)
     pk = wet_box(jitter=0.05)
-    general, fused = PoreDEM(s, pk), PoreDEM(s, pk)
+    general, fused = PoreDEM(s.settings, pk), PoreDEM(s.settings, pk)
     n_fused = 0
     for k in range(10):
         xz = moving_positions(pk, k)
@@ -382,7 +382,7 @@ def test_one_compiled_call_per_step_equals_the_general_step(wet):
         assert general.water.balance.inflow > 0
         assert fused.water.balance.inflow == pytest.approx(general.water.balance.inflow, rel=1e-13)
         assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
-    every = PoreDEM(wet_scene(rebuild_interval=1), pk)
+    every = PoreDEM(wet_scene(rebuild_interval=1).settings, pk)
     every.step(pk.xz)
     assert every.kernel_step_args(np.arange(len(pk.r)), np.zeros((len(pk.r), 2))) is None   # k = 1: a rebuild is due
 
@@ -392,7 +392,7 @@ def test_one_compiled_call_adjusts_the_caller_velocities():
     -Vn''/Vn = e from the caller's velocities, as in the general step."""
     s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
-    core = PoreDEM(s, pk)
+    core = PoreDEM(s.settings, pk)
     for z in (2 * R + 5e-9, 2 * R - 5e-9):
         fused_step(core, np.array([[0.0, 0.0], [0.0, z]]))
     _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
@@ -406,8 +406,8 @@ def test_an_isolated_pair_separating_keeps_its_momentum():
     s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
     r = np.array([R, 0.7 * R])
     pk = Packing(np.array([[0.0, 0.0], [r.sum() + 5e-9, 0.0]]), r, [0, 0], [1.0, 1.0])
-    core = PoreDEM(s, pk)
-    m, _ = disc_masses(s, pk)
+    core = PoreDEM(s.settings, pk)
+    m, _ = disc_masses(s.settings, pk)
     for gap in (5e-9, -5e-9):                              # approach at 0.1 m/s: contact
         core.step(np.array([[0.0, 0.0], [r.sum() + gap, 0.0]]))
     vel = np.array([[-0.3, 0.0], [0.5, 0.0]])
@@ -426,16 +426,16 @@ def test_flat_walls_of_a_scene_stand_at_the_wall_discs_inner_faces():
     group = np.where(row == 0, pg.WALL_BOTTOM, np.where(col == 0, pg.WALL_LEFT, np.where(col == 6, pg.WALL_RIGHT, 0)))
     pk = Packing(grid, np.where(group == 0, 0.9 * R, R), group, np.ones(len(grid)))
     flat = {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "a"}}
-    walls = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 1e-4, "sides": "drained"}), pk)
+    walls = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 1e-4, "sides": "drained"}).settings, pk)
     left, right, bottom = (pk.group == g for g in (pg.WALL_LEFT, pg.WALL_RIGHT, pg.WALL_BOTTOM))
     assert walls == {pg.WALL_BOTTOM: FlatWall(1, float(np.max(pk.xz[bottom, 1] + R)), 1, "inflow"),
                      pg.WALL_LEFT: FlatWall(0, float(np.max(pk.xz[left, 0] + R)), 1, "drained"),
                      pg.WALL_RIGHT: FlatWall(0, float(np.min(pk.xz[right, 0] - R)), -1, "drained")}
-    closed = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 0.0}), pk)
+    closed = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 0.0}).settings, pk)
     assert [w.boundary for w in closed.values()] == ["undrained"] * 3
-    assert pore_dem.scene_flat_walls(scene(), pk) == {}  # kind = "discs"
+    assert pore_dem.scene_flat_walls(scene().settings, pk) == {}  # kind = "discs"
     faces = {code: w.position for code, w in walls.items()}
-    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 0.5]}), pk.particles(), faces)
+    window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 0.5]}).settings, pk.particles(), faces)
     h = pk.bed_top - faces[pg.WALL_BOTTOM]
     assert (window.x0, window.x1, window.z0, window.z1) == (faces[pg.WALL_LEFT], faces[pg.WALL_RIGHT],
                                                             faces[pg.WALL_BOTTOM], faces[pg.WALL_BOTTOM] + 0.5 * h)
@@ -448,7 +448,7 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
     dz = np.sqrt((rw + r) ** 2 - rw**2)  # the particle on the two discs at x = 0, 2 rw
     xz = np.array([[0.0, 0.0], [2 * rw, 0.0], [rw, dz]])
     pk = Packing(xz, [rw, rw, r], [pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0], np.ones(3))
-    walls = pore_dem.scene_flat_walls(scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"}), pk)
+    walls = pore_dem.scene_flat_walls(scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"}).settings, pk)
     assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0
 
 
@@ -475,9 +475,9 @@ def test_flat_walls_steps_match_the_reference_without_yade(moves):
     lo, hi = pk.xz.min(axis=0) - pk.r.max() - 1e-5, pk.xz.max(axis=0) + pk.r.max() + 1e-5  # 10 um off the discs
     x0, x1, z0 = lo[0], hi[0], lo[1]
     walls = (FlatWall(1, z0, +1, "inflow"), FlatWall(0, x0, +1, "undrained"), FlatWall(0, x1, -1, "drained"))
-    core = NumpyPoreDEM(s, pk, walls)
+    core = NumpyPoreDEM(s.settings, pk, walls)
     tables = s.as_dict()
-    moving = pore_dem.moving_flat_walls(s, walls)
+    moving = pore_dem.moving_flat_walls(s.settings, walls)
     assert moving.tolist() == {None: [False] * 3, "bottom": [True, False, False], "box": [True] * 3}[moves]
     tables["walls"] = {"flat": as_tables(walls, moving)}
     model = ref.ReferenceModel(tables, pk)
@@ -508,8 +508,8 @@ def test_the_compiled_pore_dem_with_flat_walls_is_the_numpy_one():
     pk = wet_box(seed=5, jitter=0.05).particles()
     lo, hi = pk.xz.min(axis=0) - pk.r.max() - 1e-5, pk.xz.max(axis=0) + pk.r.max() + 1e-5
     walls = (FlatWall(1, lo[1], +1, "inflow"), FlatWall(0, lo[0], +1, "undrained"), FlatWall(0, hi[0], -1, "drained"))
-    cores = [cls(s, pk, walls) for cls in (NumpyPoreDEM, PoreDEM)]
-    m, _ = disc_masses(s, pk)
+    cores = [cls(s.settings, pk, walls) for cls in (NumpyPoreDEM, PoreDEM)]
+    m, _ = disc_masses(s.settings, pk)
     x, v = pk.xz.copy(), np.zeros_like(pk.xz)
     for _ in range(400):
         (Fa, fa), (Fb, fb) = (core.step(x.copy()) for core in cores)
@@ -546,6 +546,6 @@ def test_weight_carried_by_wall_discs_or_flat_walls(kind):
         pk = Packing(xz, np.r_[r, r, np.full(11, wall_r)], np.r_[pg.WALL_NONE, pg.WALL_NONE, np.full(11, pg.WALL_BOTTOM)],
                      np.r_[f, 1.0, np.ones(11)])
         first, second = np.arange(13) == 0, np.arange(13) == 1
-        assert weight_carried(sc, pk, first) == pytest.approx(carried, abs=1e-9)
-        assert weight_carried(sc, pk, second) == 0.0
-        assert weight_carried(sc, pk) == pytest.approx(carried * f / (f + 1), abs=1e-9)
+        assert weight_carried(sc.settings, pk, first) == pytest.approx(carried, abs=1e-9)
+        assert weight_carried(sc.settings, pk, second) == 0.0
+        assert weight_carried(sc.settings, pk) == pytest.approx(carried * f / (f + 1), abs=1e-9)

@@ -49,7 +49,7 @@ def test_steps_to_rebuild_counts_to_the_step_at_which_rebuild_due_holds():
 def test_the_model_records_the_step_of_its_last_build():
     sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 4, "water_interval": 1}})
     pk = Packing.load(sc.packing.file)
-    wm = water_model(sc, pk)
+    wm = water_model(sc.settings, pk)
     assert isinstance(wm, WaterModel) and wm.k_built == 0
     for k in range(10):
         wm.step(k, pk.xz)
@@ -63,7 +63,7 @@ def moved_model(cls, d, interval=1000):
     sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": interval, "water_interval": 1,
                                                         "rebuild_distance": d}})
     pk = Packing.load(sc.packing.file)
-    return water_model(sc, pk, cls), pk, int(np.flatnonzero(pk.mobile)[0])
+    return water_model(sc.settings, pk, cls), pk, int(np.flatnonzero(pk.mobile)[0])
 
 
 def shifted(xz, a, dist):

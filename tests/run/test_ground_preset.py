@@ -71,8 +71,8 @@ def test_the_ground_carries_its_overburden(ground):
     packing's positions, engines.model.pore_dem.weight_carried; the tangential springs of the
     deposit, which this cannot recover from positions, carry the rest)."""
     sc, pk = ground
-    assert weight_carried(sc, pk) == pytest.approx(1.0, abs=0.05)
+    assert weight_carried(sc.settings, pk) == pytest.approx(1.0, abs=0.05)
     m, z = pk.mobile, pk.xz[:, 1]
     for q in (0.1, 0.25, 0.5, 0.75, 0.9):
         above = m & (z > np.quantile(z[m], q))
-        assert weight_carried(sc, pk, above) == pytest.approx(1.0, abs=0.05), q
+        assert weight_carried(sc.settings, pk, above) == pytest.approx(1.0, abs=0.05), q

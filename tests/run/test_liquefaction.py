@@ -66,7 +66,7 @@ def test_driven_base_follows_the_integrated_input(case, law):
     n, every = 400, 50
     cp = YadeCoupling(sc, pk)
     xs = run_recording(cp, n, every)
-    t, a, v, u = base_history(gm.input_acceleration(sc), sc.numerics.dt, n)
+    t, a, v, u = base_history(gm.input_acceleration(sc.settings), sc.numerics.dt, n)
     bottom = pk.group == pg.WALL_BOTTOM
     moved = xs[:, bottom, 0] - pk.xz[bottom, 0]
     ulp = np.spacing(np.abs(pk.xz[:, 0]).max())  # round-off of a coordinate: x += v dt each step
@@ -86,8 +86,8 @@ def test_side_walls_on_springs_follow_their_ties():
     cp = YadeCoupling(sc, pk)
     xs = run_recording(cp, n, 1)
     ties, dt = cp.core.ties, sc.numerics.dt
-    m = disc_masses(sc, pk)[0]
-    _, _, _, u = base_history(gm.input_acceleration(sc), dt, n)
+    m = disc_masses(sc.settings, pk)[0]
+    _, _, _, u = base_history(gm.input_acceleration(sc.settings), dt, n)
     x_prev, x, v = pk.xz[:, 0].copy(), pk.xz[:, 0].copy(), np.zeros(len(pk.r))
     side = ties.moving
     bottom = pk.group == pg.WALL_BOTTOM
@@ -127,7 +127,7 @@ def test_drained_side_flux_in_the_water_engine():
     for case, k3 in ((3, 1e3), (1, 0.0)):
         sc = preset(case)
         pk = packing_of(sc)
-        wm = water_model(sc, pk, WaterModel)
+        wm = water_model(sc.settings, pk, WaterModel)
         w, s = wm.water, sc.water
         A = pg.measure(w.net, pk.xz, pk.r).void_area
         U0 = 100.0
@@ -159,7 +159,7 @@ def test_history_porosity_is_the_window_porosity_and_the_columns(tmp_path):
     csv = 1e-8  # history.csv holds 9 significant digits
     win = box_window(pk, sc.output.porosity_window)
     assert h["porosity"][0] == pytest.approx(porosity(pk.xz[pk.mobile], pk.r[pk.mobile], win), rel=csv)
-    t, a, v, u = base_history(gm.input_acceleration(sc), sc.numerics.dt, 300)
+    t, a, v, u = base_history(gm.input_acceleration(sc.settings), sc.numerics.dt, 300)
     np.testing.assert_allclose(h["base_disp"], u[::100][:len(h["t"])], rtol=csv, atol=0)
     np.testing.assert_allclose(h["base_acc"], a[::100][:len(h["t"])], rtol=csv)
     assert np.all(np.abs(h["side_left_dx"]) < 1e-6) and np.any(h["side_left_dx"] != 0)
@@ -210,7 +210,7 @@ def test_tie_time_step_is_refused_before_the_run(tmp_path):
     assert "\n" not in str(err.value) and any(abs(x / limit - 1) < 5e-3 for x in stated), (limit, str(err.value))
     assert not (tmp_path / "out").exists()
     with pytest.raises(ValueError, match="side-wall ties"):
-        PoreDEM(sc, pk)
+        PoreDEM(sc.settings, pk)
     assert limit * np.sqrt(10) > sc.numerics.dt
     preflight(preset(1, contact={"ks_wall": 1e10}), pk, str(tmp_path / "out"))  # a limit sqrt(10) x longer: accepted
 

@@ -82,7 +82,7 @@ def test_the_seismic_packing_carries_its_dense_top():
     their weight until deposition settled them again under it: [packing] settle_loaded)."""
     sc = scenes.preset("liquefaction_case1")
     pk = Packing.load(sc.packing.file)
-    lift = weight_carried(sc, pk, pk.mobile & (pk.density_factor > 1))
+    lift = weight_carried(sc.settings, pk, pk.mobile & (pk.density_factor > 1))
     assert 0.5 < lift < 2.0, f"the contacts carry {lift:.2f} of the dense top's weight"
 
 
@@ -91,10 +91,10 @@ def test_presets_build_in_the_current_engine(case):
     """The water core builds on the preset, with its base motion and side-wall ties."""
     sc = scenes.preset(f"liquefaction_case{case}")
     pk = Packing.load(sc.packing.file)
-    dem = PoreDEM(sc, pk)
+    dem = PoreDEM(sc.settings, pk)
     assert dem.water.net.n_pores > 150 and dem.water.net.pore_surface.any()
     assert dem.ties is not None and dem.ties.moving.sum() == 22
-    bm = BaseMotion(input_acceleration(sc), sc.numerics.dt)
+    bm = BaseMotion(input_acceleration(sc.settings), sc.numerics.dt)
     for _ in range(10):
         v = bm.step()
         dem.step(pk.xz)

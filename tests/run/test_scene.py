@@ -54,7 +54,7 @@ def test_dt_above_the_stability_limit_is_refused():
     sc = scenes.preset("quicksand_case1", {"numerics": {"dt": 1e-4}})
     pk = Packing(np.array([[0.0, 1e-3], [0.0, 0.0]]), np.array([0.5e-3, 0.5e-3]), [0, 1], [1.0, 1.0])
     with pytest.raises(ValueError, match=r"\[numerics\] dt .* stability limit"):
-        PoreDEM(sc, pk)
+        PoreDEM(sc.settings, pk)
 
 
 def test_paths_resolve_against_the_file_that_names_them(tmp_path):

@@ -309,25 +309,25 @@ def test_fast_variants_are_the_validated_setting_on_scenes_that_pass():
     with the verdict "pass" on that scene in the committed validation (docs/tradeoffs/validation.json),
     and dt = "auto" names, per factor, exactly the scenes where its setting passes."""
     from engines import ROOT
-    from engines.model import time_step
+    from engines.run.preflight import describe_auto_dt
     with open(os.path.join(ROOT, "docs", "tradeoffs", "validation.json")) as f:
         validation = json.load(f)
     assert validation["fast"] == {k: v for k, v in tr.FAST.items() if k != "name"}
-    assert scenes.preset("liquefaction_case1").numerics.dt_auto_factor == time_step.VALIDATED_FACTOR
+    assert scenes.preset("liquefaction_case1").numerics.dt_auto_factor == tr.VALIDATED_FACTOR
 
     def passing(scene):
         """{dt_auto_factor: numerics} of the settings that pass on ``scene``."""
         e = validation["scenes"][scene]
-        out = {time_step.VALIDATED_FACTOR: _numerics(tr.FAST)} if e["verdict"] == "pass" else {}
+        out = {tr.VALIDATED_FACTOR: _numerics(tr.FAST)} if e["verdict"] == "pass" else {}
         out.update({c["settings"]["numerics.dt_auto_factor"]: _numerics(c["settings"])
                     for c in e.get("candidates", {}).values() if c["verdict"] == "pass"})
         return out
 
-    for factor, named in time_step.VALIDATED_ON.items():
+    for factor, named in tr.VALIDATED_ON.items():
         assert sorted(named) == sorted(s for s in validation["scenes"] if factor in passing(s)), factor
-        said = time_step.describe(1e-5, {"contact": 1e-5 / factor}, "contact", 1, factor)  # what dt = "auto" prints
+        said = describe_auto_dt(1e-5, {"contact": 1e-5 / factor}, "contact", 1, factor)  # what dt = "auto" prints
         assert all(s in said for s in named) and "validated over the whole run on" in said
-    assert "not validated" in time_step.describe(1e-5, {"contact": 2e-5}, "contact", 1, 0.5)
+    assert "not validated" in describe_auto_dt(1e-5, {"contact": 2e-5}, "contact", 1, 0.5)
     for path in os.listdir(scenes.SCENE_DIR):
         if path.endswith("_fast.toml"):
             scene = path[:-len("_fast.toml")]

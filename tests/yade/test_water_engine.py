@@ -298,7 +298,7 @@ def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
     _assert_same_runs(runs)
     assert kernel_lists == runs[0][3] - 1  # every list but the first step's rebuilt inside the compiled calls
     assert min(compiled_steps) > 150
-    side = side_wall_ties(sc, packing).moving
+    side = side_wall_ties(sc.settings, packing).moving
     assert np.all(runs[0][0][side, 0] != packing.xz[side, 0]) and np.all(runs[0][1][side, 0] != 0)
     bottom = packing.group == pg.WALL_BOTTOM
     assert np.all(runs[0][0][bottom, 0] > packing.xz[bottom, 0])

@@ -1,0 +1,51 @@
+"""One start of a run: on every preset scene (the flat-wall one included) the limits preflight checks,
+and dt = "auto" is chosen from, are those of the network the engines run on (engines.model.start)."""
+import glob
+import os
+
+import pytest
+import yade  # noqa: F401  (fails loudly if YADE is missing: make test installs it)
+
+from engines.model import pores as pg
+from engines.model.start import Start, limits
+from engines.run import scene as scenes
+from engines.run.preflight import preflight, timed
+from engines.yade.coupling import YadeCoupling
+from engines.yade.deposition import scene_packing
+from packing.packing import Packing
+
+PRESETS = sorted(os.path.basename(p)[:-len(".toml")] for p in glob.glob(os.path.join(scenes.SCENE_DIR, "*.toml")))
+
+
+def packing_of(sc):
+    """The preset's packing file; a preset that deposits its own on the quick-sand packing (a deposit
+    is a long run; the start does not depend on where the packing came from)."""
+    if sc.packing.source == "file":
+        return scene_packing(sc)
+    return Packing.load(os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv"))
+
+
+def running_limits(settings, cp):
+    """The limits of the network the coupling ``cp`` built (its water model's) at its start."""
+    pores = None
+    if cp.water is not None:
+        net = cp.water.net
+        pores = net, pg.measure(net, cp.positions(), cp.packing.r), cp.water
+    ties = cp.core.ties if cp.core is not None else None
+    return limits(settings, cp.packing, cp.mass, ties, pores)
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_preflight_limits_are_those_of_the_network_that_runs(name, tmp_path):
+    sc = scenes.preset(name)
+    pk = packing_of(sc)
+    start = Start(sc.settings, pk)
+    preflight(sc, pk, str(tmp_path / "out"), start)
+    cp = YadeCoupling(timed(sc, start), pk)  # its own Start; its engines build their own (compiled) pores
+    ran = running_limits(start.settings, cp)
+    assert set(ran) == set(start.limits)
+    for key, value in start.limits.items():
+        assert ran[key] == pytest.approx(value, rel=1e-6), key  # eigsh's tolerance 1e-8
+    if sc.water.enabled:
+        assert cp.water.net.n_pores == start.pores[0].n_pores
+    assert len(cp.packing.r) == len(start.packing.r) and len(cp.flat_walls) == len(start.flat_walls)
