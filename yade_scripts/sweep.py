@@ -36,7 +36,10 @@ def main(argv=None):
     if a.table:
         if not a.script:
             ap.error("--table needs --script")
-        jobs = jobs_from_table(a.table, a.script)
+        try:
+            jobs = jobs_from_table(a.table, a.script)
+        except ValueError as e:  # the table refused, in one line
+            ap.error(str(e))
     else:
         with open(a.jobs) as f:
             jobs = [Job(d["name"], d["argv"], d.get("env", {}), d.get("timeout")) for d in json.load(f)]

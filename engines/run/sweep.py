@@ -22,9 +22,9 @@ is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the
 on its workers, which need ROOT and the sweep's directory on a shared file system, not this
 project on their path (the runner is sent to them by value). YADE's own parameter tables
 (yade-batch's format) become jobs with ``jobs_from_table``: one job per table line, run as
-yade-batch runs it (YADE_BATCH=table:line, read by the script with
-``yade.utils.readParamsFromTable``). The module imports nothing of YADE: the sweep runs under a
-plain ``python3``; YADE's table reader runs in a ``yade -n`` process.
+yade-batch runs it (YADE_BATCH=table:line, from which the script reads its line). Tables are
+read as data (engines.run.table: literal values only). The module imports nothing of YADE: the
+sweep runs under a plain ``python3``.
 
 The command line is yade_scripts/sweep.py.
 """
@@ -34,11 +34,12 @@ import re
 import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
+
+from engines.run.table import BATCH, DESCRIPTION, read_table
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
@@ -256,31 +257,12 @@ def format_summary(records):
 
 
 def jobs_from_table(table, script, yade=("yade", "-n")):
-    """Jobs from a yade-batch parameter table: one per line, named by its description (the
-    ``description`` column, or YADE's synthesised name=value list), run as ``yade -x script``
-    with YADE_BATCH=table:line, so the script reads its line by readParamsFromTable."""
+    """Jobs from a yade-batch parameter table (read as data by engines.run.table, without YADE):
+    one per line, named by its description, run as ``yade -x script`` with YADE_BATCH=table:line,
+    from which the script reads its line (engines.run.command_line)."""
     table = os.path.abspath(table)
     jobs = []
-    for line, params in sorted(read_table(table, yade).items()):
-        name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params["description"])
-        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
+    for line, params in sorted(read_table(table).items()):
+        name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params[DESCRIPTION])
+        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}"}))
     return jobs
-
-
-def read_table(table, yade=("yade", "-n")):
-    """{line number: {column: text}} of a yade-batch table, read by YADE's own TableParamReader
-    in a ``yade -x`` process running this file (so this process needs no YADE)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        result = os.path.join(tmp, "table.json")
-        run = subprocess.run([*yade, "-x", os.path.abspath(__file__), table, result], capture_output=True, text=True,
-                             env=_environment({}))
-        if run.returncode != 0 or not os.path.exists(result):
-            why = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}"])[-1]
-            raise ValueError(f"{table}: YADE could not read the table: {why}")
-        with open(result) as f:
-            return {int(line): params for line, params in json.load(f).items()}
-
-
-if __name__ == "__main__":  # under yade -x, from read_table: TABLE RESULT.json
-    from yade.utils import TableParamReader  # YADE's own reader of the format
-    _write_json(sys.argv[2], TableParamReader(sys.argv[1]).paramDict())

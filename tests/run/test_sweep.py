@@ -101,7 +101,7 @@ def test_yade_batch_table_becomes_jobs(tmp_path):
     recs = run_sweep(jobs, str(tmp_path / "sweep"), log=None)
     assert [r["status"] for r in recs] == ["ok", "ok"], recs[0]["stderr_tail"]
     assert [(tmp_path / "sweep" / n / "ab.txt").read_text() for n in ("first", "second")] == ["1.5", "2.0"]
-    with pytest.raises(ValueError, match="missing.table: YADE could not read the table: .*No such file"):
+    with pytest.raises(ValueError, match="missing.table: no such table file"):
         jobs_from_table(str(tmp_path / "missing.table"), str(script))
 
 
