@@ -178,7 +178,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
     try:  # bad scenes, packings, limits: one clear line, nothing written
         if args.resume and many:
-            jobs, plan = ensemble.resume_jobs(args.resume, args.duration)
+            jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
         elif args.resume:
             check_resume(args.resume, args.duration)
         else:

@@ -15,10 +15,15 @@ the start (the plan: seeds, perturbation, the starts' command line; "status": "r
 when the starts have ended: "completed" with the statistics and the figures
 (postproc.ensemble), or "incomplete" with each start's status. ``--resume DIR`` continues the
 starts that did not complete from their checkpoints (with ``--duration`` every start, to a later
-end) and starts those that never began, then writes the statistics again.
+end) and starts those that never began, then writes the statistics again. What runs is never
+taken from ensemble.json: the starts run the script the resume was started with (refused unless
+it has the name of the one that made the ensemble), the plan is refused unless it is one this
+project writes (integer seeds, start folders start_<seed> inside DIR, start_argv made of the
+script's own options without --out, --resume or the ensemble's).
 """
 import json
 import os
+import re
 import shutil
 import time
 
@@ -136,10 +141,59 @@ def _plain(x):
 
 
 def read_plan(out):
-    """The plan (PLAN) of the ensemble in ``out``."""
-    with open(os.path.join(out, ENSEMBLE)) as f:
-        doc = json.load(f)
+    """The plan (PLAN) of the ensemble in ``out``, checked to be one this project wrote (its
+    starts are start_<k> folders of ``out``); refuses (InputError, one line) anything else."""
+    path = os.path.join(out, ENSEMBLE)
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+    except (OSError, ValueError, RecursionError) as e:
+        raise InputError(f"{path}: cannot be read as JSON ({e})") from None
+    problem = _plan_problem(doc)
+    if problem:
+        raise InputError(f"{path}: {problem}: not an ensemble plan this project wrote; start the ensemble again "
+                         f"with --starts N --out NEW_DIR")
     return {k: doc[k] for k in PLAN}
+
+
+def _plan_problem(doc):
+    """What is wrong with an ensemble.json's plan, or None."""
+    if not isinstance(doc, dict):
+        return "not a JSON object"
+    missing = [k for k in PLAN if k not in doc]
+    if missing:
+        return f"no {', '.join(missing)}"
+    seeds = doc["seeds"]
+    if not (isinstance(seeds, list) and seeds and all(type(k) is int and k >= 0 for k in seeds)
+            and len(set(seeds)) == len(seeds)):
+        return "seeds must be a list of distinct integers >= 0"
+    if doc["n_starts"] != len(seeds) or doc["starts"] != [f"start_{k}" for k in seeds]:
+        return "n_starts and starts do not match the seeds (starts are the folders start_<seed>)"
+    size = doc["perturbation_m"]
+    if not (type(size) in (int, float) and 0 < size < float("inf")):
+        return "perturbation_m must be a number > 0 [m]"
+    if not isinstance(doc["script"], str) or not isinstance(doc["start_argv"], list) \
+            or not all(isinstance(a, str) for a in doc["start_argv"]):
+        return "script must be a name and start_argv a list of strings"
+    return None
+
+
+def _argv_problem(ap, argv):
+    """What in a plan's ``start_argv`` is not the script's own options, less the ensemble's and
+    the run folder's (the starts get those from the ensemble), or None."""
+    actions = ap._option_string_actions
+    set_here = set(OWN_OPTIONS + ("--resume", "--start"))
+    for word in argv:
+        if not word.startswith("-") or re.fullmatch(r"-[0-9.][0-9.eE+-]*", word):
+            continue
+        name = word.split("=", 1)[0]
+        found = {a for o, a in actions.items() if o == name} or \
+                {a for o, a in actions.items() if name.startswith("--") and o.startswith(name)}
+        if len(found) != 1:
+            return f"start_argv holds {word!r}, which is not an option of this script"
+        if set_here & set(found.pop().option_strings):
+            return f"start_argv holds {word!r}, which the ensemble gives each start itself"
+    return None
 
 
 def start(ap, args, script, scene):
@@ -158,14 +212,25 @@ def start(ap, args, script, scene):
     return run_starts([_start_job(plan, k) for k in seeds], out, plan, args)
 
 
-def resume_jobs(out, duration):
+def resume_jobs(ap, out, duration, script):
     """(the jobs that continue the ensemble in ``out``, its plan) (module docstring), to
     ``duration`` [s] if given (then also the plan's end); refuses (InputError) a start that
-    cannot go on, before anything runs."""
+    cannot go on, before anything runs. The jobs run ``script``, the scene script this resume was
+    started with (the plan's script is only compared with it by name, never run), with the
+    plan's start_argv only when they are the options of ``ap``, the script's parser."""
     from engines.run.command_line import check_resume
     from engines.yade.checkpoint import NAME
     from postproc.run_files import read_summary
     plan = read_plan(out)
+    made_by = os.path.basename(plan["script"])
+    if made_by != os.path.basename(script):
+        raise InputError(f"--resume {out}: this ensemble was run by {made_by!r} ({ENSEMBLE}); resume it with that "
+                         f"script, not {os.path.basename(script)}")
+    problem = _argv_problem(ap, plan["start_argv"])
+    if problem:
+        raise InputError(f"{os.path.join(out, ENSEMBLE)}: {problem}; start the ensemble again with --starts N "
+                         f"--out NEW_DIR")
+    plan = {**plan, "script": script}
     jobs = []
     for k in plan["seeds"]:
         d = start_dir(out, k)

@@ -105,7 +105,8 @@ def test_a_start_gets_the_scripts_arguments_without_the_ensembles():
     assert start_argv(ap, argv) == ["--case", "1", "--set", "water.k1=20", "--duration", "0.01"]
 
 
-def test_an_ensembles_resume_is_refused_in_one_line_before_anything_runs(tmp_path, capsys):
+def test_an_ensembles_resume_is_refused_in_one_line_before_anything_runs(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("sys.argv", [os.path.join(ROOT, "yade_scripts", "quicksand.py")])  # the script typed
     out = tmp_path / "ens"
     out.mkdir()
     plan = {"scene": "quicksand-case1", "script": os.path.join(ROOT, "yade_scripts", "quicksand.py"), "n_starts": 2,
