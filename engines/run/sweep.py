@@ -10,7 +10,8 @@ A job is a name and a command line; ``{out}`` in an argument becomes the job's d
 ``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR, where a scene
 script run from a table writes). A job runs in the directory the sweep was started from,
 wherever it runs, so relative paths in its command line mean the same on every worker. Each job
-writes there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
+writes there ``stdout.log``, ``stderr.log`` (without the lines of YADE's banner that give its
+listeners' ports and its console's cookie, BANNER) and ``job.json``: status ("running", then "ok" or
 "failed"), return code, wall and CPU seconds, command, working directory, host, and the tail of
 stderr. ``run_sweep`` returns the records of all jobs in the order given, prints one line per
 finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job
@@ -131,6 +132,40 @@ def _on_dask_worker():
         return False
 
 
+# the lines of YADE's banner that give its console's and XML-RPC server's ports and the console's
+# cookie (yade.remote: "TCP python prompt on localhost:9000, auth cookie `...'" on stderr,
+# "XMLRPC info provider on http://localhost:21000" on stdout): never written to a job's logs
+BANNER = re.compile(rb"(TCP python prompt on |XMLRPC info provider on )[^\n]*\n?")
+
+
+class _Log:
+    """A job's log file, written from a pipe (its ``fileno()``, given to the job as its stdout or
+    stderr) by a thread that leaves out YADE's BANNER lines; closed and complete on exit."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __enter__(self):
+        read, self.write = os.pipe()
+        self.copier = threading.Thread(target=self._copy, args=(read,), daemon=True)
+        self.copier.start()
+        return self
+
+    def fileno(self):
+        return self.write
+
+    def _copy(self, read):
+        with open(read, "rb") as src, open(self.path, "wb") as dst:
+            for line in src:
+                if not BANNER.fullmatch(line):
+                    dst.write(line)
+                    dst.flush()
+
+    def __exit__(self, *exc):
+        os.close(self.write)
+        self.copier.join(timeout=5)  # what the job wrote is copied by then; a process it left behind may hold the pipe
+
+
 def run_job(job, root, cwd=None):
     """Run one job (blocking) in the directory ``cwd`` (None: this process's), its outputs in its
     own directory under ``root``; write and return its record. Runs wherever it is called: in a
@@ -146,7 +181,7 @@ def run_job(job, root, cwd=None):
     err_path = os.path.join(out, "stderr.log")
     cpu_s, note = 0.0, ""
     try:
-        with open(os.path.join(out, "stdout.log"), "w") as so, open(err_path, "w") as se:
+        with _Log(os.path.join(out, "stdout.log")) as so, _Log(err_path) as se:
             rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout, cwd)
         if timed_out:
             rc, note = -9, f"timeout after {job.timeout} s"
