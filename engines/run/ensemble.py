@@ -3,7 +3,7 @@ sweep runner (engines.run.sweep: local processes or a Dask cluster) and states e
 and history column across them (engines.studies.ensemble: mean, standard error, 95 % interval).
 
     yade -n -x yade_scripts/liquefaction.py --case 1 --starts 8 --out DIR [--perturbation M]
-                                            [--jobs J | --scheduler tcp://HOST:PORT]
+                                            [--jobs J | --scheduler tcp://HOST:PORT | --scheduler-file PATH]
     yade -n -x yade_scripts/liquefaction.py --resume DIR [--duration S]
 
 Start k is the script's own command line with ``--start k --perturbation M --out DIR/start_k``
@@ -31,7 +31,7 @@ from engines.run.preflight import ENSEMBLE, InputError, number, preflight
 from engines.run.sweep import Job, run_sweep
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
-OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--out", "--overwrite")  # not passed to a start
+OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--scheduler-file", "--out", "--overwrite")  # not passed to a start
 PLAN = ("scene", "script", "n_starts", "seeds", "perturbation_m", "perturbation", "start_argv", "starts")  # ensemble.json's plan
 PERTURBATION_TEXT = ("start k moves every particle (not the walls) by perturbation_m x N(0, 1) in x and z, "
                      "numpy Generator(k); start 0 is the scene's packing")
@@ -49,6 +49,8 @@ def add_arguments(ap, perturbation):
     where = g.add_mutually_exclusive_group()
     where.add_argument("--jobs", type=number(int, lo=1), metavar="J", help="starts run at a time on this machine (default 2)")
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run the starts on this Dask cluster's workers")
+    where.add_argument("--scheduler-file", metavar="PATH",
+                       help="run the starts on the workers of the Dask scheduler that wrote PATH (docs/SWEEPS.md)")
     g.add_argument("--start", type=number(int, lo=0), metavar="K",
                    help="run start K of an ensemble alone (what --starts runs in OUT/start_K)")
     ap.set_defaults(scene_perturbation=perturbation)
@@ -70,8 +72,10 @@ def check_options(ap, args):
         ap.error("--start K runs one start of an ensemble: it cannot be given with --starts")
     if args.perturbation is not None and args.starts is None and args.start is None:
         ap.error("--perturbation needs --starts N (or --start K)")
-    if (args.jobs is not None or args.scheduler) and args.starts is None and not ensemble_resume:
-        ap.error(f"{'--jobs' if args.jobs is not None else '--scheduler'} needs --starts N (or --resume of an ensemble)")
+    where = [o for o, v in (("--jobs", args.jobs), ("--scheduler", args.scheduler), ("--scheduler-file", args.scheduler_file))
+             if v is not None]
+    if where and args.starts is None and not ensemble_resume:
+        ap.error(f"{where[0]} needs --starts N (or --resume of an ensemble)")
 
 
 def start_dir(out, k):
@@ -254,7 +258,8 @@ def run_starts(jobs, out, plan, args):
     from postproc import ensemble as figures
     from postproc.run_files import read_history, read_summary
     t0 = time.time()
-    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
+    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
+              scheduler_file=args.scheduler_file)
     summaries = {k: read_summary(start_dir(out, k)) for k in plan["seeds"]}
     status = {k: s.get("status", "not started") for k, s in summaries.items()}
     doc = {**plan, "status": "completed", "start_status": {f"start_{k}": v for k, v in status.items()},

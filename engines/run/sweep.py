@@ -19,7 +19,8 @@ whose job.json says "ok" for the same command is not run again; failed, interrup
 jobs are.
 
 Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
-is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the same jobs run
+is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``, or
+``scheduler_file`` the file a scheduler started with ``--scheduler-file`` wrote; the same jobs run
 on its workers, which need ROOT and the sweep's directory on a shared file system, not this
 project on their path (the runner is sent to them by value). YADE's own parameter tables
 (yade-batch's format) become jobs with ``jobs_from_table``: one job per table line, run as
@@ -212,12 +213,13 @@ def is_done(job, root):
         and rec.get("env", {}) == dict(job.env)
 
 
-def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
+def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, scheduler_file=None):
     """Run ``jobs`` (a list of Job) under ``root``; returns their records in the given order.
 
     workers: local processes at a time (ignored with a scheduler). scheduler: None (local), a
-    Dask scheduler address or a distributed.Client. resume: skip jobs already "ok" with the same
-    command. ``log``: a print-like function for progress (None = quiet).
+    Dask scheduler address or a distributed.Client; or scheduler_file: the JSON file a Dask
+    scheduler started with ``--scheduler-file`` wrote. resume: skip jobs already "ok" with the
+    same command. ``log``: a print-like function for progress (None = quiet).
     """
     names = [j.name for j in jobs]
     if len(set(names)) != len(names):
@@ -230,8 +232,9 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     t0 = time.time()
     kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
     todo = [j for j in jobs if j.name not in kept]
+    cluster = scheduler if scheduler_file is None else f"scheduler file {scheduler_file}"
     log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
-        f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
+        f"({'Dask ' + str(cluster) if cluster is not None else f'{workers} local workers'})")
     done = {}
 
     def finished(job, fut):
@@ -244,7 +247,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         done[job.name] = rec
         log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
-    if scheduler is None:
+    if cluster is None:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
             for fut in as_completed(futures):
@@ -256,7 +259,8 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
 
         # the workers get this module's functions by value: they need not import the project
         cloudpickle.register_pickle_by_value(sys.modules[__name__])
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        client = scheduler if isinstance(scheduler, Client) else \
+            Client(scheduler_file=scheduler_file) if scheduler_file is not None else Client(scheduler)
         try:
             futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
                                      pure=False): j for j in todo}

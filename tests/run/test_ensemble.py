@@ -62,7 +62,8 @@ def test_quick_sand_ensemble_on_dask_and_resumed_per_start_locally_gives_the_sam
     """An ensemble continued to a later end, and then with a start that never began, gives the
     numbers of the ensemble run at once on a Dask cluster's workers."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
         run = script("quicksand.py", "--case", "1", "--starts", "2", "--duration", "0.004", "--scheduler",
                      cluster.scheduler_address, "--out", "whole", cwd=tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]

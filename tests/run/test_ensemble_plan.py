@@ -79,3 +79,13 @@ def test_the_other_scripts_resume_is_refused_by_the_script_itself(tmp_path, caps
         liquefaction.main(["--resume", str(out)])
     assert "run by 'quicksand.py' (ensemble.json); resume it with that script, not liquefaction.py" in str(e.value.code)
     assert sorted(p.name for p in out.iterdir()) == ["ensemble.json"]
+
+
+def test_a_scheduler_file_goes_with_starts_only(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        quicksand.main(["--case", "1", "--scheduler-file", str(tmp_path / "s.json"), "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--scheduler-file needs --starts N" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        quicksand.main(["--case", "1", "--starts", "2", "--jobs", "2", "--scheduler-file", "s.json", "--out", "o"])
+    assert "not allowed with" in capsys.readouterr().err
+    assert ensemble.start_argv(quicksand.parser(), ["--case", "1", "--scheduler-file", "s.json"]) == ["--case", "1"]
