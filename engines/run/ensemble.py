@@ -28,7 +28,7 @@ import shutil
 import time
 
 from engines.run.preflight import ENSEMBLE, InputError, number, preflight
-from engines.run.sweep import Job, run_sweep
+from engines.run.sweep import YADE, Job, run_sweep, yade_environment
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
 OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--scheduler-file", "--out", "--overwrite")  # not passed to a start
@@ -112,12 +112,12 @@ def check_starts(scene, packing, out, seeds, size):
 
 
 def _yade(script, argv):
-    return ["yade", "-n", "-x", script, *argv]
+    return [*YADE, "-x", script, *argv]
 
 
 def _job(k, argv):
     # YADE_BATCH emptied: a start does not read the table line of an ensemble run by yade-batch again
-    return Job(f"start_{k}", argv, {"YADE_BATCH": ""})
+    return Job(f"start_{k}", argv, {"YADE_BATCH": "", **yade_environment()})
 
 
 def _start_job(plan, k):

@@ -41,11 +41,21 @@ import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
+from engines import ROOT
 from engines.run.table import BATCH, DESCRIPTION, read_table
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
+# the project's own yade launches: YADE's console and XML-RPC server never started (the launcher
+# imports engines/yade/no_servers.py first, found through yade_environment()'s PYTHONPATH)
+YADE = ("yade", "-n", "-L", "engines.yade.no_servers")
+
+
+def yade_environment():
+    """The environment a job running YADE as YADE (above) needs: the project's folder first on
+    PYTHONPATH (this process's PYTHONPATH after it)."""
+    return {"PYTHONPATH": os.pathsep.join([ROOT] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
 
 
 @dataclass(frozen=True)
@@ -295,13 +305,14 @@ def format_summary(records):
     return "\n".join(lines)
 
 
-def jobs_from_table(table, script, yade=("yade", "-n")):
+def jobs_from_table(table, script, yade=YADE):
     """Jobs from a yade-batch parameter table (read as data by engines.run.table, without YADE):
-    one per line, named by its description, run as ``yade -x script`` with YADE_BATCH=table:line,
-    from which the script reads its line (engines.run.command_line)."""
+    one per line, named by its description, run as ``yade -x script`` (without YADE's servers,
+    YADE) with YADE_BATCH=table:line, from which the script reads its line
+    (engines.run.command_line)."""
     table = os.path.abspath(table)
     jobs = []
     for line, params in sorted(read_table(table).items()):
         name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params[DESCRIPTION])
-        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}"}))
+        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}", **yade_environment()}))
     return jobs

@@ -9,6 +9,7 @@ import pytest
 from engines import ROOT
 from engines.run import ensemble
 from engines.run.preflight import InputError
+from engines.run.sweep import YADE
 from yade_scripts import liquefaction, quicksand
 
 TYPED = os.path.join(ROOT, "yade_scripts", "quicksand.py")
@@ -33,7 +34,7 @@ def test_the_starts_run_the_script_typed_never_the_plans(tmp_path):
     jobs, kept = resume(tmp_path, plan(script="/elsewhere/quicksand.py"))
     assert [j.name for j in jobs] == ["start_0", "start_1"]
     for k, job in enumerate(jobs):
-        assert job.argv == ("yade", "-n", "-x", TYPED, "--case", "1", "--set", "water.k1=20", "--dt", "-1e-6",
+        assert job.argv == (*YADE, "-x", TYPED, "--case", "1", "--set", "water.k1=20", "--dt", "-1e-6",
                             "--start", str(k), "--perturbation", "1e-08", "--out", "{out}")
     assert kept["script"] == TYPED
 

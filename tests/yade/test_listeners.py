@@ -17,10 +17,9 @@ LINE = "import engines.yade  # noqa: F401"
 SCRIPTS = sorted(p for p in glob.glob(os.path.join(ROOT, "yade_scripts", "**", "*.py"), recursive=True)
                  if not p.endswith("__init__.py"))
 
-# run under yade: the first lines of SCRIPT up to its closing line, then this process's listening
-# TCP ports (from /proc: its socket inodes among the kernel's listening sockets) before and after
-PROBE = """
-import json, os, sys
+# this process's listening TCP ports (from /proc: its socket inodes among the kernel's listening sockets)
+LISTENING = """
+import os
 def listening():
     inodes = set()
     for fd in os.listdir('/proc/self/fd'):
@@ -37,6 +36,15 @@ def listening():
             if f[3] == '0A' and f[9] in inodes:
                 ports.append(int(f[1].rsplit(':', 1)[1], 16))
     return sorted(ports)
+"""
+# run under yade: what listens at the script's first line
+FIRST_LINE = LISTENING + """
+import json
+print('PORTS', json.dumps(listening()))
+"""
+# run under yade: the first lines of SCRIPT up to its closing line; what listens before and after
+PROBE = LISTENING + """
+import json, sys
 script = os.environ['PROBED_SCRIPT']
 lines = open(script).read().splitlines(True)
 head = ''.join(lines[:next(k for k, l in enumerate(lines) if l.startswith(%r)) + 1])
@@ -112,3 +120,18 @@ def test_no_listening_socket_after_a_scripts_first_line(tmp_path, name):
     assert len(before) == 2 and after == []  # the console and the XML-RPC server, then none
     before, after = _probe(tmp_path, script, keep=True)
     assert len(before) == 2 and after == before
+
+
+@pytest.mark.check
+def test_the_projects_own_launches_start_no_listener(tmp_path):
+    """A sweep job or an ensemble's start (engines.run.sweep.YADE) has no server from its start."""
+    from engines.run.sweep import YADE, Job, run_sweep, yade_environment
+    probe = tmp_path / "first.py"
+    probe.write_text(FIRST_LINE)
+    env = {k: v for k, v in os.environ.items() if k not in (KEEP, "PYTHONPATH")}
+    run = subprocess.run(["yade", "-n", "-x", str(probe)], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert len(json.loads(run.stdout.split("PORTS", 1)[1])) == 2  # YADE's own start: two servers
+    rec = run_sweep([Job("j", (*YADE, "-x", str(probe)), yade_environment())], str(tmp_path / "sweep"), log=None)[0]
+    assert rec["status"] == "ok", rec["stderr_tail"]
+    out = (tmp_path / "sweep" / "j" / "stdout.log").read_text()
+    assert json.loads(out.split("PORTS", 1)[1]) == []
