@@ -24,10 +24,12 @@ def yade_servers():
     remote = sys.modules.get("yade.remote")
     if remote is None:
         return []
+    # type(), not isinstance: no object's own __class__ is asked (a proxy's may raise)
     return [o for o in gc.get_objects()
-            if isinstance(o, socketserver.BaseServer) and o.socket.fileno() != -1
+            if issubclass(type(o), socketserver.BaseServer)
             and (o.RequestHandlerClass is remote.PythonConsoleSocketEmulator
-                 or isinstance(getattr(o, "instance", None), remote.InfoProvider))]
+                 or type(getattr(o, "instance", None)) is remote.InfoProvider)
+            and o.socket.fileno() != -1]
 
 
 def close_yade_servers():
