@@ -86,6 +86,7 @@ def _serve(handler, **kw):
 
 def test_only_yades_own_servers_are_closed(monkeypatch):
     remote = pytest.importorskip("yade.remote")
+    assert close_yade_servers() == []  # YADE imported into python3 starts none
     console = _serve(remote.PythonConsoleSocketEmulator)
     info = _serve(None, instance=remote.InfoProvider())
     other = _serve(_Handler)  # a server of someone else's (a Dask worker's, a user's)
