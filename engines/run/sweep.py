@@ -55,7 +55,8 @@ YADE = ("yade", "-n", "-L", "engines.yade.no_servers")
 def yade_environment():
     """The environment a job running YADE as YADE (above) needs: the project's folder first on
     PYTHONPATH (this process's PYTHONPATH after it)."""
-    return {"PYTHONPATH": os.pathsep.join([ROOT] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+    rest = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != ROOT]
+    return {"PYTHONPATH": os.pathsep.join([ROOT, *rest])}
 
 
 @dataclass(frozen=True)
