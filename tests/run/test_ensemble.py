@@ -102,7 +102,7 @@ def test_bad_ensembles_are_refused_in_one_line(tmp_path, capsys, args, match):
 def test_a_start_gets_the_scripts_arguments_without_the_ensembles():
     ap = liquefaction.parser()
     argv = ["--case", "1", "--starts", "3", "--jobs=2", "--pert", "1e-7", "--set", "water.k1=20", "--overwrite",
-            "--out", "o", "--duration", "0.01", "--sched", "tcp://h:1"]
+            "--out", "o", "--duration", "0.01", "--scheduler-f", "s.json"]
     assert start_argv(ap, argv) == ["--case", "1", "--set", "water.k1=20", "--duration", "0.01"]
 
 
