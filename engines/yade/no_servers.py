@@ -3,10 +3,14 @@
 imported before YADE and makes ``yade.remote.runServers``, which the launcher calls before the
 script's first line, do nothing. The project's own launches use it (engines.run.sweep.YADE);
 every other ``yade`` process has its servers closed at the script's first line instead
-(engines.yade.listeners). Imports nothing of YADE itself: the launcher sets YADE's threads after it.
+(engines.yade.listeners). PORE_DEM_KEEP_YADE_SERVERS=1 keeps them here too. Imports nothing of
+YADE itself: the launcher sets YADE's threads after it.
 """
 import importlib.util
+import os
 import sys
+
+from engines.yade.listeners import KEEP
 
 MODULE = "yade.remote"
 
@@ -28,5 +32,5 @@ class _NoServers:
         return spec
 
 
-if MODULE not in sys.modules:
+if MODULE not in sys.modules and os.environ.get(KEEP) != "1":
     sys.meta_path.insert(0, _NoServers())

@@ -136,3 +136,7 @@ def test_the_projects_own_launches_start_no_listener(tmp_path):
     assert rec["status"] == "ok", rec["stderr_tail"]
     out = (tmp_path / "sweep" / "j" / "stdout.log").read_text()
     assert json.loads(out.split("PORTS", 1)[1]) == []
+    rec = run_sweep([Job("keep", (*YADE, "-x", str(probe)), {**yade_environment(), KEEP: "1"})], str(tmp_path / "sweep"),
+                    log=None)[0]
+    out = (tmp_path / "sweep" / "keep" / "stdout.log").read_text()
+    assert rec["status"] == "ok" and len(json.loads(out.split("PORTS", 1)[1])) == 2  # the opt-out
