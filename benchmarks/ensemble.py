@@ -60,7 +60,8 @@ def main(argv):
     walls[f"jobs={a.jobs}"] = timed(base + ["--jobs", str(a.jobs)], os.path.join(root, f"jobs{a.jobs}"))
     if not a.no_dask:
         from distributed import LocalCluster
-        with LocalCluster(n_workers=a.jobs, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with LocalCluster(n_workers=a.jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:
             walls[f"dask={a.jobs}"] = timed(base + ["--scheduler", cluster.scheduler_address], os.path.join(root, "dask"))
     efficiency = {k: walls["jobs=1"][0] / (a.jobs * w) for k, (w, _) in walls.items() if k != "jobs=1"}
     for k, (w, busy) in walls.items():

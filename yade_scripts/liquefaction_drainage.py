@@ -18,6 +18,7 @@ import numpy as np
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 from engines import files
 from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg

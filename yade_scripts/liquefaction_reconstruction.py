@@ -20,6 +20,7 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 from engines.run.preflight import ArgumentParser, number
 from engines.run.reconstruction import run_study
 from engines.studies.reconstruction import VARIANTS

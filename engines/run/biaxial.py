@@ -13,7 +13,7 @@ Writes into DIR:
     packing_sigma3_<S>.csv/.json   the packed periodic block at σ3 = S (x, z, r; cell, stresses)
 
 Under yade-batch the parameters come from the table line (columns named as the options, with
-underscores: phi_e, sigma3, seed, ...; readParamsFromTable); the output directory is the
+underscores: phi_e, sigma3, seed, ...; values as literals, engines.run.table); the output directory is the
 table's ``out`` column, else the sweep runner's job directory, else out/biaxial-batch/DESCRIPTION.
 """
 import argparse
@@ -27,6 +27,7 @@ import numpy as np
 from engines import files
 from engines.run.command_line import batch_out
 from engines.run.preflight import ArgumentParser, number, output_dir
+from engines.run.table import DESCRIPTION, batch_line
 from engines.seeds.biaxial.cem_contact import ROTATIONS
 from engines.seeds.biaxial.periodic import PACKING_PHI_E
 
@@ -121,20 +122,22 @@ def check(args, ap):
 
 
 def table_argv(ap):
-    """Under yade-batch: the table line's parameters as command-line arguments."""
-    from yade import O, utils
-
+    """Under yade-batch: the table line's parameters as command-line arguments (a column named as
+    an option's destination; '*' or None leaves its default); refused in one line otherwise."""
     options = {a.dest: a.option_strings[0] for a in ap._actions if a.option_strings and a.dest != "help"}
-    utils.readParamsFromTable(noTableOk=False, **{k: None for k in options})
-    from yade.params import table
-
+    try:
+        table, line, values = batch_line()
+    except ValueError as e:
+        ap.error(str(e))
     argv = []
-    for dest, opt in options.items():
-        v = getattr(table, dest)
-        if v is not None:
-            argv += [opt, ",".join(map(str, v)) if isinstance(v, (tuple, list)) else str(v)]
-    if table.out is None:
-        argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), O.tags["description"])]
+    for dest, v in values.items():
+        if dest == DESCRIPTION or v is None:
+            continue
+        if dest not in options:
+            ap.error(f"yade-batch table {table}, line {line}: column {dest!r} is not an option of this script")
+        argv += [options[dest], ",".join(map(str, v)) if isinstance(v, (tuple, list)) else str(v)]
+    if "out" not in values:
+        argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), values[DESCRIPTION])]
     return argv
 
 

@@ -9,11 +9,12 @@ A script adds its own choice of scene (e.g. --case, --scene) and then::
     args = parse_run_arguments(ap, argv)          # argv, or the yade-batch job's table line
     run_script(ap, args, load_scene)              # preflight, run or resume, exit status
 
-Under yade-batch (the YADE_BATCH variable names table:line) the job's line is read with
-``yade.utils.readParamsFromTable``; each column becomes arguments: a column named like an option
-(``duration``, ``dt``, ``case``, ``vtk``: true/false) gives that option, a column ``TABLE.FIELD``
-(e.g. ``water.k1``) gives ``--set TABLE.FIELD=VALUE``. Values are Python expressions, as
-readParamsFromTable reads them (quote strings: 'my.toml'). Without an ``out`` column each job
+Under yade-batch (the YADE_BATCH variable names table:line) the job's line is read by
+engines.run.table (as data: never through YADE's readParamsFromTable, which evaluates every
+value); each column becomes arguments: a column named like an option (``duration``, ``dt``,
+``case``, ``vtk``: True/False) gives that option, a column ``TABLE.FIELD`` (e.g. ``water.k1``)
+gives ``--set TABLE.FIELD=VALUE``. Values are Python literals (quote strings: 'my.toml'); an
+expression such as ``pi/4`` is refused in one line. Without an ``out`` column each job
 writes to the sweep runner's job directory (engines.run.sweep; SWEEP_JOB_DIR), else to
 out/batch/<the job's description>, the name yade-batch gives its log.
 """
@@ -27,6 +28,7 @@ from engines.run import ensemble
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR
+from engines.run.table import DESCRIPTION, batch_line
 from engines.studies.ensemble import perturbed
 
 BATCH_OUT = os.path.join("out", "batch")
@@ -104,11 +106,6 @@ def overrides_of(args):
 
 
 # -- yade-batch -----------------------------------------------------------------------------------
-def batch_job():
-    """'table:line' of this yade-batch job, or None (yade-batch of a lone script sets YADE_BATCH empty)."""
-    return os.environ.get("YADE_BATCH") or None
-
-
 def sweep_job_dir(path):
     """Is ``path`` the job directory the sweep runner gave this job? The runner re-runs only jobs
     that did not finish, so their outputs there are replaced without --overwrite."""
@@ -132,21 +129,21 @@ def _as_argument(value):
 
 
 def job_argv(ap, argv):
-    """``argv``, or under yade-batch the job's table line as arguments (module docstring) before argv."""
-    if batch_job() is None:
+    """``argv``, or under yade-batch the job's table line as arguments (module docstring) before
+    argv; a table that cannot be read, or a column that is no option, is refused in one line."""
+    try:
+        job = batch_line()
+    except ValueError as e:
+        ap.error(str(e))
+    if job is None:
         return argv
-    import pickle
-
-    from yade import O, utils
-    # readParamsFromTable adds to the variables an earlier call saved in O.tags: start empty
-    O.tags["pickledPythonVariablesDictionarytable"] = pickle.dumps({}, 0).decode("ascii")
-    utils.readParamsFromTable(unknownOk=True)
-    from yade.params import table
-    values = {k: getattr(table, k) for k in table.__all__}
+    table, line, values = job
     options = ap._option_string_actions
     args = []
     for name, value in values.items():
         opt = "--" + name.replace("_", "-")
+        if name == DESCRIPTION:
+            continue
         if "." in name:
             args += ["--set", f"{name}={_as_argument(value)}"]
         elif opt in options and options[opt].nargs == 0:
@@ -154,10 +151,10 @@ def job_argv(ap, argv):
         elif opt in options:
             args += [opt, value if isinstance(value, str) else _as_argument(value)]
         else:
-            ap.error(f"yade-batch table {batch_job()}: column {name!r} is neither an option of this script "
+            ap.error(f"yade-batch table {table}, line {line}: column {name!r} is neither an option of this script "
                      f"nor a scene field TABLE.FIELD")
     if "out" not in values and "resume" not in values:
-        args += ["--out", batch_out(BATCH_OUT, O.tags["description"])]
+        args += ["--out", batch_out(BATCH_OUT, values[DESCRIPTION])]
     return args + list(argv)
 
 
@@ -181,7 +178,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
     try:  # bad scenes, packings, limits: one clear line, nothing written
         if args.resume and many:
-            jobs, plan = ensemble.resume_jobs(args.resume, args.duration)
+            jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
         elif args.resume:
             check_resume(args.resume, args.duration)
         else:

@@ -3,7 +3,7 @@ sweep runner (engines.run.sweep: local processes or a Dask cluster) and states e
 and history column across them (engines.studies.ensemble: mean, standard error, 95 % interval).
 
     yade -n -x yade_scripts/liquefaction.py --case 1 --starts 8 --out DIR [--perturbation M]
-                                            [--jobs J | --scheduler tcp://HOST:PORT]
+                                            [--jobs J | --scheduler tcp://HOST:PORT | --scheduler-file PATH]
     yade -n -x yade_scripts/liquefaction.py --resume DIR [--duration S]
 
 Start k is the script's own command line with ``--start k --perturbation M --out DIR/start_k``
@@ -15,18 +15,23 @@ the start (the plan: seeds, perturbation, the starts' command line; "status": "r
 when the starts have ended: "completed" with the statistics and the figures
 (postproc.ensemble), or "incomplete" with each start's status. ``--resume DIR`` continues the
 starts that did not complete from their checkpoints (with ``--duration`` every start, to a later
-end) and starts those that never began, then writes the statistics again.
+end) and starts those that never began, then writes the statistics again. What runs is never
+taken from ensemble.json: the starts run the script the resume was started with (refused unless
+it has the name of the one that made the ensemble), the plan is refused unless it is one this
+project writes (integer seeds, start folders start_<seed> inside DIR, start_argv made of the
+script's own options without --out, --resume or the ensemble's).
 """
 import json
 import os
+import re
 import shutil
 import time
 
 from engines.run.preflight import ENSEMBLE, InputError, number, preflight
-from engines.run.sweep import Job, run_sweep
+from engines.run.sweep import YADE, Job, run_sweep, yade_environment
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
-OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--out", "--overwrite")  # not passed to a start
+OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--scheduler-file", "--out", "--overwrite")  # not passed to a start
 PLAN = ("scene", "script", "n_starts", "seeds", "perturbation_m", "perturbation", "start_argv", "starts")  # ensemble.json's plan
 PERTURBATION_TEXT = ("start k moves every particle (not the walls) by perturbation_m x N(0, 1) in x and z, "
                      "numpy Generator(k); start 0 is the scene's packing")
@@ -44,6 +49,8 @@ def add_arguments(ap, perturbation):
     where = g.add_mutually_exclusive_group()
     where.add_argument("--jobs", type=number(int, lo=1), metavar="J", help="starts run at a time on this machine (default 2)")
     where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run the starts on this Dask cluster's workers")
+    where.add_argument("--scheduler-file", metavar="PATH",
+                       help="run the starts on the workers of the Dask scheduler that wrote PATH (docs/SWEEPS.md)")
     g.add_argument("--start", type=number(int, lo=0), metavar="K",
                    help="run start K of an ensemble alone (what --starts runs in OUT/start_K)")
     ap.set_defaults(scene_perturbation=perturbation)
@@ -65,8 +72,10 @@ def check_options(ap, args):
         ap.error("--start K runs one start of an ensemble: it cannot be given with --starts")
     if args.perturbation is not None and args.starts is None and args.start is None:
         ap.error("--perturbation needs --starts N (or --start K)")
-    if (args.jobs is not None or args.scheduler) and args.starts is None and not ensemble_resume:
-        ap.error(f"{'--jobs' if args.jobs is not None else '--scheduler'} needs --starts N (or --resume of an ensemble)")
+    where = [o for o, v in (("--jobs", args.jobs), ("--scheduler", args.scheduler), ("--scheduler-file", args.scheduler_file))
+             if v is not None]
+    if where and args.starts is None and not ensemble_resume:
+        ap.error(f"{where[0]} needs --starts N (or --resume of an ensemble)")
 
 
 def start_dir(out, k):
@@ -103,12 +112,12 @@ def check_starts(scene, packing, out, seeds, size):
 
 
 def _yade(script, argv):
-    return ["yade", "-n", "-x", script, *argv]
+    return [*YADE, "-x", script, *argv]
 
 
 def _job(k, argv):
     # YADE_BATCH emptied: a start does not read the table line of an ensemble run by yade-batch again
-    return Job(f"start_{k}", argv, {"YADE_BATCH": ""})
+    return Job(f"start_{k}", argv, {"YADE_BATCH": "", **yade_environment()})
 
 
 def _start_job(plan, k):
@@ -136,10 +145,59 @@ def _plain(x):
 
 
 def read_plan(out):
-    """The plan (PLAN) of the ensemble in ``out``."""
-    with open(os.path.join(out, ENSEMBLE)) as f:
-        doc = json.load(f)
+    """The plan (PLAN) of the ensemble in ``out``, checked to be one this project wrote (its
+    starts are start_<k> folders of ``out``); refuses (InputError, one line) anything else."""
+    path = os.path.join(out, ENSEMBLE)
+    try:
+        with open(path) as f:
+            doc = json.load(f)
+    except (OSError, ValueError, RecursionError) as e:
+        raise InputError(f"{path}: cannot be read as JSON ({e})") from None
+    problem = _plan_problem(doc)
+    if problem:
+        raise InputError(f"{path}: {problem}: not an ensemble plan this project wrote; start the ensemble again "
+                         f"with --starts N --out NEW_DIR")
     return {k: doc[k] for k in PLAN}
+
+
+def _plan_problem(doc):
+    """What is wrong with an ensemble.json's plan, or None."""
+    if not isinstance(doc, dict):
+        return "not a JSON object"
+    missing = [k for k in PLAN if k not in doc]
+    if missing:
+        return f"no {', '.join(missing)}"
+    seeds = doc["seeds"]
+    if not (isinstance(seeds, list) and seeds and all(type(k) is int and k >= 0 for k in seeds)
+            and len(set(seeds)) == len(seeds)):
+        return "seeds must be a list of distinct integers >= 0"
+    if doc["n_starts"] != len(seeds) or doc["starts"] != [f"start_{k}" for k in seeds]:
+        return "n_starts and starts do not match the seeds (starts are the folders start_<seed>)"
+    size = doc["perturbation_m"]
+    if not (type(size) in (int, float) and 0 < size < float("inf")):
+        return "perturbation_m must be a number > 0 [m]"
+    if not isinstance(doc["script"], str) or not isinstance(doc["start_argv"], list) \
+            or not all(isinstance(a, str) for a in doc["start_argv"]):
+        return "script must be a name and start_argv a list of strings"
+    return None
+
+
+def _argv_problem(ap, argv):
+    """What in a plan's ``start_argv`` is not the script's own options, less the ensemble's and
+    the run folder's (the starts get those from the ensemble), or None."""
+    actions = ap._option_string_actions
+    set_here = set(OWN_OPTIONS + ("--resume", "--start"))
+    for word in argv:
+        if not word.startswith("-") or re.fullmatch(r"-[0-9.][0-9.eE+-]*", word):
+            continue
+        name = word.split("=", 1)[0]
+        found = {a for o, a in actions.items() if o == name} or \
+                {a for o, a in actions.items() if name.startswith("--") and o.startswith(name)}
+        if len(found) != 1:
+            return f"start_argv holds {word!r}, which is not an option of this script"
+        if set_here & set(found.pop().option_strings):
+            return f"start_argv holds {word!r}, which the ensemble gives each start itself"
+    return None
 
 
 def start(ap, args, script, scene):
@@ -158,14 +216,25 @@ def start(ap, args, script, scene):
     return run_starts([_start_job(plan, k) for k in seeds], out, plan, args)
 
 
-def resume_jobs(out, duration):
+def resume_jobs(ap, out, duration, script):
     """(the jobs that continue the ensemble in ``out``, its plan) (module docstring), to
     ``duration`` [s] if given (then also the plan's end); refuses (InputError) a start that
-    cannot go on, before anything runs."""
+    cannot go on, before anything runs. The jobs run ``script``, the scene script this resume was
+    started with (the plan's script is only compared with it by name, never run), with the
+    plan's start_argv only when they are the options of ``ap``, the script's parser."""
     from engines.run.command_line import check_resume
     from engines.yade.checkpoint import NAME
     from postproc.run_files import read_summary
     plan = read_plan(out)
+    made_by = os.path.basename(plan["script"])
+    if made_by != os.path.basename(script):
+        raise InputError(f"--resume {out}: this ensemble was run by {made_by!r} ({ENSEMBLE}); resume it with that "
+                         f"script, not {os.path.basename(script)}")
+    problem = _argv_problem(ap, plan["start_argv"])
+    if problem:
+        raise InputError(f"{os.path.join(out, ENSEMBLE)}: {problem}; start the ensemble again with --starts N "
+                         f"--out NEW_DIR")
+    plan = {**plan, "script": script}
     jobs = []
     for k in plan["seeds"]:
         d = start_dir(out, k)
@@ -189,7 +258,8 @@ def run_starts(jobs, out, plan, args):
     from postproc import ensemble as figures
     from postproc.run_files import read_history, read_summary
     t0 = time.time()
-    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
+    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
+              scheduler_file=args.scheduler_file)
     summaries = {k: read_summary(start_dir(out, k)) for k in plan["seeds"]}
     status = {k: s.get("status", "not started") for k, s in summaries.items()}
     doc = {**plan, "status": "completed", "start_status": {f"start_{k}": v for k, v in status.items()},

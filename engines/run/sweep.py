@@ -10,7 +10,8 @@ A job is a name and a command line; ``{out}`` in an argument becomes the job's d
 ``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR, where a scene
 script run from a table writes). A job runs in the directory the sweep was started from,
 wherever it runs, so relative paths in its command line mean the same on every worker. Each job
-writes there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
+writes there ``stdout.log``, ``stderr.log`` (without the lines of YADE's banner that give its
+listeners' ports and its console's cookie, BANNER) and ``job.json``: status ("running", then "ok" or
 "failed"), return code, wall and CPU seconds, command, working directory, host, and the tail of
 stderr. ``run_sweep`` returns the records of all jobs in the order given, prints one line per
 finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job
@@ -18,13 +19,14 @@ whose job.json says "ok" for the same command is not run again; failed, interrup
 jobs are.
 
 Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
-is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the same jobs run
+is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``, or
+``scheduler_file`` the file a scheduler started with ``--scheduler-file`` wrote; the same jobs run
 on its workers, which need ROOT and the sweep's directory on a shared file system, not this
 project on their path (the runner is sent to them by value). YADE's own parameter tables
 (yade-batch's format) become jobs with ``jobs_from_table``: one job per table line, run as
-yade-batch runs it (YADE_BATCH=table:line, read by the script with
-``yade.utils.readParamsFromTable``). The module imports nothing of YADE: the sweep runs under a
-plain ``python3``; YADE's table reader runs in a ``yade -n`` process.
+yade-batch runs it (YADE_BATCH=table:line, from which the script reads its line). Tables are
+read as data (engines.run.table: literal values only). The module imports nothing of YADE: the
+sweep runs under a plain ``python3``.
 
 The command line is yade_scripts/sweep.py.
 """
@@ -34,15 +36,27 @@ import re
 import socket
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
+from engines import ROOT
+from engines.run.table import BATCH, DESCRIPTION, read_table
+
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
+# the project's own yade launches: YADE's console and XML-RPC server never started (the launcher
+# imports engines/yade/no_servers.py first, found through yade_environment()'s PYTHONPATH)
+YADE = ("yade", "-n", "-L", "engines.yade.no_servers")
+
+
+def yade_environment():
+    """The environment a job running YADE as YADE (above) needs: the project's folder first on
+    PYTHONPATH (this process's PYTHONPATH after it)."""
+    rest = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != ROOT]
+    return {"PYTHONPATH": os.pathsep.join([ROOT, *rest])}
 
 
 @dataclass(frozen=True)
@@ -130,6 +144,40 @@ def _on_dask_worker():
         return False
 
 
+# the lines of YADE's banner that give its console's and XML-RPC server's ports and the console's
+# cookie (yade.remote: "TCP python prompt on localhost:9000, auth cookie `...'" on stderr,
+# "XMLRPC info provider on http://localhost:21000" on stdout): never written to a job's logs
+BANNER = re.compile(rb"(TCP python prompt on |XMLRPC info provider on )[^\n]*\n?")
+
+
+class _Log:
+    """A job's log file, written from a pipe (its ``fileno()``, given to the job as its stdout or
+    stderr) by a thread that leaves out YADE's BANNER lines; closed and complete on exit."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __enter__(self):
+        read, self.write = os.pipe()
+        self.copier = threading.Thread(target=self._copy, args=(read,), daemon=True)
+        self.copier.start()
+        return self
+
+    def fileno(self):
+        return self.write
+
+    def _copy(self, read):
+        with open(read, "rb") as src, open(self.path, "wb") as dst:
+            for line in src:
+                if not BANNER.fullmatch(line):
+                    dst.write(line)
+                    dst.flush()
+
+    def __exit__(self, *exc):
+        os.close(self.write)
+        self.copier.join(timeout=5)  # what the job wrote is copied by then; a process it left behind may hold the pipe
+
+
 def run_job(job, root, cwd=None):
     """Run one job (blocking) in the directory ``cwd`` (None: this process's), its outputs in its
     own directory under ``root``; write and return its record. Runs wherever it is called: in a
@@ -145,7 +193,7 @@ def run_job(job, root, cwd=None):
     err_path = os.path.join(out, "stderr.log")
     cpu_s, note = 0.0, ""
     try:
-        with open(os.path.join(out, "stdout.log"), "w") as so, open(err_path, "w") as se:
+        with _Log(os.path.join(out, "stdout.log")) as so, _Log(err_path) as se:
             rc, cpu_s, timed_out = _run_timed(cmd, so, se, env, job.timeout, cwd)
         if timed_out:
             rc, note = -9, f"timeout after {job.timeout} s"
@@ -176,12 +224,13 @@ def is_done(job, root):
         and rec.get("env", {}) == dict(job.env)
 
 
-def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
+def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, scheduler_file=None):
     """Run ``jobs`` (a list of Job) under ``root``; returns their records in the given order.
 
     workers: local processes at a time (ignored with a scheduler). scheduler: None (local), a
-    Dask scheduler address or a distributed.Client. resume: skip jobs already "ok" with the same
-    command. ``log``: a print-like function for progress (None = quiet).
+    Dask scheduler address or a distributed.Client; or scheduler_file: the JSON file a Dask
+    scheduler started with ``--scheduler-file`` wrote. resume: skip jobs already "ok" with the
+    same command. ``log``: a print-like function for progress (None = quiet).
     """
     names = [j.name for j in jobs]
     if len(set(names)) != len(names):
@@ -194,8 +243,9 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     t0 = time.time()
     kept = {j.name: read_record(root, j.name) for j in jobs if resume and is_done(j, root)}
     todo = [j for j in jobs if j.name not in kept]
+    cluster = scheduler if scheduler_file is None else f"scheduler file {scheduler_file}"
     log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
-        f"({'Dask ' + str(scheduler) if scheduler is not None else f'{workers} local workers'})")
+        f"({'Dask ' + str(cluster) if cluster is not None else f'{workers} local workers'})")
     done = {}
 
     def finished(job, fut):
@@ -208,7 +258,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         done[job.name] = rec
         log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
-    if scheduler is None:
+    if cluster is None:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
             for fut in as_completed(futures):
@@ -220,7 +270,8 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
 
         # the workers get this module's functions by value: they need not import the project
         cloudpickle.register_pickle_by_value(sys.modules[__name__])
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        client = scheduler if isinstance(scheduler, Client) else \
+            Client(scheduler_file=scheduler_file) if scheduler_file is not None else Client(scheduler)
         try:
             futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
                                      pure=False): j for j in todo}
@@ -255,32 +306,14 @@ def format_summary(records):
     return "\n".join(lines)
 
 
-def jobs_from_table(table, script, yade=("yade", "-n")):
-    """Jobs from a yade-batch parameter table: one per line, named by its description (the
-    ``description`` column, or YADE's synthesised name=value list), run as ``yade -x script``
-    with YADE_BATCH=table:line, so the script reads its line by readParamsFromTable."""
+def jobs_from_table(table, script, yade=YADE):
+    """Jobs from a yade-batch parameter table (read as data by engines.run.table, without YADE):
+    one per line, named by its description, run as ``yade -x script`` (without YADE's servers,
+    YADE) with YADE_BATCH=table:line, from which the script reads its line
+    (engines.run.command_line)."""
     table = os.path.abspath(table)
     jobs = []
-    for line, params in sorted(read_table(table, yade).items()):
-        name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params["description"])
-        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
+    for line, params in sorted(read_table(table).items()):
+        name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params[DESCRIPTION])
+        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}", **yade_environment()}))
     return jobs
-
-
-def read_table(table, yade=("yade", "-n")):
-    """{line number: {column: text}} of a yade-batch table, read by YADE's own TableParamReader
-    in a ``yade -x`` process running this file (so this process needs no YADE)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        result = os.path.join(tmp, "table.json")
-        run = subprocess.run([*yade, "-x", os.path.abspath(__file__), table, result], capture_output=True, text=True,
-                             env=_environment({}))
-        if run.returncode != 0 or not os.path.exists(result):
-            why = (run.stderr.strip().splitlines() or [f"exit status {run.returncode}"])[-1]
-            raise ValueError(f"{table}: YADE could not read the table: {why}")
-        with open(result) as f:
-            return {int(line): params for line, params in json.load(f).items()}
-
-
-if __name__ == "__main__":  # under yade -x, from read_table: TABLE RESULT.json
-    from yade.utils import TableParamReader  # YADE's own reader of the format
-    _write_json(sys.argv[2], TableParamReader(sys.argv[1]).paramDict())

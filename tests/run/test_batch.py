@@ -10,6 +10,7 @@ import pytest
 from engines import ROOT
 from engines.run import scene as scenes
 from engines.run.command_line import BATCH_OUT, job_argv, overrides_of
+from engines.run.table import read_table
 
 SCRIPT = os.path.join(ROOT, "yade_scripts", "quicksand.py")
 TABLE = os.path.join(ROOT, "yade_scripts", "quicksand_sweep.table")
@@ -59,8 +60,7 @@ def test_an_unknown_column_is_refused_in_one_line(tmp_path, monkeypatch, capsys)
 
 
 def test_the_example_table_gives_valid_scenes(monkeypatch):
-    from yade.utils import TableParamReader
-    lines = sorted(TableParamReader(str(TABLE)).paramDict())
+    lines = sorted(read_table(TABLE))
     assert len(lines) >= 2
     for line in lines:
         args = job_args(monkeypatch, TABLE, line)

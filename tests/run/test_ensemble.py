@@ -62,7 +62,8 @@ def test_quick_sand_ensemble_on_dask_and_resumed_per_start_locally_gives_the_sam
     """An ensemble continued to a later end, and then with a start that never began, gives the
     numbers of the ensemble run at once on a Dask cluster's workers."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
         run = script("quicksand.py", "--case", "1", "--starts", "2", "--duration", "0.004", "--scheduler",
                      cluster.scheduler_address, "--out", "whole", cwd=tmp_path)
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
@@ -101,11 +102,12 @@ def test_bad_ensembles_are_refused_in_one_line(tmp_path, capsys, args, match):
 def test_a_start_gets_the_scripts_arguments_without_the_ensembles():
     ap = liquefaction.parser()
     argv = ["--case", "1", "--starts", "3", "--jobs=2", "--pert", "1e-7", "--set", "water.k1=20", "--overwrite",
-            "--out", "o", "--duration", "0.01", "--sched", "tcp://h:1"]
+            "--out", "o", "--duration", "0.01", "--scheduler-f", "s.json"]
     assert start_argv(ap, argv) == ["--case", "1", "--set", "water.k1=20", "--duration", "0.01"]
 
 
-def test_an_ensembles_resume_is_refused_in_one_line_before_anything_runs(tmp_path, capsys):
+def test_an_ensembles_resume_is_refused_in_one_line_before_anything_runs(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("sys.argv", [os.path.join(ROOT, "yade_scripts", "quicksand.py")])  # the script typed
     out = tmp_path / "ens"
     out.mkdir()
     plan = {"scene": "quicksand-case1", "script": os.path.join(ROOT, "yade_scripts", "quicksand.py"), "n_starts": 2,

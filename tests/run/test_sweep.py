@@ -65,7 +65,8 @@ def test_dask_local_cluster_sweep(tmp_path):
     """The sweep on a Dask cluster as on the local pool; its jobs see the environment of the sweep,
     not the Dask nanny's MALLOC_TRIM_THRESHOLD_ (which the worker itself holds)."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
         _check_sweep(str(tmp_path / "dask"), scheduler=cluster.scheduler_address)
         with distributed.Client(cluster) as client:
             assert "MALLOC_TRIM_THRESHOLD_" in client.submit(lambda: dict(os.environ)).result()
@@ -101,7 +102,7 @@ def test_yade_batch_table_becomes_jobs(tmp_path):
     recs = run_sweep(jobs, str(tmp_path / "sweep"), log=None)
     assert [r["status"] for r in recs] == ["ok", "ok"], recs[0]["stderr_tail"]
     assert [(tmp_path / "sweep" / n / "ab.txt").read_text() for n in ("first", "second")] == ["1.5", "2.0"]
-    with pytest.raises(ValueError, match="missing.table: YADE could not read the table: .*No such file"):
+    with pytest.raises(ValueError, match="missing.table: no such table file"):
         jobs_from_table(str(tmp_path / "missing.table"), str(script))
 
 
@@ -126,3 +127,28 @@ def test_cpu_seconds_and_timeout_are_recorded(tmp_path):
     assert asleep_rec["status"] == "ok" and asleep_rec["wall_s"] >= 0.5 and asleep_rec["cpu_s"] < 0.3
     assert late_rec["status"] == "failed" and late_rec["returncode"] == -9 and late_rec["wall_s"] < 10
     assert "timeout after 0.5 s" in late_rec["stderr_tail"]
+
+
+def test_the_dask_clusters_of_the_tests_and_benchmarks_listen_on_127_0_0_1_only():
+    """Every LocalCluster binds 127.0.0.1 without a dashboard, and so does every `dask scheduler`
+    and `dask worker` started (their arguments: --host 127.0.0.1 --no-dashboard)."""
+    import ast
+    import glob
+
+    from engines import ROOT
+    found = []
+    for path in glob.glob(os.path.join(ROOT, "tests", "**", "*.py"), recursive=True) + \
+            glob.glob(os.path.join(ROOT, "benchmarks", "*.py")):
+        for node in ast.walk(ast.parse(open(path).read())):
+            if not isinstance(node, ast.Call):
+                continue
+            words = [a.value for a in node.args if isinstance(a, ast.Constant)]
+            if getattr(node.func, "attr", getattr(node.func, "id", "")) == "LocalCluster":
+                kw = {k.arg: ast.literal_eval(k.value) for k in node.keywords
+                      if k.arg in ("host", "dashboard_address")}
+                found.append((path, kw.get("host"), "dashboard_address" in kw and kw["dashboard_address"] is None))
+            elif words[:1] in (["scheduler"], ["worker"]):  # dask's command line
+                host = words[words.index("--host") + 1] if "--host" in words else None
+                found.append((path, host, "--no-dashboard" in words))
+    assert len(found) >= 5  # three LocalClusters, a scheduler, a worker
+    assert [f for f in found if f[1:] != ("127.0.0.1", True)] == []

@@ -21,7 +21,9 @@ SWEEP = os.path.join(ROOT, "yade_scripts", "sweep.py")
 
 @pytest.fixture
 def cluster(tmp_path):
-    """(scheduler address, the workers' working directory); every process stopped at the end."""
+    """(scheduler address, the workers' working directory, the scheduler file); every process
+    stopped at the end. All on 127.0.0.1 without dashboards, the port chosen by the system and found
+    by the workers in the scheduler file (docs/SWEEPS.md's recipe)."""
     if DASK is None:
         pytest.skip("no dask command")
     cwd = tmp_path / "workers"
@@ -45,7 +47,7 @@ def cluster(tmp_path):
         with distributed.Client(scheduler_file=str(info), timeout=30) as client:
             client.wait_for_workers(2, timeout=30)
             address = client.scheduler.address
-        yield address, cwd
+        yield address, cwd, str(info)
     finally:
         for p in procs:
             p.terminate()
@@ -65,7 +67,7 @@ def sweep(*args):
 
 
 def test_scene_scripts_write_into_their_job_directories_on_dask_workers(cluster, tmp_path):
-    address, workers_cwd = cluster
+    address, workers_cwd, info = cluster
     # a yade-batch table (no out column) with a script path relative to ROOT
     table = tmp_path / "qs.table"
     table.write_text("duration water.q_w\n1e-5 2.5e-4\n1e-5 1e-3\n")
@@ -83,7 +85,7 @@ def test_scene_scripts_write_into_their_job_directories_on_dask_workers(cluster,
     jobs = tmp_path / "jobs.json"
     jobs.write_text(json.dumps([{"name": "liq", "argv": ["yade", "-n", "-x", "yade_scripts/liquefaction.py", "--case",
                                                          "1", "--duration", "1e-5", "--out", "{out}"]}]))
-    sweep("--jobs", str(jobs), "--out", str(tmp_path / "liq"), "--scheduler", address)
+    sweep("--jobs", str(jobs), "--out", str(tmp_path / "liq"), "--scheduler-file", info)
     with open(tmp_path / "liq" / "liq" / "summary.json") as f:
         assert json.load(f)["steps"] == 10
     assert os.listdir(workers_cwd) == []

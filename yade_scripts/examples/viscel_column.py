@@ -16,6 +16,8 @@ import sys
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__)))))
 
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
+# isort: split
 import numpy as np
 from yade import O, utils
 from yade.wrapper import (
