@@ -1,5 +1,8 @@
 """A packing: disc centres, radii, groups and density factors, saved as CSV (x, z, r, group, density_factor).
 
+A packing file is a regular file of at most 200 MB (LIMIT) whose line 1 is the header HEADER,
+checked by its column names (a file without it is refused, not read losing its first disc).
+
 Refusals name the disc: in a file by its line number (the header is line 1, so the first disc is
 line 2), otherwise by its 0-based index. A packing refuses a non-finite value, a radius or density
 factor <= 0, a group code not in engines.model.groups, and two discs with the same centre
@@ -7,15 +10,20 @@ factor <= 0, a group code not in engines.model.groups, and two discs with the sa
 than a tolerance (preflight gives it the scene's contact law).
 """
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from engines.files import saved
+from engines.files.inputs import MB, check_input_file
 from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
 from engines.model.pores import check_discs
 
 COLUMNS = ("x", "z", "r", "group", "density_factor")
+HEADER = ("x_m", "z_m", "r_m", "group", "density_factor")  # line 1 of a packing file
+LIMIT = 200 * MB  # the largest packing file read [bytes]
 
 
 @dataclass
@@ -143,17 +151,58 @@ class Packing:
         return [(bottom + a * h, bottom + b * h) for a, b in block_z]
 
     def save(self, path):
+        """Write the CSV (HEADER, one disc a line) atomically (engines.files)."""
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         data = np.column_stack([self.xz, self.r, self.group, self.density_factor])
-        np.savetxt(path, data, delimiter=",", header="x_m,z_m,r_m,group,density_factor", comments="",
-                   fmt=["%.12e", "%.12e", "%.12e", "%d", "%.6g"])
+        with saved(path) as tmp:
+            np.savetxt(tmp, data, delimiter=",", header=",".join(HEADER), comments="",
+                       fmt=["%.12e", "%.12e", "%.12e", "%d", "%.6g"])
 
     @classmethod
     def load(cls, path):
+        """Read a CSV packing: a regular file of at most LIMIT bytes whose line 1 is the header
+        (HEADER; x, z, r without "_m" accepted), then one disc a line. Refusals (ValueError) name the
+        file and the line as an editor counts it."""
+        check_input_file(path, "packing file", LIMIT)
+        with open(path, errors="replace") as f:
+            header = f.readline()
+        names = [name.strip().lower() for name in header.split(",")]
+        if names not in ([*HEADER], [*COLUMNS]):
+            row = "a row of numbers" if all(_is_number(n) for n in names) else repr(header.strip()[:80])
+            raise ValueError(f"packing file {path}, line 1: expected the header {','.join(HEADER)}, got {row}"
+                             f"{' (a file without its header: add the header line)' if row.startswith('a row') else ''}")
         try:
-            d = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-        except (OSError, ValueError) as e:
-            raise ValueError(f"packing file {path}: {e}") from None
-        if d.shape[1] != 5:
-            raise ValueError(f"packing file {path}: expected 5 columns x,z,r,group,density_factor, got {d.shape[1]}")
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
+                d = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        except (OSError, ValueError):
+            raise ValueError(_first_bad_line(path)) from None
+        if d.size == 0:
+            raise ValueError(f"packing file {path}: holds the header and no discs")
         return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path)
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _first_bad_line(path):
+    """Why numpy could not read the packing file ``path``: its first line (1-based, the header
+    line 1) that is not 5 comma-separated numbers."""
+    with open(path, errors="replace") as f:
+        next(f)
+        for k, line in enumerate(f, 2):
+            cells = line.strip().split(",")
+            if not line.strip():
+                continue
+            if len(cells) != len(COLUMNS):
+                return (f"packing file {path}, line {k}: expected {len(COLUMNS)} columns {','.join(HEADER)}, "
+                        f"got {len(cells)}: {line.strip()[:80]!r}")
+            bad = [c for c in cells if not _is_number(c)]
+            if bad:
+                return f"packing file {path}, line {k}: not a number: {bad[0].strip()[:40]!r}"
+    return f"packing file {path}: cannot be read as CSV numbers"

@@ -134,7 +134,10 @@ def table_argv(ap):
         if v is not None:
             argv += [opt, ",".join(map(str, v)) if isinstance(v, (tuple, list)) else str(v)]
     if table.out is None:
-        argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), O.tags["description"])]
+        try:
+            argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), O.tags["description"])]
+        except ValueError as e:
+            ap.error(str(e))
     return argv
 
 

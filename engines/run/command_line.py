@@ -23,6 +23,7 @@ import re
 import sys
 import tomllib
 
+from engines.files.inputs import check_name
 from engines.run import ensemble
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
@@ -118,8 +119,13 @@ def sweep_job_dir(path):
 
 def batch_out(root, description):
     """The output directory of a table's job without an ``out`` column: the sweep runner's job
-    directory, or under yade-batch ROOT/DESCRIPTION."""
-    return os.environ.get(JOB_DIR) or os.path.join(root, description.replace(os.sep, "_"))
+    directory, or under yade-batch ROOT/DESCRIPTION (path separators made _; refused, ValueError,
+    if it starts with a dot or holds "..": give the line a description column)."""
+    if os.environ.get(JOB_DIR):
+        return os.environ[JOB_DIR]
+    name = description.replace(os.sep, "_").replace("\\", "_")
+    check_name(name, f"yade-batch table {batch_job()}: the job's description")
+    return os.path.join(root, name)
 
 
 def _as_argument(value):
@@ -157,7 +163,10 @@ def job_argv(ap, argv):
             ap.error(f"yade-batch table {batch_job()}: column {name!r} is neither an option of this script "
                      f"nor a scene field TABLE.FIELD")
     if "out" not in values and "resume" not in values:
-        args += ["--out", batch_out(BATCH_OUT, O.tags["description"])]
+        try:
+            args += ["--out", batch_out(BATCH_OUT, O.tags["description"])]
+        except ValueError as e:
+            ap.error(str(e))
     return args + list(argv)
 
 

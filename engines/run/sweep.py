@@ -40,6 +40,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
+from engines.files.inputs import check_name
+
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
@@ -47,7 +49,8 @@ JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
 
 @dataclass(frozen=True)
 class Job:
-    """One run: ``name`` (its directory under the root; letters, digits and ._=,+-), ``argv``
+    """One run: ``name`` (its directory under the root; letters, digits and ._=,+-, no leading dot
+    and no ``..``: engines.files.inputs.check_name), ``argv``
     (the command line, "{out}" replaced by the directory), ``env`` (extra environment) and
     ``timeout`` (seconds, None = none)."""
 
@@ -59,6 +62,7 @@ class Job:
     def __post_init__(self):
         if not NAME.match(self.name or ""):
             raise ValueError(f"job name {self.name!r}: use letters, digits and . _ = , + - only")
+        check_name(self.name, "job name")
         object.__setattr__(self, "argv", tuple(str(a) for a in self.argv))
         if not self.argv:
             raise ValueError(f"job {self.name}: empty command")

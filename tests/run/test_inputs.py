@@ -1,0 +1,226 @@
+"""Bad input refused in one line before anything is written (issue 37, items 2 and 6): names that
+become paths, files that are not regular files or are too large or empty, the list fields of the
+scene schema, the packing file's header and its lines as an editor counts them."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+from engines import ROOT
+from engines.files.inputs import check_input_file, check_name
+from engines.model.ground_motion import read_record
+from engines.run import scene as scenes
+from engines.run.sweep import Job
+from packing.packing import Packing
+
+PRESET = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
+PACKING = os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
+
+
+def scene_file(folder, body, name="mine.toml"):
+    path = folder / name
+    path.write_text(f'extends = "{os.path.relpath(PRESET, folder)}"\n' + body)
+    return str(path)
+
+
+def one_line(e):
+    text = str(e.value)
+    assert "\n" not in text and text, text
+    return text
+
+
+# -- names that become paths -----------------------------------------------------------------------
+@pytest.mark.parametrize("name,why", [("..", "starts with a dot"), (".hidden", "starts with a dot"),
+                                      ("a/b", "path separator"), ("../up", "path separator"),
+                                      ("a\\b", "path separator"), ("x..y", "'..'"), ("", "expected a name"),
+                                      ("a\nb", "control character")])
+def test_check_name_refuses_what_leaves_the_folder(name, why):
+    with pytest.raises(ValueError) as e:
+        check_name(name, "[scene] name")
+    assert one_line(e).startswith("[scene] name") and why in str(e.value)
+
+
+@pytest.mark.parametrize("name", ["quicksand-case1", "case=2,k1=20", "a.b", "start_7"])
+def test_check_name_accepts_plain_names(name):
+    assert check_name(name, "x") == name
+
+
+@pytest.mark.parametrize("name", ["../../evil", ".x", "sub/dir"])
+def test_a_scene_name_that_is_a_path_is_refused(tmp_path, name):
+    with pytest.raises(scenes.SceneError) as e:
+        scenes.load(scene_file(tmp_path, f'[scene]\nname = "{name}"\n'))
+    assert one_line(e).startswith("[scene] name = ")
+
+
+@pytest.mark.parametrize("name", ["..", ".", ".hidden"])
+def test_a_sweep_job_name_that_leaves_the_root_is_refused(name):
+    with pytest.raises(ValueError, match="job name"):
+        Job(name, ["true"])
+
+
+def test_every_preset_name_is_a_plain_name():
+    for name in os.listdir(scenes.SCENE_DIR):
+        if name.endswith(".toml"):
+            scenes.load(os.path.join(scenes.SCENE_DIR, name))  # [scene] name checked
+
+
+# -- files where a file is expected ---------------------------------------------------------------
+def test_check_input_file(tmp_path):
+    (tmp_path / "f").write_text("x" * 10)
+    assert check_input_file(str(tmp_path / "f"), "scene file", 10) == 10
+    cases = [(str(tmp_path), "is a directory"), ("/dev/zero", "/dev/zero is not a regular file"),
+             (str(tmp_path / "none"), "not found")]
+    (tmp_path / "empty").write_text("")
+    cases += [(str(tmp_path / "empty"), "is empty")]
+    for path, why in cases:
+        with pytest.raises(ValueError) as e:
+            check_input_file(path, "scene file", 10)
+        assert one_line(e).startswith(f"scene file {path}") and why in str(e.value)
+    with pytest.raises(ValueError, match=r"is 11 bytes, above the limit of 10 bytes for a scene file"):
+        (tmp_path / "f").write_text("x" * 11)
+        check_input_file(str(tmp_path / "f"), "scene file", 10)
+
+
+@pytest.mark.parametrize("target,why", [(None, "is a directory"), ("/dev/zero", "is not a regular file"),
+                                        ("empty", "is empty"), ("big", "above the limit of 1 MB"),
+                                        ("binary", "not a text file")])
+def test_scene_files_and_extends_are_regular_small_text_files(tmp_path, target, why):
+    path = {None: str(tmp_path), "/dev/zero": "/dev/zero"}.get(target, str(tmp_path / f"{target}.toml"))
+    content = {"empty": b"", "big": b"#" * (2 << 20), "binary": b"\xff\xfe\x00"}.get(target)
+    if content is not None:
+        with open(path, "wb") as f:
+            f.write(content)
+    with pytest.raises(scenes.SceneError) as e:   # as --scene
+        scenes.load(path)
+    assert why in one_line(e)
+    (tmp_path / "child").mkdir()
+    child = tmp_path / "child" / "c.toml"
+    child.write_text(f'extends = "{path}"\n')
+    with pytest.raises(scenes.SceneError) as e:   # as the extends of another scene
+        scenes.load(str(child))
+    assert why in one_line(e) and (target == "binary" or str(child) in str(e.value))
+
+
+def test_a_record_that_is_a_directory_or_a_device_is_refused(tmp_path):
+    for path, why in ((str(tmp_path), "is a directory"), ("/dev/zero", "is not a regular file")):
+        with pytest.raises(ValueError, match=f"record file {path} {why}"):
+            read_record(path)
+
+
+# -- the scene schema's list fields -----------------------------------------------------------------
+BAD_ELEMENTS = ["nan", "inf", "-inf", '"a"', "true"]
+
+
+def test_every_list_field_is_checked():
+    assert set(scenes.LIST_FIELDS) == {("output", "snapshot_times"), ("output", "block_z"),
+                                       ("output", "porosity_window")}
+
+
+@pytest.mark.parametrize("value", [f"[{v}]" for v in BAD_ELEMENTS] + ["[0.01, nan]", "[-0.01]"])
+def test_snapshot_times_are_finite_times(tmp_path, value):
+    with pytest.raises(scenes.SceneError, match=r"^\[output\] snapshot_times\[\d\]: expected a finite time >= 0"):
+        scenes.load(scene_file(tmp_path, f"[output]\nsnapshot_times = {value}\n"))
+
+
+@pytest.mark.parametrize("value", ["[]", '[["a", "b"]]', "[[0.0, nan]]", "[[0.0, inf]]", "[[nan, 0.5]]", "[[0.5]]",
+                                   "[0.1, 0.2]", "[[0.0, 0.5], []]"])
+def test_block_z_is_a_list_of_finite_pairs(tmp_path, value):
+    with pytest.raises(scenes.SceneError, match=r"^\[output\] block_z"):
+        scenes.load(scene_file(tmp_path, f"[output]\nblock_z = {value}\n"))
+
+
+@pytest.mark.parametrize("value", ["[]", "[0.0, inf]", "[nan, 0.5]", '["a", "b"]', "[0.0]", "[0.5, 0.1]"])
+def test_the_porosity_window_is_a_finite_pair(tmp_path, value):
+    with pytest.raises(scenes.SceneError, match=r"^\[output\] porosity_window"):
+        scenes.load(scene_file(tmp_path, f"[output]\nporosity_window = {value}\n"))
+
+
+def test_no_snapshots_is_allowed(tmp_path):
+    assert scenes.load(scene_file(tmp_path, "[output]\nsnapshot_times = []\n")).output.snapshot_times == []
+
+
+# -- packing files --------------------------------------------------------------------------------
+def packing_lines():
+    return open(PACKING).read().splitlines()
+
+
+def write(folder, lines, name="p.csv"):
+    path = folder / name
+    path.write_text("\n".join(lines) + "\n")
+    return str(path)
+
+
+def test_a_packing_without_its_header_is_refused_not_read_short(tmp_path):
+    lines = packing_lines()
+    path = write(tmp_path, lines[1:])
+    with pytest.raises(ValueError) as e:
+        Packing.load(path)
+    assert one_line(e) == (f"packing file {path}, line 1: expected the header x_m,z_m,r_m,group,density_factor, "
+                           f"got a row of numbers (a file without its header: add the header line)")
+    assert len(Packing.load(write(tmp_path, ["x,z,r,group,density_factor"] + lines[1:], "q.csv")).r) == len(lines) - 1
+    with pytest.raises(ValueError, match="line 1: expected the header .*, got 'a,b,c'"):
+        Packing.load(write(tmp_path, ["a,b,c"] + lines[1:]))
+
+
+@pytest.mark.parametrize("line,cell,why", [
+    (10, "abc", "line 10: not a number: 'abc'"),
+    (2, "", "line 2: not a number: ''"),
+    (40, None, "line 40: expected 5 columns x_m,z_m,r_m,group,density_factor, got 4"),
+])
+def test_a_bad_packing_line_is_named_as_an_editor_counts_it(tmp_path, line, cell, why):
+    lines = packing_lines()
+    cells = lines[line - 1].split(",")
+    if cell is None:
+        cells = cells[:4]
+    else:
+        cells[1] = cell
+    lines[line - 1] = ",".join(cells)
+    path = write(tmp_path, lines)
+    with pytest.raises(ValueError) as e:
+        Packing.load(path)
+    assert one_line(e).startswith(f"packing file {path}, {why}")
+
+
+@pytest.mark.parametrize("kind,why", [("empty", "is empty"), ("header", "holds the header and no discs"),
+                                      ("dir", "is a directory"), ("dev", "is not a regular file")])
+def test_empty_and_special_packing_files_are_refused(tmp_path, kind, why):
+    path = {"dir": str(tmp_path), "dev": "/dev/zero"}.get(kind) or write(tmp_path, [] if kind == "empty" else
+                                                                          packing_lines()[:1])
+    if kind == "empty":
+        open(path, "w").close()
+    with pytest.raises(ValueError) as e:
+        Packing.load(path)
+    assert one_line(e).startswith(f"packing file {path}") and why in str(e.value)
+
+
+def test_a_packing_above_its_size_limit_is_refused_before_reading(tmp_path, monkeypatch):
+    import packing.packing as module
+    monkeypatch.setattr(module, "LIMIT", 1000)
+    with pytest.raises(ValueError, match=r"is 2.\d+ kB, above the limit of 1e\+03 bytes|above the limit"):
+        Packing.load(PACKING)
+
+
+def test_a_packing_is_saved_whole_and_read_back(tmp_path):
+    pk = Packing.load(PACKING)
+    pk.save(str(tmp_path / "p.csv"))
+    assert os.listdir(tmp_path) == ["p.csv"]
+    back = Packing.load(str(tmp_path / "p.csv"))
+    np.testing.assert_array_equal(back.group, pk.group)
+    np.testing.assert_allclose(back.xz, pk.xz, rtol=1e-12)
+
+
+# -- a script, end to end --------------------------------------------------------------------------
+@pytest.mark.check
+def test_deposit_does_not_follow_a_scene_name_out_of_its_folder(tmp_path):
+    work = tmp_path / "work"
+    work.mkdir()
+    victim = tmp_path / "victim.csv"
+    victim.write_text("precious\n")
+    scene = scene_file(work, '[scene]\nname = "../../victim"\n')
+    run = subprocess.run(["yade", "-n", "-x", os.path.join(ROOT, "yade_scripts", "deposit.py"), "--scene", scene],
+                         cwd=work, env=dict(os.environ, PYTHONPATH=ROOT, MPLBACKEND="Agg"), capture_output=True,
+                         text=True, timeout=300)
+    errors = [line for line in run.stderr.splitlines() if "error" in line]
+    assert run.returncode != 0 and len(errors) == 1 and "[scene] name = '../../victim'" in errors[0], run.stderr
+    assert victim.read_text() == "precious\n" and os.listdir(work) == ["mine.toml"]
