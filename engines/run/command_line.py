@@ -3,7 +3,7 @@ its yade-batch form.
 
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
-    add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --resume
+    add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --force --resume
                                                   # and the ensemble's --starts --perturbation --jobs
                                                   # --scheduler --start (engines.run.ensemble)
     args = parse_run_arguments(ap, argv)          # argv, or the yade-batch job's table line
@@ -24,7 +24,7 @@ import sys
 import tomllib
 
 from engines.files.inputs import check_name
-from engines.run import ensemble
+from engines.run import ensemble, manifest
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR
@@ -76,6 +76,8 @@ def add_run_arguments(ap, perturbation):
     ap.add_argument("--set", type=scene_setting, action="append", default=[], metavar="TABLE.FIELD=VALUE",
                     help="change a scene field, e.g. --set water.k1=20 (repeatable)")
     ap.add_argument("--vtk", action="store_true", help="write a ParaView series to OUT/vtk/ ([output] vtk = true)")
+    ap.add_argument("--force", action="store_true",
+                    help="run although the estimate is above 24 h of CPU or 10 GB of outputs (refused without it)")
     ap.add_argument("--resume", type=resume_dir, metavar="DIR",
                     help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place "
                          "(an ensemble's DIR: its starts that did not complete)")
@@ -181,7 +183,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     ensemble.check_options(ap, args)
     if args.resume:
-        setup = ("out", "overwrite", "dt", "set", "vtk", "starts", "start", "perturbation")
+        setup = ("out", "overwrite", "dt", "set", "vtk", "force", "starts", "start", "perturbation")
         given = [f"--{k}" for k in setup if getattr(args, k) != ap.get_default(k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
@@ -202,11 +204,12 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
             if many:
-                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args))
+                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args),
+                                              args.force)
             else:
                 if args.start is not None:
                     packing = perturbed(packing, args.start, ensemble.size_of(args))
-                notes = preflight(sc, packing, args.out)
+                notes = preflight(sc, packing, args.out, args.force)
             for note in notes:
                 print(note)
     except ValueError as e:
@@ -235,7 +238,9 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         # on a busy 2-core machine), so that the process ends within a fraction of a second
         os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
     if figures is not None:
-        for path in figures(out):
+        drawn = figures(out)
+        manifest.claim(out, [os.path.basename(path) for path in drawn])
+        for path in drawn:
             print("figure:", path)
     print(runner.done_line(summary))
 
