@@ -27,7 +27,7 @@ from engines.files.inputs import check_name
 from engines.run import ensemble, manifest
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
-from engines.run.sweep import JOB_DIR
+from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.studies.ensemble import perturbed
 
 BATCH_OUT = os.path.join("out", "batch")
@@ -193,6 +193,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     try:  # bad scenes, packings, limits: one clear line, nothing written
         if args.resume and many:
             jobs, plan = ensemble.resume_jobs(args.resume, args.duration)
+            if args.scheduler:
+                check_scheduler(args.scheduler)
         elif args.resume:
             check_resume(args.resume, args.duration)
         else:
@@ -203,6 +205,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
                 check(sc)
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
+            if many and args.scheduler:
+                check_scheduler(args.scheduler)
             if many:
                 notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args),
                                               args.force)

@@ -210,7 +210,16 @@ def run_starts(jobs, out, plan, args):
     from postproc import ensemble as figures
     from postproc.run_files import read_history, read_summary
     t0 = time.time()
-    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
+    try:
+        run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False)
+    except (OSError, TimeoutError) as e:
+        if not args.scheduler:
+            raise
+        _write(out, {**plan, "status": "failed", "error": f"--scheduler {args.scheduler}: {type(e).__name__}: {e}"})
+        print(f"error: --scheduler {args.scheduler}: the cluster could not be reached or was lost ({type(e).__name__}: "
+              f"{e}); {os.path.join(out, ENSEMBLE)} says \"failed\"; continue with yade -n -x {plan['script']} "
+              f"--resume {out}", flush=True)
+        return 1
     summaries = {k: read_summary(start_dir(out, k)) for k in plan["seeds"]}
     status = {k: s.get("status", "not started") for k, s in summaries.items()}
     doc = {**plan, "status": "completed", "start_status": {f"start_{k}": v for k, v in status.items()},

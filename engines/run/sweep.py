@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 from engines.files.inputs import check_name
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
+TABLE_LIMIT = 10 << 20  # the largest table or jobs file read [bytes]
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
 
@@ -178,6 +179,27 @@ def is_done(job, root):
     out = os.path.abspath(os.path.join(root, job.name))
     return rec is not None and rec.get("status") == "ok" and rec.get("command") == job.command(out) \
         and rec.get("env", {}) == dict(job.env)
+
+
+SCHEDULER_TIMEOUT = 5.0  # seconds to wait for a Dask scheduler's port to answer
+
+
+def check_scheduler(address, arg="--scheduler"):
+    """Raise ValueError (one line naming ``arg``) unless a TCP connection to the Dask scheduler
+    ``address`` (tcp://HOST:PORT, tls://HOST:PORT or HOST:PORT) opens within SCHEDULER_TIMEOUT s."""
+    from urllib.parse import urlsplit
+    parts = urlsplit(address if "://" in address else "tcp://" + address)
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port or parts.scheme not in ("tcp", "tls"):
+        raise ValueError(f"{arg} {address}: expected tcp://HOST:PORT (the Dask scheduler's address)")
+    try:
+        socket.create_connection((host, port), timeout=SCHEDULER_TIMEOUT).close()
+    except OSError as e:
+        raise ValueError(f"{arg} {address}: no Dask scheduler answers there ({e.strerror or e}); start one "
+                         f"(docs/SWEEPS.md) or run on this machine without {arg}") from None
 
 
 def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):

@@ -224,3 +224,90 @@ def test_deposit_does_not_follow_a_scene_name_out_of_its_folder(tmp_path):
     errors = [line for line in run.stderr.splitlines() if "error" in line]
     assert run.returncode != 0 and len(errors) == 1 and "[scene] name = '../../victim'" in errors[0], run.stderr
     assert victim.read_text() == "precious\n" and os.listdir(work) == ["mine.toml"]
+
+
+# -- the sweep runner's own arguments, an unreachable scheduler -------------------------------------
+def closed_port():
+    """A localhost port nothing listens on."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def sweep_refuses(tmp_path, capsys, args, why, code=1):
+    from yade_scripts import sweep
+    out = tmp_path / "sweep"
+    with pytest.raises(SystemExit) as e:
+        sweep.main(["--out", str(out), *args])
+    message = e.value.code if isinstance(e.value.code, str) else capsys.readouterr().err
+    assert (code == 1) == isinstance(e.value.code, str) and (code == 1 or e.value.code == code)
+    assert why in message and len(message.strip().splitlines()) == 1, message
+    assert not out.exists()
+
+
+def test_the_sweep_runner_refuses_bad_arguments_in_one_line(tmp_path, capsys):
+    jobs = tmp_path / "jobs.json"
+    table = tmp_path / "t.table"
+    table.write_text("description x\nA 1\n")
+    cases = [
+        (["--table", str(tmp_path), "--script", "s.py"], f"table {tmp_path} is a directory"),
+        (["--table", "/dev/zero", "--script", "s.py"], "table /dev/zero is not a regular file"),
+        (["--table", str(tmp_path / "none.table"), "--script", "s.py"], "none.table not found"),
+        (["--table", str(table), "--script", str(tmp_path / "none.py")], "script"),
+        (["--jobs", str(jobs)], "jobs file"),
+    ]
+    for args, why in cases:
+        sweep_refuses(tmp_path, capsys, args, why)
+    for text, why in [("[\n{\"name\": 1,\n", "line 3: not valid JSON"), ('{"name": "a"}', "expected a JSON list"),
+                      ('[{"name": "a"}]', 'job 1: expected {"name", "argv"'),
+                      ('[{"name": "..", "argv": ["true"]}]', "job 1: job name = '..' starts with a dot"),
+                      ('[{"name": "a", "argv": "true"}]', '"argv" must be a list'),
+                      ("[]", "holds no jobs"), ("", "is empty")]:
+        jobs.write_text(text)
+        sweep_refuses(tmp_path, capsys, ["--jobs", str(jobs)], why)
+    jobs.write_text('[{"name": "a", "argv": ["true"]}]')
+    for workers in ("0", "x", "1000"):
+        sweep_refuses(tmp_path, capsys, ["--jobs", str(jobs), "--workers", workers], "--workers", code=2)
+    port = closed_port()
+    sweep_refuses(tmp_path, capsys, ["--jobs", str(jobs), "--scheduler", f"tcp://127.0.0.1:{port}"],
+                  f"--scheduler tcp://127.0.0.1:{port}: no Dask scheduler answers there")
+    sweep_refuses(tmp_path, capsys, ["--jobs", str(jobs), "--scheduler", "nonsense"], "expected tcp://HOST:PORT")
+
+
+def test_an_ensemble_with_an_unreachable_scheduler_is_refused_before_its_folder(tmp_path):
+    from tests.run.test_preflight import QUICKSAND, refused
+    out = tmp_path / "ens"
+    refused(QUICKSAND + ["--starts", "2", "--scheduler", f"tcp://127.0.0.1:{closed_port()}", "--out", str(out)], out,
+            "no Dask scheduler answers there")
+
+
+def test_a_cluster_lost_during_an_ensemble_marks_it_failed(tmp_path, monkeypatch, capsys):
+    import argparse
+    import json
+
+    from engines.run import ensemble
+
+    def lost(*args, **kw):
+        raise OSError("Timed out trying to connect to tcp://127.0.0.1:1 after 30 s")
+
+    monkeypatch.setattr(ensemble, "run_sweep", lost)
+    plan = {"script": "s.py", "seeds": [0, 1], "starts": ["start_0", "start_1"]}
+    args = argparse.Namespace(jobs=None, scheduler="tcp://127.0.0.1:1")
+    assert ensemble.run_starts([], str(tmp_path), plan, args) == 1
+    doc = json.loads((tmp_path / "ensemble.json").read_text())
+    assert doc["status"] == "failed" and "Timed out" in doc["error"]
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 1 and out[0].startswith("error: --scheduler tcp://127.0.0.1:1: ") and "--resume" in out[0]
+
+
+@pytest.mark.check
+def test_an_empty_table_is_refused(tmp_path):
+    import sys
+    table = tmp_path / "t.table"
+    table.write_text("description x\n")
+    run = subprocess.run([sys.executable, os.path.join(ROOT, "yade_scripts", "sweep.py"), "--out", str(tmp_path / "s"),
+                          "--table", str(table), "--script", os.path.join(ROOT, "yade_scripts", "quicksand.py")],
+                         cwd=tmp_path, env=dict(os.environ, PYTHONPATH=ROOT), capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1 and run.stderr.strip().splitlines() == [f"error: table {table} holds no jobs: nothing to run"]
+    assert not (tmp_path / "s").exists()
