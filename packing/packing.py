@@ -37,6 +37,7 @@ class Packing:
     group: np.ndarray
     density_factor: np.ndarray
     path: str = None  # the CSV file it was read from (named in refusals)
+    lines: np.ndarray = None  # the file's line of each disc (1-based), when not simply index + 2
 
     def __post_init__(self):
         r = np.asarray(self.r, float)
@@ -68,7 +69,9 @@ class Packing:
 
     def row_name(self, i):
         """Disc ``i`` as refusals name it: its line in the file (the header is line 1) or its index."""
-        return f"line {i + 2}" if self.path else f"disc {i}"
+        if not self.path:
+            return f"disc {i}"
+        return f"line {i + 2 if self.lines is None else int(self.lines[i])}"
 
     def _refuse_first(self, bad, what, values):
         """ValueError naming the file, the first disc where ``bad`` and ``what`` with its value."""
@@ -179,7 +182,7 @@ class Packing:
             raise ValueError(_first_bad_line(path)) from None
         if d.size == 0:
             raise ValueError(f"packing file {path}: holds the header and no discs")
-        return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path)
+        return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path, lines=_disc_lines(path, len(d)))
 
 
 def _is_number(text):
@@ -190,12 +193,25 @@ def _is_number(text):
     return True
 
 
+def _disc_lines(path, n):
+    """The line (1-based) of each of the ``n`` discs numpy read from ``path``, or None when they
+    are lines 2 to n + 1 (no blank or comment line among them)."""
+    with open(path, "rb") as f:
+        text = f.read()
+    if text.count(b"\n") + (not text.endswith(b"\n")) == n + 1:
+        return None
+    data = [k for k, line in enumerate(text.decode(errors="replace").splitlines(), 1)
+            if k > 1 and line.split("#", 1)[0].strip()]
+    return np.array(data) if len(data) == n else None
+
+
 def _first_bad_line(path):
     """Why numpy could not read the packing file ``path``: its first line (1-based, the header
     line 1) that is not 5 comma-separated numbers."""
     with open(path, errors="replace") as f:
         next(f)
         for k, line in enumerate(f, 2):
+            line = line.split("#", 1)[0]
             cells = line.strip().split(",")
             if not line.strip():
                 continue

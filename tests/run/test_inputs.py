@@ -311,3 +311,18 @@ def test_an_empty_table_is_refused(tmp_path):
                          cwd=tmp_path, env=dict(os.environ, PYTHONPATH=ROOT), capture_output=True, text=True, timeout=300)
     assert run.returncode == 1 and run.stderr.strip().splitlines() == [f"error: table {table} holds no jobs: nothing to run"]
     assert not (tmp_path / "s").exists()
+
+
+def test_blank_and_comment_lines_do_not_shift_the_line_named(tmp_path):
+    lines = packing_lines()
+    lines[5:5] = ["", "# a note"]
+    cells = lines[11].split(",")
+    cells[2] = "-1e-4"
+    lines[11] = ",".join(cells)
+    path = write(tmp_path, lines)
+    with pytest.raises(ValueError, match=rf"^packing file {path}, line 12: r = -0.0001 m"):
+        Packing.load(path)
+    cells[2] = "x"
+    lines[11] = ",".join(cells)
+    with pytest.raises(ValueError, match=rf"^packing file {path}, line 12: not a number: 'x'"):
+        Packing.load(write(tmp_path, lines))
