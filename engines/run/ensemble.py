@@ -72,6 +72,9 @@ def check_options(ap, args):
 
 
 def start_dir(out, k):
+    """The folder of start ``k`` (an integer >= 0: a crafted ensemble.json cannot name another)."""
+    if isinstance(k, bool) or not isinstance(k, int) or k < 0:
+        raise InputError(f"{os.path.join(out, ENSEMBLE)}: start {k!r} is not a start number (an integer >= 0)")
     return os.path.join(out, f"start_{k}")
 
 

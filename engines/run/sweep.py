@@ -289,7 +289,10 @@ def jobs_from_table(table, script, yade=("yade", "-n")):
     jobs = []
     for line, params in sorted(read_table(table, yade).items()):
         name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params["description"])
-        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
+        try:
+            jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {"YADE_BATCH": f"{table}:{line}"}))
+        except ValueError as e:
+            raise ValueError(f"{table}, line {line}: {e}; change the line's description (it names the job's folder)") from None
     return jobs
 
 

@@ -326,3 +326,27 @@ def test_blank_and_comment_lines_do_not_shift_the_line_named(tmp_path):
     lines[11] = ",".join(cells)
     with pytest.raises(ValueError, match=rf"^packing file {path}, line 12: not a number: 'x'"):
         Packing.load(write(tmp_path, lines))
+
+
+def test_a_batch_description_or_an_ensembles_start_cannot_leave_the_folder(monkeypatch):
+    from engines.run.command_line import batch_out
+    from engines.run.ensemble import start_dir
+    monkeypatch.delenv("SWEEP_JOB_DIR", raising=False)
+    monkeypatch.setenv("YADE_BATCH", "t.table:2")
+    assert batch_out("out/batch", "case=2/x") == os.path.join("out/batch", "case=2_x")
+    for description in ("..", ".hidden", "a..b"):
+        with pytest.raises(ValueError, match=r"^yade-batch table t.table:2: the job's description = "):
+            batch_out("out/batch", description)
+    assert start_dir("out", 3) == os.path.join("out", "start_3")
+    for k in ("../../x", -1, True, 1.5):
+        with pytest.raises(ValueError, match=r"out/ensemble.json: start .* is not a start number"):
+            start_dir("out", k)
+
+
+@pytest.mark.check
+def test_a_table_line_described_as_dot_dot_is_refused_naming_the_line(tmp_path):
+    from engines.run.sweep import jobs_from_table
+    table = tmp_path / "t.table"
+    table.write_text("description x\nok 1\n.. 2\n")
+    with pytest.raises(ValueError, match=rf"^{table}, line 3: job name = '..' starts with a dot.*change the line's description"):
+        jobs_from_table(str(table), "s.py")
