@@ -189,7 +189,9 @@ def estimate(scene, packing):
     packing's discs (walls included); outputs = history rows (steps / history_interval + 1) x
     columns (t, the blocks, 13 measures, 6 wall loads) x VALUE_BYTES + snapshots x bodies x
     SNAPSHOT_BYTES + VTK frames x bodies x VTK_BYTES + bodies x CHECKPOINT_BYTES. The per-body sizes
-    are those of the quick-sand and seismic runs, rounded up."""
+    are those of the quick-sand and seismic runs, rounded up. A dt = "auto" is estimated as chosen."""
+    from engines.model.time_step import resolve_dt
+    scene = resolve_dt(scene, packing, log=None)
     num, out = scene.numerics, scene.output
     steps = int(round(num.duration / num.dt))
     bodies = len(packing.r)

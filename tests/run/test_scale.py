@@ -4,6 +4,7 @@ stated cost model, within 3x of what two presets cost; refusals above 24 h or 10
 names."""
 import pytest
 
+from engines.model.time_step import resolve_dt
 from engines.run import ensemble
 from engines.run import scene as scenes
 from engines.run.preflight import CPU_LIMIT, OUTPUT_LIMIT, InputError, check_scale, cost_per_step, estimate, preflight
@@ -34,6 +35,9 @@ def test_the_estimate_follows_the_model(case1):
     assert dry["cpu_s"] == pytest.approx(60000 * 76 * c_law * 1e-6) and dry["frames"] == 4 and dry["bytes"] > e["bytes"]
     assert estimate(sc.with_overrides({"numerics": {"water_interval": 10}}), pk)["cpu_s"] == \
         pytest.approx(60000 * 76 * (c_law + c_water / 10) * 1e-6)
+    auto = sc.with_overrides({"numerics": {"dt": "auto"}})
+    assert estimate(auto, pk)["steps"] == round(0.06 / resolve_dt(auto, pk, log=None).numerics.dt)
+    assert "starts x" in ensemble.check_starts(auto, pk, "out", range(2), 1e-7)[0]
 
 
 def test_a_trillion_steps_are_refused_without_force(case1):
