@@ -350,3 +350,19 @@ def test_a_table_line_described_as_dot_dot_is_refused_naming_the_line(tmp_path):
     table.write_text("description x\nok 1\n.. 2\n")
     with pytest.raises(ValueError, match=rf"^{table}, line 3: job name = '..' starts with a dot.*change the line's description"):
         jobs_from_table(str(table), "s.py")
+
+
+@pytest.mark.parametrize("args,why", [
+    (["--scene", "/dev/zero"], "scene file /dev/zero is not a regular file"),
+    (["--scene", "DIR"], "is a directory"),
+    (["--set", "output.snapshot_times=[nan]"], "[output] snapshot_times[0]: expected a finite time >= 0"),
+    (["--set", "output.block_z=[]"], "[output] block_z: expected at least one block"),
+    (["--set", 'output.block_z=[["a", "b"]]'], "[output] block_z[0]"),
+    (["--duration", "1e6"], "of outputs is above 10 GB"),   # 1e12 steps
+])
+def test_a_scene_script_refuses_in_one_line_before_out_exists(tmp_path, args, why):
+    from tests.run.test_preflight import QUICKSAND, refused
+    out = tmp_path / "run"
+    args = [str(tmp_path) if a == "DIR" else a for a in args]
+    message = refused(QUICKSAND + args + ["--out", str(out)], out, why)
+    assert "--duration" not in args or "--force" in message
