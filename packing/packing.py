@@ -1,5 +1,8 @@
 """A packing: disc centres, radii, groups and density factors, saved as CSV (x, z, r, group, density_factor).
 
+A packing file is a regular file of at most 200 MB (LIMIT) whose line 1 is the header HEADER,
+checked by its column names (a file without it is refused, not read losing its first disc).
+
 Refusals name the disc: in a file by its line number (the header is line 1, so the first disc is
 line 2), otherwise by its 0-based index. A packing refuses a non-finite value, a radius or density
 factor <= 0, a group code not in engines.model.groups, and two discs with the same centre
@@ -7,16 +10,20 @@ factor <= 0, a group code not in engines.model.groups, and two discs with the sa
 than a tolerance (preflight gives it the scene's contact law).
 """
 import os
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from engines import files
+from engines.files.inputs import MB, check_input_file
 from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
 from engines.model.pores import check_discs
 
 COLUMNS = ("x", "z", "r", "group", "density_factor")
+HEADER = ("x_m", "z_m", "r_m", "group", "density_factor")  # line 1 of a packing file
+LIMIT = 200 * MB  # the largest packing file read [bytes]
 
 
 @dataclass
@@ -30,6 +37,7 @@ class Packing:
     group: np.ndarray
     density_factor: np.ndarray
     path: str = None  # the CSV file it was read from (named in refusals)
+    lines: np.ndarray = None  # the file's line of each disc (1-based), when not simply index + 2
 
     def __post_init__(self):
         r = np.asarray(self.r, float)
@@ -61,7 +69,9 @@ class Packing:
 
     def row_name(self, i):
         """Disc ``i`` as refusals name it: its line in the file (the header is line 1) or its index."""
-        return f"line {i + 2}" if self.path else f"disc {i}"
+        if not self.path:
+            return f"disc {i}"
+        return f"line {i + 2 if self.lines is None else int(self.lines[i])}"
 
     def _refuse_first(self, bad, what, values):
         """ValueError naming the file, the first disc where ``bad`` and ``what`` with its value."""
@@ -144,18 +154,71 @@ class Packing:
         return [(bottom + a * h, bottom + b * h) for a, b in block_z]
 
     def save(self, path):
+        """Write the CSV (HEADER, one disc a line) atomically (engines.files)."""
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         data = np.column_stack([self.xz, self.r, self.group, self.density_factor])
         with files.saved(path) as tmp:
-            np.savetxt(tmp, data, delimiter=",", header="x_m,z_m,r_m,group,density_factor", comments="",
+            np.savetxt(tmp, data, delimiter=",", header=",".join(HEADER), comments="",
                        fmt=["%.12e", "%.12e", "%.12e", "%d", "%.6g"])
 
     @classmethod
     def load(cls, path):
+        """Read a CSV packing: a regular file of at most LIMIT bytes whose line 1 is the header
+        (HEADER; x, z, r without "_m" accepted), then one disc a line. Refusals (ValueError) name the
+        file and the line as an editor counts it."""
+        check_input_file(path, "packing file", LIMIT)
+        with open(path, errors="replace") as f:
+            header = f.readline()
+        names = [name.strip().lower() for name in header.split(",")]
+        if names not in ([*HEADER], [*COLUMNS]):
+            row = "a row of numbers" if all(_is_number(n) for n in names) else repr(header.strip()[:80])
+            raise ValueError(f"packing file {path}, line 1: expected the header {','.join(HEADER)}, got {row}"
+                             f"{' (a file without its header: add the header line)' if row.startswith('a row') else ''}")
         try:
-            d = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-        except (OSError, ValueError) as e:
-            raise ValueError(f"packing file {path}: {e}") from None
-        if d.shape[1] != 5:
-            raise ValueError(f"packing file {path}: expected 5 columns x,z,r,group,density_factor, got {d.shape[1]}")
-        return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
+                d = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        except (OSError, ValueError):
+            raise ValueError(_first_bad_line(path)) from None
+        if d.size == 0:
+            raise ValueError(f"packing file {path}: holds the header and no discs")
+        return cls(d[:, :2], d[:, 2], d[:, 3], d[:, 4], path=path, lines=_disc_lines(path, len(d)))
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _disc_lines(path, n):
+    """The line (1-based) of each of the ``n`` discs numpy read from ``path``, or None when they
+    are lines 2 to n + 1 (no blank or comment line among them)."""
+    with open(path, "rb") as f:
+        text = f.read()
+    if text.count(b"\n") + (not text.endswith(b"\n")) == n + 1:
+        return None
+    data = [k for k, line in enumerate(text.decode(errors="replace").splitlines(), 1)
+            if k > 1 and line.split("#", 1)[0].strip()]
+    return np.array(data) if len(data) == n else None
+
+
+def _first_bad_line(path):
+    """Why numpy could not read the packing file ``path``: its first line (1-based, the header
+    line 1) that is not 5 comma-separated numbers."""
+    with open(path, errors="replace") as f:
+        next(f)
+        for k, line in enumerate(f, 2):
+            line = line.split("#", 1)[0]
+            cells = line.strip().split(",")
+            if not line.strip():
+                continue
+            if len(cells) != len(COLUMNS):
+                return (f"packing file {path}, line {k}: expected {len(COLUMNS)} columns {','.join(HEADER)}, "
+                        f"got {len(cells)}: {line.strip()[:80]!r}")
+            bad = [c for c in cells if not _is_number(c)]
+            if bad:
+                return f"packing file {path}, line {k}: not a number: {bad[0].strip()[:40]!r}"
+    return f"packing file {path}: cannot be read as CSV numbers"

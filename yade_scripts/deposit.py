@@ -8,8 +8,10 @@ size distribution (Fig. 14) and a drawing of the packing (Fig. 15) beside it.
 flat walls ([walls] kind = "flat": quicksand_case1_flat's packing is case 1's, settled on them).
 ``--set``: a change to the scene, as in the run scripts (e.g. ``--set packing.n_bottom=37``).
 
-By default the packing goes to out/packings/<scene name>.csv; ``--replace`` overwrites the
-packing file the scene names (a tracked preset file: check the diff before committing it).
+By default the packing goes to out/packings/<scene name>.csv (the name is one plain name: the
+scene schema refuses separators, ``..`` and a leading dot); ``--replace`` overwrites the packing
+file the scene names (a tracked preset file: check the diff before committing it). The two
+figures are written beside the CSV, named after it.
 """
 import argparse
 import os
@@ -48,6 +50,8 @@ def main(argv):
                              "--replace with --set: a changed scene does not replace the preset's packing; use --out")
         out = sc.packing.file if args.replace else args.out or os.path.join("out", "packings", sc.scene.name + ".csv")
         check_output_dir(os.path.dirname(os.path.abspath(out)), "--out")
+        if os.path.exists(out) and not os.path.isfile(out):
+            raise InputError(f"--out {out} is a directory or a special file: name the CSV file to write")
         if args.source and sc.walls.kind != "flat":
             raise InputError(f"--from: the scene's [walls] kind is {sc.walls.kind!r}; a packing is settled again only "
                              f"against flat walls")

@@ -32,13 +32,15 @@ Inputs:
 Units: SI; records given in g use g = 9.80665 m/s^2.
 """
 import math
-import os
 import re
 
 import numpy as np
 
+from engines.files.inputs import MB, check_input_file
+
 G0 = 9.80665  # standard gravity [m/s^2]
 UNITS = {"g": G0, "gal": 0.01, "m/s2": 1.0}  # record acceleration unit -> m/s^2
+RECORD_LIMIT = 200 * MB  # the largest record file read [bytes]
 
 
 class Cosine:
@@ -73,11 +75,11 @@ def read_record(path):
     """Time [s] and acceleration (the file's unit) of a two-column text record.
 
     Columns separated by spaces, tabs or a comma; '#' starts a comment; blank lines are skipped.
-    Raises ValueError naming the file (and line) for: a missing file, a line without exactly two
+    Raises ValueError naming the file (and line) for: a missing, empty or not regular file, one
+    above RECORD_LIMIT bytes, a line without exactly two
     numbers, a non-finite value, fewer than two samples, a time that does not increase.
     """
-    if not os.path.isfile(path):
-        raise ValueError(f"record file not found: {path}")
+    check_input_file(path, "record file", RECORD_LIMIT)
     rows, lines = [], []
     with open(path) as f:
         for k, line in enumerate(f, 1):

@@ -137,7 +137,10 @@ def table_argv(ap):
             ap.error(f"yade-batch table {table}, line {line}: column {dest!r} is not an option of this script")
         argv += [options[dest], ",".join(map(str, v)) if isinstance(v, (tuple, list)) else str(v)]
     if "out" not in values:
-        argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), values[DESCRIPTION])]
+        try:
+            argv += ["--out", batch_out(os.path.join("out", "biaxial-batch"), values[DESCRIPTION])]
+        except ValueError as e:
+            ap.error(str(e))
     return argv
 
 

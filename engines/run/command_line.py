@@ -3,7 +3,7 @@ its yade-batch form.
 
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
-    add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --resume
+    add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --force --resume
                                                   # and the ensemble's --starts --perturbation --jobs
                                                   # --scheduler --start (engines.run.ensemble)
     args = parse_run_arguments(ap, argv)          # argv, or the yade-batch job's table line
@@ -24,10 +24,11 @@ import re
 import sys
 import tomllib
 
-from engines.run import ensemble
+from engines.files.inputs import check_name
+from engines.run import ensemble, manifest
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
-from engines.run.sweep import JOB_DIR
+from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import DESCRIPTION, batch_line
 from engines.studies.ensemble import perturbed
 
@@ -77,6 +78,8 @@ def add_run_arguments(ap, perturbation):
     ap.add_argument("--set", type=scene_setting, action="append", default=[], metavar="TABLE.FIELD=VALUE",
                     help="change a scene field, e.g. --set water.k1=20 (repeatable)")
     ap.add_argument("--vtk", action="store_true", help="write a ParaView series to OUT/vtk/ ([output] vtk = true)")
+    ap.add_argument("--force", action="store_true",
+                    help="run although the estimate is above 24 h of CPU or 10 GB of outputs (refused without it)")
     ap.add_argument("--resume", type=resume_dir, metavar="DIR",
                     help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place "
                          "(an ensemble's DIR: its starts that did not complete)")
@@ -115,8 +118,13 @@ def sweep_job_dir(path):
 
 def batch_out(root, description):
     """The output directory of a table's job without an ``out`` column: the sweep runner's job
-    directory, or under yade-batch ROOT/DESCRIPTION."""
-    return os.environ.get(JOB_DIR) or os.path.join(root, description.replace(os.sep, "_"))
+    directory, or under yade-batch ROOT/DESCRIPTION (path separators made _; refused, ValueError,
+    if it starts with a dot or holds "..": give the line a description column)."""
+    if os.environ.get(JOB_DIR):
+        return os.environ[JOB_DIR]
+    name = description.replace(os.sep, "_").replace("\\", "_")
+    check_name(name, f"yade-batch table {batch_line()}: the job's description")
+    return os.path.join(root, name)
 
 
 def _as_argument(value):
@@ -154,7 +162,10 @@ def job_argv(ap, argv):
             ap.error(f"yade-batch table {table}, line {line}: column {name!r} is neither an option of this script "
                      f"nor a scene field TABLE.FIELD")
     if "out" not in values and "resume" not in values:
-        args += ["--out", batch_out(BATCH_OUT, values[DESCRIPTION])]
+        try:
+            args += ["--out", batch_out(BATCH_OUT, values[DESCRIPTION])]
+        except ValueError as e:
+            ap.error(str(e))
     return args + list(argv)
 
 
@@ -169,7 +180,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     ensemble.check_options(ap, args)
     if args.resume:
-        setup = ("out", "overwrite", "dt", "set", "vtk", "starts", "start", "perturbation")
+        setup = ("out", "overwrite", "dt", "set", "vtk", "force", "starts", "start", "perturbation")
         given = [f"--{k}" for k in setup if getattr(args, k) != ap.get_default(k)] + (["the scene"] if scene_given else [])
         if given:
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
@@ -179,6 +190,8 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     try:  # bad scenes, packings, limits: one clear line, nothing written
         if args.resume and many:
             jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
+            if args.scheduler:
+                check_scheduler(args.scheduler)
         elif args.resume:
             check_resume(args.resume, args.duration)
         else:
@@ -190,13 +203,16 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             from engines.model.start import Start
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
+            if many and args.scheduler:
+                check_scheduler(args.scheduler)
             if many:
-                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args))
+                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args),
+                                              args.force)
             else:
                 if args.start is not None:
                     packing = perturbed(packing, args.start, ensemble.size_of(args))
                 prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
-                notes = preflight(sc, packing, args.out, prepared)
+                notes = preflight(sc, packing, args.out, prepared, args.force)
             for note in notes:
                 print(note)
     except ValueError as e:
@@ -225,7 +241,9 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         # on a busy 2-core machine), so that the process ends within a fraction of a second
         os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
     if figures is not None:
-        for path in figures(out):
+        drawn = figures(out)
+        manifest.claim(out, [os.path.basename(path) for path in drawn])
+        for path in drawn:
             print("figure:", path)
     print(runner.done_line(summary))
 

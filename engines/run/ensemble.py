@@ -10,7 +10,9 @@ Start k is the script's own command line with ``--start k --perturbation M --out
 (without the ensemble's options): a complete run in DIR/start_<k>/ (history, summary, checkpoint,
 figures; the sweep runner's job.json and logs beside them), its packing ``perturbed`` with seed k
 (start 0 is the scene's packing). Before anything is written every start is checked as a run is
-(preflight of its perturbed packing; one line names the start). DIR/ensemble.json is written at
+(preflight of its perturbed packing; one line names the start; beyond 64 starts a seeded sample of
+64, and the output says so) and the estimate of all of them is stated (refused above 24 h of CPU
+or 10 GB without --force). DIR/ensemble.json is written at
 the start (the plan: seeds, perturbation, the starts' command line; "status": "running") and
 when the starts have ended: "completed" with the statistics and the figures
 (postproc.ensemble), or "incomplete" with each start's status. ``--resume DIR`` continues the
@@ -24,10 +26,10 @@ script's own options without --out, --resume or the ensemble's).
 import json
 import os
 import re
-import shutil
 import time
 
-from engines.run.preflight import ENSEMBLE, InputError, number, preflight
+from engines.run import manifest
+from engines.run.preflight import ENSEMBLE, InputError, check_scale, number, preflight
 from engines.run.sweep import YADE, Job, run_sweep, yade_environment
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
@@ -79,6 +81,9 @@ def check_options(ap, args):
 
 
 def start_dir(out, k):
+    """The folder of start ``k`` (an integer >= 0: a crafted ensemble.json cannot name another)."""
+    if isinstance(k, bool) or not isinstance(k, int) or k < 0:
+        raise InputError(f"{os.path.join(out, ENSEMBLE)}: start {k!r} is not a start number (an integer >= 0)")
     return os.path.join(out, f"start_{k}")
 
 
@@ -100,12 +105,33 @@ def start_argv(ap, argv):
     return [str(a) for a in out]
 
 
-def check_starts(scene, packing, out, seeds, size):
-    """Preflight of every start's perturbed packing (one line naming the start); the notes once."""
-    notes = []
-    for k in seeds:
+CHECKED_STARTS = 64  # starts checked before an ensemble runs; beyond, a seeded sample of this many
+
+
+def checked_seeds(seeds):
+    """The starts ``check_starts`` checks: all of ``seeds`` up to CHECKED_STARTS, else a sample of
+    that many drawn by numpy Generator(0), start 0 always among them (sorted)."""
+    seeds = list(seeds)
+    if len(seeds) <= CHECKED_STARTS:
+        return seeds
+    import numpy as np
+    rest = np.random.default_rng(0).choice(len(seeds) - 1, CHECKED_STARTS - 1, replace=False) + 1
+    return [seeds[0]] + [seeds[i] for i in sorted(rest)]
+
+
+def check_starts(scene, packing, out, seeds, size, force=False):
+    """Preflight of the starts' perturbed packings (``checked_seeds``; one line names a refused
+    start), the estimate of all of them once (preflight.check_scale), the notes once."""
+    seeds = list(seeds)
+    notes = [check_scale(scene, packing, force, starts=len(seeds))]
+    checked = checked_seeds(seeds)
+    if len(checked) < len(seeds):
+        notes.append(f"note: checked {len(checked)} of the {len(seeds)} starts before the run (a sample drawn by numpy "
+                     f"Generator(0), start 0 among them); each start is checked again as it begins")
+    for k in checked:
         try:
-            notes += [n for n in preflight(scene, perturbed(packing, k, size), start_dir(out, k)) if n not in notes]
+            notes += [n for n in preflight(scene, perturbed(packing, k, size), start_dir(out, k), scale=False)
+                      if n not in notes]
         except InputError as e:
             raise InputError(f"start {k} (perturbed by {size:g} m): {e}") from None
     return notes
@@ -205,10 +231,8 @@ def start(ap, args, script, scene):
     exit status."""
     out, size = args.out, size_of(args)
     seeds = list(range(args.starts))
-    if args.overwrite:
-        for name in os.listdir(out) if os.path.isdir(out) else []:
-            if name.startswith("start_") and os.path.isdir(os.path.join(out, name)):
-                shutil.rmtree(os.path.join(out, name))
+    if args.overwrite:  # the earlier ensemble's files and the start folders its ensemble.json lists
+        manifest.clear(out)
     os.makedirs(out, exist_ok=True)
     plan = {"scene": scene.scene.name, "script": script, "n_starts": len(seeds), "seeds": seeds, "perturbation_m": size,
             "perturbation": PERTURBATION_TEXT, "start_argv": start_argv(ap, args.argv), "starts": [f"start_{k}" for k in seeds]}
@@ -258,8 +282,18 @@ def run_starts(jobs, out, plan, args):
     from postproc import ensemble as figures
     from postproc.run_files import read_history, read_summary
     t0 = time.time()
-    run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
-              scheduler_file=args.scheduler_file)
+    try:
+        run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
+                  scheduler_file=args.scheduler_file)
+    except (OSError, TimeoutError) as e:
+        if not (args.scheduler or args.scheduler_file):
+            raise
+        where = f"--scheduler {args.scheduler}" if args.scheduler else f"--scheduler-file {args.scheduler_file}"
+        _write(out, {**plan, "status": "failed", "error": f"{where}: {type(e).__name__}: {e}"})
+        print(f"error: {where}: the cluster could not be reached or was lost ({type(e).__name__}: "
+              f"{e}); {os.path.join(out, ENSEMBLE)} says \"failed\"; continue with yade -n -x {plan['script']} "
+              f"--resume {out}", flush=True)
+        return 1
     summaries = {k: read_summary(start_dir(out, k)) for k in plan["seeds"]}
     status = {k: s.get("status", "not started") for k, s in summaries.items()}
     doc = {**plan, "status": "completed", "start_status": {f"start_{k}": v for k, v in status.items()},

@@ -5,8 +5,9 @@ time step against the stability limits at the start (engines.model.start: eq 52,
 the water stiffness, the Darcy limit and the sub-step count; ``prepared``, the run's Start, is the one
 the engines then run on, so the limits checked are those of the network that runs), the duration, the
 loading record, the packing against the walls' box and the contact law (``check_packing``) and the
-output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs;
-``announce_output`` prints the folder a script writes into, ``announce_dt`` the choice of dt = "auto".
+output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs
+or files the project did not write (engines.run.manifest); ``announce_output`` prints the folder a
+script writes into, ``announce_dt`` the choice of dt = "auto".
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -15,14 +16,13 @@ checks at construction.
 status 2).
 """
 import argparse
+import functools
 import math
 import os
 import tempfile
 
-from engines.yade.checkpoint import NAME as CHECKPOINT
-
-ENSEMBLE = "ensemble.json"  # an ensemble's statistics (engines.run.ensemble)
-RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT, ENSEMBLE)  # their presence marks a run's directory
+from engines.run import manifest
+from engines.run.manifest import ENSEMBLE  # noqa: F401  (an ensemble's statistics, engines.run.ensemble; the scripts import it from here)
 
 
 class InputError(ValueError):
@@ -88,13 +88,13 @@ def check_output_dir(path, arg="--out"):
 
 
 def check_fresh_output(path, arg="--out", resumable=False):
-    """Raise InputError (naming ``arg``) if ``path`` holds another run's outputs: any of
-    RUN_OUTPUTS (a run writes history.csv and its first checkpoint at its start)."""
-    found = [name for name in RUN_OUTPUTS if os.path.exists(os.path.join(path, name))]
-    if found:
-        resume = f", or --resume {path} to continue that run" if resumable else ""
-        raise InputError(f"{arg} {path} holds another run's outputs ({', '.join(found)}): give --overwrite to "
-                         f"replace them{resume}")
+    """Raise InputError (naming ``arg``) if ``path`` holds another run's outputs or anything this
+    project did not write (engines.run.manifest.check_fresh): a run writes into a new or empty
+    folder, or replaces with --overwrite only what the project wrote."""
+    try:
+        manifest.check_fresh(path, arg, resumable)
+    except ValueError as e:
+        raise InputError(str(e)) from None
 
 
 def announce_output(path):
@@ -155,10 +155,93 @@ def check_record(scene):
         raise InputError(str(e)) from None
 
 
-def preflight(scene, packing, out_dir, prepared=None):
+# -- a sense of scale ------------------------------------------------------------------------------
+COST_BENCHMARK = os.path.join("docs", "performance", "608e748", "bench-coupling.json")  # the newest measurement
+CPU_LIMIT = 24 * 3600.0     # the estimated CPU [s] above which a run needs --force
+OUTPUT_LIMIT = 10 * (1 << 30)  # the estimated output size [bytes] above which a run needs --force
+VALUE_BYTES = 16            # a history value as written ("%.9g" and its comma)
+SNAPSHOT_BYTES = 150        # a snapshot per body (positions, velocities, contacts, pores; compressed)
+VTK_BYTES = 600             # a VTK frame per body (discs, forces, pores; ASCII XML)
+CHECKPOINT_BYTES = 1500     # the checkpoint per body (YADE's scene and the run's state)
+
+
+@functools.lru_cache(maxsize=None)
+def cost_per_step(law):
+    """(µs per body and step of the contact law alone, µs per body and water step) of ``law``
+    ('paper' or 'yade'): the medians over the sizes of COST_BENCHMARK (its CPU µs per step, dry,
+    and wet minus dry with a water step every step, divided by the bodies)."""
+    import json
+    import statistics
+
+    from engines import ROOT
+    with open(os.path.join(ROOT, COST_BENCHMARK)) as f:
+        results = json.load(f)["results"]
+    dry = [r["cpu_us"][f"{law}_law_dry_us"] / r["n_bodies"] for r in results]
+    water = [(r["cpu_us"][f"{law}_law_wet_us"] - r["cpu_us"][f"{law}_law_dry_us"]) / r["n_bodies"] for r in results]
+    return statistics.median(dry), statistics.median(water)
+
+
+def estimate(scene, packing):
+    """The run's estimated CPU [s] and output size [bytes], with the model's terms, as a dict.
+
+    The cost model: CPU = steps x bodies x (c_law + c_water / water_interval) with c_law, c_water
+    the µs per body and step of ``cost_per_step`` (water only for a wet scene), bodies = the
+    packing's discs (walls included); outputs = history rows (steps / history_interval + 1) x
+    columns (t, the blocks, 13 measures, 6 wall loads) x VALUE_BYTES + snapshots x bodies x
+    SNAPSHOT_BYTES + VTK frames x bodies x VTK_BYTES + bodies x CHECKPOINT_BYTES. The per-body sizes
+    are those of the quick-sand and seismic runs, rounded up. A dt = "auto" is estimated as chosen."""
+    if scene.numerics.dt == "auto":
+        from engines.model.start import Start
+        scene = timed(scene, Start(scene.settings, packing))
+    num, out = scene.numerics, scene.output
+    steps = int(round(num.duration / num.dt))
+    bodies = len(packing.r)
+    c_law, c_water = cost_per_step(scene.contact.law)
+    wet = scene.water.enabled
+    cpu = steps * bodies * (c_law + (c_water / num.water_interval if wet else 0.0)) * 1e-6
+    rows = steps // out.history_interval + 1
+    columns = 1 + len(out.block_z) + 13 + 6
+    snapshots = sum(1 for t in out.snapshot_times if t <= num.duration)
+    frames = (steps // out.vtk_interval + 1 if out.vtk_interval else snapshots) if out.vtk else 0
+    size = (rows * columns * VALUE_BYTES + snapshots * bodies * SNAPSHOT_BYTES + frames * bodies * VTK_BYTES
+            + bodies * CHECKPOINT_BYTES)
+    return {"cpu_s": cpu, "bytes": size, "steps": steps, "bodies": bodies, "c_law": c_law,
+            "c_water": c_water if wet else 0.0, "rows": rows, "columns": columns, "snapshots": snapshots, "frames": frames}
+
+
+def _duration_text(seconds):
+    return (f"{seconds:.3g} s" if seconds < 120 else f"{seconds / 60:.3g} min" if seconds < 7200 else
+            f"{seconds / 3600:.3g} h")
+
+
+def check_scale(scene, packing, force=False, starts=1):
+    """The line that states the estimate of ``starts`` runs (``estimate``); raises InputError if
+    it is above CPU_LIMIT or OUTPUT_LIMIT unless ``force``."""
+    from engines.files.inputs import size_text
+    e = estimate(scene, packing)
+    cpu, size = starts * e["cpu_s"], starts * e["bytes"]
+    runs = f"{starts} starts x " if starts > 1 else ""
+    per = f"{e['c_law']:.3g} us, law {scene.contact.law}"
+    if e["c_water"]:
+        per = f"({per}, + {e['c_water']:.3g} us / water_interval {scene.numerics.water_interval})"
+    line = (f"estimate: {_duration_text(cpu)} of CPU ({runs}{e['steps']} steps x {e['bodies']} bodies x {per}; "
+            f"{COST_BENCHMARK}), outputs {size_text(size)} "
+            f"({runs}{e['rows']} history rows x {e['columns']} columns, {e['snapshots']} snapshots, {e['frames']} VTK frames)")
+    over = [f"{_duration_text(cpu)} of CPU is above {_duration_text(CPU_LIMIT)}" if cpu > CPU_LIMIT else "",
+            f"{size_text(size)} of outputs is above {size_text(OUTPUT_LIMIT)}" if size > OUTPUT_LIMIT else ""]
+    over = [o for o in over if o]
+    if over and not force:
+        raise InputError(f"{' and '.join(over)} (the estimate: {line.removeprefix('estimate: ')}): shorten "
+                         f"[numerics] duration, raise [output] history_interval, or give --force to run it anyway")
+    return line
+
+
+def preflight(scene, packing, out_dir, prepared=None, force=False, scale=True):
     """Every check of a run that can be made before its first step; raises InputError.
 
-    Returns notes (one line each) on what the run will silently skip, for the script to print.
+    Returns notes (one line each) for the script to print: the estimate of its CPU time and
+    outputs (``check_scale``; refused above the limits unless ``force``; ``scale`` False: not
+    made, an ensemble makes it once for all its starts) and what the run will silently skip.
     ``prepared``: the run's Start of scene on packing (engines.model.start; made here if None);
     a dt = "auto" is checked as it will be chosen."""
     if prepared is None:
@@ -170,11 +253,12 @@ def preflight(scene, packing, out_dir, prepared=None):
     check_record(scene)
     check_packing(scene, packing)
     check_limits(prepared)
+    notes = [check_scale(scene, packing, force)] if scale else []
     late = [t for t in scene.output.snapshot_times if t > scene.numerics.duration]
     if late:
-        return [f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
-                f"({scene.numerics.duration:g} s) and are skipped"]
-    return []
+        notes.append(f"note: [output] snapshot_times {', '.join(f'{t:g}' for t in late)} s lie after the end "
+                     f"({scene.numerics.duration:g} s) and are skipped")
+    return notes
 
 
 # -- dt = "auto" ----------------------------------------------------------------------------------

@@ -18,11 +18,9 @@ import csv
 import json
 import math
 import os
-import shutil
 import signal
 import threading
 import time
-from glob import glob
 
 import numpy as np
 from yade import O
@@ -31,6 +29,7 @@ from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
 from engines.model.start import Start
 from engines.run.preflight import announce_dt, timed
+from engines.run import manifest
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
@@ -112,7 +111,7 @@ class Recorder:
         if snap_due or vtk_due:
             snap = snapshot_data(cp, xz, k)
             if snap_due:
-                np.savez_compressed(os.path.join(self.out, f"snapshot_{k * self.dt * 1e3:06.2f}ms.npz"), **snap)
+                np.savez_compressed(os.path.join(self.out, snapshot_name(k, self.dt)), **snap)
                 self.snapshot_steps.append(k)
             if vtk_due:
                 from postproc.vtk import snapshot_frame
@@ -324,12 +323,17 @@ class Run:
         return summary
 
 
-def clear_outputs(out_dir):
-    """Remove the files an earlier run left in ``out_dir`` that this one would not overwrite."""
-    for path in glob(os.path.join(out_dir, "snapshot_*.npz")) + [os.path.join(out_dir, f) for f in (CHECKPOINT, FAILURE_STATE)]:
-        if os.path.exists(path):
-            os.remove(path)
-    shutil.rmtree(os.path.join(out_dir, "vtk"), ignore_errors=True)
+def snapshot_name(k, dt):
+    """The file of the snapshot at step k (time k dt [s], in ms in the name)."""
+    return f"snapshot_{k * dt * 1e3:06.2f}ms.npz"
+
+
+def claim_outputs(out_dir, scene, snap_steps=()):
+    """Record in the manifest of ``out_dir`` the files a run of ``scene`` may write (its snapshots
+    at ``snap_steps``), before it writes them (engines.run.manifest)."""
+    manifest.claim(out_dir, [n for n in manifest.RUN_FILES if n != manifest.NAME] +
+                   ([manifest.VTK] if scene.output.vtk else []) +
+                   [snapshot_name(k, scene.numerics.dt) for k in snap_steps])
 
 
 def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, prepared=None):
@@ -344,10 +348,12 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, 
     announce_dt(prepared)
     scene = timed(scene, prepared)
     os.makedirs(out_dir, exist_ok=True)
-    clear_outputs(out_dir)
+    manifest.clear(out_dir)  # an earlier run's files (--overwrite, a sweep's re-run job); others kept
+    claim_outputs(out_dir, scene)
     duration = scene.numerics.duration if duration is None else duration
-    return Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start, prepared).go(scene.overrides,
-                                                                                                    figures)
+    run = Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start, prepared)
+    claim_outputs(out_dir, scene, run.rec.snap_steps)
+    return run.go(scene.overrides, figures)
 
 
 def resume_run(out_dir, duration=None, figures=True):
@@ -355,6 +361,7 @@ def resume_run(out_dir, duration=None, figures=True):
     end or to ``duration`` [s]. Returns the summary like ``run_scene``."""
     run = checkpoint.load(os.path.join(out_dir, CHECKPOINT))
     run.reopen(out_dir, duration)
+    claim_outputs(out_dir, run.scene, run.rec.snap_steps)
     return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures)
 
 

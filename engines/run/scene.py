@@ -4,7 +4,9 @@ A scene is data, not code. The paper's cases are presets in ``yade_scripts/scene
 preset may ``extends = "other.toml"`` and override any field. Every field, its unit and its
 default is listed in SCHEMA below; ``/usr/bin/python3 -m engines.run.scene`` prints it as the table
 in yade_scripts/scenes/README.md. Unknown tables or fields, wrong types and out-of-range values
-raise SceneError naming the field.
+raise SceneError naming the field: every number finite (list elements too), ``[scene] name`` one
+plain name (engines.files.inputs.check_name: it names files), and a scene file (``--scene``,
+``extends``) a regular file of at most SCENE_LIMIT bytes.
 """
 import math
 import os
@@ -12,10 +14,12 @@ import tomllib
 from dataclasses import dataclass, field
 
 from engines import ROOT
+from engines.files.inputs import MB, check_input_file, check_name
 from engines.model.fields import POS, REQUIRED, check, checked, describe_check
 from engines.model.settings import TABLES, Settings
 
 SCENE_DIR = os.path.join(ROOT, "yade_scripts", "scenes")
+SCENE_LIMIT = 1 * MB  # the largest scene file read [bytes]
 
 
 class SceneError(ValueError):
@@ -147,13 +151,7 @@ def _cross_checks(t, path):
         raise SceneError("[packing] file: required when source = 'file'")
     if t["loading"]["type"] == "record" and not t["loading"]["record"]:
         raise SceneError("[loading] record: required when type = 'record'")
-    for k, blk in enumerate(t["output"]["block_z"]):
-        if not (isinstance(blk, list) and len(blk) == 2 and blk[0] < blk[1]):
-            raise SceneError(f"[output] block_z[{k}]: expected [z0, z1] with z0 < z1, got {blk!r}")
-    win = t["output"]["porosity_window"]
-    if not (len(win) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in win)
-            and 0 <= win[0] < win[1]):
-        raise SceneError(f"[output] porosity_window: expected [z0, z1] with 0 <= z0 < z1, got {win!r}")
+    _check_lists(t["output"])
     if t["loading"]["side_walls"] == "springs" and c["law"] == "yade":
         raise SceneError("[loading] side_walls = 'springs': the side-wall ties run in the paper's law engine; "
                          "use [contact] law = 'paper'")
@@ -162,11 +160,35 @@ def _cross_checks(t, path):
     if t["walls"]["kind"] == "flat" and t["loading"]["side_walls"] == "springs":
         raise SceneError("[walls] kind = 'flat': [loading] side_walls = 'springs' ties side-wall discs; flat side "
                          "walls are fixed or follow the base (use [walls] kind = 'discs')")
-    if any(not isinstance(s, (int, float)) or s < 0 for s in t["output"]["snapshot_times"]):
-        raise SceneError(f"[output] snapshot_times: expected times >= 0, got {t['output']['snapshot_times']!r}")
+    try:
+        check_name(t["scene"]["name"], "[scene] name")
+    except ValueError as e:
+        raise SceneError(str(e)) from None
     _resolve_paths(t, os.path.dirname(path) if path else SCENE_DIR)
 
 
+def _finite(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _check_lists(out):
+    """The list fields of [output] (every list field of SCHEMA), element by element: finite numbers
+    (no NaN, no infinity, no strings), the shapes and orders their meanings need."""
+    times = out["snapshot_times"]
+    for k, v in enumerate(times):
+        if not (_finite(v) and v >= 0):
+            raise SceneError(f"[output] snapshot_times[{k}]: expected a finite time >= 0 [s], got {v!r}")
+    if not out["block_z"]:
+        raise SceneError("[output] block_z: expected at least one block [z0, z1], got []")
+    for k, blk in enumerate(out["block_z"]):
+        if not (isinstance(blk, list) and len(blk) == 2 and all(map(_finite, blk)) and blk[0] < blk[1]):
+            raise SceneError(f"[output] block_z[{k}]: expected [z0, z1] of finite numbers with z0 < z1, got {blk!r}")
+    win = out["porosity_window"]
+    if not (len(win) == 2 and all(map(_finite, win)) and 0 <= win[0] < win[1]):
+        raise SceneError(f"[output] porosity_window: expected [z0, z1] of finite numbers with 0 <= z0 < z1, got {win!r}")
+
+
+LIST_FIELDS = tuple((table, name) for table, fields in SCHEMA.items() for name, spec in fields.items() if spec[0] is list)
 PATH_FIELDS = (("packing", "file"), ("loading", "record"))  # relative to the file that names them
 
 
@@ -195,12 +217,15 @@ def read_raw(path, _chain=None):
     Relative paths (``extends``, PATH_FIELDS) are resolved against the folder of the file that
     names them, so a scene anywhere may extend a preset and inherit its packing file."""
     try:
+        check_input_file(path, "scene file", SCENE_LIMIT)
         with open(path, "rb") as f:
             raw = tomllib.load(f)
-    except FileNotFoundError:
-        raise SceneError(f"scene file not found: {path}") from None
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{path}: not valid TOML: {e}") from None
+    except UnicodeDecodeError as e:
+        raise SceneError(f"{path}: not a text file (byte {e.start} is not UTF-8); a scene is TOML text") from None
+    except ValueError as e:
+        raise SceneError(str(e)) from None
     path = os.path.abspath(path)
     _chain = (path,) if _chain is None else _chain
     _resolve_paths(raw, os.path.dirname(path))
@@ -211,7 +236,10 @@ def read_raw(path, _chain=None):
         parent = os.path.normpath(os.path.join(os.path.dirname(path), parent))
         if parent in _chain:
             raise SceneError(f"{path}: extends: a loop back to {parent}")
-        raw = _merge(read_raw(parent, _chain + (parent,)), raw)
+        try:
+            raw = _merge(read_raw(parent, _chain + (parent,)), raw)
+        except SceneError as e:
+            raise SceneError(f"{path}: extends: {e}" if str(e).startswith("scene file ") else str(e)) from None
     return raw
 
 

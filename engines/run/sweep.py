@@ -42,9 +42,11 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
 from engines import ROOT
+from engines.files.inputs import check_name
 from engines.run.table import BATCH, DESCRIPTION, read_table
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
+TABLE_LIMIT = 10 << 20  # the largest table or jobs file read [bytes]
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
 # the project's own yade launches: YADE's console and XML-RPC server never started (the launcher
@@ -61,7 +63,8 @@ def yade_environment():
 
 @dataclass(frozen=True)
 class Job:
-    """One run: ``name`` (its directory under the root; letters, digits and ._=,+-), ``argv``
+    """One run: ``name`` (its directory under the root; letters, digits and ._=,+-, no leading dot
+    and no ``..``: engines.files.inputs.check_name), ``argv``
     (the command line, "{out}" replaced by the directory), ``env`` (extra environment) and
     ``timeout`` (seconds, None = none)."""
 
@@ -73,6 +76,7 @@ class Job:
     def __post_init__(self):
         if not NAME.match(self.name or ""):
             raise ValueError(f"job name {self.name!r}: use letters, digits and . _ = , + - only")
+        check_name(self.name, "job name")
         object.__setattr__(self, "argv", tuple(str(a) for a in self.argv))
         if not self.argv:
             raise ValueError(f"job {self.name}: empty command")
@@ -224,6 +228,27 @@ def is_done(job, root):
         and rec.get("env", {}) == dict(job.env)
 
 
+SCHEDULER_TIMEOUT = 5.0  # seconds to wait for a Dask scheduler's port to answer
+
+
+def check_scheduler(address, arg="--scheduler"):
+    """Raise ValueError (one line naming ``arg``) unless a TCP connection to the Dask scheduler
+    ``address`` (tcp://HOST:PORT, tls://HOST:PORT or HOST:PORT) opens within SCHEDULER_TIMEOUT s."""
+    from urllib.parse import urlsplit
+    parts = urlsplit(address if "://" in address else "tcp://" + address)
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or not port or parts.scheme not in ("tcp", "tls"):
+        raise ValueError(f"{arg} {address}: expected tcp://HOST:PORT (the Dask scheduler's address)")
+    try:
+        socket.create_connection((host, port), timeout=SCHEDULER_TIMEOUT).close()
+    except OSError as e:
+        raise ValueError(f"{arg} {address}: no Dask scheduler answers there ({e.strerror or e}); start one "
+                         f"(docs/SWEEPS.md) or run on this machine without {arg}") from None
+
+
 def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, scheduler_file=None):
     """Run ``jobs`` (a list of Job) under ``root``; returns their records in the given order.
 
@@ -315,5 +340,8 @@ def jobs_from_table(table, script, yade=YADE):
     jobs = []
     for line, params in sorted(read_table(table).items()):
         name = re.sub(r"[^A-Za-z0-9._=,+-]", "_", params[DESCRIPTION])
-        jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}", **yade_environment()}))
+        try:
+            jobs.append(Job(name, (*yade, "-x", os.path.abspath(script)), {BATCH: f"{table}:{line}", **yade_environment()}))
+        except ValueError as e:
+            raise ValueError(f"{table}, line {line}: {e}; change the line's description (it names the job's folder)") from None
     return jobs

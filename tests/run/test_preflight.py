@@ -15,12 +15,13 @@ from engines.model.limits import DarcyStabilityError, critical_time_step
 from engines.model.pore_dem import disc_masses
 from engines.model.start import Start
 from engines.run import scene as scenes
-from engines.run.preflight import (RUN_OUTPUTS, InputError, check_fresh_output, check_output_dir, check_packing,
-                                   max_overlap, number, preflight)
+from engines.run.preflight import InputError, check_fresh_output, check_output_dir, check_packing, max_overlap, number, preflight
+from engines.yade.checkpoint import NAME as CHECKPOINT
 from engines.yade.deposition import scene_packing
 from packing.packing import Packing
 
 PRESET = os.path.join(scenes.SCENE_DIR, "quicksand_case1.toml")
+RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT, "ensemble.json")  # each marks a run's folder
 ENV = dict(os.environ, PYTHONPATH=ROOT, MPLBACKEND="Agg")
 
 
@@ -128,7 +129,7 @@ def test_the_presets_pass_and_nothing_is_created(packing, tmp_path):
     for case in (1, 2):
         sc = scenes.preset(f"quicksand_case{case}", {"numerics": {"duration": 0.02}})
         notes = preflight(sc, scene_packing(sc), str(tmp_path / "a" / "b"))
-        assert notes and "0.04, 0.06" in notes[0]  # snapshots after the end are named
+        assert notes[0].startswith("estimate: ") and "0.04, 0.06" in notes[1]  # snapshots after the end are named
     assert list(tmp_path.iterdir()) == []
 
 
@@ -237,9 +238,9 @@ def test_the_overlap_tolerance_is_the_contact_laws_f_max_over_kn(packing):
 def test_check_fresh_output(tmp_path):
     check_fresh_output(str(tmp_path / "new"))
     check_fresh_output(str(tmp_path))  # empty
-    (tmp_path / "notes.txt").write_text("")
-    check_fresh_output(str(tmp_path))  # no run's outputs
-    assert RUN_OUTPUTS == ("summary.json", "history.csv", "checkpoint.pkl", "ensemble.json")
+    for name in ("job.json", "stdout.log", "stderr.log"):  # a sweep job's folder, before its run
+        (tmp_path / name).write_text("")
+    check_fresh_output(str(tmp_path))
     for name in RUN_OUTPUTS:
         (tmp_path / name).write_text("")
         with pytest.raises(InputError, match=rf"^--out {tmp_path} holds another run's outputs \(.*{name}.*\): "
