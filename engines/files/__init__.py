@@ -23,7 +23,8 @@ class WriteError(OSError):
     """A file that could not be written; the message names the path and the cause, in one line."""
 
 
-def _reason(e):
+def reason(e):
+    """The cause of an OSError in words ("no space left on the device"), for a one-line message."""
     if getattr(e, "errno", None) == errno.ENOSPC:
         return "no space left on the device"
     if getattr(e, "errno", None) == errno.EDQUOT:
@@ -41,7 +42,7 @@ def saved(path, mode=0o666):
     try:
         fd, tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{base}{TEMP_MARK}", dir=folder)
     except OSError as e:
-        raise WriteError(f"cannot write {path}: {_reason(e)}") from None
+        raise WriteError(f"cannot write {path}: {reason(e)}") from None
     os.close(fd)
     try:
         yield tmp
@@ -59,7 +60,7 @@ def saved(path, mode=0o666):
             os.remove(tmp)
         if isinstance(e, WriteError):
             raise
-        raise WriteError(f"cannot write {path}: {_reason(e)}") from None
+        raise WriteError(f"cannot write {path}: {reason(e)}") from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.remove(tmp)

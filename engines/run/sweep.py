@@ -17,6 +17,13 @@ finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the
 whose job.json says "ok" for the same command is not run again; failed, interrupted or changed
 jobs are.
 
+Each job runs in its own process group and dies with its runner (Linux's PR_SET_PDEATHSIG: a
+killed runner or Dask worker takes its jobs with it). SIGINT or SIGTERM to the runner is passed to
+its running jobs' process groups (a scene script then stops after its step with a checkpoint); the
+runner waits for them (up to STOP_SECONDS, then kills them), records them "interrupted", and exits
+with 128 + the signal's number and one line. A job whose folder another live run holds (its
+lock, engines.run.guard) is not started: its record says "locked" and by whom.
+
 Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
 is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``; the same jobs run
 on its workers, which need ROOT and the sweep's directory on a shared file system, not this
@@ -28,9 +35,13 @@ plain ``python3``; YADE's table reader runs in a ``yade -n`` process.
 
 The command line is yade_scripts/sweep.py.
 """
+import ctypes
+import ctypes.util
+import fcntl
 import json
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -43,6 +54,8 @@ from dataclasses import dataclass, field
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 NAME = re.compile(r"^[A-Za-z0-9._=,+-]+$")
 JOB_DIR = "SWEEP_JOB_DIR"  # the environment variable holding a job's directory
+LOCK_FILE = ".lock"  # a run's lock in its folder (engines.run.guard.LOCK)
+STOP_SECONDS = 20  # after a signal: how long the runner waits for its jobs to stop before killing them
 
 
 @dataclass(frozen=True)
@@ -83,15 +96,56 @@ def read_record(root, name):
         return None
 
 
+def lock_holder(folder):
+    """'' if no live process holds ``folder``'s lock (LOCK_FILE), else its "HOST PID" (or "a process").
+    Here, not in engines.run.guard (which uses it): the sweep's workers get this module by value and
+    import nothing of the project. Never ask about a folder this process holds: closing the probe's
+    descriptor would release this process's own POSIX lock."""
+    try:
+        fd = os.open(os.path.join(folder, LOCK_FILE), os.O_RDWR)
+    except OSError:
+        return ""
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        who = os.pread(fd, 200, 0).decode(errors="replace").strip()
+        return who or "a process"
+    finally:
+        os.close(fd)
+    return ""
+
+
+_running = {}  # process group id -> job name, of the jobs this runner started and waits for
+_stopping = threading.Event()  # set at a signal: no job starts any more
+_PR_SET_PDEATHSIG = 1
+
+
+def _libc():
+    return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+
+
+def _die_with(parent, prctl):
+    """preexec_fn of a job: SIGTERM when the thread that started it ends (its runner or Dask worker
+    died), and an end at once if that happened before this line."""
+    def preexec():
+        prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+        if os.getppid() != parent:
+            os._exit(1)
+    return preexec
+
+
 def _run_timed(cmd, stdout, stderr, env, timeout, cwd):
-    """Run ``cmd`` in ``cwd`` to its end: (return code, CPU seconds it used (user + system, with
-    the children it waited for), whether it was killed at ``timeout`` seconds)."""
-    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env, cwd=cwd)
+    """Run ``cmd`` in ``cwd`` to its end, in its own process group and session, dying with this
+    process: (return code, CPU seconds it used (user + system, with the children it waited for),
+    whether it was killed at ``timeout`` seconds)."""
+    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env, cwd=cwd, start_new_session=True,
+                            preexec_fn=_die_with(os.getpid(), _libc().prctl))
+    _running[proc.pid] = cmd
     killed = threading.Event()
 
     def kill():
         killed.set()
-        proc.kill()
+        _signal_group(proc.pid, signal.SIGKILL)
 
     timer = threading.Timer(timeout, kill) if timeout else None
     if timer:
@@ -101,8 +155,16 @@ def _run_timed(cmd, stdout, stderr, env, timeout, cwd):
     finally:
         if timer:
             timer.cancel()
+        _running.pop(proc.pid, None)
     proc.returncode = os.waitstatus_to_exitcode(status)
     return proc.returncode, usage.ru_utime + usage.ru_stime, killed.is_set()
+
+
+def _signal_group(pgid, sig):
+    try:
+        os.killpg(pgid, sig)
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 # set by a Dask nanny for its worker: glibc then hands freed memory back at once, and a job's
@@ -139,6 +201,11 @@ def run_job(job, root, cwd=None):
     cmd = job.command(out)
     rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "cwd": cwd,
            "host": socket.gethostname(), "started": time.time()}
+    held = lock_holder(out)
+    if held or _stopping.is_set():  # its folder is another live run's, or the runner is stopping: not started
+        why = f"not started: {out} is in use by another run ({held})" if held else "not started: the sweep was stopped"
+        return {**rec, "status": "locked" if held else "interrupted", "returncode": None, "wall_s": 0.0, "cpu_s": 0.0,
+                "started": None, "stderr_tail": why}
     _write_json(os.path.join(out, "job.json"), rec)
     env = _environment({**job.env, JOB_DIR: out})
     t0 = time.time()
@@ -153,7 +220,9 @@ def run_job(job, root, cwd=None):
         rc, note = 127, f"could not start: {e}"
     with open(err_path, errors="replace") as f:
         tail = f.read()[-STDERR_TAIL:]
-    rec.update(status="ok" if rc == 0 else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
+    stopped = _stopping.is_set() and rc in (-signal.SIGINT, -signal.SIGTERM, -signal.SIGKILL,
+                                            128 + signal.SIGINT, 128 + signal.SIGTERM)
+    rec.update(status="ok" if rc == 0 else "interrupted" if stopped else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
                finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
     _write_json(os.path.join(out, "job.json"), rec)
     return rec
@@ -208,11 +277,20 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         done[job.name] = rec
         log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
+    stopped_by = None
     if scheduler is None:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
+        _stopping.clear()
+        with ThreadPoolExecutor(max_workers=workers) as pool, _Signals() as signals:
             futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
-            for fut in as_completed(futures):
-                finished(futures[fut], fut)
+            try:
+                for fut in as_completed(futures):
+                    finished(futures[fut], fut)
+            except _Stop as stop:
+                stopped_by = stop.signum
+                _stop_jobs(stop.signum, futures, signals)
+                for fut in futures:
+                    if futures[fut].name not in done and fut.done() and not fut.cancelled():
+                        finished(futures[fut], fut)
     elif todo:
         import cloudpickle
         from distributed import Client
@@ -231,14 +309,67 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
                 client.close()
     records = []
     for j in jobs:
-        rec = dict(kept[j.name], kept=True) if j.name in kept else done[j.name]
+        rec = dict(kept[j.name], kept=True) if j.name in kept else done.get(j.name) or \
+            {"name": j.name, "status": "interrupted", "returncode": None, "wall_s": 0.0,
+             "stderr_tail": "not finished: the sweep was stopped"}
         records.append(rec)
     failed = [r["name"] for r in records if r["status"] != "ok"]
     summary = {"root": root, "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
                "wall_s": time.time() - t0, "jobs": records}
     _write_json(os.path.join(root, "sweep.json"), summary)
     log(format_summary(records))
+    if stopped_by is not None:
+        print(f"sweep {root} stopped by {signal.Signals(stopped_by).name}: its running jobs were stopped and recorded "
+              "\"interrupted\"; run it again to continue them", file=sys.stderr, flush=True)
+        raise SystemExit(128 + stopped_by)
     return records
+
+
+class _Stop(BaseException):
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+class _Signals:
+    """While active, in the main thread: the first SIGINT or SIGTERM raises _Stop there; a second
+    one kills the jobs' process groups and ends the runner at once (one line, 128 + its number)."""
+
+    def __enter__(self):
+        self.received, self._previous = [], {}
+        if threading.current_thread() is threading.main_thread():
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self._previous[s] = signal.signal(s, self._handle)
+        return self
+
+    def _handle(self, signum, frame):  # noqa: ARG002
+        self.received.append(signum)
+        if len(self.received) == 1:
+            raise _Stop(signum)
+        for pgid in list(_running):
+            _signal_group(pgid, signal.SIGKILL)
+        print(f"sweep stopped at once by a second {signal.Signals(signum).name}: its running jobs were killed",
+              file=sys.stderr, flush=True)
+        os._exit(128 + signum)
+
+    def __exit__(self, *exc):
+        for s, handler in self._previous.items():
+            signal.signal(s, handler)
+
+
+def _stop_jobs(signum, futures, signals):
+    """Pass ``signum`` to the running jobs' process groups, let no other job start, wait up to
+    STOP_SECONDS for them, then kill what is left."""
+    from concurrent.futures import wait
+    _stopping.set()
+    for fut in futures:
+        fut.cancel()  # those not started
+    for pgid in list(_running):
+        _signal_group(pgid, signum)
+    wait(futures, timeout=STOP_SECONDS)
+    for pgid in list(_running):
+        _signal_group(pgid, signal.SIGKILL)
+    wait(futures, timeout=STOP_SECONDS)
 
 
 def format_summary(records):
