@@ -11,6 +11,7 @@ left (the next start of a run calls it).
 import contextlib
 import errno
 import glob
+import io
 import json
 import os
 import tempfile
@@ -91,8 +92,9 @@ def savez(path, compressed=True, **arrays):
     for name, a in arrays.items():
         if np.asarray(a).dtype == object:
             raise TypeError(f"{path}: array {name!r} holds Python objects; only numbers and strings are written")
-    with saved(path) as tmp, open(tmp, "wb") as f:
-        (np.savez_compressed if compressed else np.savez)(f, **arrays)
+    buf = io.BytesIO()  # built in memory: a write that fails then leaves no half-written zip object behind
+    (np.savez_compressed if compressed else np.savez)(buf, **arrays)
+    write_bytes(path, buf.getvalue())
 
 
 def remove_stale_temporaries(folder):

@@ -90,7 +90,7 @@ def hold(folder):
         yield
     finally:
         entry[2] -= 1
-        if entry[2] == 0:
+        if entry[2] == 0 and _held.get(key) is entry:  # (release_all may have released it)
             _release(key)
 
 
@@ -124,6 +124,7 @@ def exit_now(signum, line):
     if _exiting:
         os._exit(128 + _exiting[0])
     _exiting.append(signum)
+    signal.pthread_sigmask(signal.SIG_BLOCK, SIGNALS)  # no handler runs again in the middle of this one
     with contextlib.suppress(Exception):
         sys.stdout.flush()
         print(line, file=sys.stderr, flush=True)

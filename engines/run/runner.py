@@ -307,8 +307,8 @@ class Run:
     def reopen(self, out_dir, info, duration=None):
         """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end);
         ``info``: the checkpoint's (history.csv is checked against it). The segments are those of
-        summary.json when it is this run's and knows more (a segment killed after the checkpoint
-        ran on), those of the checkpoint otherwise; a segment left "running" is marked "killed"."""
+        summary.json when it is this run's and knows as much or more (a segment that failed or
+        was killed after the checkpoint ran on), those of the checkpoint otherwise; a segment left "running" is marked "killed"."""
         self.out = out_dir
         self.cp.restore_forces()
         n = checkpoint.resume_end(O.iter, self.n_steps, self.scene.numerics.dt, duration)
@@ -324,9 +324,11 @@ class Run:
                 before = json.load(f)
         except (OSError, ValueError):
             before = {}
-        if isinstance(before, dict) and before.get("run_id") == self.run_id and \
-                isinstance(before.get("segments"), list) and len(before["segments"]) >= len(self.segments):
-            self.segments = before["segments"]
+        theirs = before.get("segments") if isinstance(before, dict) and before.get("run_id") == self.run_id else None
+        if isinstance(theirs, list) and theirs and all(isinstance(x, dict) for x in theirs) and \
+                (len(theirs), theirs[-1].get("to_step", -1)) >= (len(self.segments), self.segments[-1]["to_step"]
+                                                                 if self.segments else -1):
+            self.segments = theirs
         for seg in self.segments:
             if seg.get("status") == "running":
                 seg["status"] = "killed"

@@ -116,7 +116,7 @@ def lock_holder(folder):
 
 
 _running = {}  # process group id -> job name, of the jobs this runner started and waits for
-_stopping = threading.Event()  # set at a signal: no job starts any more
+_stopping = []  # not empty after a signal: no job starts any more (a list: the workers get this module by value)
 _PR_SET_PDEATHSIG = 1
 
 
@@ -202,7 +202,7 @@ def run_job(job, root, cwd=None):
     rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "cwd": cwd,
            "host": socket.gethostname(), "started": time.time()}
     held = lock_holder(out)
-    if held or _stopping.is_set():  # its folder is another live run's, or the runner is stopping: not started
+    if held or _stopping:  # its folder is another live run's, or the runner is stopping: not started
         why = f"not started: {out} is in use by another run ({held})" if held else "not started: the sweep was stopped"
         return {**rec, "status": "locked" if held else "interrupted", "returncode": None, "wall_s": 0.0, "cpu_s": 0.0,
                 "started": None, "stderr_tail": why}
@@ -220,7 +220,7 @@ def run_job(job, root, cwd=None):
         rc, note = 127, f"could not start: {e}"
     with open(err_path, errors="replace") as f:
         tail = f.read()[-STDERR_TAIL:]
-    stopped = _stopping.is_set() and rc in (-signal.SIGINT, -signal.SIGTERM, -signal.SIGKILL,
+    stopped = bool(_stopping) and rc in (-signal.SIGINT, -signal.SIGTERM, -signal.SIGKILL,
                                             128 + signal.SIGINT, 128 + signal.SIGTERM)
     rec.update(status="ok" if rc == 0 else "interrupted" if stopped else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
                finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
@@ -361,7 +361,7 @@ def _stop_jobs(signum, futures, signals):
     """Pass ``signum`` to the running jobs' process groups, let no other job start, wait up to
     STOP_SECONDS for them, then kill what is left."""
     from concurrent.futures import wait
-    _stopping.set()
+    _stopping.append(signum)
     for fut in futures:
         fut.cancel()  # those not started
     for pgid in list(_running):
