@@ -23,11 +23,12 @@ import re
 import sys
 import tomllib
 
-from engines.run import ensemble
+from engines.run import ensemble, guard, history
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR
 from engines.studies.ensemble import perturbed
+from engines.yade.checkpoint import CheckpointError
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -181,8 +182,6 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
         ap.error("--out is required (or --resume DIR)")
-    from engines.run import guard, history
-    from engines.yade.checkpoint import CheckpointError
     many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
     out = args.resume or args.out
     try:  # bad scenes, packings, limits, a folder in use: one clear line, nothing written
@@ -245,7 +244,6 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
 def check_resume(run_dir, duration):
     """A resume that can go on: writable, not held by another run, not complete unless a later
     --duration is given, its history.csv holding the rows its checkpoint recorded (engines.run.history)."""
-    from engines.run import guard, history
     from engines.yade.checkpoint import NAME, read_info, resume_end
     check_output_dir(run_dir, "--resume")
     guard.check_free(run_dir)

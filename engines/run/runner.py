@@ -64,8 +64,10 @@ class Recorder:
     times and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
     snapshot times; taken between steps at the positions after k steps (t = k dt). Each is taken
     once per step index, so a resumed run does not repeat one. ``create`` starts history.csv (and
-    the VTK folder). Pickled with the run (the open history file and its running checksum are left
+    the VTK folder; Run.go calls it). Pickled with the run (the open history file and its running checksum are left
     out; ``reopen`` checks the file against the checkpoint and opens it again)."""
+
+    file = None  # history.csv, open for appending
 
     def __init__(self, cp, out_dir, n_steps):
         out = cp.scene.output
@@ -183,8 +185,9 @@ class Recorder:
 
     def close(self):
         """Close history.csv (every row was flushed when written)."""
-        with contextlib.suppress(OSError):
-            self.file.close()
+        if self.file is not None:
+            with contextlib.suppress(OSError):
+                self.file.close()
 
 
 def snapshot_data(cp, xz, k):
@@ -364,6 +367,8 @@ class Run:
             if signals is None:
                 signals = stack.enter_context(Interrupts())
             try:
+                if self.rec.file is None:  # a fresh run: its history starts here
+                    self.rec.create()
                 self.write_summary("running", [])
                 if not cp.run(self.n_steps - k0, stop=signals.requested):
                     status = "interrupted"
@@ -464,7 +469,6 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None):
     with guard.hold(out_dir), Interrupts() as signals:
         remove_stale_temporaries(out_dir)
         clear_outputs(out_dir)
-        run.rec.create()
         return run.go(scene.overrides, figures, signals)
 
 

@@ -10,8 +10,8 @@ A job is a name and a command line; ``{out}`` in an argument becomes the job's d
 ``ROOT/NAME`` (also given to the job as the environment variable SWEEP_JOB_DIR, where a scene
 script run from a table writes). A job runs in the directory the sweep was started from,
 wherever it runs, so relative paths in its command line mean the same on every worker. Each job
-writes there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok" or
-"failed"), return code, wall and CPU seconds, command, working directory, host, and the tail of
+writes there ``stdout.log``, ``stderr.log`` and ``job.json``: status ("running", then "ok", "failed" or
+"interrupted"), return code, wall and CPU seconds, command, working directory, host, and the tail of
 stderr. ``run_sweep`` returns the records of all jobs in the order given, prints one line per
 finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job
 whose job.json says "ok" for the same command is not run again; failed, interrupted or changed
