@@ -137,10 +137,12 @@ class Recorder:
         appended to when it holds exactly those rows, else first rebuilt from them in a temporary
         file renamed over it (a run stopped or crashed after its checkpoint wrote more rows)."""
         self.out = out_dir
-        keep, whole = history.kept(out_dir, info, self.rows)
+        path = os.path.join(out_dir, history.NAME)
+        size, whole, self.sha = history.kept(out_dir, info, self.rows)
         if not whole:
-            files.write_bytes(os.path.join(out_dir, history.NAME), keep)
-        self.sha = hashlib.sha256(keep)
+            with files.saved(path) as tmp, open(path, "rb") as old, open(tmp, "wb") as new:
+                while new.tell() < size:
+                    new.write(old.read(min(history.CHUNK, size - new.tell())))
         if self.vtk is not None:
             self.vtk.dir = os.path.join(out_dir, "vtk")
         self._open("a")
@@ -475,12 +477,12 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None):
 def resume_run(out_dir, duration=None, figures=True):
     """Continue the run in ``out_dir`` from its checkpoint, in place (history.csv appended), to its
     end or to ``duration`` [s]. Returns the summary like ``run_scene``. Holds the folder's lock;
-    history.csv is checked against the checkpoint first (engines.run.history.HistoryMismatch)."""
+    history.csv is checked against the checkpoint before anything is written (Run.reopen;
+    engines.run.history.HistoryMismatch)."""
     path = os.path.join(out_dir, CHECKPOINT)
     with guard.hold(out_dir):
         remove_stale_temporaries(out_dir)
         info = checkpoint.read_info(path)
-        history.kept(out_dir, info)
         run = checkpoint.load(path)
         run.reopen(out_dir, info, duration)
         with Interrupts() as signals:

@@ -66,7 +66,8 @@ def test_the_checkpoint_records_the_run_and_its_history(tmp_path, packing):
     assert info["run_id"] == summary["run_id"] and len(info["run_id"]) == 32
     assert info["history_rows"] == data.count(b"\n") - 1 == 4  # rows at steps 0, 100, 200, 300
     assert info["history_last_t"] == pytest.approx(3e-4, rel=1e-9)
-    assert history.kept(str(tmp_path), info) == (data, True)
+    size, whole, sha = history.kept(str(tmp_path), info)
+    assert (size, whole, sha.hexdigest()) == (len(data), True, info["history_sha256"])
 
 
 @pytest.mark.parametrize("damage, match", [
@@ -130,9 +131,8 @@ def test_the_resume_appends_or_rebuilds_and_is_never_caught_half_way(tmp_path, p
 
     # exactly the checkpoint's rows: appended to (a rewrite would fail here)
     open(path, "wb").write(exact)
-    write_bytes = files.write_bytes
-    monkeypatch.setattr(files, "write_bytes", lambda path, data: killed() if path.endswith(history.NAME)
-                        else write_bytes(path, data))
+    saved = files.saved
+    monkeypatch.setattr(files, "saved", lambda path, *a: killed() if path.endswith(history.NAME) else saved(path, *a))
     O.reset()
     summary = resume_run(str(tmp_path), figures=False)
     assert summary["status"] == "completed" and summary["steps"] == STEPS
@@ -253,3 +253,19 @@ def test_a_full_disk_is_one_line_from_the_script(tmp_path, monkeypatch, capsys):
         quicksand.main(["--case", "1", "--out", str(out), "--duration", "2e-4"])
     assert e.value.code == f"error: cannot write {out}/summary.json: no space left on the device"
     assert not os.path.exists(out / ".lock")
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 1 << 20])
+@pytest.mark.parametrize("after", [b"", b"0.001,10\n", b"0.001,"])
+def test_the_history_is_checked_in_chunks_to_the_checkpoints_last_row(tmp_path, monkeypatch, chunk, after):
+    """What history.kept keeps and whether it is the whole file, whatever the chunks' edges."""
+    import hashlib
+    body = b"t,a\n" + b"".join(b"%.9g,%d\n" % (k * 1e-4, k) for k in range(10))
+    (tmp_path / history.NAME).write_bytes(body + after)
+    info = {"step": 900, **history.info(10, 9e-4, hashlib.sha256(body).hexdigest())}
+    monkeypatch.setattr(history, "CHUNK", chunk)
+    size, whole, sha = history.kept(str(tmp_path), info)
+    assert (size, whole, sha.hexdigest()) == (len(body), not after, info["history_sha256"])
+    with pytest.raises(history.HistoryMismatch, match="row 10 has t = 0.0009 s, the checkpoint at step 900 recorded "
+                                                      "t = 0.001 s"):
+        history.kept(str(tmp_path), {**info, "history_last_t": 1e-3})
