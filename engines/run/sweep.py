@@ -277,7 +277,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         done[job.name] = rec
         log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
-    stopped_by = None
+    stopped_by, running_on_cluster = None, []
     if scheduler is None:
         _stopping.clear()
         with ThreadPoolExecutor(max_workers=workers) as pool, _Signals() as signals:
@@ -300,10 +300,16 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
         cloudpickle.register_pickle_by_value(sys.modules[__name__])
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
-            futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
-                                     pure=False): j for j in todo}
-            for fut in dask_completed(list(futures)):
-                finished(futures[fut], fut)
+            with _Signals():
+                futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
+                                         pure=False): j for j in todo}
+                try:
+                    for fut in dask_completed(list(futures)):
+                        finished(futures[fut], fut)
+                except _Stop as stop:  # the jobs not started are cancelled; a task running on a worker cannot be
+                    stopped_by = stop.signum
+                    client.cancel(list(futures))
+                    running_on_cluster = [futures[f].name for f in futures if futures[f].name not in done]
         finally:
             if client is not scheduler:
                 client.close()
@@ -319,8 +325,10 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print):
     _write_json(os.path.join(root, "sweep.json"), summary)
     log(format_summary(records))
     if stopped_by is not None:
+        on_cluster = (f" (not finished: {', '.join(running_on_cluster)}; those already running on the cluster's "
+                      "workers go on to their end: stop the workers to end them)") if running_on_cluster else ""
         print(f"sweep {root} stopped by {signal.Signals(stopped_by).name}: its running jobs were stopped and recorded "
-              "\"interrupted\"; run it again to continue them", file=sys.stderr, flush=True)
+              f"\"interrupted\"; run it again to continue them{on_cluster}", file=sys.stderr, flush=True)
         raise SystemExit(128 + stopped_by)
     return records
 
