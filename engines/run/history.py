@@ -66,8 +66,8 @@ def kept(run_dir, info, rows=None):
     if "history_sha256" in info:
         last = tail[:-1].rsplit(b"\n", 1)[-1].split(b",", 1)[0].decode(errors="replace")
         if n and info["history_last_t"] is not None and _number(last) != info["history_last_t"]:
-            raise HistoryMismatch(f"{path}: row {n} has t = {last} s, {step} recorded t = {info['history_last_t']:.9g} s "
-                                  "for it: the history is another run's")
+            raise HistoryMismatch(f"{path}: row {n} has t = {last} s, {step} recorded t = "
+                                  f"{info['history_last_t']:.9g} s for it: the history is another run's")
         if sha.hexdigest() != info["history_sha256"]:
             raise HistoryMismatch(f"{path}: its header and first {n} rows are not those {step} recorded (SHA-256 "
                                   "differs): the history was changed, or is another run's")

@@ -313,7 +313,8 @@ class Run:
         """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end);
         ``info``: the checkpoint's (history.csv is checked against it). The segments are those of
         summary.json when it is this run's and knows as much or more (a segment that failed or
-        was killed after the checkpoint ran on), those of the checkpoint otherwise; a segment left "running" is marked "killed"."""
+        was killed after the checkpoint ran on), those of the checkpoint otherwise; a segment left
+        "running" is marked "killed"."""
         self.out = out_dir
         self.cp.restore_forces()
         n = checkpoint.resume_end(O.iter, self.n_steps, self.scene.numerics.dt, duration)
@@ -410,7 +411,8 @@ class Run:
         if not status.startswith("failed"):
             results["porosity_end"] = cp.porosity(cp.positions())
         summary = {
-            "scene": sc.scene.name, "run_id": self.run_id, "status": status, "steps": int(O.iter), "steps_requested": self.n_steps,
+            "scene": sc.scene.name, "run_id": self.run_id, "status": status, "steps": int(O.iter),
+            "steps_requested": self.n_steps,
             "wall_seconds": wall, "us_per_step": 1e6 * wall / max(steps_run, 1),
             "cpu_seconds": sum(s.get("cpu_seconds", 0.0) for s in self.segments),
             "n_particles": int(cp.packing.mobile.sum()), "n_walls": int((~cp.packing.mobile).sum()),

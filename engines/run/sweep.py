@@ -222,7 +222,8 @@ def run_job(job, root, cwd=None):
         tail = f.read()[-STDERR_TAIL:]
     stopped = bool(_stopping) and rc in (-signal.SIGINT, -signal.SIGTERM, -signal.SIGKILL,
                                             128 + signal.SIGINT, 128 + signal.SIGTERM)
-    rec.update(status="ok" if rc == 0 else "interrupted" if stopped else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
+    rec.update(status="ok" if rc == 0 else "interrupted" if stopped else "failed", returncode=rc,
+               wall_s=time.time() - t0, cpu_s=cpu_s,
                finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
     _write_json(os.path.join(out, "job.json"), rec)
     return rec
