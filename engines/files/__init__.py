@@ -13,6 +13,7 @@ calls it).
 import contextlib
 import errno
 import glob
+import io
 import json
 import os
 import tempfile
@@ -25,7 +26,8 @@ class WriteError(OSError):
     """A file that could not be written; the message names the path and the cause, in one line."""
 
 
-def _reason(e):
+def reason(e):
+    """The cause of an OSError in words ("no space left on the device"), for a one-line message."""
     if getattr(e, "errno", None) == errno.ENOSPC:
         return "no space left on the device"
     if getattr(e, "errno", None) == errno.EDQUOT:
@@ -43,7 +45,7 @@ def saved(path, mode=0o666):
     try:
         fd, tmp = tempfile.mkstemp(prefix=f"{TEMP_PREFIX}{base}{TEMP_MARK}", suffix=os.path.splitext(base)[1], dir=folder)
     except OSError as e:
-        raise WriteError(f"cannot write {path}: {_reason(e)}") from None
+        raise WriteError(f"cannot write {path}: {reason(e)}") from None
     os.close(fd)
     try:
         yield tmp
@@ -61,7 +63,7 @@ def saved(path, mode=0o666):
             os.remove(tmp)
         if isinstance(e, WriteError):
             raise
-        raise WriteError(f"cannot write {path}: {_reason(e)}") from None
+        raise WriteError(f"cannot write {path}: {reason(e)}") from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.remove(tmp)
@@ -92,8 +94,9 @@ def savez(path, compressed=True, **arrays):
     for name, a in arrays.items():
         if np.asarray(a).dtype == object:
             raise TypeError(f"{path}: array {name!r} holds Python objects; only numbers and strings are written")
-    with saved(path) as tmp, open(tmp, "wb") as f:
-        (np.savez_compressed if compressed else np.savez)(f, **arrays)
+    buf = io.BytesIO()  # built in memory: a write that fails then leaves no half-written zip object behind
+    (np.savez_compressed if compressed else np.savez)(buf, **arrays)
+    write_bytes(path, buf.getvalue())
 
 
 def save_figure(fig, path, **kw):

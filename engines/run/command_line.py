@@ -25,12 +25,13 @@ import sys
 import tomllib
 
 from engines.files.inputs import check_name
-from engines.run import ensemble, manifest
+from engines.run import ensemble, guard, history, manifest
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import DESCRIPTION, batch_line
 from engines.studies.ensemble import perturbed
+from engines.yade.checkpoint import CheckpointError
 
 BATCH_OUT = os.path.join("out", "batch")
 
@@ -172,8 +173,11 @@ def job_argv(ap, argv):
 # -- running --------------------------------------------------------------------------------------
 def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None):
     """Check, then run or resume, printing one line at the end; exits non-zero on refused input
-    (one line, nothing written) and with 128 + the signal's number after an interrupt. With
-    --starts, or --resume of an ensemble's folder, runs the ensemble (engines.run.ensemble).
+    (one line, nothing written), on a folder another run holds (engines.run.guard: one line naming
+    its host and pid) and on a failed write (one line naming the path), and with 128 + the
+    signal's number after an interrupt. The folder's lock is held from the end of the checks to
+    the end. With --starts, or --resume of an ensemble's folder, runs the ensemble
+    (engines.run.ensemble), holding the ensemble's folder; each start holds its own.
 
     ``load_scene(overrides)`` -> Scene; ``scene_given``: the script's own scene options were used
     (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
@@ -187,7 +191,9 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     elif not args.out:
         ap.error("--out is required (or --resume DIR)")
     many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
-    try:  # bad scenes, packings, limits: one clear line, nothing written
+    out = args.resume or args.out
+    try:  # bad scenes, packings, limits, a folder in use: one clear line, nothing written
+        guard.check_free(out)
         if args.resume and many:
             jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
             if args.scheduler:
@@ -217,18 +223,21 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
                 print(note)
     except ValueError as e:
         sys.exit(f"error: {e}")
-    out = args.resume or args.out
-    announce_output(out)
-    if many and args.resume:
-        sys.exit(ensemble.run_starts(jobs, args.resume, plan, args))
-    if many:
-        sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
-    from engines.run import runner
-    if args.resume:
-        summary = runner.resume_run(args.resume, args.duration)
-    else:
-        start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
-        summary = runner.run_scene(sc, packing, args.out, start=start, prepared=prepared)
+    try:
+        with guard.hold(out):
+            announce_output(out)
+            if many and args.resume:
+                sys.exit(ensemble.run_starts(jobs, args.resume, plan, args))
+            if many:
+                sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
+            from engines.run import runner
+            if args.resume:
+                summary = runner.resume_run(args.resume, args.duration)
+            else:
+                start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
+                summary = runner.run_scene(sc, packing, args.out, start=start, prepared=prepared)
+    except (OSError, guard.FolderLocked, history.HistoryMismatch, CheckpointError) as e:
+        sys.exit(f"error: {e}")  # a full disk (WriteError), a folder taken meanwhile, a history not this run's
     if summary["status"] == "interrupted":
         stop = summary.get("interrupt", {})
         print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "
@@ -239,6 +248,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         sys.stderr.flush()
         # everything is written and closed: skip the interpreter's and YADE's teardown (about 1 s
         # on a busy 2-core machine), so that the process ends within a fraction of a second
+        guard.release_all()
         os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
     if figures is not None:
         drawn = figures(out)
@@ -249,11 +259,14 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
 
 
 def check_resume(run_dir, duration):
-    """A resume that can go on: writable, not complete unless a later --duration is given."""
+    """A resume that can go on: writable, not held by another run, not complete unless a later
+    --duration is given, its history.csv holding the rows its checkpoint recorded (engines.run.history)."""
     from engines.yade.checkpoint import NAME, read_info, resume_end
     check_output_dir(run_dir, "--resume")
+    guard.check_free(run_dir)
     info = read_info(os.path.join(run_dir, NAME))
     try:
         resume_end(info["step"], info["n_steps"], info["dt"], duration)
     except ValueError as e:
         raise InputError(f"--resume {run_dir}: {e}") from None
+    history.kept(run_dir, info)

@@ -23,6 +23,7 @@ import shutil
 
 from engines.files import TEMP_MARK, TEMP_PREFIX, write_json
 from engines.files.inputs import check_name
+from engines.run.sweep import LOCK_FILE
 from engines.yade.checkpoint import NAME as CHECKPOINT
 
 NAME = "manifest.json"
@@ -84,7 +85,8 @@ def _matches(name, patterns):
 
 def project_names(folder):
     """(the names in ``folder`` this project wrote, the others), each sorted; JOB_FILES, the sweep
-    runner's, are in neither (they belong to the job, not to the run)."""
+    runner's, are in neither (they belong to the job, not to the run), nor is the folder's lock
+    (LOCK_FILE: engines.run.guard takes it, removes it, and takes over one a killed run left)."""
     try:
         entries = os.listdir(folder)
     except FileNotFoundError:
@@ -94,7 +96,7 @@ def project_names(folder):
     ours |= set(ensemble_starts(folder))
     mine, others = [], []
     for name in entries:
-        if name in JOB_FILES:
+        if name in JOB_FILES or name == LOCK_FILE:
             continue
         path = os.path.join(folder, name)
         is_ours = (name in ours or _matches(name, TEMPORARIES) or listed is None and _matches(name, RUN_PATTERNS))

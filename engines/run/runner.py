@@ -5,31 +5,50 @@ is appended and flushed row by row, so a stopped or crashed run keeps what it co
 
 Stopping: SIGINT (Ctrl-C) or SIGTERM during a run stops it after the current step: the history is
 flushed, a checkpoint written, summary.json says "interrupted" with the step, and the run returns
-(the scripts then exit with 128 + the signal's number). A second signal stops at once.
+(the scripts then exit with 128 + the signal's number). A second signal ends the process at once,
+with one line and the same status; the run resumes from its last checkpoint. Before the run loop
+(compilation, preflight, loading a checkpoint) the scripts' engines.run.guard.catch_signals ends
+the process with one line and nothing changed.
 
-Checkpoints (engines.yade.checkpoint, ``checkpoint.pkl``): at the start, every
+One run per folder: ``run_scene`` and ``resume_run`` hold the folder's lock (engines.run.guard)
+while they write; at their start they remove the temporary files a killed run left there. A run
+has an id (``run_id``, in every checkpoint and in summary.json). summary.json (written atomically,
+engines.files) says "running" from the start and is written again at every checkpoint, so that a
+killed segment stays listed (a resume marks it "killed" with its last known step); its provenance
+is the first segment's. A write that fails (a full disk) ends the run "failed: cannot write PATH:
+CAUSE" (``WriteError``, one line), after writing what it still can.
+
+Checkpoints (engines.yade.checkpoint, ``checkpoint.pkl``, fsync'd and renamed into place): at the start, every
 ``[output] checkpoint_seconds`` of wall time, at the end and on an interrupt; each holds YADE's
 scene and the whole ``Run`` (coupling, recorder, bookkeeping), so that a resumed run continues
 exactly as if it had not stopped. A crashed run keeps its last checkpoint (resumable: the history
-rows written after it are dropped on resume) and writes the state at the failing step to
-``failure_state.npz`` for a post-mortem.
+rows written after it are dropped on resume: engines.run.history checks the rows it keeps) and
+writes the state at the failing step to ``failure_state.npz`` for a post-mortem.
 """
+import contextlib
 import csv
+import hashlib
+import io
 import json
 import math
 import os
 import signal
+import socket
 import threading
 import time
+import uuid
+from glob import escape as glob_escape
+from glob import glob
 
 import numpy as np
 from yade import O
 
+from engines import files
 from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
 from engines.model.start import Start
+from engines.run import guard, history, manifest
 from engines.run.preflight import announce_dt, timed
-from engines.run import manifest
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
@@ -38,14 +57,18 @@ from postproc.run_files import headline_results, read_history
 
 CHECKPOINT = checkpoint.NAME
 FAILURE_STATE = "failure_state.npz"
+SUMMARY = "summary.json"
 
 
 class Recorder:
     """Coupling hook: history rows every history_interval steps, snapshots at the scene's snapshot
     times and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
     snapshot times; taken between steps at the positions after k steps (t = k dt). Each is taken
-    once per step index, so a resumed run does not repeat one. Pickled with the run (the open
-    history file is left out and opened again by ``reopen``)."""
+    once per step index, so a resumed run does not repeat one. ``create`` starts history.csv (and
+    the VTK folder; Run.go calls it). Pickled with the run (the open history file and its running checksum are left
+    out; ``reopen`` checks the file against the checkpoint and opens it again)."""
+
+    file = None  # history.csv, open for appending
 
     def __init__(self, cp, out_dir, n_steps):
         out = cp.scene.output
@@ -60,16 +83,23 @@ class Recorder:
                          "side_right_dx", "remesh_change"] +
                         [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")])
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
+        self.last_t = None  # the last row's t [s] as written
         self.snapshot_steps = []  # steps whose snapshot file was written
         self.vtk = None
-        if out.vtk:
-            from postproc.vtk import VtkSeries
-            self.vtk = VtkSeries(out_dir)
+        self.with_vtk = out.vtk
         self.schedule(n_steps)
         self.out = out_dir
+
+    def create(self):
+        """Start history.csv (its header) and, with [output] vtk, the VTK folder."""
+        if self.with_vtk:
+            from postproc.vtk import VtkSeries
+            self.vtk = VtkSeries(self.out)
+        header = io.StringIO()
+        csv.writer(header, lineterminator="\n").writerow(self.columns)
+        self.sha = hashlib.sha256()
         self._open("w")
-        self.writer.writerow(self.columns)
-        self.file.flush()
+        self._write(header.getvalue())
 
     def schedule(self, n_steps):
         """The run ends at step n_steps: snapshot steps within it."""
@@ -77,25 +107,43 @@ class Recorder:
         self.snap_steps = sorted({int(round(t / self.dt)) for t in self.snapshot_times if round(t / self.dt) <= n_steps})
 
     def _open(self, mode):
-        self.file = open(os.path.join(self.out, "history.csv"), mode, newline="")
-        self.writer = csv.writer(self.file, lineterminator="\n")
+        self.path = os.path.join(self.out, history.NAME)
+        try:
+            self.file = open(self.path, mode, newline="")
+        except OSError as e:
+            raise files.WriteError(f"cannot write {self.path}: {files.reason(e)}") from None
         self.t_wall0 = self.t_last = time.time()
         self.k_wall0 = O.iter
 
-    def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k not in ("file", "writer")}
+    def _write(self, line):
+        """Append ``line`` (text ending in a newline) to history.csv, flushed; the checksum follows
+        only what was written whole."""
+        try:
+            self.file.write(line)
+            self.file.flush()
+        except OSError as e:
+            raise files.WriteError(f"cannot write {self.path}: {files.reason(e)}") from None
+        self.sha.update(line.encode())
 
-    def reopen(self, out_dir):
-        """Continue in ``out_dir``: history.csv cut to the rows this recorder had written (a crashed
-        run may have written more after its checkpoint), then appended to."""
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in ("file", "sha")}
+
+    def history_info(self):
+        """What the checkpoint records of history.csv (engines.run.history.info)."""
+        return history.info(self.rows, self.last_t, self.sha.hexdigest())
+
+    def reopen(self, out_dir, info):
+        """Continue in ``out_dir`` from the checkpoint whose ``info`` (checkpoint.read_info) recorded
+        the history: history.csv checked against it (engines.run.history; HistoryMismatch), then
+        appended to when it holds exactly those rows, else first rebuilt from them in a temporary
+        file renamed over it (a run stopped or crashed after its checkpoint wrote more rows)."""
         self.out = out_dir
-        path = os.path.join(out_dir, "history.csv")
-        with open(path) as f:
-            lines = f.readlines()
-        if len(lines) < 1 + self.rows:
-            raise checkpoint.CheckpointError(f"{path} has {len(lines) - 1} rows, the checkpoint wrote {self.rows}")
-        with open(path, "w") as f:
-            f.writelines(lines[:1 + self.rows])
+        path = os.path.join(out_dir, history.NAME)
+        size, whole, self.sha = history.kept(out_dir, info, self.rows)
+        if not whole:
+            with files.saved(path) as tmp, open(path, "rb") as old, open(tmp, "wb") as new:
+                while new.tell() < size:
+                    new.write(old.read(min(history.CHUNK, size - new.tell())))
         if self.vtk is not None:
             self.vtk.dir = os.path.join(out_dir, "vtk")
         self._open("a")
@@ -111,7 +159,7 @@ class Recorder:
         if snap_due or vtk_due:
             snap = snapshot_data(cp, xz, k)
             if snap_due:
-                np.savez_compressed(os.path.join(self.out, snapshot_name(k, self.dt)), **snap)
+                files.savez(os.path.join(self.out, snapshot_name(k, self.dt)), **snap)
                 self.snapshot_steps.append(k)
             if vtk_due:
                 from postproc.vtk import snapshot_frame
@@ -133,13 +181,16 @@ class Recorder:
                    cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))] +
                   list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0] +
                   [f for load in cp.wall_loads().values() for f in load])
-        self.writer.writerow([f"{v:.9g}" for v in values])
-        self.file.flush()
+        texts = [f"{v:.9g}" for v in values]
+        self._write(",".join(texts) + "\n")
         self.rows += 1
-        self.last_row = k
+        self.last_row, self.last_t = k, float(texts[0])
 
     def close(self):
-        self.file.close()
+        """Close history.csv (every row was flushed when written)."""
+        if self.file is not None:
+            with contextlib.suppress(OSError):
+                self.file.close()
 
 
 def snapshot_data(cp, xz, k):
@@ -175,12 +226,13 @@ def write_failure_state(cp, path):
     state = pore_state(cp.water_model, xz)
     if state is not None:
         data.update(W=cp.water.W, U=state[2])
-    np.savez_compressed(path, **data)
+    files.savez(path, **data)
 
 
 class Interrupts:
     """While active (``with``): the first SIGINT or SIGTERM is noted (``requested()`` turns true,
-    the run stops after its current step), a second one raises KeyboardInterrupt at once.
+    the run stops after its current step), a second one ends the process at once with one line
+    and 128 + its number (engines.run.guard.exit_now; the run resumes from its last checkpoint).
     Signal handlers can only be set in the main thread; elsewhere nothing is caught."""
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
@@ -194,8 +246,9 @@ class Interrupts:
         return self
 
     def _handle(self, signum, frame):  # noqa: ARG002
-        if self.received:
-            raise KeyboardInterrupt(f"second signal ({signal.Signals(signum).name})")
+        if self.received:  # the status of the first signal: a second Ctrl-C or a Ctrl-C then a kill, the same
+            guard.exit_now(self.received[0][0], f"stopped at once by a second {signal.Signals(signum).name} at step "
+                                                f"{O.iter}: continue from the last checkpoint with --resume")
         self.received.append((signum, time.time()))
 
     def requested(self):
@@ -209,14 +262,17 @@ class Interrupts:
 class Run:
     """One run of a scene in ``out_dir``: the coupling, its recorder and the bookkeeping of the
     run's segments (a start and each resume). Pickled whole into the checkpoints; it is also the
-    coupling's last hook, which writes the periodic checkpoints. ``start``: which start of an
-    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None;
-    ``prepared``: the Start of scene on packing (engines.model.start) the coupling runs on, or None."""
+    coupling's last hook, which writes the periodic checkpoints (and summary.json with them).
+    ``start``: which start of an ensemble the packing is ({"seed", "perturbation_m"};
+    engines.run.ensemble), or None; ``prepared``: the Start of scene on packing (engines.model.start)
+    the coupling runs on, or None. ``run_id``: made here, kept by every segment."""
 
     start = None
+    run_id = None
 
     def __init__(self, scene, packing, out_dir, n_steps, start=None, prepared=None):
         self.scene, self.out, self.n_steps, self.start = scene, out_dir, n_steps, start
+        self.run_id = uuid.uuid4().hex
         self.cp = YadeCoupling(scene, packing, prepared=prepared)
         self.rec = Recorder(self.cp, out_dir, n_steps)
         self.cp.hooks += [self.rec, self]
@@ -233,57 +289,117 @@ class Run:
     def __call__(self, cp):  # noqa: ARG002  (the hook: periodic checkpoints)
         if time.time() - self._last_checkpoint >= self.scene.output.checkpoint_seconds:
             self.save_checkpoint()
+            self.write_summary("running", [])
+
+    def info(self):
+        """The checkpoint's ``info``: plain values readable without YADE (checkpoint.read_info)."""
+        return {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name,
+                "run_id": self.run_id, **self.rec.history_info()}
 
     def save_checkpoint(self):
+        """The checkpoint at this step (fsync'd, renamed into place; WriteError names the path)."""
+        self._segment_to_now()
         self.checkpoint_step = O.iter
-        checkpoint.save(os.path.join(self.out, CHECKPOINT), self,
-                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name})
+        path = os.path.join(self.out, CHECKPOINT)
+        with files.saved(path) as tmp:
+            checkpoint.save(tmp, self, self.info())
         self._last_checkpoint = time.time()
 
-    def reopen(self, out_dir, duration=None):
-        """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end)."""
+    def write_summary(self, status, received):
+        """summary.json (``summarise``), atomically; returns the summary."""
+        summary = self.summarise(status, received)
+        files.write_json(os.path.join(self.out, SUMMARY), summary)
+        return summary
+
+    def reopen(self, out_dir, info, duration=None):
+        """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end);
+        ``info``: the checkpoint's (history.csv is checked against it). The segments are those of
+        summary.json when it is this run's and knows as much or more (a segment that failed or
+        was killed after the checkpoint ran on), those of the checkpoint otherwise; a segment left
+        "running" is marked "killed"."""
         self.out = out_dir
         self.cp.restore_forces()
         n = checkpoint.resume_end(O.iter, self.n_steps, self.scene.numerics.dt, duration)
+        self.rec.reopen(out_dir, info)
         if duration is not None:
             self.scene = self.cp.scene = self.scene.with_overrides({"numerics": {"duration": duration}})
             self.n_steps = n
             self.rec.schedule(n)
             self._schedule()
             self.cp._hooked_at = None  # the hooks see this step again: the row at the old end is due now
-        self.rec.reopen(out_dir)
+        try:
+            with open(os.path.join(out_dir, SUMMARY)) as f:
+                before = json.load(f)
+        except (OSError, ValueError):
+            before = {}
+        theirs = before.get("segments") if isinstance(before, dict) and before.get("run_id") == self.run_id else None
+        if isinstance(theirs, list) and theirs and all(isinstance(x, dict) for x in theirs) and \
+                (len(theirs), theirs[-1].get("to_step", -1)) >= (len(self.segments), self.segments[-1]["to_step"]
+                                                                 if self.segments else -1):
+            self.segments = theirs
+        for seg in self.segments:
+            if seg.get("status") == "running":
+                seg["status"] = "killed"
         self._last_checkpoint = time.time()
 
-    def go(self, overrides=None, figures=True):
+    def _segment_to_now(self, status=None):
+        """The current segment's last step, times and (if given) status."""
+        if not self.segments or self.segments[-1]["status"] != "running":
+            return
+        seg = self.segments[-1]
+        seg.update(to_step=int(O.iter), wall_seconds=time.time() - self._clock[0],
+                   cpu_seconds=time.process_time() - self._clock[1])
+        if status is not None:
+            seg["status"] = status
+
+    def go(self, overrides=None, figures=True, signals=None):
         """Run to step n_steps (or until a signal or an error); write the checkpoint, summary and
         (when completed) the figures. Returns the summary; re-raises an error after writing what
-        it can."""
+        it can (a failed write: WriteError, one line naming the path). ``signals``: the active
+        Interrupts (default: its own)."""
         cp, sc = self.cp, self.scene
-        k0, t0, c0, started = O.iter, time.time(), time.process_time(), time.strftime("%Y-%m-%dT%H:%M:%S")
+        k0 = O.iter
+        self._clock = (time.time(), time.process_time())
+        self.segments.append({"from_step": k0, "to_step": k0, "status": "running", "wall_seconds": 0.0,
+                              "cpu_seconds": 0.0, "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+                              "host": socket.gethostname(), "pid": os.getpid(),
+                              "provenance": provenance(overrides=overrides)})
         print(f"[{sc.scene.name}] {int(cp.packing.mobile.sum())} particles, {int((~cp.packing.mobile).sum())} wall discs, "
               f"{cp.water.net.n_pores if cp.water else 0} pores, law = {sc.contact.law}, I/O {yade_io.BACKEND}, "
               f"dt = {sc.numerics.dt:g} s, steps {k0} to {self.n_steps} -> {self.out}", flush=True)
-        status = "completed"
-        with Interrupts() as signals:
+        status, error = "completed", None
+        with contextlib.ExitStack() as stack:
+            if signals is None:
+                signals = stack.enter_context(Interrupts())
             try:
+                if self.rec.file is None:  # a fresh run: its history starts here
+                    self.rec.create()
+                self.write_summary("running", [])
                 if not cp.run(self.n_steps - k0, stop=signals.requested):
                     status = "interrupted"
             except BaseException as e:
-                status = f"failed: {type(e).__name__}: {e}"
-                write_failure_state(cp, os.path.join(self.out, FAILURE_STATE))
-                raise
-            finally:
-                self.rec.close()
-                self.segments.append({"from_step": k0, "to_step": int(O.iter), "status": status,
-                                      "wall_seconds": time.time() - t0, "cpu_seconds": time.process_time() - c0, "started": started,
-                                      "provenance": provenance(overrides=overrides)})
-                if not status.startswith("failed"):
+                error = e
+                status = f"failed: {e}" if isinstance(e, files.WriteError) else f"failed: {type(e).__name__}: {e}"
+                with contextlib.suppress(OSError):  # a full disk: the error above is the one to report
+                    write_failure_state(cp, os.path.join(self.out, FAILURE_STATE))
+            self.rec.close()
+            self._segment_to_now(status)
+            try:
+                if error is None:
                     self.save_checkpoint()
-                summary = self.summarise(status, signals.received)
-                with open(os.path.join(self.out, "summary.json"), "w") as f:
-                    json.dump(summary, f, indent=1)
-                if status == "completed" and figures:
-                    plots.figures_of_run(self.out)
+                summary = self.write_summary(status, signals.received)
+            except OSError as e:
+                if error is None:  # the checkpoint or summary could not be written: the run failed
+                    error, status = e, f"failed: {e}"
+                    self.segments[-1]["status"] = status
+                    with contextlib.suppress(OSError):
+                        self.write_summary(status, signals.received)
+        if error is not None:
+            raise error
+        if status == "completed" and figures:
+            guard.stage("while drawing the figures (the run's files are complete; python3 -m postproc.plots "
+                        f"{self.out} draws them)")
+            plots.figures_of_run(self.out)
         return summary
 
     def summarise(self, status, received):
@@ -291,13 +407,14 @@ class Run:
         w, wm = cp.water, cp.water_model
         wall = sum(s["wall_seconds"] for s in self.segments)
         steps_run = sum(s["to_step"] - s["from_step"] for s in self.segments)
-        history_path = os.path.join(self.out, "history.csv")
+        history_path = os.path.join(self.out, history.NAME)
         results = headline_results(read_history(history_path) if os.path.exists(history_path) else {},
                                    sc.output.heave_rise)
         if not status.startswith("failed"):
             results["porosity_end"] = cp.porosity(cp.positions())
         summary = {
-            "scene": sc.scene.name, "status": status, "steps": int(O.iter), "steps_requested": self.n_steps,
+            "scene": sc.scene.name, "run_id": self.run_id, "status": status, "steps": int(O.iter),
+            "steps_requested": self.n_steps,
             "wall_seconds": wall, "us_per_step": 1e6 * wall / max(steps_run, 1),
             "cpu_seconds": sum(s.get("cpu_seconds", 0.0) for s in self.segments),
             "n_particles": int(cp.packing.mobile.sum()), "n_walls": int((~cp.packing.mobile).sum()),
@@ -336,6 +453,17 @@ def claim_outputs(out_dir, scene, snap_steps=()):
                    [snapshot_name(k, scene.numerics.dt) for k in snap_steps])
 
 
+def remove_stale_temporaries(out_dir):
+    """Remove what a killed run left in ``out_dir`` (its lock held): engines.files' temporaries
+    there and in vtk/, and the checkpoint's (``.checkpoint-*``)."""
+    for folder in (out_dir, os.path.join(out_dir, "vtk")):
+        if os.path.isdir(folder):
+            files.remove_stale_temporaries(folder)
+    for path in glob(os.path.join(glob_escape(out_dir), ".checkpoint-*")):
+        with contextlib.suppress(OSError):
+            os.remove(path)
+
+
 def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, prepared=None):
     """Run ``scene`` on ``packing`` for ``duration`` (default: the scene's) and write the outputs
     (``figures=False``: no PNGs; ``python3 -m postproc.plots DIR`` draws them later; ``start``:
@@ -343,26 +471,35 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, 
     Returns the summary ("status": completed or interrupted); re-raises an error after writing
     the history, summary and failure state. ``prepared``: the Start of scene on packing
     (engines.model.start) preflight checked, made here if None; it holds the time step of dt =
-    "auto", whose choice is printed here (engines.run.preflight.announce_dt)."""
+    "auto", whose choice is printed here (engines.run.preflight.announce_dt). The coupling is built
+    before anything is written; then the folder's lock is taken (engines.run.guard.FolderLocked if
+    another run holds it) and a signal stops the run after its first checkpoint."""
     prepared = Start(scene.settings, packing) if prepared is None else prepared
     announce_dt(prepared)
     scene = timed(scene, prepared)
-    os.makedirs(out_dir, exist_ok=True)
-    manifest.clear(out_dir)  # an earlier run's files (--overwrite, a sweep's re-run job); others kept
-    claim_outputs(out_dir, scene)
     duration = scene.numerics.duration if duration is None else duration
     run = Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start, prepared)
-    claim_outputs(out_dir, scene, run.rec.snap_steps)
-    return run.go(scene.overrides, figures)
+    with guard.hold(out_dir), Interrupts() as signals:
+        remove_stale_temporaries(out_dir)
+        manifest.clear(out_dir)  # an earlier run's files (--overwrite, a sweep's re-run job); others kept
+        claim_outputs(out_dir, scene, run.rec.snap_steps)
+        return run.go(scene.overrides, figures, signals)
 
 
 def resume_run(out_dir, duration=None, figures=True):
     """Continue the run in ``out_dir`` from its checkpoint, in place (history.csv appended), to its
-    end or to ``duration`` [s]. Returns the summary like ``run_scene``."""
-    run = checkpoint.load(os.path.join(out_dir, CHECKPOINT))
-    run.reopen(out_dir, duration)
-    claim_outputs(out_dir, run.scene, run.rec.snap_steps)
-    return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures)
+    end or to ``duration`` [s]. Returns the summary like ``run_scene``. Holds the folder's lock;
+    history.csv is checked against the checkpoint before anything is written (Run.reopen;
+    engines.run.history.HistoryMismatch)."""
+    path = os.path.join(out_dir, CHECKPOINT)
+    with guard.hold(out_dir):
+        remove_stale_temporaries(out_dir)
+        info = checkpoint.read_info(path)
+        run = checkpoint.load(path)
+        run.reopen(out_dir, info, duration)
+        claim_outputs(out_dir, run.scene, run.rec.snap_steps)
+        with Interrupts() as signals:
+            return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures, signals)
 
 
 def done_line(summary):

@@ -11,12 +11,19 @@ A job is a name and a command line; ``{out}`` in an argument becomes the job's d
 script run from a table writes). A job runs in the directory the sweep was started from,
 wherever it runs, so relative paths in its command line mean the same on every worker. Each job
 writes there ``stdout.log``, ``stderr.log`` (without the lines of YADE's banner that give its
-listeners' ports and its console's cookie, BANNER) and ``job.json``: status ("running", then "ok" or
-"failed"), return code, wall and CPU seconds, command, working directory, host, and the tail of
+listeners' ports and its console's cookie, BANNER) and ``job.json``: status ("running", then "ok",
+"failed" or "interrupted"), return code, wall and CPU seconds, command, working directory, host, and the tail of
 stderr. ``run_sweep`` returns the records of all jobs in the order given, prints one line per
 finished job and a summary, and writes ``ROOT/sweep.json``. With ``resume`` (the default) a job
 whose job.json says "ok" for the same command is not run again; failed, interrupted or changed
 jobs are.
+
+Each job runs in its own process group and dies with its runner (Linux's PR_SET_PDEATHSIG: a
+killed runner or Dask worker takes its jobs with it). SIGINT or SIGTERM to the runner is passed to
+its running jobs' process groups (a scene script then stops after its step with a checkpoint); the
+runner waits for them (up to STOP_SECONDS, then kills them), records them "interrupted", and exits
+with 128 + the signal's number and one line. A job whose folder another live run holds (its
+lock, engines.run.guard) is not started: its record says "locked" and by whom.
 
 Local: ``workers`` processes at a time (default 2, the machine's cores). Cluster: ``scheduler``
 is a Dask scheduler address ("tcp://host:8786") or a ``distributed.Client``, or
@@ -30,9 +37,13 @@ sweep runs under a plain ``python3``.
 
 The command line is yade_scripts/sweep.py.
 """
+import ctypes
+import ctypes.util
+import fcntl
 import json
 import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -59,6 +70,10 @@ def yade_environment():
     PYTHONPATH (this process's PYTHONPATH after it)."""
     rest = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p and p != ROOT]
     return {"PYTHONPATH": os.pathsep.join([ROOT, *rest])}
+
+
+LOCK_FILE = ".lock"  # a run's lock in its folder (engines.run.guard.LOCK)
+STOP_SECONDS = 20  # after a signal: how long the runner waits for its jobs to stop before killing them
 
 
 @dataclass(frozen=True)
@@ -101,15 +116,56 @@ def read_record(root, name):
         return None
 
 
+def lock_holder(folder):
+    """'' if no live process holds ``folder``'s lock (LOCK_FILE), else its "HOST PID" (or "a process").
+    Here, not in engines.run.guard (which uses it): the sweep's workers get this module by value and
+    import nothing of the project. Never ask about a folder this process holds: closing the probe's
+    descriptor would release this process's own POSIX lock."""
+    try:
+        fd = os.open(os.path.join(folder, LOCK_FILE), os.O_RDWR)
+    except OSError:
+        return ""
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        who = os.pread(fd, 200, 0).decode(errors="replace").strip()
+        return who or "a process"
+    finally:
+        os.close(fd)
+    return ""
+
+
+_running = {}  # process group id -> job name, of the jobs this runner started and waits for
+_stopping = []  # not empty after a signal: no job starts any more (a list: the workers get this module by value)
+_PR_SET_PDEATHSIG = 1
+
+
+def _libc():
+    return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+
+
+def _die_with(parent, prctl):
+    """preexec_fn of a job: SIGTERM when the thread that started it ends (its runner or Dask worker
+    died), and an end at once if that happened before this line."""
+    def preexec():
+        prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
+        if os.getppid() != parent:
+            os._exit(1)
+    return preexec
+
+
 def _run_timed(cmd, stdout, stderr, env, timeout, cwd):
-    """Run ``cmd`` in ``cwd`` to its end: (return code, CPU seconds it used (user + system, with
-    the children it waited for), whether it was killed at ``timeout`` seconds)."""
-    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env, cwd=cwd)
+    """Run ``cmd`` in ``cwd`` to its end, in its own process group and session, dying with this
+    process: (return code, CPU seconds it used (user + system, with the children it waited for),
+    whether it was killed at ``timeout`` seconds)."""
+    proc = subprocess.Popen(cmd, stdout=stdout, stderr=stderr, env=env, cwd=cwd, start_new_session=True,
+                            preexec_fn=_die_with(os.getpid(), _libc().prctl))
+    _running[proc.pid] = cmd
     killed = threading.Event()
 
     def kill():
         killed.set()
-        proc.kill()
+        _signal_group(proc.pid, signal.SIGKILL)
 
     timer = threading.Timer(timeout, kill) if timeout else None
     if timer:
@@ -119,8 +175,16 @@ def _run_timed(cmd, stdout, stderr, env, timeout, cwd):
     finally:
         if timer:
             timer.cancel()
+        _running.pop(proc.pid, None)
     proc.returncode = os.waitstatus_to_exitcode(status)
     return proc.returncode, usage.ru_utime + usage.ru_stime, killed.is_set()
+
+
+def _signal_group(pgid, sig):
+    try:
+        os.killpg(pgid, sig)
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 # set by a Dask nanny for its worker: glibc then hands freed memory back at once, and a job's
@@ -191,6 +255,11 @@ def run_job(job, root, cwd=None):
     cmd = job.command(out)
     rec = {"name": job.name, "status": "running", "command": cmd, "env": dict(job.env), "cwd": cwd,
            "host": socket.gethostname(), "started": time.time()}
+    held = lock_holder(out)
+    if held or _stopping:  # its folder is another live run's, or the runner is stopping: not started
+        why = f"not started: {out} is in use by another run ({held})" if held else "not started: the sweep was stopped"
+        return {**rec, "status": "locked" if held else "interrupted", "returncode": None, "wall_s": 0.0, "cpu_s": 0.0,
+                "started": None, "stderr_tail": why}
     _write_json(os.path.join(out, "job.json"), rec)
     env = _environment({**job.env, JOB_DIR: out})
     t0 = time.time()
@@ -205,7 +274,10 @@ def run_job(job, root, cwd=None):
         rc, note = 127, f"could not start: {e}"
     with open(err_path, errors="replace") as f:
         tail = f.read()[-STDERR_TAIL:]
-    rec.update(status="ok" if rc == 0 else "failed", returncode=rc, wall_s=time.time() - t0, cpu_s=cpu_s,
+    stopped = bool(_stopping) and rc in (-signal.SIGINT, -signal.SIGTERM, -signal.SIGKILL,
+                                            128 + signal.SIGINT, 128 + signal.SIGTERM)
+    rec.update(status="ok" if rc == 0 else "interrupted" if stopped else "failed", returncode=rc,
+               wall_s=time.time() - t0, cpu_s=cpu_s,
                finished=time.time(), stderr_tail=(note + "\n" + tail).strip())
     _write_json(os.path.join(out, "job.json"), rec)
     return rec
@@ -283,11 +355,20 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
         done[job.name] = rec
         log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
 
+    stopped_by, running_on_cluster = None, []
     if cluster is None:
-        with ThreadPoolExecutor(max_workers=workers) as pool:
+        _stopping.clear()
+        with ThreadPoolExecutor(max_workers=workers) as pool, _Signals() as signals:
             futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
-            for fut in as_completed(futures):
-                finished(futures[fut], fut)
+            try:
+                for fut in as_completed(futures):
+                    finished(futures[fut], fut)
+            except _Stop as stop:
+                stopped_by = stop.signum
+                _stop_jobs(stop.signum, futures, signals)
+                for fut in futures:
+                    if futures[fut].name not in done and fut.done() and not fut.cancelled():
+                        finished(futures[fut], fut)
     elif todo:
         import cloudpickle
         from distributed import Client
@@ -298,23 +379,84 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
         client = scheduler if isinstance(scheduler, Client) else \
             Client(scheduler_file=scheduler_file) if scheduler_file is not None else Client(scheduler)
         try:
-            futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
-                                     pure=False): j for j in todo}
-            for fut in dask_completed(list(futures)):
-                finished(futures[fut], fut)
+            with _Signals():
+                futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
+                                         pure=False): j for j in todo}
+                try:
+                    for fut in dask_completed(list(futures)):
+                        finished(futures[fut], fut)
+                except _Stop as stop:  # the jobs not started are cancelled; a task running on a worker cannot be
+                    stopped_by = stop.signum
+                    client.cancel(list(futures))
+                    running_on_cluster = [futures[f].name for f in futures if futures[f].name not in done]
         finally:
             if client is not scheduler:
                 client.close()
     records = []
     for j in jobs:
-        rec = dict(kept[j.name], kept=True) if j.name in kept else done[j.name]
+        rec = dict(kept[j.name], kept=True) if j.name in kept else done.get(j.name) or \
+            {"name": j.name, "status": "interrupted", "returncode": None, "wall_s": 0.0,
+             "stderr_tail": "not finished: the sweep was stopped"}
         records.append(rec)
     failed = [r["name"] for r in records if r["status"] != "ok"]
     summary = {"root": root, "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
                "wall_s": time.time() - t0, "jobs": records}
     _write_json(os.path.join(root, "sweep.json"), summary)
     log(format_summary(records))
+    if stopped_by is not None:
+        on_cluster = (f" (not finished: {', '.join(running_on_cluster)}; those already running on the cluster's "
+                      "workers go on to their end: stop the workers to end them)") if running_on_cluster else ""
+        print(f"sweep {root} stopped by {signal.Signals(stopped_by).name}: its running jobs were stopped and recorded "
+              f"\"interrupted\"; run it again to continue them{on_cluster}", file=sys.stderr, flush=True)
+        raise SystemExit(128 + stopped_by)
     return records
+
+
+class _Stop(BaseException):
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+class _Signals:
+    """While active, in the main thread: the first SIGINT or SIGTERM raises _Stop there; a second
+    one kills the jobs' process groups and ends the runner at once (one line, 128 + its number)."""
+
+    def __enter__(self):
+        self.received, self._previous = [], {}
+        if threading.current_thread() is threading.main_thread():
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self._previous[s] = signal.signal(s, self._handle)
+        return self
+
+    def _handle(self, signum, frame):  # noqa: ARG002
+        self.received.append(signum)
+        if len(self.received) == 1:
+            raise _Stop(signum)
+        for pgid in list(_running):
+            _signal_group(pgid, signal.SIGKILL)
+        print(f"sweep stopped at once by a second {signal.Signals(signum).name}: its running jobs were killed",
+              file=sys.stderr, flush=True)
+        os._exit(128 + signum)
+
+    def __exit__(self, *exc):
+        for s, handler in self._previous.items():
+            signal.signal(s, handler)
+
+
+def _stop_jobs(signum, futures, signals):
+    """Pass ``signum`` to the running jobs' process groups, let no other job start, wait up to
+    STOP_SECONDS for them, then kill what is left."""
+    from concurrent.futures import wait
+    _stopping.append(signum)
+    for fut in futures:
+        fut.cancel()  # those not started
+    for pgid in list(_running):
+        _signal_group(pgid, signum)
+    wait(futures, timeout=STOP_SECONDS)
+    for pgid in list(_running):
+        _signal_group(pgid, signal.SIGKILL)
+    wait(futures, timeout=STOP_SECONDS)
 
 
 def format_summary(records):

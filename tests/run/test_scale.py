@@ -4,7 +4,8 @@ stated cost model, within 3x of what two presets cost; refusals above 24 h or 10
 names."""
 import pytest
 
-from engines.model.time_step import resolve_dt
+from engines.model.start import Start
+from engines.run.preflight import timed
 from engines.run import ensemble
 from engines.run import scene as scenes
 from engines.run.preflight import CPU_LIMIT, OUTPUT_LIMIT, InputError, check_scale, cost_per_step, estimate, preflight
@@ -36,7 +37,7 @@ def test_the_estimate_follows_the_model(case1):
     assert estimate(sc.with_overrides({"numerics": {"water_interval": 10}}), pk)["cpu_s"] == \
         pytest.approx(60000 * 76 * (c_law + c_water / 10) * 1e-6)
     auto = sc.with_overrides({"numerics": {"dt": "auto"}})
-    assert estimate(auto, pk)["steps"] == round(0.06 / resolve_dt(auto, pk, log=None).numerics.dt)
+    assert estimate(auto, pk)["steps"] == round(0.06 / timed(auto, Start(auto.settings, pk)).numerics.dt)
     assert "starts x" in ensemble.check_starts(auto, pk, "out", range(2), 1e-7)[0]
 
 
@@ -91,11 +92,10 @@ def test_up_to_64_starts_are_all_checked_beyond_that_a_seeded_sample(case1, monk
     ("quicksand_case1", {"numerics": {"duration": 0.03}, "contact": {"law": "yade", "spring": "b"}}),
 ])
 def test_the_estimate_is_within_3x_of_a_run(tmp_path, name, over):
-    from engines.model.time_step import resolve_dt
     from engines.run.runner import run_scene
     sc = scenes.preset(name, over)
     pk = scene_packing(sc)
-    guess = estimate(resolve_dt(sc, pk, log=None), pk)
+    guess = estimate(sc, pk)
     run_scene(sc, pk, str(tmp_path / "warm-up"), duration=2e-4, figures=False)  # numba compiles (or loads its cache) once
     summary = run_scene(sc, pk, str(tmp_path / "run"), figures=False)
     assert summary["status"] == "completed"
