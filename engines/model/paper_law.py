@@ -30,6 +30,10 @@ class PaperLaw:
     """
 
     contact_class = ContactLaw  # of ``contact``
+    # what a checkpoint stores (engines.model.state); shift_prev and wall_du with flat walls only
+    CHECKPOINT_FIELDS = ("contact", "walls", "omega", "du", "xz_prev", "shift_prev", "wall_du")
+    CHECKPOINT_DERIVED = {name: "the scene's settings and the packing's discs" for name in
+                          ("settings", "dt", "mobile", "mass", "inertia")}
 
     def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
         self.settings, self.dt = settings, float(dt)

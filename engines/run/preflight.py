@@ -19,9 +19,10 @@ import os
 import tempfile
 
 from engines.yade.checkpoint import NAME as CHECKPOINT
+from engines.yade.checkpoint import OLD_NAME as OLD_CHECKPOINT
 
 ENSEMBLE = "ensemble.json"  # an ensemble's statistics (engines.run.ensemble)
-RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT, ENSEMBLE)  # their presence marks a run's directory
+RUN_OUTPUTS = ("summary.json", "history.csv", CHECKPOINT, OLD_CHECKPOINT, ENSEMBLE)  # their presence marks a run's directory
 
 
 class InputError(ValueError):

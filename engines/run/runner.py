@@ -7,10 +7,12 @@ Stopping: SIGINT (Ctrl-C) or SIGTERM during a run stops it after the current ste
 flushed, a checkpoint written, summary.json says "interrupted" with the step, and the run returns
 (the scripts then exit with 128 + the signal's number). A second signal stops at once.
 
-Checkpoints (engines.yade.checkpoint, ``checkpoint.pkl``): at the start, every
-``[output] checkpoint_seconds`` of wall time, at the end and on an interrupt; each holds YADE's
-scene and the whole ``Run`` (coupling, recorder, bookkeeping), so that a resumed run continues
-exactly as if it had not stopped. A crashed run keeps its last checkpoint (resumable: the history
+Checkpoints (engines.yade.checkpoint, ``checkpoint.npz``, data only): at the start, every
+``[output] checkpoint_seconds`` of wall time, at the end and on an interrupt; each holds the
+run's scene and packing (``Run.recipe``), YADE's bodies and the named state of the ``Run`` and its
+parts (coupling, recorder, bookkeeping: each class's CHECKPOINT_FIELDS). A resume builds the run
+again from the scene and packing and sets that state (``Run.from_checkpoint``), so that it
+continues exactly as if it had not stopped. A crashed run keeps its last checkpoint (resumable: the history
 rows written after it are dropped on resume) and writes the state at the failing step to
 ``failure_state.npz`` for a post-mortem.
 """
@@ -29,13 +31,16 @@ from yade import O
 
 from engines.model import pores as pg
 from engines.model.pore_dem import pore_state
+from engines.run import scene as scenes
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
+from packing.packing import Packing
 from postproc import plots
 from postproc.run_files import headline_results, read_history
 
 CHECKPOINT = checkpoint.NAME
+RECIPE = ("scene", "start", "packing.xz", "packing.r", "packing.group", "packing.density_factor")  # Run.recipe
 FAILURE_STATE = "failure_state.npz"
 
 
@@ -43,10 +48,19 @@ class Recorder:
     """Coupling hook: history rows every history_interval steps, snapshots at the scene's snapshot
     times and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
     snapshot times; taken between steps at the positions after k steps (t = k dt). Each is taken
-    once per step index, so a resumed run does not repeat one. Pickled with the run (the open
-    history file is left out and opened again by ``reopen``)."""
+    once per step index, so a resumed run does not repeat one. ``new``: start history.csv (False:
+    a resumed run's recorder, whose ``reopen`` continues it)."""
 
-    def __init__(self, cp, out_dir, n_steps):
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("rows", "last_row", "last_vtk", "snapshot_steps", "vtk")
+    CHECKPOINT_DERIVED = {
+        **{name: "the scene's [output] and the coupling's blocks and walls" for name in
+           ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns")},
+        "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
+        "file": "history.csv, opened by reopen", "writer": "history.csv, opened by reopen",
+        **{name: "progress lines: the wall clock of this segment" for name in ("t_wall0", "t_last", "k_wall0")}}
+
+    def __init__(self, cp, out_dir, n_steps, new=True):
         out = cp.scene.output
         self.dt = cp.scene.numerics.dt
         self.history_interval, self.vtk_interval = out.history_interval, out.vtk_interval
@@ -66,9 +80,10 @@ class Recorder:
             self.vtk = VtkSeries(out_dir)
         self.schedule(n_steps)
         self.out = out_dir
-        self._open("w")
-        self.writer.writerow(self.columns)
-        self.file.flush()
+        if new:
+            self._open("w")
+            self.writer.writerow(self.columns)
+            self.file.flush()
 
     def schedule(self, n_steps):
         """The run ends at step n_steps: snapshot steps within it."""
@@ -80,9 +95,6 @@ class Recorder:
         self.writer = csv.writer(self.file, lineterminator="\n")
         self.t_wall0 = self.t_last = time.time()
         self.k_wall0 = O.iter
-
-    def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k not in ("file", "writer")}
 
     def reopen(self, out_dir):
         """Continue in ``out_dir``: history.csv cut to the rows this recorder had written (a crashed
@@ -207,16 +219,21 @@ class Interrupts:
 
 class Run:
     """One run of a scene in ``out_dir``: the coupling, its recorder and the bookkeeping of the
-    run's segments (a start and each resume). Pickled whole into the checkpoints; it is also the
-    coupling's last hook, which writes the periodic checkpoints. ``start``: which start of an
-    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None."""
+    run's segments (a start and each resume). Its checkpoints hold its ``recipe`` and its named
+    state (CHECKPOINT_FIELDS, engines.model.state); it is also the coupling's last hook, which writes
+    the periodic checkpoints. ``start``: which start of an ensemble the packing is ({"seed",
+    "perturbation_m"}; engines.run.ensemble), or None. ``new``: a new run (False: one built again
+    from its checkpoint, ``from_checkpoint``)."""
 
-    start = None
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("n_steps", "segments", "checkpoint_step", "cp", "rec")
+    CHECKPOINT_DERIVED = {"scene": "the recipe", "packing": "the recipe", "start": "the recipe",
+                          "out": "the folder resumed in", "_last_checkpoint": "the wall clock of this segment"}
 
-    def __init__(self, scene, packing, out_dir, n_steps, start=None):
-        self.scene, self.out, self.n_steps, self.start = scene, out_dir, n_steps, start
+    def __init__(self, scene, packing, out_dir, n_steps, start=None, new=True):
+        self.scene, self.packing, self.out, self.n_steps, self.start = scene, packing, out_dir, n_steps, start
         self.cp = YadeCoupling(scene, packing)
-        self.rec = Recorder(self.cp, out_dir, n_steps)
+        self.rec = Recorder(self.cp, out_dir, n_steps, new)
         self.cp.hooks += [self.rec, self]
         self.segments = []
         self.checkpoint_step = None
@@ -235,11 +252,42 @@ class Run:
     def save_checkpoint(self):
         self.checkpoint_step = O.iter
         checkpoint.save(os.path.join(self.out, CHECKPOINT), self,
-                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name})
+                        {"n_steps": self.n_steps, "dt": self.scene.numerics.dt, "scene": self.scene.scene.name},
+                        self.recipe())
         self._last_checkpoint = time.time()
 
+    def recipe(self):
+        """What builds this run again (``from_checkpoint``): the scene (its tables, file and
+        overrides), the ensemble's start and the packing's arrays."""
+        sc, pk = self.scene, self.packing
+        return dict(zip(RECIPE, ({"tables": sc.as_dict(), "path": sc.path, "overrides": sc.overrides}, self.start,
+                                 pk.xz, pk.r, pk.group, pk.density_factor)))
+
+    @classmethod
+    def from_checkpoint(cls, out_dir):
+        """The run of ``out_dir`` built again from its checkpoint's recipe as a new run is built,
+        then set to its stored state (engines.yade.checkpoint.restore); CheckpointError in one line."""
+        path = os.path.join(out_dir, CHECKPOINT)
+        ck = checkpoint.load(path)
+        r, start, n_steps = ck.recipe, ck.recipe.get("start"), ck.state.get("n_steps")
+        if set(r) != set(RECIPE) or not (start is None or isinstance(start, dict)) or type(n_steps) is not int \
+                or not isinstance(r["scene"], dict) or set(r["scene"]) != {"tables", "path", "overrides"} \
+                or not (isinstance(r["scene"]["tables"], dict) and isinstance(r["scene"]["path"], str)
+                        and isinstance(r["scene"]["overrides"], dict)):
+            raise checkpoint.CheckpointError(f"{path}: its recipe is not {', '.join(RECIPE)} of their types, or "
+                                             "n_steps is missing")
+        try:
+            scene = scenes.validate(r["scene"]["tables"], r["scene"]["path"])
+            scene.overrides = r["scene"]["overrides"]
+            packing = Packing(r["packing.xz"], r["packing.r"], r["packing.group"], r["packing.density_factor"])
+        except ValueError as e:
+            raise checkpoint.CheckpointError(f"{path}: its scene or packing is refused: {e}") from None
+        run = cls(scene, packing, out_dir, n_steps, start, new=False)
+        checkpoint.restore(ck, run)
+        return run
+
     def reopen(self, out_dir, duration=None):
-        """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end)."""
+        """After ``from_checkpoint``: continue in ``out_dir`` (to ``duration`` [s] if given: a later end)."""
         self.out = out_dir
         self.cp.restore_forces()
         n = checkpoint.resume_end(O.iter, self.n_steps, self.scene.numerics.dt, duration)
@@ -323,7 +371,8 @@ class Run:
 
 def clear_outputs(out_dir):
     """Remove the files an earlier run left in ``out_dir`` that this one would not overwrite."""
-    for path in glob(os.path.join(out_dir, "snapshot_*.npz")) + [os.path.join(out_dir, f) for f in (CHECKPOINT, FAILURE_STATE)]:
+    for path in glob(os.path.join(out_dir, "snapshot_*.npz")) + [os.path.join(out_dir, f) for f in (
+            CHECKPOINT, checkpoint.OLD_NAME, FAILURE_STATE)]:
         if os.path.exists(path):
             os.remove(path)
     shutil.rmtree(os.path.join(out_dir, "vtk"), ignore_errors=True)
@@ -346,7 +395,7 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None):
 def resume_run(out_dir, duration=None, figures=True):
     """Continue the run in ``out_dir`` from its checkpoint, in place (history.csv appended), to its
     end or to ``duration`` [s]. Returns the summary like ``run_scene``."""
-    run = checkpoint.load(os.path.join(out_dir, CHECKPOINT))
+    run = Run.from_checkpoint(out_dir)
     run.reopen(out_dir, duration)
     return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures)
 

@@ -239,7 +239,7 @@ def test_check_fresh_output(tmp_path):
     check_fresh_output(str(tmp_path))  # empty
     (tmp_path / "notes.txt").write_text("")
     check_fresh_output(str(tmp_path))  # no run's outputs
-    assert RUN_OUTPUTS == ("summary.json", "history.csv", "checkpoint.pkl", "ensemble.json")
+    assert RUN_OUTPUTS == ("summary.json", "history.csv", "checkpoint.npz", "checkpoint.pkl", "ensemble.json")
     for name in RUN_OUTPUTS:
         (tmp_path / name).write_text("")
         with pytest.raises(InputError, match=rf"^--out {tmp_path} holds another run's outputs \(.*{name}.*\): "
