@@ -16,7 +16,7 @@ A class whose instances carry state from step to step says which of its attribut
 ``state_of(obj)`` gives {dotted name: value}; ``restore(obj, values)`` sets them on an object
 built afresh, checking each against the attribute it replaces (type, dtype, dimensions) and
 refusing a missing one; it removes what it took from ``values``, so the caller can refuse the
-rest. tests/yade/test_checkpoint.py fails when an object of a run gains an attribute that neither
+rest. tests/yade/test_checkpoint_format.py fails when an object of a run gains an attribute that neither
 list names. Nothing is executed and no object is made from the data: only numbers, strings and
 arrays of numbers are set on objects the code built.
 """

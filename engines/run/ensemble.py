@@ -163,13 +163,13 @@ def resume_jobs(out, duration):
     ``duration`` [s] if given (then also the plan's end); refuses (InputError) a start that
     cannot go on, before anything runs."""
     from engines.run.command_line import check_resume
-    from engines.yade.checkpoint import NAME
+    from engines.yade.checkpoint import NAME, OLD_NAME
     from postproc.run_files import read_summary
     plan = read_plan(out)
     jobs = []
     for k in plan["seeds"]:
         d = start_dir(out, k)
-        if os.path.exists(os.path.join(d, NAME)):
+        if any(os.path.exists(os.path.join(d, name)) for name in (NAME, OLD_NAME)):  # an older one: refused by name
             if read_summary(d).get("status") == "completed" and duration is None:
                 continue
             check_resume(d, duration)

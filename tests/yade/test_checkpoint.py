@@ -228,6 +228,11 @@ def test_resume_refusals_come_before_yade(full_run, tmp_path):
     assert "does not exist" in refused(["--resume", str(tmp_path)])
     assert "--dt" in refused(["--resume", full_run, "--dt", "1e-6"])
     assert "the scene" in refused(["--resume", full_run, "--case", "2"])
+    old, marker = tmp_path / "old", tmp_path / "executed"  # a run folder of an older version, its pickle crafted
+    old.mkdir()
+    (old / "checkpoint.pkl").write_bytes(b"\x80\x02cbuiltins\nopen\n(V" + str(marker).encode() + b"\nVw\ntR.")  # open(marker, "w")
+    line = refused(["--resume", str(old)])
+    assert "checkpoint.pkl: a checkpoint of an older format (a pickle), which is not read" in line and not marker.exists()
 
 
 # -- ParaView from a run --------------------------------------------------------------------------
