@@ -210,7 +210,11 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
     from engines.run import runner
     if args.resume:
-        summary = runner.resume_run(args.resume, args.duration)
+        from engines.yade.checkpoint import CheckpointError
+        try:
+            summary = runner.resume_run(args.resume, args.duration)
+        except CheckpointError as e:  # found when the run is built again: before anything is written
+            sys.exit(f"error: {e}")
     else:
         start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
         summary = runner.run_scene(sc, packing, args.out, start=start)

@@ -263,3 +263,19 @@ def test_a_run_resumed_twice_from_one_checkpoint_is_the_same(saved_run, tmp_path
         else:
             assert json.loads(json.dumps(again[k])) == v, k
     assert runner.CHECKPOINT == checkpoint.NAME == "checkpoint.npz"
+
+
+@pytest.mark.check
+def test_the_script_refuses_a_crafted_checkpoint_in_one_line(saved_run, tmp_path):
+    """Through ``yade ... --resume``: the refusal found while the run is built again is one line,
+    exit status 1, and history.csv is left as it was."""
+    import subprocess
+    from engines import ROOT
+    run_dir, path = copy_run(saved_run, tmp_path / "run")
+    rewrite(path, edit_header=lambda h: h["state"].update({"cp.hack": 1}))
+    history = open(os.path.join(run_dir, "history.csv"), "rb").read()
+    run = subprocess.run(["yade", "-n", "-x", "yade_scripts/quicksand.py", "--resume", run_dir], cwd=ROOT,
+                         env=dict(os.environ, PYTHONPATH=ROOT), capture_output=True, text=True, timeout=600)
+    assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
+    assert run.stderr.strip().splitlines()[-1] == f"error: {path}: unknown field(s) ['cp.hack'] (a checkpoint of other code?)"
+    assert open(os.path.join(run_dir, "history.csv"), "rb").read() == history
