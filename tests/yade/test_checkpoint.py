@@ -105,6 +105,10 @@ def test_a_resumed_run_matches_the_uninterrupted_one(packing, full_run, tmp_path
                                      "output": {"history_interval": 1500, "vtk": False}}, 700, False),
     ("flat walls, paper law", {"walls": {"kind": "flat"}, "contact": {"spring": "b"}}, 777, True),
     ("flat walls, yade law", {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "b"}}, 777, False),
+    ("moving flat walls, paper law", {"walls": {"kind": "flat"}, "contact": {"spring": "b"},
+                                      "loading": {"type": "cosine", "moves": "box"}}, 777, True),
+    ("moving flat walls, yade law", {"walls": {"kind": "flat"}, "contact": {"law": "yade", "spring": "b"},
+                                     "loading": {"type": "cosine", "moves": "box"}}, 777, False),
 ])
 def test_other_engines_resume_too(packing, tmp_path, monkeypatch, name, over, k, exact):  # noqa: ARG001
     sc = scenes.preset("quicksand_case1", scenes._merge(BASE, over))
