@@ -249,7 +249,7 @@ def _load_yade_scene(path, data):
         with os.fdopen(fd, "wb") as f:
             f.write(data.tobytes())
         O.load(tmp)
-    except RuntimeError as e:
+    except RuntimeError as e:  # YADE's loader: "input stream error", "gzip error: ..."
         raise CheckpointError(f"{path}: YADE's scene does not load ({str(e).splitlines()[0] if str(e) else e!r})") from None
     finally:
         os.remove(tmp)

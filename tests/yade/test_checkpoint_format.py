@@ -247,6 +247,9 @@ def test_a_yade_scene_with_a_pyrunner_is_refused_and_never_run(tmp_path):
     assert "PyRunner" in msg and not any(isinstance(e, PyRunner) for e in O.engines)
     O.step()
     assert not marker.exists()
+    path = os.path.join(out, checkpoint.NAME)
+    rewrite(path, edit_arrays=lambda a: a.update({"yade:scene": np.frombuffer(b"\x1f\x8b" + bytes(64), np.uint8)}))
+    refused(out, "YADE's scene does not load")
 
 
 def test_a_run_resumed_twice_from_one_checkpoint_is_the_same(saved_run, tmp_path):
