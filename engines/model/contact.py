@@ -87,6 +87,8 @@ class ContactLaw:
     def checkpoint_restored(self):
         """Refuse a stored pair list whose arrays do not fit together or index no disc."""
         m = len(self.i)
+        if self.xz_list is not None and self.xz_list.shape != (self.n, 2):
+            raise ValueError(f"pair list: xz_list has shape {self.xz_list.shape}, expected {(self.n, 2)}")
         if self.j.shape != (m,) or self.state.shape != (m, 6):
             raise ValueError(f"pair list: i {self.i.shape}, j {self.j.shape}, state {self.state.shape} do not fit")
         if m and (min(self.i.min(), self.j.min()) < 0 or max(self.i.max(), self.j.max()) >= self.n):

@@ -54,6 +54,11 @@ class PaperLaw:
         if self.walls is not None:  # the walls' shift at the last step and its increment (eq 17 of a wall)
             self.shift_prev, self.wall_du = self.walls.shift.copy(), np.zeros_like(self.walls.shift)
 
+    def checkpoint_restored(self):
+        """Refuse stored positions of the last step of another shape than the discs'."""
+        if self.xz_prev is not None and self.xz_prev.shape != (len(self.mobile), 2):
+            raise ValueError(f"xz_prev has shape {self.xz_prev.shape}, expected {(len(self.mobile), 2)}")
+
     def move_walls(self, shift):
         """Translate the flat walls to ``shift`` (W, 2) [m] from their FlatWall positions
         (flat_walls.WallVertices.move): their positions at the next step."""

@@ -9,9 +9,12 @@ A class whose instances carry state from step to step says which of its attribut
 * ``CHECKPOINT_DERIVED``: {attribute: why it is not stored}: made again, the same, when the run is
   built from its scene and packing (constants, the YADE bodies it talks to), scratch buffers that
   each step overwrites before reading, or state stored under another owner;
-* ``CHECKPOINT_RESIZED`` (optional): the stored arrays whose first dimension may differ from that
-  of the freshly built object (pair lists, pores); the others keep their shape;
-* ``checkpoint_restored()`` (optional): called after its fields were set (buffers built again).
+* ``CHECKPOINT_RESIZED`` (optional): the stored arrays whose shape may differ from that of the
+  freshly built object (pair lists, pores; the same number of dimensions); the others keep their
+  shape;
+* ``checkpoint_restored()`` (optional): called after its fields were set: it checks what the
+  lists cannot (the shapes of resized arrays, and of those the fresh object holds as None, the
+  ranges of indices; a ValueError there is refused as a StateError) and builds buffers again.
 
 ``state_of(obj)`` gives {dotted name: value}; ``restore(obj, values)`` sets them on an object
 built afresh, checking each against the attribute it replaces (type, dtype, dimensions) and
@@ -109,9 +112,8 @@ def _array(name, stored, current, resized):
     dtype, shape = (np.dtype(float), None) if current is None else (current.dtype, current.shape)
     if stored.dtype != dtype:
         raise StateError(f"field {name}: expected an array of {dtype}, got {stored.dtype}")
-    if shape is not None and (stored.ndim != len(shape) or stored.shape[1:] != shape[1:]
-                              or (not resized and stored.shape != shape)):
-        raise StateError(f"field {name}: expected shape {shape}{' (any length)' if resized else ''}, got {stored.shape}")
+    if shape is not None and (stored.ndim != len(shape) or (not resized and stored.shape != shape)):
+        raise StateError(f"field {name}: expected shape {shape}{' (any lengths)' if resized else ''}, got {stored.shape}")
     return stored
 
 
