@@ -240,6 +240,14 @@ class Run:
         self._last_checkpoint = -math.inf  # the first hook call (step 0) writes one
         self._schedule()
 
+    def checkpoint_restored(self):
+        """Refuse stored segments that summarise cannot read."""
+        for k, s in enumerate(self.segments):
+            if not (isinstance(s, dict) and all(type(s.get(key)) is int for key in ("from_step", "to_step"))
+                    and type(s.get("wall_seconds")) in (int, float) and type(s.get("cpu_seconds", 0.0)) in (int, float)
+                    and "provenance" in s):
+                raise ValueError(f"segment {k}: expected from_step, to_step, wall_seconds, cpu_seconds and provenance")
+
     def _schedule(self):
         out = self.scene.output
         self.cp.run_every = math.gcd(out.history_interval, out.vtk_interval) if out.vtk else out.history_interval

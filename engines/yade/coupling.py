@@ -157,14 +157,16 @@ class YadeCoupling:
     or the water engine's model by compiled kernels, else their NumPy classes (engines.model)."""
 
     # what a checkpoint stores (engines.model.state); YADE's bodies: engines.yade.checkpoint
-    CHECKPOINT_FIELDS = ("core", "water_engine", "engine", "base", "_hooked_at", "_chunk")
+    CHECKPOINT_FIELDS = ("core", "water_engine", "engine", "base", "_hooked_at")
     CHECKPOINT_DERIVED = {
         **{name: "the scene and the packing" for name in ("scene", "flat_walls", "block_bounds", "window", "packing",
                                                           "wall_ids", "ids", "law", "mass", "inertia", "io", "per_step",
                                                           "_undamped")},
         "wall_engine": "YADE's TranslationEngine, built from the scene; its velocity is set before each step",
         "hooks": "set by the run (engines.run.runner.Run)", "run_every": "set by the run (Run._schedule)",
-        "stops": "set by the run (Run._schedule)"}
+        "stops": "set by the run (Run._schedule)",
+        "_chunk": "the steps of the next blocking O.run, adapted to the wall time: how steps are grouped, not what "
+                  "they compute"}
 
     def __init__(self, scene, packing, newton_damping=0.0, compiled=True):
         self.scene = scene

@@ -189,6 +189,7 @@ def test_an_object_array_is_refused_unread(saved_run, tmp_path):
     (lambda h: h["state"].pop("rec.rows"), "field rec.rows is missing"),
     (lambda h: h["state"].update({"rec.rows": "2"}), "field rec.rows: expected a int, got a str"),
     (lambda h: h["state"].update({"checkpoint_step": [1]}), "checkpoint_step: expected an array"),
+    (lambda h: h["state"]["segments"].append({"from_step": 0}), "segment 0: expected from_step, to_step"),
     (lambda h: h.update({"format": 3}), "not a checkpoint of format 4 .format 3."),
     (lambda h: h.update({"extra": 1}), "the header's fields"),
     (lambda h: h["recipe"].update({"start": "x"}), "recipe"),
