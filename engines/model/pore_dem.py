@@ -193,10 +193,9 @@ class PoreDEM:
 
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
     # what a checkpoint stores (engines.model.state)
-    CHECKPOINT_FIELDS = ("law", "k", "base", "wall_velocity", "water_model")
+    CHECKPOINT_FIELDS = ("law", "k", "base", "wall_velocity", "water_model", "ties")
     CHECKPOINT_DERIVED = {name: "the scene and the packing" for name in
-                          ("scene", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")} | {
-        "ties": "the side-wall ties: the packing's columns and the scene's springs, constant"}
+                          ("scene", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")}
 
     def __init__(self, scene, packing, flat_walls=()):
         self.scene, self.packing = scene, packing

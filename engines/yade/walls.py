@@ -89,6 +89,11 @@ class WallMotion:
     since they were read: ``shift()`` (W, 2) [m] in (x, z), the WallVertices' shift
     (engines.model.flat_walls); refuses a body that spins. Holds no YADE object."""
 
+    # a checkpoint stores nothing of it (engines.model.state)
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {"ids": "the flat walls' bodies, built from the scene",
+                          "start": "their positions as built (the same in a run built again)"}
+
     def __init__(self, ids):
         from yade import O
         self.ids = [int(i) for i in ids]

@@ -68,10 +68,9 @@ class WaterEngine:
     """
 
     # what a checkpoint stores (engines.model.state)
-    CHECKPOINT_FIELDS = ("model", "k")
+    CHECKPOINT_FIELDS = ("model", "k", "wall_motion")
     CHECKPOINT_DERIVED = {
         **{name: "the bodies, built from the scene" for name in ("io", "wall_ids", "_n_bodies", "forced", "_dynamic")},
-        "wall_motion": "the flat walls' bodies and their positions as built (the same in a run built again)",
         "compiled": "the caller's choice", "F_const": "buoyancy, from the scene",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
         "_run_kernel": "a function of engines.yade.yade_io",

@@ -41,7 +41,6 @@ CONSTANT = {
     "FlatWall": "a frozen dataclass made from the scene and packing",
     "ContactSettings": "the scene's [contact]", "WaterSettings": "the scene's [water]",
     "Window": "the porosity window, from the scene and packing", "Bodies": "YADE body ids, from the build",
-    "SideWallTies": "the packing's side columns and the scene's springs", "WallMotion": "the flat walls' start",
     "WaterBalance": "stored whole as a dict of its fields (PoreWater.balance)",
 }
 
@@ -102,7 +101,7 @@ def test_the_lists_cover_every_class_of_a_run(tmp_path):
         seen |= {type(obj).__name__ for _, obj in parts(build(name, tmp_path, 3)) if named_state.is_part(obj)}
     assert seen >= {"Run", "Recorder", "VtkSeries", "YadeCoupling", "PaperLawEngine", "WaterEngine", "PoreDEM",
                     "PaperLaw", "ContactLaw", "WallVertices", "BaseMotion", "Cosine", "Sampled", "WaterModel",
-                    "PoreWater", "PoreNetwork"}
+                    "PoreWater", "PoreNetwork", "SideWallTies", "WallMotion"}
 
 
 # -- refused, nothing executed --------------------------------------------------------------------
