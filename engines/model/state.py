@@ -113,7 +113,8 @@ def _array(name, stored, current, resized):
     if stored.dtype != dtype:
         raise StateError(f"field {name}: expected an array of {dtype}, got {stored.dtype}")
     if shape is not None and (stored.ndim != len(shape) or (not resized and stored.shape != shape)):
-        raise StateError(f"field {name}: expected shape {shape}{' (any lengths)' if resized else ''}, got {stored.shape}")
+        any_lengths = " (any lengths)" if resized else ""
+        raise StateError(f"field {name}: expected shape {shape}{any_lengths}, got {stored.shape}")
     return stored
 
 
@@ -131,7 +132,8 @@ def restore(obj, values, prefix=""):
         if is_part(current):
             restore(current, values, name + ".")
             continue
-        if current is None:  # set during the run (a first step's positions, eq 46 flows, a step): None, a number or floats
+        if current is None:  # set during the run (a first step's positions, eq 46 flows, a step index):
+            # None, a number or an array of floats
             stored = _take(values, name)
             if not (stored is None or type(stored) in (int, float)):
                 stored = np.array(_array(name, stored, None, True))

@@ -227,7 +227,8 @@ def _set_bodies(path, y):
     arrays = []
     for k in ("pos", "vel", "ang_vel"):
         a = y.pop(k, None)
-        if not (isinstance(a, np.ndarray) and a.dtype == float and a.shape == (len(bodies), 3) and np.isfinite(a).all()):
+        if not (isinstance(a, np.ndarray) and a.dtype == float and a.shape == (len(bodies), 3)
+                and np.isfinite(a).all()):
             raise CheckpointError(f"{path}: YADE's {k} must be ({len(bodies)}, 3) finite floats, got "
                                   f"{getattr(a, 'shape', type(a).__name__)}")
         arrays.append(a.tolist())
@@ -250,7 +251,8 @@ def _load_yade_scene(path, data):
             f.write(data.tobytes())
         O.load(tmp)
     except RuntimeError as e:  # YADE's loader: "input stream error", "gzip error: ..."
-        raise CheckpointError(f"{path}: YADE's scene does not load ({str(e).splitlines()[0] if str(e) else e!r})") from None
+        reason = str(e).splitlines()[0] if str(e) else repr(e)
+        raise CheckpointError(f"{path}: YADE's scene does not load ({reason})") from None
     finally:
         os.remove(tmp)
     loaded = [type(e).__name__ for e in O.engines]
