@@ -18,7 +18,7 @@ the scene and packing, YADE's bodies and engines, the pores at the packing's pos
 ``restore`` sets YADE's bodies (or loads YADE's save and puts the freshly built engines back in
 place of the loaded ones: the loaded engines never run, and engine types the scene does not
 make, a PyRunner among them, are refused) and then every named field. Nothing in the file is
-executed, no object is made from it, and O.tags are not read: a file that is anything else (a
+executed, no Python object is unpickled from it, O.tags are not read: a file that is anything else (a
 pickle, another format, a truncated file, an array of another dtype or shape, a missing or
 unknown field) is refused in one line naming it. YADE's own binary loader (O.load, law = 'yade'
 only) is not hardened against crafted archives (docs/RELIABILITY.md).
