@@ -42,6 +42,8 @@ Observables: the window porosity and block means (model/observe.py); block press
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
 without taking it (ContactLaw.touching_at: the bottom wall's normal force).
 Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
+What a checkpoint stores of each object (its CHECKPOINT_FIELDS, and CHECKPOINT_DERIVED with reasons):
+model/state.py; the file (data only, no pickle): yade/checkpoint.py.
 
 Where to add ...
   a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
@@ -52,6 +54,9 @@ Where to add ...
     PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
   an output column: Recorder in run/runner.py (its ``columns`` and ``row``), from what the
     coupling (yade/coupling.py) measured at the step.
+  an attribute to a class of a run's state: its CHECKPOINT_FIELDS (stored) or CHECKPOINT_DERIVED
+    (why not), else tests/yade/test_checkpoint_format.py fails; raise FORMAT in yade/checkpoint.py
+    when the stored fields change.
   a scene option: a constant of the contact law or of the water goes into CONTACT_FIELDS
     (model/contact.py) or WATER_FIELDS (model/pore_water.py), which make both the settings class
     and the scene's table; another option the model reads into its table's field list in

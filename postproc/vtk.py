@@ -151,10 +151,24 @@ class VtkSeries:
     """Frames of a run written to ``out_dir``/vtk; the .pvd files are rewritten after every
     frame, so an interrupted run leaves a readable series."""
 
+    CHECKPOINT_FIELDS = ("entries",)  # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_DERIVED = {"dir": "the folder resumed in (Recorder.reopen)"}
+
     def __init__(self, out_dir):
         self.dir = os.path.join(out_dir, "vtk")
         os.makedirs(self.dir, exist_ok=True)
         self.entries = {s: [] for s in SERIES}
+
+    def checkpoint_restored(self):
+        """Refuse stored entries other than (t, "<series>_<k>.vtp") of SERIES; make them tuples again."""
+        if sorted(self.entries) != sorted(SERIES):
+            raise ValueError(f"vtk entries: expected the series {list(SERIES)}")
+        for series, entries in self.entries.items():
+            for k, e in enumerate(entries):
+                if not (isinstance(e, list) and len(e) == 2 and type(e[0]) in (int, float)
+                        and e[1] == f"{series}_{k:05d}.vtp"):
+                    raise ValueError(f"vtk entry {series}[{k}]: expected [t, {series}_{k:05d}.vtp], got {e!r}")
+            self.entries[series] = [(float(t), name) for t, name in entries]
 
     def add(self, t, discs, forces=None, pores=None):
         """One frame at time t [s]: keyword dicts for write_discs, write_forces and write_pores

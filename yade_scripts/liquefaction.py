@@ -12,7 +12,7 @@ undrained, 2 dry, 3 drained sides (spring d, cosine); 4 saturated undrained, 5 d
 spring a, cosine); 6 saturated undrained, 7 dry (spring d, El Centro). --transfer chooses how the
 water moves onto rebuilt pores ([water] transfer). Writes DIR/history.csv (t, U_block1..6,
 porosity, base_acc, base_vel, base_disp, side walls, water balance ...), DIR/summary.json, the
-snapshots, DIR/checkpoint.pkl (Ctrl-C stops with a checkpoint; --resume continues), with --vtk a
+snapshots, DIR/checkpoint.npz (Ctrl-C stops with a checkpoint; --resume continues), with --vtk a
 ParaView series in DIR/vtk/, and the figures: DIR/pressure_blocks.png and DIR/blocks.png
 (block pressures with the base input and the block positions of Fig. 35; Fig. 37/39/42/44), DIR/snapshots.png
 (velocities, normal forces and pores; Fig. 36/38/43/45) and DIR/history_panels.png.

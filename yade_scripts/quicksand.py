@@ -9,7 +9,7 @@
 
 Writes DIR/history.csv, DIR/summary.json, DIR/pressure_blocks.png (Fig. 21/23),
 DIR/snapshots.png (Fig. 22/24 at the scene's snapshot times), DIR/history_panels.png,
-DIR/checkpoint.pkl and with --vtk DIR/vtk/*.pvd. Ctrl-C (or SIGTERM) stops the run after the
+DIR/checkpoint.npz and with --vtk DIR/vtk/*.pvd. Ctrl-C (or SIGTERM) stops the run after the
 current step with a checkpoint; --resume DIR continues it.
 
 --starts K runs the scene from K starts perturbed by M (default 1e-8 m for the quick sand), each a

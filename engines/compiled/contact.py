@@ -10,6 +10,11 @@ class ContactLaw(contact.ContactLaw):
     """engines.model.contact.ContactLaw, stepped by kernels.contact_forces; the F, M that ``forces``
     returns are buffers reused by the next call."""
 
+    CHECKPOINT_DERIVED = contact.ContactLaw.CHECKPOINT_DERIVED | {
+        "_F": "scratch: the forces of a call", "_M": "scratch: the moments of a call", "_acc": "scratch of the kernel",
+        "_lost": "scratch of the kernel, one per listed pair (checkpoint_restored)",
+        "_spring": "the scene's spring", "_prm": "the scene's contact parameters for dt", "_args": "a cache of kernel_args"}
+
     def __init__(self, settings, r, mobile, skin=None, pair_filter=None):
         super().__init__(settings, r, mobile, skin, pair_filter)
         self._F, self._M, self._acc = np.zeros((self.n, 2)), np.zeros(self.n), np.zeros((self.n, 3))
@@ -47,6 +52,12 @@ class ContactLaw(contact.ContactLaw):
         self._lost = np.zeros(len(self.i), np.int64)
         self._args = None
         return True
+
+    def checkpoint_restored(self):
+        """After a checkpoint set the pair list: its scratch and the kernel's arguments again."""
+        super().checkpoint_restored()
+        self._lost = np.zeros(len(self.i), np.int64)
+        self._args = None
 
     def take_list(self, builds, i, j, state, lost):
         """The pair list that a kernel rebuilt ``builds`` times (kernels.dem_drive_bulk_io:

@@ -14,6 +14,7 @@ class PaperLaw(paper_law.PaperLaw):
     that the next step overwrites; du and xz_prev are updated in place."""
 
     contact_class = ContactLaw
+    CHECKPOINT_DERIVED = paper_law.PaperLaw.CHECKPOINT_DERIVED | {"_dpsi": "scratch of the kernel: omega dt"}
 
     def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
         super().__init__(settings, r, mobile, mass, inertia, dt, flat_walls)

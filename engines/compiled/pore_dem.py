@@ -16,6 +16,7 @@ class PoreDEM(pore_dem.PoreDEM):
     ``finish_kernel_step`` wrap one kernels.dem_step call (what PaperLawEngine.drive runs)."""
 
     law_class, water_class = PaperLaw, WaterModel
+    CHECKPOINT_DERIVED = pore_dem.PoreDEM.CHECKPOINT_DERIVED | {"_tie_args": "the ties' kernel arguments and scratch"}
 
     def __init__(self, settings, packing, flat_walls=()):
         super().__init__(settings, packing, flat_walls)

@@ -16,6 +16,10 @@ class WaterModel(water_model.WaterModel):
     the network's arrays are packed into the buffers of kernels.water_step at each build."""
 
     build_steps, remesh_steps = cp.BUILD, cp.REMESH
+    CHECKPOINT_DERIVED = water_model.WaterModel.CHECKPOINT_DERIVED | {
+        "wp": "the scene's [water] as the kernels' vector",
+        **{name: "the kernels' buffers, packed from the network (checkpoint_restored)" for name in
+           ("_ints", "_i_at", "_floats", "_f_at", "_q_prev", "_lam", "_balance", "_has_q_prev", "_args", "_args_key")}}
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
@@ -60,15 +64,15 @@ class WaterModel(water_model.WaterModel):
             self._part(name) for name in ("lam", "balance", "has_q_prev", "F_walls"))
         self._args_key = None
 
-    def __getstate__(self):  # a pickle copies views: leave them out, make them again on loading
-        state = dict(self.__dict__)
-        for name in ("_lam", "_balance", "_has_q_prev", "F_walls", "_args", "_args_key"):
-            state.pop(name, None)
-        return state
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
-        self._views()
+    def checkpoint_restored(self):
+        """After a checkpoint set the network and the water: the kernels' buffers packed again, with
+        the walls' pushes and positions (F_walls is a view into them)."""
+        super().checkpoint_restored()
+        F_walls = self.F_walls.copy()
+        self._buffers()
+        self.F_walls[:] = F_walls
+        if self.wall_vertices is not None:
+            self.move_walls(self.wall_vertices.shift)
 
     def _part(self, name):
         """A view of the part ``name`` of the float buffer of kernels.water_step."""

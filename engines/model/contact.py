@@ -65,6 +65,12 @@ class ContactLaw:
     the NumPy code here, which stays the readable path).
     """
 
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("i", "j", "state", "xz_list", "list_builds")
+    CHECKPOINT_RESIZED = ("i", "j", "state")  # the pair list
+    CHECKPOINT_DERIVED = {name: "the scene's contact settings and the packing's discs" for name in
+                          ("s", "r", "mobile", "n", "skin", "pair_filter", "reach")}
+
     def __init__(self, settings, r, mobile, skin=None, pair_filter=None):
         self.s = settings
         self.r = np.ascontiguousarray(r, float)
@@ -77,6 +83,16 @@ class ContactLaw:
         self.xz_list = None
         self.state = np.zeros((0, 6))
         self.list_builds = 0
+
+    def checkpoint_restored(self):
+        """Refuse a stored pair list whose arrays do not fit together or index no disc."""
+        m = len(self.i)
+        if self.xz_list is not None and self.xz_list.shape != (self.n, 2):
+            raise ValueError(f"pair list: xz_list has shape {self.xz_list.shape}, expected {(self.n, 2)}")
+        if self.j.shape != (m,) or self.state.shape != (m, 6):
+            raise ValueError(f"pair list: i {self.i.shape}, j {self.j.shape}, state {self.state.shape} do not fit")
+        if m and (min(self.i.min(), self.j.min()) < 0 or max(self.i.max(), self.j.max()) >= self.n):
+            raise ValueError(f"pair list: disc indices outside [0, {self.n})")
 
     @property
     def half_skin2(self):

@@ -83,7 +83,7 @@ def settings_class(name, fields, table, module, doc):
 
     cls = dataclasses.make_dataclass(name, [(k, f.type, default(f)) for k, f in fields.items()],
                                      namespace={"__post_init__": __post_init__, "FIELDS": fields, "__doc__": doc})
-    cls.__module__ = module  # where pickle (checkpoints) finds it
+    cls.__module__ = module  # the module that makes it, as for a class written there (pickle, reprs)
     return cls
 
 

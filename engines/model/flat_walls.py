@@ -78,6 +78,10 @@ class WallVertices:
     shift (W, 2) [m]: the walls' displacements (module docstring; ``move``), zero at the start.
     """
 
+    CHECKPOINT_FIELDS = ("shift",)  # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_DERIVED = {name: "the scene's flat walls and the number of discs" for name in
+                          ("walls", "n", "corners", "n_vertices", "owner", "bits")}
+
     def __init__(self, walls, n):
         self.walls, self.n = tuple(walls), int(n)
         if not all(isinstance(w, FlatWall) for w in self.walls):

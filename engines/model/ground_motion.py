@@ -45,7 +45,10 @@ RECORD_LIMIT = 200 * MB  # the largest record file read [bytes]
 
 class Cosine:
     """a(t) = amplitude cos(2 pi frequency t) [m/s^2] for amplitude [m/s^2] and frequency [Hz]; a
-    class rather than a closure, so that a run's state pickles (engines.yade.checkpoint)."""
+    class rather than a closure, so that a checkpoint stores its fields (engines.model.state)."""
+
+    CHECKPOINT_FIELDS = ("amplitude", "w")
+    CHECKPOINT_DERIVED = {}
 
     def __init__(self, amplitude, frequency):
         self.amplitude, self.w = amplitude, 2 * np.pi * frequency
@@ -57,10 +60,18 @@ class Cosine:
 
 class Sampled:
     """a(t) linear between samples (t_s, a_s), ``left`` before and ``right`` after them (None: the
-    end sample's value), as np.interp; picklable like Cosine."""
+    end sample's value), as np.interp; stored by a checkpoint like Cosine (the record as it was read)."""
+
+    CHECKPOINT_FIELDS = ("t_s", "a_s", "left", "right")
+    CHECKPOINT_RESIZED = ("t_s", "a_s")
+    CHECKPOINT_DERIVED = {}
 
     def __init__(self, t_s, a_s, left=0.0, right=0.0):
         self.t_s, self.a_s, self.left, self.right = t_s, a_s, left, right
+
+    def checkpoint_restored(self):
+        if self.t_s.ndim != 1 or self.t_s.shape != self.a_s.shape:
+            raise ValueError("the record's times and accelerations must be two columns of one length")
 
     def __call__(self, t):
         return np.interp(t, self.t_s, self.a_s, left=self.left, right=self.right)
@@ -140,6 +151,9 @@ class BaseMotion:
     """Acceleration, velocity and displacement of the driven bottom wall, advanced one DEM step at
     a time by the constant-(average-)acceleration method (module docstring). Starts from rest at
     u = 0 at t = 0."""
+
+    CHECKPOINT_FIELDS = ("accel", "k", "acc", "vel", "disp")  # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_DERIVED = {"dt": "the scene's dt"}
 
     def __init__(self, accel, dt):
         if not dt > 0:

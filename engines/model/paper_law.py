@@ -30,6 +30,10 @@ class PaperLaw:
     """
 
     contact_class = ContactLaw  # of ``contact``
+    # what a checkpoint stores (engines.model.state); shift_prev and wall_du with flat walls only
+    CHECKPOINT_FIELDS = ("contact", "walls", "omega", "du", "xz_prev", "shift_prev", "wall_du")
+    CHECKPOINT_DERIVED = {name: "the scene's settings and the packing's discs" for name in
+                          ("settings", "dt", "mobile", "mass", "inertia")}
 
     def __init__(self, settings, r, mobile, mass, inertia, dt, flat_walls=()):
         self.settings, self.dt = settings, float(dt)
@@ -49,6 +53,11 @@ class PaperLaw:
         self.xz_prev = None
         if self.walls is not None:  # the walls' shift at the last step and its increment (eq 17 of a wall)
             self.shift_prev, self.wall_du = self.walls.shift.copy(), np.zeros_like(self.walls.shift)
+
+    def checkpoint_restored(self):
+        """Refuse stored positions of the last step of another shape than the discs'."""
+        if self.xz_prev is not None and self.xz_prev.shape != (len(self.mobile), 2):
+            raise ValueError(f"xz_prev has shape {self.xz_prev.shape}, expected {(len(self.mobile), 2)}")
 
     def move_walls(self, shift):
         """Translate the flat walls to ``shift`` (W, 2) [m] from their FlatWall positions

@@ -194,6 +194,10 @@ class PoreDEM:
     that follow the input move with the base (f)."""
 
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("law", "k", "base", "wall_velocity", "water_model", "ties")
+    CHECKPOINT_DERIVED = {name: "the scene and the packing" for name in
+                          ("scene", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")}
 
     def __init__(self, settings, packing, flat_walls=()):
         self.settings, self.packing = settings, packing

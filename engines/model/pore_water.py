@@ -124,6 +124,11 @@ def water_from_pressure(U, A, E_w):
 class PoreWater:
     """Water state of a pore network: W per pore, advanced by Darcy exchange (eq 32-46)."""
 
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("net", "W", "A_prev", "q_prev", "balance", "remesh_counts", "rule")
+    CHECKPOINT_RESIZED = ("W", "A_prev", "rule")  # per pore
+    CHECKPOINT_DERIVED = {"settings": "the scene's [water]"}
+
     def __init__(self, net, A, settings, W=None):
         """Water on ``net`` with void areas A [m^2]; W defaults to A (after packing, U = 0)."""
         self.settings = settings

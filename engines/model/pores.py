@@ -82,6 +82,23 @@ def check_discs(xz, r):
     return xz, r
 
 
+# PoreNetwork's arrays as a checkpoint holds them: (shape by size, lowest index, the size indices are
+# below, or None for values): P pores, L links, H = 2 L half-edges, T throats, K corners, R triangles,
+# S vertex-set entries, V vertices (discs, then flat walls' feet and corners), W flat walls
+CHECKPOINT_SHAPES = {
+    "tri": (("R", 3), 0, "V"), "tri_pore": (("R",), 0, "P"), "links": (("L", 2), 0, "V"),
+    "link_pores": (("L", 2), -1, "P"), "throat_conns": (("T", 2), 0, "P"), "throat_link": (("T",), 0, "L"),
+    "pore_surface": (("P",), None, None), "pore_vertex_ptr": (("P+1",), 0, "S"),
+    "pore_vertex_idx": (("S",), 0, "V"), "pore_signature": (("P",), None, None),
+    "he_org": (("H",), 0, "V"), "he_dst": (("H",), 0, "V"), "he_left": (("H",), -1, "P"),
+    "he_next": (("H",), -1, "H"), "corner_pore": (("K",), 0, "P"), "corner_disc": (("K",), 0, "V"),
+    "corner_link": (("K",), 0, "L"), "corner_next_link": (("K",), 0, "L"), "corner_sign": (("K",), None, None),
+    "corner_r2": (("K",), None, None), "corner_theta0": (("K",), None, None), "rattler_area": (("P",), None, None),
+    "link_vec0": (("L", 2), None, None), "sector_area0": (("P",), None, None),
+    "link_turn_weight": (("L",), None, None), "pore_walls": (("W", "P"), None, None),
+}
+
+
 @dataclass
 class PoreNetwork:
     """Topology of the pores; fixed between rebuilds (positions move, the graph does not).
@@ -116,6 +133,17 @@ class PoreNetwork:
       a_min          area below which a face is closed [m^2]; n_closed faces closed at build
       n_inserted     eq 28 pairs the regular triangulation hid, put in by edge flips at build
     """
+
+    # what a checkpoint stores (engines.model.state): every field but wall_vertices; the arrays are per
+    # pore, link, throat, triangle or corner, so of any length (checked by checkpoint_restored)
+    CHECKPOINT_FIELDS = ("n_discs", "tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link",
+                         "pore_surface", "pore_touches", "pore_vertex_ptr", "pore_vertex_idx", "pore_signature",
+                         "he_org", "he_dst", "he_left", "he_next", "corner_pore", "corner_disc", "corner_link",
+                         "corner_next_link", "corner_sign", "corner_r2", "corner_theta0", "rattler_area", "link_vec0",
+                         "sector_area0", "link_turn_weight", "a_min", "n_closed", "eps_m", "l_m", "n_inserted",
+                         "pore_walls")
+    CHECKPOINT_RESIZED = CHECKPOINT_FIELDS
+    CHECKPOINT_DERIVED = {"wall_vertices": "the water model's WallVertices (WaterModel.wall_vertices), shared"}
 
     n_discs: int
     tri: np.ndarray
@@ -165,6 +193,29 @@ class PoreNetwork:
         """(Np,) bool: the pore has a flat wall of that boundary ("drained", "inflow", ...) as a vertex."""
         on = [w for w, wall in enumerate(self.flat_walls) if wall.boundary == boundary]
         return self.pore_walls[on].any(axis=0) if on else np.zeros(self.n_pores, bool)
+
+    def checkpoint_restored(self):
+        """Refuse a stored network whose arrays do not fit together: the shapes of CHECKPOINT_SHAPES
+        and the indices within the ranges they index (a kernel does not check them)."""
+        P, L, T, K = len(self.pore_surface), len(self.links), len(self.throat_conns), len(self.corner_pore)
+        sizes = {"P": P, "P+1": P + 1, "L": L, "H": 2 * L, "T": T, "K": K, "R": len(self.tri),
+                 "S": len(self.pore_vertex_idx), "W": len(self.flat_walls), 2: 2, 3: 3,
+                 "V": self.n_discs if self.wall_vertices is None else self.wall_vertices.n_vertices}
+        for name, (shape, lo, hi) in CHECKPOINT_SHAPES.items():
+            a = getattr(self, name)
+            if a is None and self.wall_vertices is None:  # pore_walls without flat walls
+                continue
+            want = tuple(sizes[d] for d in shape)
+            if a.shape != want:
+                raise ValueError(f"pore network: {name} has shape {a.shape}, expected {want}")
+            top = sizes[hi] + (name == "pore_vertex_ptr") if hi else None  # the pointers run to S inclusive
+            if lo is not None and a.size and (a.min() < lo or a.max() >= top):
+                raise ValueError(f"pore network: {name} holds indices outside [{lo}, {top})")
+        for k, a in self.pore_touches.items():
+            if a.shape != (P,):
+                raise ValueError(f"pore network: pore_touches[{k!r}] has shape {a.shape}, expected {(P,)}")
+        if P and (np.any(np.diff(self.pore_vertex_ptr) < 0) or self.pore_vertex_ptr[-1] != len(self.pore_vertex_idx)):
+            raise ValueError("pore network: pore_vertex_ptr is not the start of each pore's vertices")
 
     def vertices_of(self, p):
         """Sorted disc indices of the vertex set of pore p."""

@@ -29,6 +29,11 @@ class SideWallTies:
     corner disc of the bottom wall first}; ``moving`` (N,) bool: the side-wall discs (x only).
     """
 
+    # a checkpoint stores nothing of it (engines.model.state): the ties are constant for a run
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {name: "the packing's side columns and the scene's springs" for name in
+                          ("ks", "eta", "n", "columns", "lower", "upper", "rest", "moving")}
+
     def __init__(self, xz, group, ks, eta):
         xz, group = np.asarray(xz, float), np.asarray(group)
         if not (np.isfinite(ks) and ks >= 0 and np.isfinite(eta) and eta >= 0):

@@ -63,6 +63,12 @@ class WaterModel:
     """
 
     build_steps, remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH  # of build_pores and PoreWater.remesh
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("wall_vertices", "F", "F_walls", "n_rebuilds", "k0", "k_built", "substeps_max",
+                         "substeps_total", "last_limit", "xz_built", "water")
+    CHECKPOINT_DERIVED = {name: "the scene's [water] and [numerics], the packing's discs and flat walls" for name in
+                          ("settings", "eps_m", "l_m", "flat_walls", "r", "walls", "dt", "rebuild_interval",
+                           "water_interval", "rebuild_distance")} | {"log": "the print function"}
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
@@ -89,6 +95,16 @@ class WaterModel:
         self.xz_built = np.array(xz, float)
         net = self._build(xz)
         self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
+
+    def checkpoint_restored(self):
+        """Refuse stored water that does not fit its network or these discs."""
+        w, n_p = self.water, self.water.net.n_pores
+        if w.net.n_discs != len(self.r):
+            raise ValueError(f"the pore network is of {w.net.n_discs} discs, the run has {len(self.r)}")
+        if w.W.shape != (n_p,) or w.A_prev.shape != (n_p,) or w.rule.shape != (n_p,):
+            raise ValueError(f"water: W, A_prev and rule must be one per pore ({n_p})")
+        if w.q_prev is not None and w.q_prev.shape != (len(w.net.throat_conns),):
+            raise ValueError(f"water: q_prev must be one per throat ({len(w.net.throat_conns)})")
 
     def _build(self, xz):
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps,

@@ -247,7 +247,7 @@ def resume_jobs(ap, out, duration, script):
     started with (the plan's script is only compared with it by name, never run), with the
     plan's start_argv only when they are the options of ``ap``, the script's parser."""
     from engines.run.command_line import check_resume
-    from engines.yade.checkpoint import NAME
+    from engines.yade.checkpoint import NAME, OLD_NAME
     from postproc.run_files import read_summary
     plan = read_plan(out)
     made_by = os.path.basename(plan["script"])
@@ -262,7 +262,7 @@ def resume_jobs(ap, out, duration, script):
     jobs = []
     for k in plan["seeds"]:
         d = start_dir(out, k)
-        if os.path.exists(os.path.join(d, NAME)):
+        if any(os.path.exists(os.path.join(d, name)) for name in (NAME, OLD_NAME)):  # an older one: refused by name
             if read_summary(d).get("status") == "completed" and duration is None:
                 continue
             check_resume(d, duration)

@@ -25,12 +25,13 @@ from engines.files import TEMP_MARK, TEMP_PREFIX, write_json
 from engines.files.inputs import check_name
 from engines.run.sweep import LOCK_FILE
 from engines.yade.checkpoint import NAME as CHECKPOINT
+from engines.yade.checkpoint import OLD_NAME as OLD_CHECKPOINT
 
 NAME = "manifest.json"
 VTK = "vtk"
 # a run's files (engines.run.runner; figures: postproc.plots.figures_of_run, a script's own, e.g.
 # postproc.liquefaction.run_figures, are claimed when drawn)
-RUN_FILES = ("history.csv", "summary.json", CHECKPOINT, "failure_state.npz", "pressure_blocks.png",
+RUN_FILES = ("history.csv", "summary.json", CHECKPOINT, OLD_CHECKPOINT, "failure_state.npz", "pressure_blocks.png",
              "history_panels.png", "snapshots.png", "blocks.png", "depth.png", NAME)
 RUN_PATTERNS = ("snapshot_*ms.npz",)
 VTK_PATTERNS = ("discs_*.vtp", "forces_*.vtp", "pores_*.vtp", "discs.pvd", "forces.pvd", "pores.pvd")  # postproc.vtk

@@ -18,9 +18,12 @@ killed segment stays listed (a resume marks it "killed" with its last known step
 is the first segment's. A write that fails (a full disk) ends the run "failed: cannot write PATH:
 CAUSE" (``WriteError``, one line), after writing what it still can.
 
-Checkpoints (engines.yade.checkpoint, ``checkpoint.pkl``, fsync'd and renamed into place): at the start, every
-``[output] checkpoint_seconds`` of wall time, at the end and on an interrupt; each holds YADE's
-scene and the whole ``Run`` (coupling, recorder, bookkeeping), so that a resumed run continues
+Checkpoints (engines.yade.checkpoint, ``checkpoint.npz``, data only, written whole or not at all):
+at the start, every ``[output] checkpoint_seconds`` of wall time, at the end and on an interrupt;
+each holds the run's scene and packing (``Run.recipe``), YADE's bodies, the run's ``info`` (its id,
+history.csv's rows, last t and checksum) and the named state of the ``Run`` and its parts
+(coupling, recorder, bookkeeping: each class's CHECKPOINT_FIELDS). A resume builds the run again
+from the scene and packing and sets that state (``Run.from_checkpoint``), so that it continues
 exactly as if it had not stopped. A crashed run keeps its last checkpoint (resumable: the history
 rows written after it are dropped on resume: engines.run.history checks the rows it keeps) and
 writes the state at the failing step to ``failure_state.npz`` for a post-mortem.
@@ -49,13 +52,16 @@ from engines.model.pore_dem import pore_state
 from engines.model.start import Start
 from engines.run import guard, history, manifest
 from engines.run.preflight import announce_dt, timed
+from engines.run import scene as scenes
 from engines.run.provenance import provenance
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
+from packing.packing import Packing
 from postproc import plots
 from postproc.run_files import headline_results, read_history
 
 CHECKPOINT = checkpoint.NAME
+RECIPE = ("scene", "start", "packing.xz", "packing.r", "packing.group", "packing.density_factor")  # Run.recipe
 FAILURE_STATE = "failure_state.npz"
 SUMMARY = "summary.json"
 
@@ -65,10 +71,21 @@ class Recorder:
     times and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
     snapshot times; taken between steps at the positions after k steps (t = k dt). Each is taken
     once per step index, so a resumed run does not repeat one. ``create`` starts history.csv (and
-    the VTK folder; Run.go calls it). Pickled with the run (the open history file and its running checksum are left
-    out; ``reopen`` checks the file against the checkpoint and opens it again)."""
+    the VTK folder; Run.go calls it for a new run); a resumed run's ``reopen`` checks the file
+    against the checkpoint and continues it."""
 
     file = None  # history.csv, open for appending
+
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("rows", "last_row", "last_t", "last_vtk", "snapshot_steps", "vtk")
+    CHECKPOINT_DERIVED = {
+        **{name: "the scene's [output] and the coupling's blocks and walls" for name in
+           ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns",
+            "with_vtk")},
+        "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
+        "file": "history.csv, opened by reopen", "path": "history.csv in the folder resumed in",
+        "sha": "the checksum of history.csv's rows, read again by reopen (engines.run.history.kept)",
+        **{name: "progress lines: the wall clock of this segment" for name in ("t_wall0", "t_last", "k_wall0")}}
 
     def __init__(self, cp, out_dir, n_steps):
         out = cp.scene.output
@@ -124,9 +141,6 @@ class Recorder:
         except OSError as e:
             raise files.WriteError(f"cannot write {self.path}: {files.reason(e)}") from None
         self.sha.update(line.encode())
-
-    def __getstate__(self):
-        return {k: v for k, v in self.__dict__.items() if k not in ("file", "sha")}
 
     def history_info(self):
         """What the checkpoint records of history.csv (engines.run.history.info)."""
@@ -261,17 +275,21 @@ class Interrupts:
 
 class Run:
     """One run of a scene in ``out_dir``: the coupling, its recorder and the bookkeeping of the
-    run's segments (a start and each resume). Pickled whole into the checkpoints; it is also the
-    coupling's last hook, which writes the periodic checkpoints (and summary.json with them).
-    ``start``: which start of an ensemble the packing is ({"seed", "perturbation_m"};
-    engines.run.ensemble), or None; ``prepared``: the Start of scene on packing (engines.model.start)
-    the coupling runs on, or None. ``run_id``: made here, kept by every segment."""
+    run's segments (a start and each resume). Its checkpoints hold its ``recipe``, its ``info`` and
+    its named state (CHECKPOINT_FIELDS, engines.model.state); it is also the coupling's last hook,
+    which writes the periodic checkpoints (and summary.json with them). ``start``: which start of an
+    ensemble the packing is ({"seed", "perturbation_m"}; engines.run.ensemble), or None;
+    ``prepared``: the Start of scene on packing (engines.model.start) the coupling runs on, or None.
+    ``run_id``: made here, kept by every segment (a run built from its checkpoint takes the stored one)."""
 
-    start = None
-    run_id = None
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("n_steps", "segments", "checkpoint_step", "run_id", "cp", "rec")
+    CHECKPOINT_DERIVED = {"scene": "the recipe", "packing": "the recipe", "start": "the recipe",
+                          "out": "the folder resumed in", "_last_checkpoint": "the wall clock of this segment",
+                          "_clock": "the wall and CPU clocks of this segment (set by go)"}
 
     def __init__(self, scene, packing, out_dir, n_steps, start=None, prepared=None):
-        self.scene, self.out, self.n_steps, self.start = scene, out_dir, n_steps, start
+        self.scene, self.packing, self.out, self.n_steps, self.start = scene, packing, out_dir, n_steps, start
         self.run_id = uuid.uuid4().hex
         self.cp = YadeCoupling(scene, packing, prepared=prepared)
         self.rec = Recorder(self.cp, out_dir, n_steps)
@@ -280,6 +298,14 @@ class Run:
         self.checkpoint_step = None
         self._last_checkpoint = -math.inf  # the first hook call (step 0) writes one
         self._schedule()
+
+    def checkpoint_restored(self):
+        """Refuse stored segments that summarise cannot read."""
+        for k, s in enumerate(self.segments):
+            if not (isinstance(s, dict) and all(type(s.get(key)) is int for key in ("from_step", "to_step"))
+                    and type(s.get("wall_seconds")) in (int, float) and type(s.get("cpu_seconds", 0.0)) in (int, float)
+                    and "provenance" in s):
+                raise ValueError(f"segment {k}: expected from_step, to_step, wall_seconds, cpu_seconds and provenance")
 
     def _schedule(self):
         out = self.scene.output
@@ -300,9 +326,7 @@ class Run:
         """The checkpoint at this step (fsync'd, renamed into place; WriteError names the path)."""
         self._segment_to_now()
         self.checkpoint_step = O.iter
-        path = os.path.join(self.out, CHECKPOINT)
-        with files.saved(path) as tmp:
-            checkpoint.save(tmp, self, self.info())
+        checkpoint.save(os.path.join(self.out, CHECKPOINT), self, self.info(), self.recipe())  # whole or not at all
         self._last_checkpoint = time.time()
 
     def write_summary(self, status, received):
@@ -311,8 +335,38 @@ class Run:
         files.write_json(os.path.join(self.out, SUMMARY), summary)
         return summary
 
+    def recipe(self):
+        """What builds this run again (``from_checkpoint``): the scene (its tables, file and
+        overrides), the ensemble's start and the packing's arrays."""
+        sc, pk = self.scene, self.packing
+        return dict(zip(RECIPE, ({"tables": sc.as_dict(), "path": sc.path, "overrides": sc.overrides}, self.start,
+                                 pk.xz, pk.r, pk.group, pk.density_factor)))
+
+    @classmethod
+    def from_checkpoint(cls, out_dir):
+        """The run of ``out_dir`` built again from its checkpoint's recipe as a new run is built,
+        then set to its stored state (engines.yade.checkpoint.restore); CheckpointError in one line."""
+        path = os.path.join(out_dir, CHECKPOINT)
+        ck = checkpoint.load(path)
+        r, start, n_steps = ck.recipe, ck.recipe.get("start"), ck.state.get("n_steps")
+        if set(r) != set(RECIPE) or not (start is None or isinstance(start, dict)) or type(n_steps) is not int \
+                or not isinstance(r["scene"], dict) or set(r["scene"]) != {"tables", "path", "overrides"} \
+                or not (isinstance(r["scene"]["tables"], dict) and isinstance(r["scene"]["path"], str)
+                        and isinstance(r["scene"]["overrides"], dict)):
+            raise checkpoint.CheckpointError(f"{path}: its recipe is not {', '.join(RECIPE)} of their types, or "
+                                             "n_steps is missing")
+        try:
+            scene = scenes.validate(r["scene"]["tables"], r["scene"]["path"])
+            scene.overrides = r["scene"]["overrides"]
+            packing = Packing(r["packing.xz"], r["packing.r"], r["packing.group"], r["packing.density_factor"])
+        except ValueError as e:
+            raise checkpoint.CheckpointError(f"{path}: its scene or packing is refused: {e}") from None
+        run = cls(scene, packing, out_dir, n_steps, start)
+        checkpoint.restore(ck, run)
+        return run
+
     def reopen(self, out_dir, info, duration=None):
-        """After checkpoint.load: continue in ``out_dir`` (to ``duration`` [s] if given: a later end);
+        """After ``from_checkpoint``: continue in ``out_dir`` (to ``duration`` [s] if given: a later end);
         ``info``: the checkpoint's (history.csv is checked against it). The segments are those of
         summary.json when it is this run's and knows as much or more (a segment that failed or
         was killed after the checkpoint ran on), those of the checkpoint otherwise; a segment left
@@ -489,13 +543,13 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, 
 def resume_run(out_dir, duration=None, figures=True):
     """Continue the run in ``out_dir`` from its checkpoint, in place (history.csv appended), to its
     end or to ``duration`` [s]. Returns the summary like ``run_scene``. Holds the folder's lock;
-    history.csv is checked against the checkpoint before anything is written (Run.reopen;
-    engines.run.history.HistoryMismatch)."""
+    the run is built again from the checkpoint (Run.from_checkpoint; CheckpointError) and history.csv
+    checked against it before anything is written (Run.reopen; engines.run.history.HistoryMismatch)."""
     path = os.path.join(out_dir, CHECKPOINT)
     with guard.hold(out_dir):
         remove_stale_temporaries(out_dir)
         info = checkpoint.read_info(path)
-        run = checkpoint.load(path)
+        run = Run.from_checkpoint(out_dir)
         run.reopen(out_dir, info, duration)
         claim_outputs(out_dir, run.scene, run.rec.snap_steps)
         with Interrupts() as signals:

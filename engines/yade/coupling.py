@@ -26,8 +26,8 @@ Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho
 of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
 without per-step Python; ``run(n, stop)`` asks ``stop()`` after every step (O.run: every chunk; the
 paper's law's compiled runs of steps: after each) and returns early when it is true
-(engines.run.runner: SIGINT, SIGTERM). The coupling pickles whole into a checkpoint
-(engines.yade.checkpoint): keep closures out of its state.
+(engines.run.runner: SIGINT, SIGTERM). A checkpoint (engines.yade.checkpoint) stores the fields
+each class of the coupling lists (CHECKPOINT_FIELDS, engines.model.state) and YADE's bodies.
 """
 import math
 import time
@@ -158,6 +158,18 @@ class YadeCoupling:
     or the water engine's model by compiled kernels, else their NumPy classes (engines.model).
     ``prepared``: the Start of scene on packing (engines.model.start: the walls, the discs to move,
     their masses; preflight's limits are those of its pores), made here if None."""
+
+    # what a checkpoint stores (engines.model.state); YADE's bodies: engines.yade.checkpoint
+    CHECKPOINT_FIELDS = ("core", "water_engine", "engine", "base", "_hooked_at")
+    CHECKPOINT_DERIVED = {
+        **{name: "the scene and the packing" for name in ("scene", "flat_walls", "block_bounds", "window", "packing",
+                                                          "wall_ids", "ids", "law", "mass", "inertia", "io", "per_step",
+                                                          "_undamped")},
+        "wall_engine": "YADE's TranslationEngine, built from the scene; its velocity is set before each step",
+        "hooks": "set by the run (engines.run.runner.Run)", "run_every": "set by the run (Run._schedule)",
+        "stops": "set by the run (Run._schedule)",
+        "_chunk": "the steps of the next blocking O.run, adapted to the wall time: how steps are grouped, not what "
+                  "they compute"}
 
     def __init__(self, scene, packing, newton_damping=0.0, compiled=True, prepared=None):
         self.scene = scene

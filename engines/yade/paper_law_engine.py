@@ -38,6 +38,17 @@ class PaperLawEngine:
     (their velocity set before O.step()).
     """
 
+    # what a checkpoint stores (engines.model.state): nothing of its own; the core is a part of its owner
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {
+        **{name: "the bodies, built from the scene" for name in ("io", "_dynamic", "forced", "walls")},
+        "core": "its owner's part (YadeCoupling.core), stored there",
+        "held": "buoyancy, from the scene", "hooks": "set by its owner",
+        **{name: "scratch of each step" for name in ("_xz", "_F_out", "_wall_vel")},
+        **{name: "functions of engines.yade.yade_io" for name in ("_set_velocities", "_run_kernel", "_check",
+                                                                  "_drive_dem")},
+        "_reset_last": "read from O.engines by each drive"}
+
     def __init__(self, disc_ids, settings=None, core=None, compiled=True):
         from yade import O
 

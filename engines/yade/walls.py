@@ -87,8 +87,12 @@ def _check_not_turning(i, b):
 class WallMotion:
     """The translations of the flat-wall bodies ``ids`` of O.bodies (in the order of flat_walls)
     since they were read: ``shift()`` (W, 2) [m] in (x, z), the WallVertices' shift
-    (engines.model.flat_walls); refuses a body that spins. Holds no YADE object (it pickles with a
-    run's checkpoint)."""
+    (engines.model.flat_walls); refuses a body that spins. Holds no YADE object."""
+
+    # a checkpoint stores nothing of it (engines.model.state)
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {"ids": "the flat walls' bodies, built from the scene",
+                          "start": "their positions as built (the same in a run built again)"}
 
     def __init__(self, ids):
         from yade import O

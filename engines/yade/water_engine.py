@@ -67,6 +67,16 @@ class WaterEngine:
     0: off); rebuild_interval [steps] bounds the time between rebuilds.
     """
 
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("model", "k", "wall_motion")
+    CHECKPOINT_DERIVED = {
+        **{name: "the bodies, built from the scene" for name in ("io", "wall_ids", "_n_bodies", "forced", "_dynamic")},
+        "compiled": "the caller's choice", "F_const": "buoyancy, from the scene",
+        "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
+        "_run_kernel": "a function of engines.yade.yade_io",
+        "_chunk": "the steps of drive's next compiled call, adapted to the wall time: how steps are grouped, not "
+                  "what they compute"}
+
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
                  water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True,
                  rebuild_distance=None, flat_walls=None):

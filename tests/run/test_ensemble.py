@@ -37,7 +37,7 @@ def test_the_seismic_box_ensemble_and_the_same_numbers_again(tmp_path):
     histories = []
     for k in range(3):
         d = a / f"start_{k}"
-        for f in ("history.csv", "summary.json", "checkpoint.pkl", "blocks.png"):
+        for f in ("history.csv", "summary.json", "checkpoint.npz", "blocks.png"):
             assert (d / f).exists(), (d, f)
         summary = json.loads((d / "summary.json").read_text())
         assert summary["status"] == "completed" and summary["start"] == {"seed": k, "perturbation_m": 1e-7}

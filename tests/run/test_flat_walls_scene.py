@@ -20,7 +20,7 @@ def quicksand(kind, law="yade"):
 
 
 class MaxU:
-    """Coupling hook: the largest U of the pores at each call (a class: the run's checkpoints pickle it)."""
+    """Coupling hook: the largest U of the pores at each call."""
 
     def __init__(self):
         self.seen = []

@@ -293,7 +293,7 @@ def test_a_cluster_lost_during_an_ensemble_marks_it_failed(tmp_path, monkeypatch
 
     monkeypatch.setattr(ensemble, "run_sweep", lost)
     plan = {"script": "s.py", "seeds": [0, 1], "starts": ["start_0", "start_1"]}
-    args = argparse.Namespace(jobs=None, scheduler="tcp://127.0.0.1:1")
+    args = argparse.Namespace(jobs=None, scheduler="tcp://127.0.0.1:1", scheduler_file=None)
     assert ensemble.run_starts([], str(tmp_path), plan, args) == 1
     doc = json.loads((tmp_path / "ensemble.json").read_text())
     assert doc["status"] == "failed" and "Timed out" in doc["error"]

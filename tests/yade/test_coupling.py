@@ -75,7 +75,7 @@ def test_run_scene_outputs_and_a_failed_run_keeps_history(packing, tmp_path, mon
         run_scene(bad, packing, str(tmp_path / "bad"), duration=0.003)
     rows = open(tmp_path / "bad" / "history.csv").read().strip().splitlines()
     assert len(rows) == 1 + 51  # rows at k = 0, 50, ..., 2500 (before step 2500 crashed)
-    assert os.path.exists(tmp_path / "bad" / "failure_state.npz") and os.path.exists(tmp_path / "bad" / "checkpoint.pkl")
+    assert os.path.exists(tmp_path / "bad" / "failure_state.npz") and os.path.exists(tmp_path / "bad" / "checkpoint.npz")
     summary = json.load(open(tmp_path / "bad" / "summary.json"))
     assert "failed" in summary["status"] and summary["checkpoint"]["step"] == 0  # the one written at the start
 
