@@ -155,8 +155,7 @@ class VtkSeries:
     CHECKPOINT_DERIVED = {"dir": "the folder resumed in (Recorder.reopen)"}
 
     def __init__(self, out_dir):
-        self.dir = os.path.join(out_dir, "vtk")
-        os.makedirs(self.dir, exist_ok=True)
+        self.dir = os.path.join(out_dir, "vtk")  # made at the first frame
         self.entries = {s: [] for s in SERIES}
 
     def checkpoint_restored(self):
@@ -175,6 +174,7 @@ class VtkSeries:
         (without path; positions are taken from ``discs['xz']``)."""
         k = len(self.entries["discs"])
         xz = discs["xz"]
+        os.makedirs(self.dir, exist_ok=True)
         for series, kwargs, write in (("discs", discs, write_discs), ("forces", forces, write_forces),
                                       ("pores", pores, write_pores)):
             if kwargs is None:

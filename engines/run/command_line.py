@@ -29,7 +29,7 @@ from engines.run import ensemble, guard, history, manifest
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR, check_scheduler
-from engines.run.table import DESCRIPTION, batch_line
+from engines.run.table import BATCH, DESCRIPTION, batch_line
 from engines.studies.ensemble import perturbed
 from engines.yade.checkpoint import CheckpointError
 
@@ -124,7 +124,7 @@ def batch_out(root, description):
     if os.environ.get(JOB_DIR):
         return os.environ[JOB_DIR]
     name = description.replace(os.sep, "_").replace("\\", "_")
-    check_name(name, f"yade-batch table {batch_line()}: the job's description")
+    check_name(name, f"yade-batch table {os.environ.get(BATCH, '')}: the job's description")
     return os.path.join(root, name)
 
 

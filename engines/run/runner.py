@@ -80,8 +80,7 @@ class Recorder:
     CHECKPOINT_FIELDS = ("rows", "last_row", "last_t", "last_vtk", "snapshot_steps", "vtk")
     CHECKPOINT_DERIVED = {
         **{name: "the scene's [output] and the coupling's blocks and walls" for name in
-           ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns",
-            "with_vtk")},
+           ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns")},
         "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
         "file": "history.csv, opened by reopen", "path": "history.csv in the folder resumed in",
         "sha": "the checksum of history.csv's rows, read again by reopen (engines.run.history.kept)",
@@ -103,15 +102,14 @@ class Recorder:
         self.last_t = None  # the last row's t [s] as written
         self.snapshot_steps = []  # steps whose snapshot file was written
         self.vtk = None
-        self.with_vtk = out.vtk
+        if out.vtk:  # its folder is made at the first frame
+            from postproc.vtk import VtkSeries
+            self.vtk = VtkSeries(out_dir)
         self.schedule(n_steps)
         self.out = out_dir
 
     def create(self):
-        """Start history.csv (its header) and, with [output] vtk, the VTK folder."""
-        if self.with_vtk:
-            from postproc.vtk import VtkSeries
-            self.vtk = VtkSeries(self.out)
+        """Start history.csv (its header)."""
         header = io.StringIO()
         csv.writer(header, lineterminator="\n").writerow(self.columns)
         self.sha = hashlib.sha256()

@@ -197,15 +197,15 @@ class FullFile:
         return getattr(self.f, name)
 
 
-@pytest.mark.parametrize("full", ["history.csv", "snapshot_", "checkpoint.pkl", "summary.json", "failure"])
+@pytest.mark.parametrize("full", ["history.csv", "snapshot_", "checkpoint.npz", "summary.json", "failure"])
 def test_a_full_disk_ends_the_run_in_one_line_naming_the_path(tmp_path, packing, monkeypatch, full):
     """ENOSPC on one kind of write after the run started: the run raises WriteError naming that
     file and the cause; summary.json (when it can be written) says "failed: ..."; no empty or
     half file is left (no temporaries, no zero-byte failure_state.npz)."""
     fsync = files.os.fsync
-    prefix = {"snapshot_": ".snapshot_", "checkpoint.pkl": ".checkpoint.pkl.tmp-", "summary.json": ".summary.json.tmp-",
+    prefix = {"snapshot_": ".snapshot_", "checkpoint.npz": ".checkpoint.npz.tmp-", "summary.json": ".summary.json.tmp-",
               "failure": ".failure_state.npz.tmp-"}.get(full)
-    first_failing = 2 if full in ("checkpoint.pkl", "summary.json") else 1  # the start's checkpoint and summary pass
+    first_failing = 2 if full in ("checkpoint.npz", "summary.json") else 1  # the start's checkpoint and summary pass
     seen = []
 
     def full_fsync(fd):
@@ -251,7 +251,7 @@ def test_a_full_disk_is_one_line_from_the_script(tmp_path, monkeypatch, capsys):
     O.reset()
     with pytest.raises(SystemExit) as e:
         quicksand.main(["--case", "1", "--out", str(out), "--duration", "2e-4"])
-    assert e.value.code == f"error: cannot write {out}/summary.json: no space left on the device"
+    assert e.value.code == f"error: cannot write {out}/manifest.json: no space left on the device"  # its first file
     assert not os.path.exists(out / ".lock")
 
 

@@ -52,6 +52,7 @@ def build(name, tmp_path, steps=STEPS):
     out = str(tmp_path / name.replace(" ", "_").replace(",", ""))
     os.makedirs(out)
     run = Run(sc, scene_packing(sc), out, STEPS)
+    run.rec.create()
     run.cp.run(steps)
     run.rec.close()
     return run
@@ -121,6 +122,7 @@ def saved_run(tmp_path_factory):
     out = str(tmp_path_factory.mktemp("saved"))
     sc = scenes.preset("quicksand_case1", scenes._merge(SHORT, {"output": {"vtk": True, "vtk_interval": 50}}))
     run = Run(sc, scene_packing(sc), out, STEPS)
+    run.rec.create()
     run.cp.run(150)
     run.rec.close()
     run.save_checkpoint()
