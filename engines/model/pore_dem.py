@@ -197,7 +197,7 @@ class PoreDEM:
     # what a checkpoint stores (engines.model.state)
     CHECKPOINT_FIELDS = ("law", "k", "base", "wall_velocity", "water_model", "ties")
     CHECKPOINT_DERIVED = {name: "the scene and the packing" for name in
-                          ("scene", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")}
+                          ("settings", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")}
 
     def __init__(self, settings, packing, flat_walls=()):
         self.settings, self.packing = settings, packing

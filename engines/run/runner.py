@@ -482,7 +482,7 @@ class Run:
             "results": results,
             "checkpoint": {"file": CHECKPOINT, "step": self.checkpoint_step},
             "parameters": sc.as_dict(),
-            "provenance": self.segments[0]["provenance"],
+            "provenance": self.segments[0]["provenance"] if self.segments else None,
             "segments": self.segments,
         }
         if received:

@@ -42,6 +42,10 @@ CONSTANT = {
     "ContactSettings": "the scene's [contact]", "WaterSettings": "the scene's [water]",
     "Window": "the porosity window, from the scene and packing", "Bodies": "YADE body ids, from the build",
     "WaterBalance": "stored whole as a dict of its fields (PoreWater.balance)",
+    "Settings": "the scene's tables (Scene.settings): the recipe",
+    **{t: f"the scene's [{t.lower()}] (Scene.settings): the recipe"
+       for t in ("Walls", "Material", "Contact", "Water", "Loading", "Numerics", "Output")},
+    "Start": "the run's start (engines.model.start), made from the scene and packing",
 }
 
 
@@ -243,6 +247,7 @@ def test_a_yade_scene_with_a_pyrunner_is_refused_and_never_run(tmp_path):
     out = str(tmp_path / "run")
     os.makedirs(out)
     run = Run(sc, scene_packing(sc), out, STEPS)
+    run.rec.create()
     run.cp.run(10)
     run.rec.close()
     O.engines = O.engines + [PyRunner(command=f"open({str(marker)!r}, 'w')", iterPeriod=1)]
