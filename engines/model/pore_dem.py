@@ -9,10 +9,10 @@ contract shared with the reference (engines/reference/model.py):
   a. du = x_t - x_{t-dt}, dpsi = omega dt (zero at k = 0)
   b. contact forces (engines.model.contact, eq 1-13)
   c. velocity adjustment of discs that became free (eq 18-24)
-  d. water: pores rebuilt at k = n rebuild_interval (n >= 1; WaterModel.rebuild_due), or with [numerics]
-     rebuild_distance > 0 when a disc has moved that far since the last build; water advanced when
-     k % water_interval == 0 by water_interval dt at the areas of x_t; pressure forces (eq 33)
-     recomputed then and held in between
+  d. water, when engines.model.schedule.Schedule says (``PoreDEM.schedule``): pores rebuilt at
+     k = n rebuild_interval (n >= 1), or with [numerics] rebuild_distance > 0 when a disc has moved
+     that far since the last build; water advanced at k = j water_interval by water_interval dt at
+     the areas of x_t; pressure forces (eq 33) recomputed then and held in between
   e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
      it lives in the law, computed in b's call and independent of d)
   f. moving walls: the base motion (engines.model.ground_motion.BaseMotion, constant average
@@ -36,6 +36,7 @@ from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.flat_walls import FlatWall
 from engines.model.observe import block_means, box_window, porosity
 from engines.model.paper_law import PaperLaw
+from engines.model.schedule import Schedule
 from engines.model.side_walls import SideWallTies
 from engines.model.water_model import WaterModel
 
@@ -211,6 +212,8 @@ class PoreDEM:
         self.ties = side_wall_ties(scene, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
         self.water_model = water_model(scene, packing, self.water_class, flat_walls)
+        # what happens at step k: the water model's schedule, or a dry scene's (output events only)
+        self.schedule = Schedule(rebuild_interval=None) if self.water_model is None else self.water_model.schedule
 
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""

@@ -355,7 +355,7 @@ def test_rebuilds_by_displacement_are_the_same_run_by_the_runner_and_by_drive():
         water.model.rebuild = lambda xz, k=None: built.append((k, water.model.max_sq_moved(xz))) or rebuild(xz, k)
         run_as(water, how, 1205)
         runs.append(([k for k, _ in built], O.iter, water.io.positions(), water.model.water.W.copy()))
-        assert all(moved > d * d and (k - water.model.k0) % 5 == 0 for k, moved in built), how
+        assert all(moved > d * d and (k - water.model.schedule.k0) % 5 == 0 for k, moved in built), how
     assert len(runs[0][0]) >= 3
     if yade_io.BACKEND == "yadebulk":
         assert len(chunks) > len(runs[0][0])  # the compiled loop ran, stopped before each of them
@@ -372,7 +372,7 @@ def test_a_void_area_out_of_range_rebuilds_the_same_in_the_runner_and_in_drive()
     from yade import O
 
     from engines.model.pore_water import WaterSettings
-    from engines.model.water_model import areas_in_range
+    from engines.model.schedule import areas_in_range
     runs = []
     for how in ("runner", "python", "compiled"):
         water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 10**6, 5, rebuild_distance=1.0)
