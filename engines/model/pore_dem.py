@@ -215,6 +215,21 @@ class PoreDEM:
         # what happens at step k: the water model's schedule, or a dry scene's (output events only)
         self.schedule = Schedule(rebuild_interval=None) if self.water_model is None else self.water_model.schedule
 
+    def set_dt(self, dt):
+        """Step with dt [s] from now on: the limits of the start (eq 52, the side-wall ties) checked
+        again, the law and the water follow; refused with a ground motion, whose input is sampled
+        at the scene's dt from step 0."""
+        if self.base is not None:
+            raise ValueError(f"dt cannot change during a run with a ground motion ([loading] type = "
+                             f"{self.scene.loading.type!r} is sampled at dt = {self.dt:g} s from step 0): "
+                             f"set [numerics] dt in the scene instead")
+        limits.check_contact(dt, self.scene.numerics.dt_safety, self.mass[self.mobile], self.scene.contact.kn)
+        limits.check_ties(dt, self.ties, self.mass)
+        self.law.set_dt(dt)
+        self.dt = self.law.dt
+        if self.water_model is not None:
+            self.water_model.set_dt(dt)
+
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""
         F = np.zeros_like(xz)

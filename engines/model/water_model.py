@@ -64,6 +64,13 @@ class WaterModel:
         return pg.build_pores(xz, self.r, eps_m=self.eps_m, l_m=self.l_m, walls=self.walls, steps=self.build_steps,
                               flat_walls=self.wall_vertices or ())
 
+    def set_dt(self, dt):
+        """Step with dt [s] from now on: water steps of water_interval dt (each checked against its
+        Darcy limit, engines.model.limits)."""
+        if not dt > 0:
+            raise ValueError(f"dt must be > 0 [s], got {dt}")
+        self.dt = float(dt)
+
     def move_walls(self, shift):
         """Translate the flat walls to the displacements ``shift`` (W, 2) [m] from their FlatWall
         positions (flat_walls.WallVertices.move): the faces of the next measure and build."""

@@ -7,6 +7,7 @@ import numpy as np
 from engines.compiled import kernels
 from engines.compiled import paper_law as compiled_paper_law
 from engines.model.paper_law import PaperLaw
+from engines.yade.contract import follow_dt
 
 
 class PaperLawEngine:
@@ -35,7 +36,8 @@ class PaperLawEngine:
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
     run after each step's forces are written (with hooks, drive makes no compiled runs of steps).
     ``drive_walls(ids)``: the bodies ids move in x at the core's ``wall_velocity`` of each step
-    (their velocity set before O.step()).
+    (their velocity set before O.step()). A script may change O.dt between steps: the core follows
+    it before its next step (engines.yade.contract.follow_dt: ``set_dt``, its limits checked again).
     """
 
     def __init__(self, disc_ids, settings=None, core=None, compiled=True):
@@ -93,6 +95,7 @@ class PaperLawEngine:
             hook()
 
     def __call__(self):
+        follow_dt(self.core)
         self._work(self._add)
 
     def _add(self, F):
@@ -110,6 +113,7 @@ class PaperLawEngine:
         many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
         done, n = 0, int(n)
         while done < n:
+            follow_dt(self.core)
             m = 0 if many is None else many(n - done)
             if m == 0:
                 self._python_step()

@@ -20,7 +20,7 @@ Every ``water_interval`` steps from its creation its PyRunner reads the centres 
 (engines.yade.yade_io), rebuilds the pores when due (the model's engines.model.schedule.Schedule,
 started at the engine's creation: a disc farther than ``rebuild_distance`` from its centre at the
 last build or a void area out of range, or the first water step at or after each multiple of
-``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
+``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46; the model follows a change of O.dt) and writes the pressure forces
 (eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
 itself is engines.model.water_model.WaterModel's, by its compiled twin
 engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
@@ -65,7 +65,8 @@ class WaterEngine:
     rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
     farther than this from its centre at the last build or a void area is out of range
     (engines.model.schedule.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
-    0: off); rebuild_interval [steps] bounds the time between rebuilds.
+    0: off); rebuild_interval [steps] bounds the time between rebuilds. A script may change O.dt
+    between steps: the model follows it at the next water step (engines.yade.contract.follow_dt).
     """
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
@@ -141,6 +142,7 @@ class WaterEngine:
                 and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move())
         due, errors = self.due, yade_io.ERRORS
         while done < n:
+            contract.follow_dt(self.model)
             m = min(n - done, self.model.schedule.steps_to_event(O.iter, water_steps_only=True), self._chunk) if fast else 0
             if m > 0:
                 t0 = time.perf_counter()
@@ -184,7 +186,7 @@ class WaterEngine:
         from engines.yade import yade_io
         m = self.model
         sch = m.schedule
-        h = sch.water_interval * O.dt
+        h = sch.water_interval * m.dt
         args = m.kernel_args(h)
         b = m.water.balance
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
@@ -211,7 +213,8 @@ class WaterEngine:
         from yade import O
         m = self.model
         self.k = O.iter
-        h = m.schedule.water_interval * O.dt
+        contract.follow_dt(m)
+        h = m.schedule.water_interval * m.dt
         self._follow_walls()
         xz = self.io.positions() if m.schedule.by_displacement else None
         rebuild = m.rebuild_due(self.k, xz)
