@@ -33,6 +33,11 @@ the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
+What happens at step k (water due, pore rebuild due by interval, displacement or areas, output due,
+steps to the next event, counted from the model's start k0): model/schedule.py (Schedule), asked
+by the NumPy step, the compiled drives (given its steps to the water and to the next event),
+WaterEngine, PaperLawEngine and the coupling's hooks. numba's cache folder is keyed by the
+sources of model/ and compiled/ (compiled/cache.py).
 Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py; a scene's
 limits at its start and dt = "auto": model/time_step.py.
 Observables: the window porosity and block means (model/observe.py); block pressures from one

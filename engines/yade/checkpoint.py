@@ -24,7 +24,7 @@ import os
 import pickle
 import tempfile
 
-FORMAT = 3  # raised when the pickled classes change (moved, split, fields): a checkpoint of another format is refused
+FORMAT = 4  # raised when the pickled classes change (moved, split, fields): a checkpoint of another format is refused
 NAME = "checkpoint.pkl"  # a run's checkpoint in its output directory (engines.run.runner)
 
 
