@@ -57,7 +57,7 @@ def test_bad_intervals_are_refused(bad):
 
 
 def test_no_code_outside_the_schedule_and_the_reference_decides_a_water_step():
-    pattern = re.compile(r"%\s*\(?\s*(self\.)?(water_interval|wi)\b")
+    pattern = re.compile(r"%\s*\(?\s*[\w.]*\b(water_interval|wi)\b")  # k % wi, (k - k0) % m.water_interval, ...
     found = []
     for folder, _, files in os.walk(ENGINES):
         for name in files:
