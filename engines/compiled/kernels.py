@@ -502,7 +502,7 @@ AREAS_OUT_OF_RANGE = -(1 << 62)  # water_step's answer when a void area left its
 
 @jit
 def areas_in_range(void, poly):
-    """Twin of engines.model.water_model.areas_in_range: 0 <= A <= polygon area in every pore."""
+    """Twin of engines.model.schedule.areas_in_range: 0 <= A <= polygon area in every pore."""
     for p in range(len(void)):
         if not 0.0 <= void[p] <= poly[p]:
             return False
