@@ -7,7 +7,8 @@ run stale code after an edit there. So the cache folder (NUMBA_CACHE_DIR, set by
 engines/compiled/__init__.py before numba compiles anything) is keyed by ``cache_key``: a hash of
 every .py file of engines/model and engines/compiled (their paths and contents, sorted) and of
 numba's version. Any edit there, or another numba, compiles afresh into a new folder; going back to
-earlier sources finds their folder again.
+earlier sources finds their folder again while it is among the KEEP most recently used (older
+keyed folders are removed when a new one is made).
 
 The folder is ``cache_dir()``: <root>/<key>, the root being the user's own NUMBA_CACHE_DIR if one
 was set, else the first writable of ~/.cache/pore-dem/numba (XDG_CACHE_HOME), <project>/.numba-cache
@@ -16,12 +17,14 @@ and the system's temporary folder. An install's warm-up compiles into the same f
 import hashlib
 import importlib.metadata
 import os
+import shutil
 import sys
 import tempfile
 
 ENGINES = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOURCES = ("model", "compiled")  # the packages of engines/ whose code the kernels compile
 KEYED = "PORE_DEM_NUMBA_CACHE_DIR"  # the keyed folder this module set as NUMBA_CACHE_DIR (for child processes)
+KEEP = 8  # keyed folders kept under a root (about 20 MB each), the most recently used
 
 
 def cache_key(engines=ENGINES):
@@ -65,8 +68,19 @@ def cache_dir(environ=None):
         except OSError:
             continue
         if os.access(path, os.W_OK | os.X_OK):
+            os.utime(path)  # used now
+            _prune(root)
             return path
     return None
+
+
+def _prune(root):
+    """Remove the keyed folders under root beyond the KEEP most recently used (any other folder is left)."""
+    keyed = [e for e in os.scandir(root) if e.is_dir(follow_symlinks=False) and len(e.name) == 16
+             and all(c in "0123456789abcdef" for c in e.name)]
+    keyed.sort(key=lambda e: e.stat().st_mtime, reverse=True)
+    for e in keyed[KEEP:]:
+        shutil.rmtree(e.path, ignore_errors=True)
 
 
 def use():

@@ -60,6 +60,18 @@ def test_the_folder_is_keyed_under_the_users_numba_cache_dir_once(tmp_path):
     assert cache.cache_dir({"XDG_CACHE_HOME": str(tmp_path)}).startswith(str(tmp_path / "pore-dem" / "numba"))
 
 
+def test_only_the_most_recently_used_keyed_folders_are_kept(tmp_path):
+    root = tmp_path / "mine"
+    for n in range(cache.KEEP + 3):
+        (root / f"{n:016x}").mkdir(parents=True)
+        os.utime(root / f"{n:016x}", (n, n))
+    (root / "not-a-key").mkdir()
+    path = cache.cache_dir({"NUMBA_CACHE_DIR": str(root)})
+    left = sorted(os.listdir(root))
+    assert os.path.basename(path) in left and "not-a-key" in left
+    assert left == sorted([f"{n:016x}" for n in range(4, cache.KEEP + 3)] + [os.path.basename(path), "not-a-key"])
+
+
 def test_this_process_compiles_into_the_keyed_folder():
     import numba.core.config
     assert numba.core.config.CACHE_DIR == os.environ["NUMBA_CACHE_DIR"] == cache.cache_dir()
