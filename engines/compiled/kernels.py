@@ -987,16 +987,17 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel, ids_in,
-                      xz, ids_out, F_out, rows, held,
+def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel,
+                      ids_in, xz, ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                       tie_pairs, tie_rest, tie_prm, T):
     """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
     -> xz), ``dem_step`` (the water at step water_in of the call, then every water_interval
-    (engines.model.schedule.Schedule), when the scene is wet; its parts called one by one: numba leaves a reference count of each array around a call
-    of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the
+    (engines.model.schedule.Schedule), when the scene is wet; its parts called one by one: numba
+    leaves a reference count of each array around a call of more than 30 arrays, two atomic adds
+    each), write_forces(ids_out <- F_out), then the
     water's balance of the step added to totals (3,) [m^2], the base motion advanced
     (``cosine_base_step`` when motion is not empty: MOTION; the walls wall_ids get its wall
     velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and bridge's steps() (O.step()).

@@ -81,7 +81,9 @@ class WaterModel:
         """Is a pore rebuild due at step k (Schedule.rebuild_due: by interval, or by displacement
         at the centres xz (N, 2) [m] of step k when given)?"""
         sch = self.schedule
-        return sch.interval_due(k) or (xz is not None and sch.by_displacement and sch.moved_too_far(self.max_sq_moved(xz)))
+        if sch.interval_due(k):
+            return True
+        return xz is not None and sch.by_displacement and sch.moved_too_far(self.max_sq_moved(xz))
 
     def max_sq_moved(self, xz):
         """max over the discs of |xz - xz_built|^2 [m^2]."""

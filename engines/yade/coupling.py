@@ -217,8 +217,8 @@ class YadeCoupling:
         self.hooks = []
         # what happens at step k (engines.model.schedule): the water's schedule, whose output
         # events (``set_output``) are when ``run`` calls the hooks; a dry scene's has output only
-        self.schedule = (self.core.schedule if self.core is not None else
-                         self.water_engine.model.schedule if self.water_engine is not None else Schedule(rebuild_interval=None))
+        self.schedule = (self.core.schedule if self.core is not None else self.water_engine.model.schedule
+                         if self.water_engine is not None else Schedule(rebuild_interval=None))
         self._hooked_at = None
         self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
         if yade_io.BACKEND == "python":
@@ -281,7 +281,8 @@ class YadeCoupling:
         """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
         asked after every step or compiled run of steps, see the module docstring) turned true
         first. The hooks are called as hook(self) at every output step of ``schedule``
-        (Schedule.set_output; the start and the end included), once per step index, before the step. An error inside an engine stops YADE and is
+        (Schedule.set_output; the start and the end included), once per step index, before the
+        step. An error inside an engine stops YADE and is
         re-raised here."""
         if self._undamped and any(isinstance(e, NewtonIntegrator) and e.damping != 0 for e in O.engines):
             raise ValueError("NewtonIntegrator.damping was set after the scene was built with damping 0, whose bodies "

@@ -144,8 +144,8 @@ class PaperLawEngine:
                 continue
             steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args = drive
             done, n_lost, n_sub, rc, builds, *pairs = self._drive_dem(
-                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, self.walls, self._wall_vel,
-                self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
+                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, self.walls,
+                self._wall_vel, self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
             if builds:
                 core.law.contact.take_list(builds, *pairs)
             core.finish_kernel_drive(done, totals, motion)

@@ -20,10 +20,11 @@ Every ``water_interval`` steps from its creation its PyRunner reads the centres 
 (engines.yade.yade_io), rebuilds the pores when due (the model's engines.model.schedule.Schedule,
 started at the engine's creation: a disc farther than ``rebuild_distance`` from its centre at the
 last build or a void area out of range, or the first water step at or after each multiple of
-``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46; the model follows a change of O.dt) and writes the pressure forces
-(eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
-itself is engines.model.water_model.WaterModel's, by its compiled twin
-engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
+``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances
+the water by water_interval x O.dt (eq 32-43, 45-46; the model follows a change of O.dt) and
+writes the pressure forces (eq 33) plus buoyancy (eq 34b) as permanent forces: between water
+steps no Python runs. The work itself is engines.model.water_model.WaterModel's, by its compiled
+twin engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
 
 With ``settings.substep`` a water step above the Darcy limit is split into sub-steps; the engine
 prints the count when it first sub-steps and whenever the count doubles, and keeps
@@ -143,7 +144,8 @@ class WaterEngine:
         due, errors = self.due, yade_io.ERRORS
         while done < n:
             contract.follow_dt(self.model)
-            m = min(n - done, self.model.schedule.steps_to_event(O.iter, water_steps_only=True), self._chunk) if fast else 0
+            to_event = self.model.schedule.steps_to_event(O.iter, water_steps_only=True)
+            m = min(n - done, to_event, self._chunk) if fast else 0
             if m > 0:
                 t0 = time.perf_counter()
                 got = self._drive_compiled(m)
