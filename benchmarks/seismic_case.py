@@ -185,7 +185,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     xz = cp.positions()
     law, wm = core.law, core.water_model
     law.contact._update_list(xz)
-    law_args, water_args = law.kernel_args(), wm.kernel_args(wm.water_interval * law.dt)
+    law_args, water_args = law.kernel_args(), wm.kernel_args(wm.schedule.water_interval * law.dt)
     part, net = wm._part, wm.water.net
     geometry = (xz, part("r"), net.links, net.link_pores, part("vec0").reshape(-1, 2), part("turn_weight"),
                 part("sector0"), wm.eps_m, part("poly"), part("sect"), part("void"), part("length"), part("contact"),
@@ -200,7 +200,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[7]
+    motion = drive_args[8]
     rows = np.arange(len(eng._F_out))
     write = yade_io._ADD_UNSYNCED if eng._reset_last else yade_io._SET_PERM  # as the run writes them
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (write, eng.forced.ids, eng._F_out.copy(), rows,

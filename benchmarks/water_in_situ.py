@@ -91,7 +91,7 @@ def measure(size, steps, repeats, log):
     def variant(flush, read, water, write, steps_):
         return lambda: _loop(steps, yade_io._BRIDGE, junk if flush else none, read, water, write, steps_, *io, *args)
     runs = {name: variant(*how) for name, how in VARIANTS.items()}
-    runs["water_drive"] = lambda: kernels.water_drive_bulk_io(yade_io._BRIDGE, steps, 0, 0, 1, totals, m.xz_built,
+    runs["water_drive"] = lambda: kernels.water_drive_bulk_io(yade_io._BRIDGE, steps, 0, 1, totals, m.xz_built,
                                                               0.0, *io, *args)
     W0 = m.water.W.copy()
     for run in runs.values():

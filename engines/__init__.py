@@ -33,6 +33,11 @@ the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
+What happens at step k (water due, pore rebuild due by interval, displacement or areas, output due,
+steps to the next event, counted from the model's start k0): model/schedule.py (Schedule), asked
+by the NumPy step, the compiled drives (given its steps to the water and to the next event),
+WaterEngine, PaperLawEngine and the coupling's hooks. numba's cache folder is keyed by the
+sources of model/ and compiled/ (compiled/cache.py).
 Stability limits (eq 52, ties, water stiffness, Darcy bound, sub-steps): model/limits.py. The start
 of a run, computed once (model/start.py, Start): the walls, the discs that move and their masses, the
 pores at the start as the water model builds them (flat walls included), their limits and dt = "auto";

@@ -6,5 +6,12 @@ arguments and buffers. The model's classes by the same names, stepped by the ker
 step as one kernel call); each subclasses its engines.model class and overrides only what runs
 compiled.
 
+numba's cache folder is keyed by the sources of engines/model and engines/compiled (cache: a
+kernel never runs code older than its callees and layouts); it is set here, before any of these
+modules loads numba.
+
 May import: NumPy, numba, engines.model. Never YADE.
 """
+from engines.compiled import cache
+
+cache.use()

@@ -502,7 +502,7 @@ AREAS_OUT_OF_RANGE = -(1 << 62)  # water_step's answer when a void area left its
 
 @jit
 def areas_in_range(void, poly):
-    """Twin of engines.model.water_model.areas_in_range: 0 <= A <= polygon area in every pore."""
+    """Twin of engines.model.schedule.areas_in_range: 0 <= A <= polygon area in every pore."""
     for p in range(len(void)):
         if not 0.0 <= void[p] <= poly[p]:
             return False
@@ -800,10 +800,11 @@ Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
 
 
 @jit
-def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out, F_out,
+def water_drive_bulk_io(bridge, n, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out, F_out,
                         rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
-    """WaterEngine.drive without Python: n DEM steps from step index k, each step whose
-    (index - k0) is a multiple of water_interval preceded by water_forces_step_bulk_io (arguments
+    """WaterEngine.drive without Python: n DEM steps, the water steps among them (step water_in
+    of the call, then every water_interval: engines.model.schedule.Schedule) each preceded by
+    water_forces_step_bulk_io (arguments
     from ids_in on), each step made by bridge's steps() (YADE's O.step()). totals (3,) [m^2] gets
     the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
     before stepping after a water step that did not answer 1 (sub-steps or a failure: its
@@ -813,9 +814,10 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
     is the caller's, nothing done of it. Returns
     (DEM steps done, water steps done, the last water step's answer or 1, the bridge's error code)."""
     balance = _part(floats, f_at, WATER_FLOATS.balance)
-    n_water = 0
+    n_water, next_water = 0, water_in
     for s in range(n):
-        if (k + s - k0) % water_interval == 0:  # water_forces_step_bulk_io, the rebuild triggers between
+        if s == next_water:  # water_forces_step_bulk_io, the rebuild triggers between
+            next_water += water_interval
             rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
             if rc != 0:
                 return s, n_water, 1, rc
@@ -839,7 +841,7 @@ def water_drive_bulk_io(bridge, n, k, k0, water_interval, totals, xz_built, move
     return n, n_water, 1, 0
 
 
-Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
+Layout.of(water_drive_bulk_io, 11).check(WATER_FORCES_STEP)
 
 
 @jit
@@ -985,16 +987,17 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel, ids_in,
-                      xz, ids_out, F_out, rows, held,
+def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel,
+                      ids_in, xz, ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                       tie_pairs, tie_rest, tie_prm, T):
     """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
-    -> xz), ``dem_step`` (the water when the index is a multiple of water_interval and the scene is
-    wet; its parts called one by one: numba leaves a reference count of each array around a call
-    of more than 30 arrays, two atomic adds each), write_forces(ids_out <- F_out), then the
+    -> xz), ``dem_step`` (the water at step water_in of the call, then every water_interval
+    (engines.model.schedule.Schedule), when the scene is wet; its parts called one by one: numba
+    leaves a reference count of each array around a call of more than 30 arrays, two atomic adds
+    each), write_forces(ids_out <- F_out), then the
     water's balance of the step added to totals (3,) [m^2], the base motion advanced
     (``cosine_base_step`` when motion is not empty: MOTION; the walls wall_ids get its wall
     velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and bridge's steps() (O.step()).
@@ -1011,12 +1014,14 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
     wet = len(W) > 0
     V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
-    builds = 0
+    builds, next_water = 0, water_in
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
             return s, 0, 1, rc, builds, pi, pj, state, lost
-        water_due = wet and (k + s) % water_interval == 0
+        water_due = wet and s == next_water
+        if s == next_water:
+            next_water += water_interval
         for attempt in range(2):  # dem_step's parts, a stale list rebuilt once
             n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
                               r, pi, pj, state, prm, spring, F, M, acc_j, lost)
@@ -1058,7 +1063,7 @@ def dem_drive_bulk_io(bridge, n, k, water_interval, adjust, e, mass, skin, total
     return n, 0, 1, 0, builds, pi, pj, state, lost
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 16).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 17).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit

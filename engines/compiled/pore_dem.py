@@ -8,7 +8,6 @@ from engines.compiled.paper_law import PaperLaw
 from engines.compiled.water_model import WaterModel
 from engines.model import pore_dem
 from engines.model.ground_motion import Cosine
-from engines.model.water_model import steps_to_rebuild
 
 
 class PoreDEM(pore_dem.PoreDEM):
@@ -32,16 +31,18 @@ class PoreDEM(pore_dem.PoreDEM):
             return None
         if wm is None:
             return kernels.dem_step_args(rows, held, False, law.kernel_args(), kernels.dry_water_args(), self._tie_args)
-        if wm.rebuild_distance > 0 or wm.rebuild_due(self.k):
+        sch = self.schedule
+        if sch.by_displacement or sch.interval_due(self.k):
             return None
         return kernels.dem_step_args(rows, held, self.water_due(), law.kernel_args(),
-                                     wm.kernel_args(wm.water_interval * self.dt), self._tie_args)
+                                     wm.kernel_args(sch.water_interval * self.dt), self._tie_args)
 
     def pores_due(self):
         """Is step k one that ``kernel_step_args`` leaves to the general path only for its pore
         rebuild on the interval (no rebuild_distance)? Then ``rebuild_pores`` makes it first."""
-        wm = self.water_model
-        return self._law_compiled() and wm is not None and wm.rebuild_distance == 0 and wm.rebuild_due(self.k)
+        sch = self.schedule
+        return (self._law_compiled() and self.water_model is not None and not sch.by_displacement
+                and sch.interval_due(self.k))
 
     def _law_compiled(self):
         """Can the law of step k run in kernels.law_step (after the first step, without flat walls)?"""
@@ -59,17 +60,19 @@ class PoreDEM(pore_dem.PoreDEM):
         fixes = self.law._fixes(self.law.finish_kernel_step(xz, n_lost), vel)
         if water_due:
             wm = self.water_model
-            wm.finish_kernel_step(wm.water_interval * self.dt, n_sub)
+            wm.finish_kernel_step(self.schedule.water_interval * self.dt, n_sub)
         self._move_walls()
         return fixes
 
     def water_due(self):
         """Does step k advance the water (kernels.dem_step's water_due)?"""
-        return self.water_model is not None and self.k % self.water_model.water_interval == 0
+        return self.water_model is not None and self.schedule.water_due(self.k)
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_interval, adjust, e, mass, skin, totals, motion, args) for
-        kernels.dem_drive_bulk_io: up to n steps from step k (none of them a pore rebuild), whether
+        """(steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args) for
+        kernels.dem_drive_bulk_io: up to n steps from step k to the schedule's next event
+        (Schedule.steps_to_event: none of them a pore rebuild), the water steps among them (the
+        first water_in steps from k, then every water_interval; dry: none), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
         lists it rebuilds [m], the water's balance so far (3,) [m^2], the base motion (kernels.MOTION; empty without one) and the arguments after F_out
         (DEM_DRIVE), or None when step k needs ``kernel_step_args``'s other paths or the input
@@ -85,12 +88,13 @@ class PoreDEM(pore_dem.PoreDEM):
             amplitude=base.accel.amplitude, w=base.accel.w, dt=base.dt, acc=base.acc, vel=base.vel, disp=base.disp,
             wall_velocity=self.wall_velocity))
         s, skin = self.law.settings, self.law.contact.skin  # no flat walls here: no pair filter
+        sch = self.schedule
+        steps = min(n, sch.steps_to_event(self.k))
         if wm is None:
-            return n, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, args
+            return steps, 0, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, args
         b = wm.water.balance
-        steps = min(n, steps_to_rebuild(self.k, wm.k_built, wm.k0, wm.rebuild_interval, 1))
-        return (steps, wm.water_interval, s.separation_adjustment, s.restitution, self.law.mass, skin,
-                np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args)
+        return (steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
+                self.law.mass, skin, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args)
 
     def finish_kernel_drive(self, done, totals, motion):
         """Book the ``done`` steps a kernels.dem_drive_bulk_io call made with the totals and motion
@@ -101,7 +105,7 @@ class PoreDEM(pore_dem.PoreDEM):
             base.acc, base.vel, base.disp, self.wall_velocity = motion[kernels.MOTION.acc:].tolist()
             base.k += done
         wm = self.water_model
-        if wm is not None and k + (-k) % wm.water_interval < self.k:  # a water step among them
+        if wm is not None and self.schedule.water_among(k, self.k):
             b = wm.water.balance
             b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
             wm.after_kernel_steps()

@@ -44,7 +44,7 @@ class WaterModel(water_model.WaterModel):
                   "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "right": np.zeros((n_p, 2)),
                   "Fj": np.zeros((n, 2)),
                   "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
-                  "check_areas": float(self.rebuild_distance > 0),
+                  "check_areas": float(self.schedule.by_displacement),
                   "wall_position": self.wall_vertices.faces() if walls else [],
                   "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
                   "F_walls": np.zeros(len(walls))}

@@ -64,6 +64,12 @@ class PaperLaw:
         (flat_walls.WallVertices.move): their positions at the next step."""
         self.walls.move(shift)
 
+    def set_dt(self, dt):
+        """Step with dt [s] from now on (eq 17: du / dt, the dashpots and the spin read it at each step)."""
+        if not dt > 0:
+            raise ValueError(f"dt must be > 0 [s], got {dt}")
+        self.dt = float(dt)
+
     def step(self, xz, vel=None):
         """Forces (N, 2) [N] at centres xz (N, 2) of this step and {disc: new velocity (2,)} of the
         discs that became free (eq 18-24); ``vel`` (N, 2) the velocities if known, else du/dt."""

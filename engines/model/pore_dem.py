@@ -9,10 +9,10 @@ contract shared with the reference (engines/reference/model.py):
   a. du = x_t - x_{t-dt}, dpsi = omega dt (zero at k = 0)
   b. contact forces (engines.model.contact, eq 1-13)
   c. velocity adjustment of discs that became free (eq 18-24)
-  d. water: pores rebuilt at k = n rebuild_interval (n >= 1; WaterModel.rebuild_due), or with [numerics]
-     rebuild_distance > 0 when a disc has moved that far since the last build; water advanced when
-     k % water_interval == 0 by water_interval dt at the areas of x_t; pressure forces (eq 33)
-     recomputed then and held in between
+  d. water, when engines.model.schedule.Schedule says (``PoreDEM.schedule``): pores rebuilt at
+     k = n rebuild_interval (n >= 1), or with [numerics] rebuild_distance > 0 when a disc has moved
+     that far since the last build; water advanced at k = j water_interval by water_interval dt at
+     the areas of x_t; pressure forces (eq 33) recomputed then and held in between
   e. spin: omega += M/I dt (the one rotational degree of freedom of a disc in the x-z plane;
      it lives in the law, computed in b's call and independent of d)
   f. moving walls: the base motion (engines.model.ground_motion.BaseMotion, constant average
@@ -37,6 +37,7 @@ from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.flat_walls import FlatWall
 from engines.model.observe import block_means, box_window, porosity
 from engines.model.paper_law import PaperLaw
+from engines.model.schedule import Schedule
 from engines.model.side_walls import SideWallTies
 from engines.model.water_model import WaterModel
 
@@ -217,6 +218,23 @@ class PoreDEM:
         self.ties = side_wall_ties(settings, packing)
         limits.check_ties(self.dt, self.ties, self.mass)
         self.water_model = water_model(settings, packing, self.water_class, flat_walls)
+        # what happens at step k: the water model's schedule, or a dry scene's (output events only)
+        self.schedule = Schedule(rebuild_interval=None) if self.water_model is None else self.water_model.schedule
+
+    def set_dt(self, dt):
+        """Step with dt [s] from now on: the limits of the start (eq 52, the side-wall ties) checked
+        again, the law and the water follow; refused with a ground motion, whose input is sampled
+        at the scene's dt from step 0."""
+        if self.base is not None:
+            raise ValueError(f"dt cannot change during a run with a ground motion ([loading] type = "
+                             f"{self.settings.loading.type!r} is sampled at dt = {self.dt:g} s from step 0): "
+                             f"set [numerics] dt in the scene instead")
+        limits.check_contact(dt, self.settings.numerics.dt_safety, self.mass[self.mobile], self.settings.contact.kn)
+        limits.check_ties(dt, self.ties, self.mass)
+        self.law.set_dt(dt)
+        self.dt = self.law.dt
+        if self.water_model is not None:
+            self.water_model.set_dt(dt)
 
     def _tie_forces(self, xz, du):
         """(N, 2) x-forces [N] of the side-wall ties at centres xz, velocities du / dt."""

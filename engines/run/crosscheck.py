@@ -384,7 +384,7 @@ def yade_remesh_counter():
             this = {r: int(model.water.remesh_counts.get(r, 0)) for r in "abcd"}
             for r, v in this.items():
                 counts["remesh"][r] += v
-            counts["history"].append((model.k_built, this))
+            counts["history"].append((model.schedule.k_built, this))
     return hook, counts
 
 

@@ -307,8 +307,8 @@ class Run:
 
     def _schedule(self):
         out = self.scene.output
-        self.cp.run_every = math.gcd(out.history_interval, out.vtk_interval) if out.vtk else out.history_interval
-        self.cp.stops = set(self.rec.snap_steps)
+        every = math.gcd(out.history_interval, out.vtk_interval) if out.vtk else out.history_interval
+        self.cp.schedule.set_output(every, self.rec.snap_steps)
 
     def __call__(self, cp):  # noqa: ARG002  (the hook: periodic checkpoints)
         if time.time() - self._last_checkpoint >= self.scene.output.checkpoint_seconds:

@@ -15,6 +15,8 @@ The rules (docs/ENGINE.md):
   inertia 2/5 m r^2 with its 3D mass is far below);
 * q_w > 0 needs an inflow boundary: a pore with a bottom wall disc or an inflow flat wall as a vertex;
 * the discs build pores;
+* O.dt may change between steps: the engines' models follow it (``follow_dt``) before their next
+  step, their limits checked again;
 * bodies are not added after the engine is made (refused at its next pore rebuild, ``check_added``);
   an erased disc is refused by the next read of the positions (engines.yade.yade_io), which names it.
 """
@@ -106,3 +108,12 @@ def check_added(bodies, n_bodies):
     if added:
         raise ContractError(f"body {added[0]}: added after the WaterEngine was made; its discs are fixed at "
                             f"construction (add the bodies first, then make the WaterEngine)")
+
+
+def follow_dt(model):
+    """Before a step of an engine (PaperLawEngine, WaterEngine): when the script changed O.dt since
+    the model's last step, ``model.set_dt(O.dt)`` (its dt-dependent quantities, its limits)."""
+    from yade import O
+    dt = O.dt
+    if dt != model.dt:
+        model.set_dt(dt)

@@ -55,6 +55,7 @@ from engines.model import pores as pg
 from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
 from engines.model.pore_water import buoyancy
+from engines.model.schedule import Schedule
 from engines.model.start import Start
 from engines.reference.trajectory import Trajectory
 from engines.yade import yade_io
@@ -230,7 +231,11 @@ class YadeCoupling:
         else:
             O.engines = [ForceResetter()] + loop + walls + [newton]
         self.hooks = []
-        self.run_every, self.stops, self._hooked_at = None, set(), None
+        # what happens at step k (engines.model.schedule): the water's schedule, whose output
+        # events (``set_output``) are when ``run`` calls the hooks; a dry scene's has output only
+        self.schedule = (self.core.schedule if self.core is not None else self.water_engine.model.schedule
+                         if self.water_engine is not None else Schedule(rebuild_interval=None))
+        self._hooked_at = None
         self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
         if yade_io.BACKEND == "python":
             yade_io.freeze_gc()
@@ -291,19 +296,19 @@ class YadeCoupling:
     def run(self, n_steps, stop=None):
         """Run n_steps DEM steps; returns True when they all ran, False when ``stop()`` (a callable,
         asked after every step or compiled run of steps, see the module docstring) turned true
-        first. The hooks are called as hook(self) whenever
-        O.iter is a multiple of ``run_every`` or one of ``stops`` (the start and the end included),
-        once per step index, before the step. An error inside an engine stops YADE and is
+        first. The hooks are called as hook(self) at every output step of ``schedule``
+        (Schedule.set_output; the start and the end included), once per step index, before the
+        step. An error inside an engine stops YADE and is
         re-raised here."""
         if self._undamped and any(isinstance(e, NewtonIntegrator) and e.damping != 0 for e in O.engines):
             raise ValueError("NewtonIntegrator.damping was set after the scene was built with damping 0, whose bodies "
                              "have its damping pass off (coupling.undamped): pass newton_damping to YadeCoupling")
         stop = stop or _never
         end = O.iter + int(n_steps)
+        sch = self.schedule
         while True:
             k = O.iter
-            due = (self.run_every and k % self.run_every == 0) or k in self.stops
-            if due and k != self._hooked_at:
+            if sch.output_due(k) and k != self._hooked_at:
                 self._hooked_at = k
                 for hook in self.hooks:
                     hook(self)
@@ -311,10 +316,8 @@ class YadeCoupling:
                 return True
             if stop():
                 return False
-            nxt = min([end] + [s for s in self.stops if s > k])
-            if self.run_every:
-                nxt = min(nxt, (k // self.run_every + 1) * self.run_every)
-            self._advance(min(nxt - k, PER_STEP_CHUNK) if self.per_step else nxt - k, stop)
+            n = min(end - k, sch.steps_to_output(k))
+            self._advance(min(n, PER_STEP_CHUNK) if self.per_step else n, stop)
 
     def restore_forces(self):
         """After a checkpoint's O.load: YADE's permanent forces, which O.save does not keep."""

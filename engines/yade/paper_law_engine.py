@@ -7,6 +7,7 @@ import numpy as np
 from engines.compiled import kernels
 from engines.compiled import paper_law as compiled_paper_law
 from engines.model.paper_law import PaperLaw
+from engines.yade.contract import follow_dt
 
 
 class PaperLawEngine:
@@ -35,7 +36,8 @@ class PaperLawEngine:
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
     run after each step's forces are written (with hooks, drive makes no compiled runs of steps).
     ``drive_walls(ids)``: the bodies ids move in x at the core's ``wall_velocity`` of each step
-    (their velocity set before O.step()).
+    (their velocity set before O.step()). A script may change O.dt between steps: the core follows
+    it before its next step (engines.yade.contract.follow_dt: ``set_dt``, its limits checked again).
     """
 
     # what a checkpoint stores (engines.model.state): nothing of its own; the core is a part of its owner
@@ -104,6 +106,7 @@ class PaperLawEngine:
             hook()
 
     def __call__(self):
+        follow_dt(self.core)
         self._work(self._add)
 
     def _add(self, F):
@@ -121,6 +124,7 @@ class PaperLawEngine:
         many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
         done, n = 0, int(n)
         while done < n:
+            follow_dt(self.core)
             m = 0 if many is None else many(n - done)
             if m == 0:
                 self._python_step()
@@ -149,10 +153,10 @@ class PaperLawEngine:
                 if not self._rebuild_pores():
                     return 0
                 continue
-            steps, water_interval, adjust, e, mass, skin, totals, motion, args = drive
+            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args = drive
             done, n_lost, n_sub, rc, builds, *pairs = self._drive_dem(
-                steps, core.k, water_interval, adjust, e, mass, skin, totals, motion, self.walls, self._wall_vel,
-                self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
+                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, self.walls,
+                self._wall_vel, self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
             if builds:
                 core.law.contact.take_list(builds, *pairs)
             core.finish_kernel_drive(done, totals, motion)

@@ -16,13 +16,15 @@ The bodies are checked at construction (engines.yade.contract: spheres in one x-
 per metre of thickness, pores built, an inflow boundary when q_w > 0) and refused in one line naming
 the body; bodies added later are refused at the next rebuild.
 
-Every ``water_interval`` steps its PyRunner reads the centres in bulk (engines.yade.yade_io),
-rebuilds the pores when due (WaterModel.rebuild_due: a disc farther than ``rebuild_distance``
-from its centre at the last build or a void area out of range, or each multiple of
-``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances the water by water_interval x O.dt (eq 32-43, 45-46) and writes the pressure forces
-(eq 33) plus buoyancy (eq 34b) as permanent forces: between water steps no Python runs. The work
-itself is engines.model.water_model.WaterModel's, by its compiled twin
-engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
+Every ``water_interval`` steps from its creation its PyRunner reads the centres in bulk
+(engines.yade.yade_io), rebuilds the pores when due (the model's engines.model.schedule.Schedule,
+started at the engine's creation: a disc farther than ``rebuild_distance`` from its centre at the
+last build or a void area out of range, or the first water step at or after each multiple of
+``rebuild_interval`` steps from the engine's creation), measures the void areas (eq 29), advances
+the water by water_interval x O.dt (eq 32-43, 45-46; the model follows a change of O.dt) and
+writes the pressure forces (eq 33) plus buoyancy (eq 34b) as permanent forces: between water
+steps no Python runs. The work itself is engines.model.water_model.WaterModel's, by its compiled
+twin engines.compiled.water_model.WaterModel unless ``compiled=False`` (no YADE there).
 
 With ``settings.substep`` a water step above the Darcy limit is split into sub-steps; the engine
 prints the count when it first sub-steps and whenever the count doubles, and keeps
@@ -36,7 +38,7 @@ from engines.compiled import kernels
 from engines.compiled import water_model as compiled_water_model
 from engines.model import pore_water
 from engines.model import pores as pg
-from engines.model.water_model import WaterModel, steps_to_rebuild
+from engines.model.water_model import WaterModel
 from engines.yade import contract
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
@@ -63,8 +65,9 @@ class WaterEngine:
     TranslationEngine or a velocity of its body): each water step reads where it is.
     rebuild_distance [m]: the pores are rebuilt at the first water step at which a disc is
     farther than this from its centre at the last build or a void area is out of range
-    (engines.model.water_model.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
-    0: off); rebuild_interval [steps] bounds the time between rebuilds.
+    (engines.model.schedule.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
+    0: off); rebuild_interval [steps] bounds the time between rebuilds. A script may change O.dt
+    between steps: the model follows it at the next water step (engines.yade.contract.follow_dt).
     """
 
     # what a checkpoint stores (engines.model.state)
@@ -125,13 +128,13 @@ class WaterEngine:
 
     def due(self, k):
         """True when step k is a water step (every water_interval steps from the engine's creation)."""
-        return (k - self.model.k0) % self.model.water_interval == 0
+        return self.model.schedule.water_due(k)
 
     def runner(self, label="water"):
         """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. YADE's
         PyRunner adds its dispatch to every call (``drive`` does not pay it)."""
         from engines.yade import yade_io
-        return yade_io.py_runner(self.__call__, self.model.water_interval, label)
+        return yade_io.py_runner(self.__call__, self.model.schedule.water_interval, label)
 
     def drive(self, n, stop=None):
         """Instead of the runner and O.run(n): n O.step() calls, this engine's work before each of
@@ -150,7 +153,9 @@ class WaterEngine:
                 and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move())
         due, errors = self.due, yade_io.ERRORS
         while done < n:
-            m = min(n - done, self._steps_before_rebuild(O.iter), self._chunk) if fast else 0
+            contract.follow_dt(self.model)
+            to_event = self.model.schedule.steps_to_event(O.iter, water_steps_only=True)
+            m = min(n - done, to_event, self._chunk) if fast else 0
             if m > 0:
                 t0 = time.perf_counter()
                 got = self._drive_compiled(m)
@@ -184,11 +189,6 @@ class WaterEngine:
             if not np.array_equal(shift, self.model.wall_vertices.shift):
                 self.model.move_walls(shift)
 
-    def _steps_before_rebuild(self, k):
-        """Steps from step k to the first water step whose call rebuilds the pores."""
-        m = self.model
-        return steps_to_rebuild(k, m.k_built, m.k0, m.rebuild_interval, m.water_interval)
-
     def _drive_compiled(self, n):
         """Up to n steps by kernels.water_drive_bulk_io, no rebuild among them; returns the steps
         done (fewer after a water step that needed sub-steps: its bookkeeping and its step follow
@@ -197,19 +197,18 @@ class WaterEngine:
 
         from engines.yade import yade_io
         m = self.model
-        h = m.water_interval * O.dt
+        sch = m.schedule
+        h = sch.water_interval * m.dt
         args = m.kernel_args(h)
         b = m.water.balance
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
         k = O.iter
-        d = m.rebuild_distance
-        done, n_water, n_sub, rc = yade_io.drive_water(n, k, m.k0, m.water_interval, totals, m.xz_built, d * d,
-                                                       self.io, self._xz, self.forced, self._F_out,
-                                                       self._forces_step_args(args))
+        done, n_water, n_sub, rc = yade_io.drive_water(n, sch.steps_to_water(k), sch.water_interval, totals,
+                                                       m.xz_built, sch.moved2, self.io, self._xz, self.forced,
+                                                       self._F_out, self._forces_step_args(args))
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
-            last = k + done - (1 if n_sub == 1 else 0)  # the last water step
-            self.k = last - (last - m.k0) % m.water_interval
+            self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
             m.after_kernel_steps()
         yade_io.check(rc)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
@@ -226,9 +225,10 @@ class WaterEngine:
         from yade import O
         m = self.model
         self.k = O.iter
-        h = m.water_interval * O.dt
+        contract.follow_dt(m)
+        h = m.schedule.water_interval * m.dt
         self._follow_walls()
-        xz = self.io.positions() if m.rebuild_distance > 0 else None
+        xz = self.io.positions() if m.schedule.by_displacement else None
         rebuild = m.rebuild_due(self.k, xz)
         if self.compiled and not rebuild:
             args = m.kernel_args(h)

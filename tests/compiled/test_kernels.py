@@ -243,7 +243,7 @@ def test_water_model_compiled_equals_numpy(case):
         xk = x.copy()
         if 3 <= k < 6:  # squeeze one pore shut: its corner discs move to its centroid
             net = models[0].water.net
-            v = net.vertices_of(pinched) if k < models[0].rebuild_interval else []
+            v = net.vertices_of(pinched) if k < models[0].schedule.rebuild_interval else []
             xk[v] = xk[v].mean(axis=0) + 0.2 * (xk[v] - xk[v].mean(axis=0))
             assert models[0].void_area(xk)[pinched] <= models[0].water.net.a_min
         for m in models:

@@ -1,11 +1,12 @@
-"""The one pore-rebuild schedule of both contact laws (engines.model.water_model.rebuild_due)."""
+"""The one pore-rebuild schedule of both contact laws (engines.model.schedule)."""
 import itertools
 
 import numpy as np
 
 from engines.model import pores as pg
 from engines.model.pore_dem import water_model
-from engines.model.water_model import WaterModel, areas_in_range, rebuild_due, steps_to_rebuild
+from engines.model.schedule import areas_in_range, rebuild_due, steps_to_rebuild
+from engines.model.water_model import WaterModel
 from engines.run import scene as scenes
 from packing.packing import Packing
 
@@ -50,10 +51,10 @@ def test_the_model_records_the_step_of_its_last_build():
     sc = scenes.preset("quicksand_case1", {"numerics": {"rebuild_interval": 4, "water_interval": 1}})
     pk = Packing.load(sc.packing.file)
     wm = water_model(sc.settings, pk)
-    assert isinstance(wm, WaterModel) and wm.k_built == 0
+    assert isinstance(wm, WaterModel) and wm.schedule.k_built == 0
     for k in range(10):
         wm.step(k, pk.xz)
-    assert (wm.n_rebuilds, wm.k_built) == (2, 8)
+    assert (wm.n_rebuilds, wm.schedule.k_built) == (2, 8)
     assert np.isfinite(wm.F).all()
 
 
@@ -128,7 +129,7 @@ def test_a_void_area_out_of_range_rebuilds_at_that_step_with_a_rebuild_distance_
             for k in range(3):
                 wm.step(k, pk.xz if k < 2 else pushed)
             if d:
-                assert (wm.n_rebuilds, wm.k_built) == (1, 2), cls
+                assert (wm.n_rebuilds, wm.schedule.k_built) == (1, 2), cls
                 m = pg.measure(wm.water.net, pushed, wm.r)
                 assert areas_in_range(m.void_area, m.polygon_area)
                 assert np.all(wm.pressures(pushed) < wm.settings.E_w)

@@ -45,7 +45,7 @@ def walls_and_one_particle(particle_xz):
 def run_recording(cp, n, every):
     """Run n steps and return the positions after every ``every`` steps (k = every, 2 every, ...)."""
     seen = []
-    cp.run_every = every
+    cp.schedule.set_output(every)
     cp.hooks.append(lambda c: seen.append(c.positions()) if c.step_index > 0 else None)
     cp.run(n)
     return np.array(seen)

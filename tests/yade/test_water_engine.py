@@ -355,7 +355,7 @@ def test_rebuilds_by_displacement_are_the_same_run_by_the_runner_and_by_drive():
         water.model.rebuild = lambda xz, k=None: built.append((k, water.model.max_sq_moved(xz))) or rebuild(xz, k)
         run_as(water, how, 1205)
         runs.append(([k for k, _ in built], O.iter, water.io.positions(), water.model.water.W.copy()))
-        assert all(moved > d * d and (k - water.model.k0) % 5 == 0 for k, moved in built), how
+        assert all(moved > d * d and (k - water.model.schedule.k0) % 5 == 0 for k, moved in built), how
     assert len(runs[0][0]) >= 3
     if yade_io.BACKEND == "yadebulk":
         assert len(chunks) > len(runs[0][0])  # the compiled loop ran, stopped before each of them
@@ -372,7 +372,7 @@ def test_a_void_area_out_of_range_rebuilds_the_same_in_the_runner_and_in_drive()
     from yade import O
 
     from engines.model.pore_water import WaterSettings
-    from engines.model.water_model import areas_in_range
+    from engines.model.schedule import areas_in_range
     runs = []
     for how in ("runner", "python", "compiled"):
         water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 10**6, 5, rebuild_distance=1.0)
@@ -476,4 +476,54 @@ def test_newtons_damping_pass_switched_off_changes_no_bit_of_a_run():
     cp = YadeCoupling(sc, packing)
     O.engines[0].damping = 0.2  # set after the build, it would not act: refused in one line
     with pytest.raises(ValueError, match="newton_damping"):
+        cp.run(1)
+
+
+def test_the_water_engine_follows_a_change_of_o_dt():
+    """O.dt halved by the script after 100 steps: the model's dt follows at its next water step, the
+    next 100 steps let in half the water (q_w per inflow pore x water_interval x O.dt, no rebuild),
+    and the runner, drive from Python and drive's compiled calls make the same run."""
+    from yade import O
+
+    from engines.model.pore_water import WaterSettings
+    from engines.yade import yade_io
+    runs = []
+    for how in ("runner", "python", "compiled"):
+        water = column_engine(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), 10**6, 5)
+        b = water.model.water.balance
+        if how == "runner":
+            O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+        first = []
+        for dt in (1e-6, 0.5e-6):
+            O.dt = dt
+            if how == "runner":
+                O.run(100, True)
+                yade_io.raise_pending()
+            else:
+                water.drive(100, (lambda: False) if how == "python" else None)
+            first.append(b.inflow - sum(first))
+            assert water.model.dt == dt, how
+        assert water.model.n_rebuilds == 0
+        np.testing.assert_allclose(first[1], 0.5 * first[0], rtol=1e-12)
+        runs.append((water.model.water.W.copy(), water.io.positions()))
+    for W, xz in runs[1:]:
+        assert np.array_equal(W, runs[0][0]) and np.array_equal(xz, runs[0][1])
+
+
+def test_the_paper_law_engine_follows_a_change_of_o_dt(packing):
+    """A run whose script sets O.dt = dt2 after the scene was built at dt1 is, bit for bit, the run
+    built at dt2 (the law's du / dt, dashpots and spin, and the water step follow O.dt); a dt
+    above eq 52 is refused at the next step."""
+    from yade import O
+    runs = []
+    for built, run in ((1e-6, 0.5e-6), (0.5e-6, 0.5e-6)):
+        cp = YadeCoupling(scenes.preset("quicksand_case1", {"numerics": {"dt": built, "water_interval": 2}}), packing)
+        O.dt = run
+        cp.run(300)
+        assert cp.core.dt == cp.core.law.dt == cp.core.water_model.dt == run
+        runs.append((cp.positions(), cp.core.omega.copy(), cp.water.W.copy()))
+    for a, b in zip(*runs):
+        assert np.array_equal(a, b)
+    O.dt = 1.0
+    with pytest.raises(ValueError, match="eq 52"):
         cp.run(1)
