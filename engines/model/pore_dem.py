@@ -197,8 +197,9 @@ class PoreDEM:
     law_class, water_class = PaperLaw, WaterModel  # of ``law`` and ``water_model``
     # what a checkpoint stores (engines.model.state)
     CHECKPOINT_FIELDS = ("law", "k", "base", "wall_velocity", "water_model", "ties")
-    CHECKPOINT_DERIVED = {name: "the scene and the packing" for name in
-                          ("settings", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")}
+    CHECKPOINT_DERIVED = {**{name: "the scene and the packing" for name in
+                             ("settings", "packing", "r", "mobile", "mass", "inertia", "dt", "moving_flat")},
+                          "schedule": "its water model's (stored there), or a dry scene's, which holds no state"}
 
     def __init__(self, settings, packing, flat_walls=()):
         self.settings, self.packing = settings, packing

@@ -53,6 +53,13 @@ class Schedule:
     ``k_built`` is the step of the last pore build (``built``); the output events are set by
     ``set_output`` (none until then)."""
 
+    # what a checkpoint stores (engines.model.state)
+    CHECKPOINT_FIELDS = ("k0", "k_built")
+    CHECKPOINT_DERIVED = {
+        **{name: "the scene's [numerics] (a WaterEngine's arguments)" for name in
+           ("water_interval", "rebuild_interval", "rebuild_distance")},
+        **{name: "set by the run (engines.run.runner.Run._schedule)" for name in ("output_interval", "output_steps")}}
+
     def __init__(self, water_interval=1, rebuild_interval=1000, rebuild_distance=0.0, k0=0):
         self.water_interval = int(water_interval)
         self.rebuild_interval = None if rebuild_interval is None else int(rebuild_interval)

@@ -40,11 +40,10 @@ class WaterModel:
 
     build_steps, remesh_steps = pg.NUMPY_BUILD, NUMPY_REMESH  # of build_pores and PoreWater.remesh
     # what a checkpoint stores (engines.model.state)
-    CHECKPOINT_FIELDS = ("wall_vertices", "F", "F_walls", "n_rebuilds", "k0", "k_built", "substeps_max",
+    CHECKPOINT_FIELDS = ("wall_vertices", "F", "F_walls", "n_rebuilds", "schedule", "substeps_max",
                          "substeps_total", "last_limit", "xz_built", "water")
     CHECKPOINT_DERIVED = {name: "the scene's [water] and [numerics], the packing's discs and flat walls" for name in
-                          ("settings", "eps_m", "l_m", "flat_walls", "r", "walls", "dt", "rebuild_interval",
-                           "water_interval", "rebuild_distance")} | {"log": "the print function"}
+                          ("settings", "eps_m", "l_m", "flat_walls", "r", "walls", "dt")} | {"log": "the print function"}
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):

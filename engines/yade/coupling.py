@@ -167,8 +167,8 @@ class YadeCoupling:
                                                           "wall_ids", "ids", "law", "mass", "inertia", "io", "per_step",
                                                           "_undamped")},
         "wall_engine": "YADE's TranslationEngine, built from the scene; its velocity is set before each step",
-        "hooks": "set by the run (engines.run.runner.Run)", "run_every": "set by the run (Run._schedule)",
-        "stops": "set by the run (Run._schedule)",
+        "hooks": "set by the run (engines.run.runner.Run)",
+        "schedule": "the core's (PoreDEM.schedule: its water model's, stored there) or the water engine's model's",
         "_chunk": "the steps of the next blocking O.run, adapted to the wall time: how steps are grouped, not what "
                   "they compute"}
 
