@@ -23,13 +23,13 @@ import sys
 
 # the project's folder first: `yade -x` puts only YADE's folders on sys.path
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 # signals from here on: a Ctrl-C before the run starts ends the script at once, in one line
 from engines.run.guard import catch_signals
 
 if __name__ == "__main__":
     catch_signals()
 
-import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 from engines.run import scene as scenes
 from engines.run.command_line import add_run_arguments, parse_run_arguments, run_script
 from engines.run.preflight import ArgumentParser
