@@ -77,13 +77,18 @@ class Schedule:
         """Does step k advance the water?"""
         return self.steps_to_water(k) == 0
 
+    def _phase(self, k):
+        """Steps from the last water step at or before step k to k (0: k is a water step)."""
+        return (k - self.k0) % self.water_interval
+
     def steps_to_water(self, k):
         """Steps from step k to the first water step at or after it."""
-        return (self.k0 - k) % self.water_interval
+        p = self._phase(k)
+        return 0 if p == 0 else self.water_interval - p
 
     def last_water(self, k):
         """The last water step at or before step k (k >= k0)."""
-        return k - (k - self.k0) % self.water_interval
+        return k - self._phase(k)
 
     def water_among(self, k, end):
         """Is one of the steps k, ..., end - 1 a water step?"""

@@ -309,7 +309,8 @@ def test_an_empty_table_is_refused(tmp_path):
     run = subprocess.run([sys.executable, os.path.join(ROOT, "yade_scripts", "sweep.py"), "--out", str(tmp_path / "s"),
                           "--table", str(table), "--script", os.path.join(ROOT, "yade_scripts", "quicksand.py")],
                          cwd=tmp_path, env=dict(os.environ, PYTHONPATH=ROOT), capture_output=True, text=True, timeout=300)
-    assert run.returncode == 1 and run.stderr.strip().splitlines() == [f"error: table {table} holds no jobs: nothing to run"]
+    assert run.returncode == 1 and run.stderr.strip().splitlines() == [
+        f"error: {table}: the table has column names (line 1) but no line of values"]
     assert not (tmp_path / "s").exists()
 
 
