@@ -1,6 +1,6 @@
 """Every measured number the docs quote is the number of a committed JSON: a marker right after
 the number, ``<!--json:PATH#KEY/KEY/0-->`` (PATH from the project's root, the keys of nested objects
-and the indices of lists separated by ``/``; ``*100`` after the keys for a percentage), names the
+and the indices of lists separated by ``/``, ``FIELD=VALUE`` and ``len`` to count a list's items; ``*100`` after the keys for a percentage), names the
 file and the value (keys may hold spaces, not ``*`` or ``>``), and the number as written must be that value rounded to the digits written.
 Nothing is rerun: the JSON files are the measurements, the docs quote them."""
 import glob
@@ -32,8 +32,18 @@ def quoted_numbers(text):
 
 
 def value_at(doc, keys):
+    """The value at ``keys``; on a list, ``FIELD=VALUE`` keeps the items whose FIELD is VALUE and
+    ``len`` counts the items (a count the doc quotes: points, runs of an outcome)."""
     for key in keys.split("/") if keys else []:
-        doc = doc[int(key)] if isinstance(doc, list) else doc[key]
+        if not isinstance(doc, list):
+            doc = doc[key]
+        elif key == "len":
+            doc = len(doc)
+        elif "=" in key:
+            field, value = key.split("=", 1)
+            doc = [item for item in doc if str(item.get(field)) == value]
+        else:
+            doc = doc[int(key)]
     return doc
 
 
@@ -54,6 +64,8 @@ def test_the_marker_reading_finds_the_number_and_rounds_as_written():
     assert quoted_numbers(text) == [("5.22", "a.json", "x", 1.0, 1), ("0.31", "a.json", "y/0", 100.0, 1),
                                     ("180,000", "b.json", "n", 1.0, 1)]
     assert value_at({"y": [0.5, 2]}, "y/0") == 0.5
+    points = {"p": [{"o": "a"}, {"o": "b"}, {"o": "a"}]}
+    assert value_at(points, "p/len") == 3 and value_at(points, "p/o=a/len") == 2 and value_at(points, "p/o=c/len") == 0
     assert agrees("5.22", 5.2211) and agrees("5.22", 5.2249) and not agrees("5.22", 5.226)
     assert agrees("180,000", 180000) and not agrees("180,000", 180001)
     assert agrees("6e-13", 6.4e-13) and not agrees("6e-13", 6.6e-13) and agrees("−0.5", -0.5)
