@@ -39,8 +39,9 @@ $(EXT_SO): engines/yade/yadebulk/yadebulk.c engines/yade/yadebulk/steps.cpp
 demo: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --overwrite --out $(OUT)/quicksand-case1
 
-# The YADE <-> reference cross-check (exits non-zero on a failed case), then the unit tests
-# (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests instead of skipping).
+# The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
+# batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests
+# instead of skipping).
 test: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --out $(OUT)/crosscheck
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q -m "not check" tests
@@ -51,12 +52,12 @@ check: deps
 	YADEBULK_REQUIRED=1 $(PY) -m pytest -q -m check tests
 
 # The NumPy core alone (tests of engines/model, engines/compiled, engines/reference, packing/ and the
-# layering of the tree): no YADE needed, about 15 s. Run `make deps` once first.
+# layering of the tree): no YADE needed, about 50 CPU s with a warm numba cache (README). Run `make deps` once first.
 test-fast:
 	$(PY) -m pytest -q tests/files tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
 
-# The reference in float32, float64 and longdouble on the quick-sand column (a measurement, README):
-# $(OUT)/precision/precision.json.
+# The reference in float32, float64 and longdouble on the quick-sand column (docs/CROSSCHECK.md):
+# $(OUT)/precision/precision.json; exits 1 when a precision misses its bound (PRECISION_BOUNDS).
 precision: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --precision --out $(OUT)/precision
 

@@ -32,7 +32,8 @@ def main(argv):
         print("precision:", json.dumps(result, indent=1), flush=True)
         os.makedirs(args.out, exist_ok=True)
         files.write_json(os.path.join(args.out, "precision.json"), result)
-        return 0
+        print("every precision within its bound" if result["passed"] else f"PRECISION OUT OF BOUND: {result['why']}")
+        return 0 if result["passed"] else 1
     from engines.yade.coupling import simulate  # needs YADE: run under `yade -n -x`
     try:
         result, path = crosscheck(simulate, args.out, args.only, log=lambda line: print(line, flush=True))

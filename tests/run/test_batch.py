@@ -69,6 +69,7 @@ def test_the_example_table_gives_valid_scenes(monkeypatch):
         assert args.out.startswith(BATCH_OUT + os.sep)
 
 
+@pytest.mark.check
 def test_yade_batch_runs_a_table(tmp_path):
     table = tmp_path / "sweep.table"
     table.write_text("duration water.q_w\n3e-4 2.5e-4\n3e-4 1e-3\n")

@@ -4,6 +4,7 @@ import os
 import subprocess
 
 import numpy as np
+import pytest
 
 from engines import ROOT
 from engines.run import scene as scenes
@@ -23,6 +24,7 @@ def digest(path):
     return hashlib.sha256(open(path, "rb").read()).hexdigest()
 
 
+@pytest.mark.check
 def test_default_goes_to_out_and_replace_overwrites_the_scenes_file(tmp_path):
     scene = tmp_path / "small.toml"
     scene.write_text(f'extends = "{os.path.relpath(PRESET, tmp_path)}"\n' + SMALL)
@@ -49,6 +51,7 @@ def test_replace_without_a_file_and_an_unwritable_out_are_refused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nofile.toml"]
 
 
+@pytest.mark.check
 def test_set_changes_the_deposit_and_is_refused_with_replace(tmp_path):
     """--set as in the run scripts: a wider box (8 bottom discs instead of 6) holds the same 8 discs;
     a changed scene never replaces the preset's packing file."""

@@ -26,6 +26,7 @@ def numbers(out):
     return {k: doc[k] for k in ("seeds", "perturbation_m", "results", "history")}
 
 
+@pytest.mark.check
 def test_the_seismic_box_ensemble_and_the_same_numbers_again(tmp_path):
     args = ["--case", "1", "--duration", "0.002", "--starts", "3"]
     for name in ("a", "b"):
@@ -58,6 +59,7 @@ def test_the_seismic_box_ensemble_and_the_same_numbers_again(tmp_path):
     assert (a / "ensemble_pressure_blocks.png").exists() and (a / "ensemble_history.png").exists()
 
 
+@pytest.mark.check
 def test_quick_sand_ensemble_on_dask_and_resumed_per_start_locally_gives_the_same_numbers(tmp_path):
     """An ensemble continued to a later end, and then with a start that never began, gives the
     numbers of the ensemble run at once on a Dask cluster's workers."""

@@ -304,6 +304,7 @@ def test_a_scene_script_refuses_an_out_holding_another_runs_outputs(tmp_path, na
     assert os.listdir(out) == [name] and (out / name).read_text() == "another run's\n"
 
 
+@pytest.mark.check
 def test_overwrite_replaces_another_runs_outputs_and_the_folder_is_printed(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
@@ -337,6 +338,7 @@ def test_sand_layer_keeps_another_runs_outputs(tmp_path):
     assert os.listdir(tmp_path) == ["summary.json"]
 
 
+@pytest.mark.check
 def test_the_sweep_runner_replaces_the_outputs_of_its_own_unfinished_job(tmp_path):
     """In the job directory the sweep runner gave it (SWEEP_JOB_DIR), a job it re-runs (only jobs
     that did not finish are) replaces that job's earlier outputs; any other folder stays refused."""

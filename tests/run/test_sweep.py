@@ -61,6 +61,7 @@ def test_local_sweep_reports_failures_and_resumes(tmp_path):
 ENV_JOB = "import json, os, sys; json.dump(dict(os.environ), open(os.path.join(sys.argv[1], 'env.json'), 'w'))"
 
 
+@pytest.mark.check
 def test_dask_local_cluster_sweep(tmp_path):
     """The sweep on a Dask cluster as on the local pool; its jobs see the environment of the sweep,
     not the Dask nanny's MALLOC_TRIM_THRESHOLD_ (which the worker itself holds)."""
@@ -88,6 +89,7 @@ def test_bad_jobs_are_refused(tmp_path):
     assert rec["status"] == "failed" and "could not start" in rec["stderr_tail"]
 
 
+@pytest.mark.check
 def test_yade_batch_table_becomes_jobs(tmp_path):
     script = tmp_path / "s.py"
     script.write_text("from yade import utils\n"

@@ -13,6 +13,7 @@ import pytest
 from engines import ROOT
 from engines.run.command_line import BATCH_OUT
 
+pytestmark = pytest.mark.check  # Dask processes and scene scripts under YADE
 distributed = pytest.importorskip("distributed")
 DASK = shutil.which("dask")
 CLEAN_ENV = {"PATH": "/usr/bin:/bin"}  # no PYTHONPATH, no HOME

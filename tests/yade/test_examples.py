@@ -8,6 +8,8 @@ import pytest
 
 from engines import ROOT
 
+pytestmark = pytest.mark.check  # each example run under YADE
+
 CHECKS = re.compile(r"^checks: (\d+) pores \((\d+) rebuilds\), max U (\S+) N/m \(E_w (\S+) N/m\), water balance error "
                     r"(\S+), re-meshing (\S+) of the inflow \((\S+) inside\), (\d+) grains outside the box$", re.M)
 
