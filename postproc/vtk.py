@@ -266,7 +266,8 @@ def snapshot_frame(snap):
     if "polygon.ptr" in snap:  # the network's outlines (engines.model.network_view) and its pore.* arrays
         ptr = snap["polygon.ptr"]
         n = len(ptr) - 1
-        pores = dict(xz=snap["polygon.xz"], polygons=[np.arange(ptr[p], ptr[p + 1]) for p in range(n)],
+        vertices, ids = snap["vertices"] if "vertices" in snap else xz, snap["polygon.vertex"]
+        pores = dict(xz=vertices, polygons=[ids[ptr[p]:ptr[p + 1]] for p in range(n)],
                      pore=np.arange(n), network={k: snap[k] for k in snap if k.startswith("pore.") and k != "pore.coords"})
         for name in ("U", "W", "A", "rule"):
             if name in snap:

@@ -17,7 +17,9 @@ as OpenPNM's x-z with y = 0):
   smoothing of eq 45-46);
 * each pore's outline polygon, in CSR form (not OpenPNM's: not per pore): ``polygon.xz`` (S, 2)
   [m], the boundary vertices in order (disc centres, and on flat walls the discs' feet and the
-  corners), pore p's rows ``polygon.ptr[p]:polygon.ptr[p + 1]`` (``polygons(net)`` lists them);
+  corners), pore p's rows ``polygon.ptr[p]:polygon.ptr[p + 1]`` (``polygons(net)`` lists them),
+  and ``polygon.vertex`` (S,) the vertices' ids (the discs, then the flat walls' vertices:
+  engines.model.pores.vertex_positions);
 * the water balance since the start [m^2]: ``balance.<field>`` of WaterBalance and
   ``balance.error`` (relative), 0-d arrays.
 
@@ -97,7 +99,7 @@ def pore_network(water, xz=None):
            "pore.side_flux": fl.side_q,
            "throat.conns": np.asarray(net.throat_conns, np.int64).reshape(-1, 2), "throat.conductance": fl.g,
            "throat.flux": fl.throat_q,
-           "polygon.ptr": ptr, "polygon.xz": pg.vertex_positions(net, xz)[idx]}
+           "polygon.ptr": ptr, "polygon.vertex": idx, "polygon.xz": pg.vertex_positions(net, xz)[idx]}
     out.update({f"balance.{k}": np.array(float(v)) for k, v in dataclasses.asdict(pw.balance).items()})
     out["balance.error"] = np.array(pw.balance_error())
     return out

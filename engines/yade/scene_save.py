@@ -9,19 +9,26 @@ Nothing in it is executed or unpickled.
 * ``install()`` (made by ``WaterEngine.runner()``) wraps ``Omega.save`` and ``Omega.saveTmp``:
   just before YADE writes, every WaterEngine whose runner is in O.engines writes its tag; and
   ``Omega.load`` and ``Omega.loadTmp``: after YADE read, every engine of this process restores its
-  water from the loaded tags at its next call.
+  water from the loaded tags: those whose runner is in the loaded O.engines at once (a RestoreError
+  raised by the load), the others when they are called.
+* YADE saves no permanent force: the runners are saved due at the next step, where the
+  restored engine sets its forces again and puts its runner back on its schedule.
 * The runner's command imports this module and calls ``call(key)``: the engine of that key (this
   process), or one made again from the tag's recipe (a new process: ``O.load`` then ``O.run``).
-  Its water is restored from the tag; no tag, or a tag of another step than O.iter, stops the run
-  in one line naming what to do. An engine called at a step before its last water step (the scene
+  Its water is restored from the tag (saved at step k, valid up to the engine's next water step:
+  O.iter in k ... k + water_interval); no tag, or a tag of another step, stops the run in one line
+  naming what to do. An engine called at a step before its last water step (the scene
   went back without the wrappers) restores from the tags the same way, never running on with
   water of another state.
-* ``engine(label)`` gives the script the engine of a loaded scene (to read its pores).
+* ``engine(label)`` gives the script the engine of a loaded scene (to read its pores); a new
+  engine's runner made while a loaded runner with saved water is in O.engines says, on stderr,
+  that its water starts afresh.
 """
 import base64
 import binascii
 import dataclasses
 import io
+import sys
 
 import numpy as np
 
@@ -31,6 +38,7 @@ from engines.yade import checkpoint, yade_io
 TAG = "pore_water:"  # O.tags key of an engine's saved water: TAG + its runner's key
 ENGINES = {}  # {key: WaterEngine} of this process's runners
 _STALE = set()  # keys whose water is to be restored from O.tags at the next call (after a load)
+_LOADED = set()  # keys restored from O.tags whose runner has not been called since
 
 
 class RestoreError(RuntimeError):
@@ -39,8 +47,14 @@ class RestoreError(RuntimeError):
 
 def runner(engine, label):
     """The PyRunner of ``engine`` (WaterEngine.runner): every water_interval steps, ``call`` by key."""
+    from yade import O
     from yade.wrapper import PyRunner
     install()
+    saved = [k[len(TAG):] for k in O.tags.keys() if k.startswith(TAG) and _runs_here(k[len(TAG):])]
+    if saved:
+        print(f"WaterEngine: the scene's runner(s) {saved} hold saved water (a loaded scene); this new engine's water "
+              "starts afresh (U = 0): to go on with the saved water, keep the loaded runner in O.engines "
+              "(engines.yade.scene_save.engine(label) gives its engine)", file=sys.stderr, flush=True)
     key = yade_io.new_key(label)
     ENGINES[key] = engine
     return PyRunner(command=yade_io.runner_command(__name__, key), iterPeriod=int(engine.model.schedule.water_interval),
@@ -58,14 +72,25 @@ def _step(key):
     water = ENGINES.get(key)
     if water is None or key in _STALE or O.iter < water.k:
         water = restore(key)
+    if key in _LOADED:  # the first call after a load (``install``): the forces are set again (restore);
+        _LOADED.discard(key)  # the water step only where the saved runner's call was due
+        runner = _runners(key)[0]
+        if O.iter < water.k + runner.iterPeriod:
+            runner.iterLast = water.k
+            return
     water()
+
+
+def _runners(key):
+    """The PyRunners of ``key`` among O.engines."""
+    from yade import O
+    from yade.wrapper import PyRunner
+    return [e for e in O.engines if isinstance(e, PyRunner) and repr(key) in e.command]
 
 
 def _runs_here(key):
     """Is the runner of ``key`` among O.engines?"""
-    from yade import O
-    from yade.wrapper import PyRunner
-    return any(isinstance(e, PyRunner) and repr(key) in e.command for e in O.engines)
+    return bool(_runners(key))
 
 
 def engine(label="water"):
@@ -151,7 +176,8 @@ def restore(key):
         ck = decode(where, O.tags[TAG + key])
     except checkpoint.CheckpointError as e:
         raise RestoreError(f"{e}: {remedy}") from None
-    if ck.step != O.iter or ck.yade != {"iter": O.iter}:
+    interval = ck.recipe.get("water_interval")
+    if not (ck.yade == {"iter": ck.step} and type(interval) is int and 0 <= O.iter - ck.step <= interval):
         raise RestoreError(f"{where} holds the water of step {ck.step}, the scene is at step {O.iter} (the scene went "
                            f"back or forward without O.load): {remedy}")
     water = ENGINES.get(key)
@@ -168,6 +194,7 @@ def restore(key):
         water.write_forces()
     ENGINES[key] = water
     _STALE.discard(key)
+    _LOADED.add(key)
     return water
 
 
@@ -175,6 +202,7 @@ def restore(key):
 def install():
     """Wrap Omega.save, saveTmp (the tags written first) and load, loadTmp (the engines' water
     restored from the loaded tags at their next call); once per process."""
+    from yade import O
     from yade.wrapper import Omega
     if getattr(Omega.save, "_pore_water", False):
         return
@@ -182,7 +210,16 @@ def install():
     def before(method):
         def wrapped(self, *args, **kwargs):
             save_tags()
-            return method(self, *args, **kwargs)
+            # saved due at the next step: after a load (in a new process, where nothing of the project
+            # runs before it) the runner restores the water and the permanent forces YADE does not save
+            runners = [(r, r.iterLast) for key in ENGINES for r in _runners(key)]
+            for r, last in runners:
+                r.iterLast = O.iter - r.iterPeriod
+            try:
+                return method(self, *args, **kwargs)
+            finally:
+                for r, last in runners:
+                    r.iterLast = last
         wrapped._pore_water = True
         return wrapped
 
@@ -190,6 +227,9 @@ def install():
         def wrapped(self, *args, **kwargs):
             out = method(self, *args, **kwargs)
             _STALE.update(ENGINES)
+            for key in list(ENGINES):
+                if _runs_here(key):
+                    restore(key)
             return out
         wrapped._pore_water = True
         return wrapped

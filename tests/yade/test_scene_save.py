@@ -33,20 +33,31 @@ def column():
 
 
 def test_savetmp_loadtmp_restores_the_water_and_the_run_repeats_bit_for_bit():
-    """O.saveTmp, 700 steps, O.loadTmp, the same 700 steps: the same centres and pressures (the
+    """O.saveTmp between two water steps, 700 steps, O.loadTmp, the same 700 steps: the same centres and pressures (the
     engine's water restored from O.tags, not run on with the later water)."""
     water, O = column()
-    O.run(500, True)
+    O.run(505, True)  # between two water steps (every 10)
     O.saveTmp("sv")
     O.run(700, True)
     xz, U = water.io.positions(), water.pressures().copy()
     O.loadTmp("sv")
-    assert O.iter == 500
+    assert O.iter == 505
     O.run(700, True)
     yade_io.raise_pending()
     np.testing.assert_array_equal(water.io.positions(), xz)
     np.testing.assert_array_equal(water.pressures(), U)
     assert water.model.water.balance_error() < 1e-12
+
+
+def test_a_new_engine_on_a_loaded_scene_says_its_water_starts_afresh(capsys):
+    from engines.yade.water_engine import WaterEngine
+    water, O = column()
+    O.run(100, True)
+    O.saveTmp("afresh")
+    O.loadTmp("afresh")
+    capsys.readouterr()
+    WaterEngine(**water.arguments).runner()
+    assert "hold saved water (a loaded scene); this new engine's water starts afresh" in capsys.readouterr().err
 
 
 def test_a_scene_gone_back_without_a_load_is_refused_in_one_line():
@@ -96,7 +107,7 @@ def test_o_load_in_a_new_process_restores_the_water(tmp_path):
     """A script saves its scene (O.save) and runs on; a new process O.load's it and runs the same
     steps: the same centres to the bit; with the tag emptied it stops in one line, exit status 1."""
     save = yade_script(tmp_path, "save.py", COLUMN.format(root=ROOT) + textwrap.dedent("""
-        O.run(500, True)
+        O.run(505, True)
         O.save("scene.yade.gz")
         O.run(300, True)
         np.save("xz.npy", water.io.positions())
@@ -131,3 +142,11 @@ def test_o_load_in_a_new_process_restores_the_water(tmp_path):
     assert lost.stderr.strip().splitlines()[-1].startswith("error inside a YADE engine, never raised by the script: "
                                                            "RestoreError: O.tags['pore_water:water-")
     assert "not a checkpoint (not a NumPy .npz file): make the WaterEngine again" in lost.stderr
+
+
+def test_a_runner_whose_engine_is_not_in_this_process_stops_in_one_line():
+    """A PyRunner of yade_io.py_runner (PaperLawEngine) loaded in another process: its key is unknown here."""
+    yade_io.call("paper-law-0123456789ab")
+    with pytest.raises(RuntimeError, match=r"made in another process .* make the engine again") as e:
+        yade_io.raise_pending()
+    assert "\n" not in str(e.value)
