@@ -6,7 +6,7 @@ the JSON header and named arrays of an .npz, as base64 text; sections ``recipe``
 constructor arguments, ``state``: its CHECKPOINT_FIELDS, engines.model.state; ``yade``: O.iter).
 Nothing in it is executed or unpickled.
 
-* ``install()`` (made by ``WaterEngine.runner()``) wraps ``Omega.save`` and ``Omega.saveTmp``:
+* ``install()`` (called by ``WaterEngine.runner()``) wraps ``Omega.save`` and ``Omega.saveTmp``:
   just before YADE writes, every WaterEngine whose runner is in O.engines writes its tag; and
   ``Omega.load`` and ``Omega.loadTmp``: after YADE read, every engine of this process restores its
   water from the loaded tags: those whose runner is in the loaded O.engines at once (a RestoreError
@@ -50,7 +50,8 @@ def runner(engine, label):
     from yade import O
     from yade.wrapper import PyRunner
     install()
-    saved = [k[len(TAG):] for k in O.tags.keys() if k.startswith(TAG) and _runs_here(k[len(TAG):])]
+    saved = [k for k in (t[len(TAG):] for t in O.tags.keys() if t.startswith(TAG))
+             if (k not in ENGINES or k in _LOADED) and _runs_here(k)]  # loaded, not yet run on
     if saved:
         print(f"WaterEngine: the scene's runner(s) {saved} hold saved water (a loaded scene); this new engine's water "
               "starts afresh (U = 0): to go on with the saved water, keep the loaded runner in O.engines "

@@ -150,3 +150,19 @@ def test_a_runner_whose_engine_is_not_in_this_process_stops_in_one_line():
     with pytest.raises(RuntimeError, match=r"made in another process .* make the engine again") as e:
         yade_io.raise_pending()
     assert "\n" not in str(e.value)
+
+
+def test_a_py_runner_calls_its_callback_through_its_module():
+    """yade_io.py_runner (PaperLawEngine's runner): the command imports the project's module, no builtins."""
+    import builtins
+
+    from yade import O
+    O.reset()
+    calls = []
+    O.engines = [yade_io.py_runner(lambda: calls.append(O.iter), 2, "probe")]
+    O.dt = 1e-6
+    O.run(5, True)
+    yade_io.raise_pending()
+    assert calls == [0, 2, 4]
+    assert "import engines.yade.yade_io as _pw" in O.engines[0].command
+    assert not hasattr(builtins, "_pore_dem_engines")
