@@ -45,10 +45,12 @@ run/preflight.py checks it and announces dt = "auto", run/runner.py and yade/cou
 where dt_auto_factor was validated: studies/tradeoffs.py (VALIDATED_ON).
 Observables: the window porosity and block means (model/observe.py); block pressures from one
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
-without taking it (ContactLaw.touching_at: the bottom wall's normal force).
+without taking it (ContactLaw.touching_at: the bottom wall's normal force); the pores as a network
+in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py.
 Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
 What a checkpoint stores of each object (its CHECKPOINT_FIELDS, and CHECKPOINT_DERIVED with reasons):
-model/state.py; the file (data only, no pickle): yade/checkpoint.py.
+model/state.py; the file (data only, no pickle): yade/checkpoint.py; a WaterEngine's state in
+YADE's own O.save/O.load (O.tags, the same format): yade/scene_save.py.
 
 Where to add ...
   a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across

@@ -34,7 +34,8 @@ def snapshot_files(run_dir):
 
 def read_snapshot(path):
     """One snapshot as a dict of arrays (t, xz, r, group, density_factor, vel, pairs, f_n, f_s
-    and, with water, tri, tri_pore, U, W, A, rule, with flat walls vertices; engines.run.runner.snapshot_data)."""
+    and, with water, tri, tri_pore, U, W, A, rule, with flat walls vertices, and the network under
+    OpenPNM's names, read_network; engines.run.runner.snapshot_data)."""
     with np.load(path, allow_pickle=False) as z:
         return dict(z)
 
@@ -91,3 +92,12 @@ def headline_results(history, heave_rise):
             "heave_rise_m": heave_rise, "bed_top_initial_m": float(bed[0]), "bed_top_max_m": float(bed.max()),
             "heave_time_s": float(t[risen[0]]) if len(risen) else None,
             "porosity_last_row": float(history["porosity"][-1]), "t_last_row_s": float(t[-1])}
+
+
+NETWORK_PREFIXES = ("pore.", "throat.", "polygon.", "balance.")  # engines.model.network_view's keys
+
+
+def read_network(path):
+    """The pore network of a snapshot file (engines.model.network_view: its pore.*, throat.*,
+    polygon.* and balance.* arrays), {} for a dry one or a snapshot written before them."""
+    return {k: v for k, v in read_snapshot(path).items() if k.startswith(NETWORK_PREFIXES)}

@@ -1,6 +1,6 @@
 """ParaView output: a VTK time series of discs, contact forces and pores in DIR/vtk/.
 
-Three series, each a ``.pvd`` collection (``discs.pvd``, ``forces.pvd``, ``pores.pvd``) of
+The series, each a ``.pvd`` collection (``discs.pvd``, ``forces.pvd``, ``pores.pvd``, ``throats.pvd``) of
 XML PolyData files (``discs_00000.vtp``, ...) with their times [s]. Coordinates are YADE's: the
 discs lie in the x-z plane, y = 0, in metres.
 
@@ -8,15 +8,20 @@ discs lie in the x-z plane, y = 0, in metres.
   ``density_factor`` [-], ``group`` (0 particle, 1 bottom, 2 left, 3 right wall).
 * forces: one line per touching pair between the disc centres, cell arrays ``normal_force`` and
   ``shear_force`` [N per m thickness] (each written when given).
-* pores: one polygon per pore outline (vertices at the disc centres), cell arrays ``pore`` (index),
-  ``U`` [N/m], ``W``, ``A`` [m^2 per m] and ``rule``: 0 built from the packing, 1-4 inherited at a
-  rebuild by rule (a)-(d) of §3.4(2) (the names are kept in the field array ``rule_names``).
+* pores: one polygon per pore outline (vertices at the disc centres, and on flat walls the discs'
+  feet and the corners), cell arrays ``pore`` (index), ``U`` [N/m], ``W``, ``A`` [m^2 per m] and
+  ``rule``: 0 built from the packing, 1-4 inherited at a rebuild by rule (a)-(d) of §3.4(2) (the
+  names are kept in the field array ``rule_names``); from snapshots holding the network
+  (engines.model.network_view), its ``pore.*`` arrays too, under their names (booleans as 0/1).
+* throats (snapshots holding the network): a line per throat between the pores' centroids, cell
+  arrays ``throat.conductance`` and ``throat.flux``.
 
 ``convert_run(run_dir)`` turns the ``snapshot_*.npz`` files of a run into this series.
 Written with VTK's own XML writers (Debian's python3-vtk9).
 """
 import errno
 import os
+import re
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -31,6 +36,7 @@ from postproc.run_files import read_snapshot, run_dir, snapshot_files
 
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
 SERIES = ("discs", "forces", "pores")
+THROATS = "throats"  # the series of the network's throats (runs whose snapshots hold the network)
 
 
 def _points(xz):
@@ -116,9 +122,10 @@ def rule_codes(rule):
     return np.array([RULES.index(str(x) or "build") for x in rule], np.int32)
 
 
-def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None):
+def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None, network=None):
     """Pore outlines: ``polygons`` a list of disc-index sequences; per polygon the pore index and
-    its U [N/m], W, A [m^2] and rule (names or codes, see RULES)."""
+    its U [N/m], W, A [m^2] and rule (names or codes, see RULES); ``network``: more cell arrays
+    {name: (n polygons,) values} (the network's pore.* arrays; booleans as 0/1)."""
     poly = vtkPolyData()
     poly.SetPoints(_points(xz))
     sizes = np.array([len(p) for p in polygons], np.int64)
@@ -128,6 +135,9 @@ def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None
     for name, values in (("pore", pore), ("U", U), ("W", W), ("A", A)):
         if values is not None:
             _add(cd, name, np.asarray(values, np.int32 if name == "pore" else float))
+    for name, values in (network or {}).items():
+        values = np.asarray(values)
+        _add(cd, name, values.astype(np.int8) if values.dtype == bool else values)
     if rule is not None:
         _add(cd, "rule", rule_codes(rule))
         names = vtkStringArray()
@@ -135,6 +145,20 @@ def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None
         for name in RULES:
             names.InsertNextValue(name)
         poly.GetFieldData().AddArray(names)
+    _write(poly, path)
+
+
+def write_throats(path, xz, conns, conductance=None, flux=None):
+    """The throats of the pore network: a line per pore pair ``conns`` (Nt, 2) between the pores'
+    centroids ``xz`` (Np, 2) [m], cell arrays throat.conductance [m^3/(N s)] and throat.flux [m^2/s]."""
+    conns = np.asarray(conns, np.int64).reshape(-1, 2)
+    poly = vtkPolyData()
+    poly.SetPoints(_points(xz))
+    poly.SetLines(_cells(2 * np.arange(len(conns) + 1), conns.ravel()))
+    cd = poly.GetCellData()
+    for name, values in (("throat.conductance", conductance), ("throat.flux", flux)):
+        if values is not None:
+            _add(cd, name, np.asarray(values, float))
     _write(poly, path)
 
 
@@ -156,27 +180,34 @@ class VtkSeries:
 
     def __init__(self, out_dir):
         self.dir = os.path.join(out_dir, "vtk")  # made at the first frame
-        self.entries = {s: [] for s in SERIES}
+        self.entries = {s: [] for s in SERIES + (THROATS,)}
 
     def checkpoint_restored(self):
-        """Refuse stored entries other than (t, "<series>_<k>.vtp") of SERIES; make them tuples again."""
-        if sorted(self.entries) != sorted(SERIES):
-            raise ValueError(f"vtk entries: expected the series {list(SERIES)}")
+        """Refuse stored entries other than (t, "<series>_<frame>.vtp") of SERIES (and THROATS: a
+        run of a checkpoint without them starts their series at its next frame), frames increasing;
+        make them tuples again."""
+        self.entries.setdefault(THROATS, [])
+        if sorted(self.entries) != sorted(SERIES + (THROATS,)):
+            raise ValueError(f"vtk entries: expected the series {list(SERIES + (THROATS,))}")
         for series, entries in self.entries.items():
+            last = -1
             for k, e in enumerate(entries):
-                if not (isinstance(e, list) and len(e) == 2 and type(e[0]) in (int, float)
-                        and e[1] == f"{series}_{k:05d}.vtp"):
-                    raise ValueError(f"vtk entry {series}[{k}]: expected [t, {series}_{k:05d}.vtp], got {e!r}")
+                m = re.fullmatch(rf"{series}_(\d{{5}})\.vtp", e[1]) if isinstance(e, list) and len(e) == 2 \
+                    and isinstance(e[1], str) else None
+                if not (m and type(e[0]) in (int, float) and int(m.group(1)) > last):
+                    raise ValueError(f"vtk entry {series}[{k}]: expected [t, {series}_<frame>.vtp] of increasing "
+                                     f"frames, got {e!r}")
+                last = int(m.group(1))
             self.entries[series] = [(float(t), name) for t, name in entries]
 
-    def add(self, t, discs, forces=None, pores=None):
-        """One frame at time t [s]: keyword dicts for write_discs, write_forces and write_pores
-        (without path; positions are taken from ``discs['xz']``)."""
+    def add(self, t, discs, forces=None, pores=None, throats=None):
+        """One frame at time t [s]: keyword dicts for write_discs, write_forces, write_pores and
+        write_throats (without path; positions are taken from ``discs['xz']`` unless given)."""
         k = len(self.entries["discs"])
         xz = discs["xz"]
         os.makedirs(self.dir, exist_ok=True)
         for series, kwargs, write in (("discs", discs, write_discs), ("forces", forces, write_forces),
-                                      ("pores", pores, write_pores)):
+                                      ("pores", pores, write_pores), (THROATS, throats, write_throats)):
             if kwargs is None:
                 continue
             name = f"{series}_{k:05d}.vtp"
@@ -232,7 +263,16 @@ def snapshot_frame(snap):
     discs = dict(xz=xz, r=snap["r"], vel=snap["vel"], density_factor=snap["density_factor"], group=snap["group"])
     forces = dict(pairs=snap["pairs"], f_n=snap["f_n"], f_s=snap["f_s"] if "f_s" in snap else None)
     pores = None
-    if "tri" in snap and len(snap["tri"]):
+    if "polygon.ptr" in snap:  # the network's outlines (engines.model.network_view) and its pore.* arrays
+        ptr = snap["polygon.ptr"]
+        n = len(ptr) - 1
+        vertices, ids = snap["vertices"] if "vertices" in snap else xz, snap["polygon.vertex"]
+        pores = dict(xz=vertices, polygons=[ids[ptr[p]:ptr[p + 1]] for p in range(n)],
+                     pore=np.arange(n), network={k: snap[k] for k in snap if k.startswith("pore.") and k != "pore.coords"})
+        for name in ("U", "W", "A", "rule"):
+            if name in snap:
+                pores[name] = np.asarray(snap[name])
+    elif "tri" in snap and len(snap["tri"]):
         polygons, owner = outlines_from_triangles(snap["tri"], snap["tri_pore"])
         vertices = snap["vertices"] if "vertices" in snap else xz  # with flat walls: discs, then wall vertices
         area = np.array([signed_area(vertices, poly) for poly in polygons])
@@ -248,6 +288,14 @@ def snapshot_frame(snap):
     return discs, forces, pores
 
 
+def snapshot_throats(snap):
+    """write_throats' keyword dict of one snapshot .npz holding the network (None without)."""
+    if "throat.conns" not in snap:
+        return None
+    return dict(xz=np.asarray(snap["pore.coords"])[:, [0, 2]], conns=snap["throat.conns"],
+                conductance=snap["throat.conductance"], flux=snap["throat.flux"])
+
+
 def convert_run(run_dir, out_dir=None):
     """Write the VTK series of a run's snapshots into (out_dir or run_dir)/vtk; returns the
     VtkSeries. Raises FileNotFoundError when the run has no snapshot."""
@@ -257,8 +305,7 @@ def convert_run(run_dir, out_dir=None):
     series = VtkSeries(out_dir or run_dir)
     for f in files:
         snap = read_snapshot(f)
-        discs, forces, pores = snapshot_frame(snap)
-        series.add(float(snap["t"]), discs, forces, pores)
+        series.add(float(snap["t"]), *snapshot_frame(snap), throats=snapshot_throats(snap))
     return series
 
 

@@ -34,7 +34,8 @@ VTK = "vtk"
 RUN_FILES = ("history.csv", "summary.json", CHECKPOINT, OLD_CHECKPOINT, "failure_state.npz", "pressure_blocks.png",
              "history_panels.png", "snapshots.png", "blocks.png", "depth.png", NAME)
 RUN_PATTERNS = ("snapshot_*ms.npz",)
-VTK_PATTERNS = ("discs_*.vtp", "forces_*.vtp", "pores_*.vtp", "discs.pvd", "forces.pvd", "pores.pvd")  # postproc.vtk
+VTK_PATTERNS = ("discs_*.vtp", "forces_*.vtp", "pores_*.vtp", "throats_*.vtp", "discs.pvd", "forces.pvd", "pores.pvd",
+                "throats.pvd")  # postproc.vtk
 # an ensemble's folder (engines.run.ensemble, postproc.ensemble) and a sweep's (engines.run.sweep)
 ENSEMBLE = "ensemble.json"
 ENSEMBLE_FILES = (ENSEMBLE, "sweep.json", "ensemble_pressure_blocks.png", "ensemble_history.png")

@@ -48,6 +48,7 @@ from yade import O
 
 from engines import files
 from engines.model import pores as pg
+from engines.model.network_view import pore_network
 from engines.model.pore_dem import pore_state
 from engines.model.start import Start
 from engines.run import guard, history, manifest
@@ -174,8 +175,8 @@ class Recorder:
                 files.savez(os.path.join(self.out, snapshot_name(k, self.dt)), **snap)
                 self.snapshot_steps.append(k)
             if vtk_due:
-                from postproc.vtk import snapshot_frame
-                self.vtk.add(snap["t"], *snapshot_frame(snap))
+                from postproc.vtk import snapshot_frame, snapshot_throats
+                self.vtk.add(snap["t"], *snapshot_frame(snap), throats=snapshot_throats(snap))
                 self.last_vtk = k
         now = time.time()
         if now - self.t_last >= self.progress_seconds:
@@ -209,7 +210,8 @@ def snapshot_data(cp, xz, k):
     """The arrays of a snapshot at step k (positions xz): discs, touching pairs with their normal
     and elastic shear forces and, with water, the pores as triangles with U, W, A and rule (with
     flat walls, ``vertices``: the positions tri indexes, and ``flat_walls`` (W, 3): axis, position
-    [m] now, inward of each)."""
+    [m] now, inward of each), and the network under OpenPNM's names (engines.model.network_view:
+    pore.*, throat.*, polygon.*, balance.*)."""
     pairs, fn, fs = cp.contact_pairs(xz)
     pk = cp.packing
     snap = dict(t=k * cp.scene.numerics.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
@@ -223,6 +225,7 @@ def snapshot_data(cp, xz, k):
         snap.update(tri=net.tri, tri_pore=net.tri_pore, U=U, W=cp.water.W.copy(), A=A, rule=cp.water.rule)
         if net.wall_vertices is not None:  # tri indexes the discs, then the flat walls' vertices
             snap["vertices"] = pg.vertex_positions(net, xz)
+        snap.update(pore_network(cp.water_model, xz))  # the same pores under OpenPNM's names
     return snap
 
 

@@ -23,6 +23,7 @@ pickle, another format, a truncated file, an array of another dtype or shape, a 
 unknown field) is refused in one line naming it. YADE's own binary loader (O.load, law = 'yade'
 only) is not hardened against crafted archives (docs/RELIABILITY.md).
 """
+import io
 import json
 import os
 import tempfile
@@ -89,18 +90,25 @@ def save(path, state, info=None, recipe=None):
     from yade import O
     sections = {"recipe": recipe or {}, "state": named_state.state_of(state),
                 "yade": _yade_state(os.path.dirname(os.path.abspath(path)))}
-    header = {"format": FORMAT, "step": int(O.iter), "info": info or {}, "arrays": []}
+    files.savez(path, compressed=False, **pack(int(O.iter), info, sections))
+
+
+def pack(step, info, sections):
+    """{member: array} of the checkpoint format (module docstring) for ``sections`` {section:
+    {name: plain value or array}}: the ``header`` member and one array member per array. The one
+    encoding of a checkpoint file and of a WaterEngine's saved state in O.tags (engines.yade.scene_save)."""
+    header = {"format": FORMAT, "step": int(step), "info": info or {}, "arrays": []}
     arrays = {}
-    for section, values in sections.items():
+    for section in SECTIONS:
         header[section] = {}
-        for name, value in values.items():
+        for name, value in sections.get(section, {}).items():
             if isinstance(value, np.ndarray):
                 arrays[f"{section}:{name}"] = value
             else:
                 header[section][name] = value
     header["arrays"] = sorted(arrays)
     text = json.dumps(header, separators=(",", ":"))
-    files.savez(path, compressed=False, header=np.frombuffer(text.encode("utf-8"), np.uint8), **arrays)
+    return {"header": np.frombuffer(text.encode("utf-8"), np.uint8), **arrays}
 
 
 def resume_end(step, n_steps, dt, duration=None):
@@ -135,10 +143,16 @@ def _read(path):
         head = f.read(2)
     if head[:1] == PICKLE_MAGIC:
         raise _older(path)
+    return _members(path, path, head)
+
+
+def _members(path, source, head):
+    """{member: array} of the .npz ``source`` (a path or a binary file) whose first bytes are
+    ``head``, read from ``path`` (named in the messages)."""
     if head != ZIP_MAGIC:
         raise CheckpointError(f"{path}: not a checkpoint (not a NumPy .npz file)")
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with np.load(source, allow_pickle=False) as z:
             members = {name: z[name] for name in z.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError, RuntimeError) as e:
         reason = "truncated or damaged" if isinstance(e, (zipfile.BadZipFile, EOFError)) else str(e).splitlines()[0]
@@ -151,7 +165,19 @@ def _read(path):
 
 def load(path):
     """Read the checkpoint ``path`` without YADE: a Checkpoint, or CheckpointError in one line."""
-    members = _read(path)
+    return unpack(path, _read(path))
+
+
+def load_bytes(where, data):
+    """The Checkpoint of the .npz bytes ``data`` (``pack``'s members, saved by np.savez), read from
+    ``where`` (named in the messages); CheckpointError in one line."""
+    return unpack(where, _members(where, io.BytesIO(data), data[:2]))
+
+
+def unpack(path, members):
+    """The Checkpoint of the members {name: array} read from ``path`` (a file, or where else they
+    were read: named in the messages); CheckpointError in one line."""
+    members = dict(members)
     raw = members.pop("header", None)
     if raw is None or raw.dtype != np.uint8 or raw.ndim != 1:
         raise CheckpointError(f"{path}: not a checkpoint (no header)")

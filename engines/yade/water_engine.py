@@ -77,12 +77,14 @@ class WaterEngine:
         "compiled": "the caller's choice", "F_const": "buoyancy, from the scene",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
         "_run_kernel": "a function of engines.yade.yade_io",
+        "arguments": "the constructor's arguments: the recipe of a saved scene's tag (engines.yade.scene_save)",
         "_chunk": "the steps of drive's next compiled call, adapted to the wall time: how steps are grouped, not "
                   "what they compute"}
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
                  water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True,
                  rebuild_distance=None, flat_walls=None):
+        self.arguments = {k: v for k, v in locals().items() if k != "self"}  # saved with the scene (scene_save)
         from yade import O  # YADE only here and below
 
         from engines.yade import yade_io
@@ -132,9 +134,11 @@ class WaterEngine:
 
     def runner(self, label="water"):
         """The PyRunner to put after the InteractionLoop and before NewtonIntegrator. YADE's
-        PyRunner adds its dispatch to every call (``drive`` does not pay it)."""
-        from engines.yade import yade_io
-        return yade_io.py_runner(self.__call__, self.model.schedule.water_interval, label)
+        PyRunner adds its dispatch to every call (``drive`` does not pay it). O.save and O.saveTmp
+        save the engine's water with the scene, O.load and O.loadTmp restore it, in a new process
+        too (engines.yade.scene_save)."""
+        from engines.yade import scene_save
+        return scene_save.runner(self, label)
 
     def drive(self, n, stop=None):
         """Instead of the runner and O.run(n): n O.step() calls, this engine's work before each of
@@ -262,6 +266,12 @@ class WaterEngine:
     def pressures(self):
         """U (Np,) [N/m] of the pores at the current positions."""
         return self.model.pressures(self.io.positions())
+
+    def network(self):
+        """The pores now as a pore network in OpenPNM's vocabulary (engines.model.network_view:
+        pore.coords, pore.pressure, polygons, boundaries, throat.conns, throat.flux, the balance)."""
+        from engines.model.network_view import pore_network
+        return pore_network(self.model, self.io.positions())
 
     def wall_forces(self):
         """{body id of flat_walls: (F_x, F_z)} [N per m thickness]: the push of the pore water on

@@ -16,12 +16,12 @@ The backend is chosen once, at import:
 Set the environment variable PORE_DEM_IO=python to force the Python backend (benchmarks, tests).
 """
 import atexit
-import builtins
 import ctypes
 import gc
 import os
 import sys
 import traceback
+import uuid
 
 import numpy as np
 from yade import O, utils
@@ -220,11 +220,11 @@ def set_velocities(ids, V):
         O.bodies[i].state.vel = (vx, 0.0, vz)
 
 
-_REGISTRY = "_pore_dem_engines"
 ERRORS = []  # exceptions raised inside engine callbacks, first one first (raise_pending re-raises)
 
 
-def _guarded(callback):
+def guarded(callback):
+    """``callback`` as an engine callback: an exception pauses YADE and is kept for ``raise_pending``."""
     def run():
         try:
             callback()
@@ -256,14 +256,40 @@ def _exit_if_pending():
         os._exit(1)
 
 
+CALLBACKS = {}  # {key: guarded callback} of the PyRunners made in this process (py_runner)
+# A PyRunner's command imports its module (the project) and calls by key: nothing in builtins, so
+# a scene saved by O.save and loaded by O.load, in this process or another, finds the module again
+COMMAND = ("try:\n    import {module} as _pw\nexcept ImportError as e:\n    raise ImportError(\"this PyRunner "
+           "calls the pore-water project ({module}), not importable here (\" + str(e) + \"): install it (make deps) "
+           "or put its folder on sys.path before O.run\") from None\n_pw.call({key!r})")
+
+
+def runner_command(module, key):
+    """The command of a PyRunner that imports ``module`` (of the project) and calls its ``call(key)``."""
+    return COMMAND.format(module=module, key=key)
+
+
+def new_key(label):
+    """A key for a PyRunner's callback, unique across processes (a saved scene keeps it)."""
+    return f"{label or 'runner'}-{uuid.uuid4().hex[:12]}"
+
+
 def py_runner(callback, iter_period=1, label=""):
-    """A PyRunner that calls ``callback()`` every ``iter_period`` steps (registered in builtins,
-    so the command works in any namespace YADE runs it in). An exception in the callback pauses
-    YADE and is kept for ``raise_pending`` (never raised: the process exits with status 1)."""
-    slot = getattr(builtins, _REGISTRY, None)
-    if slot is None:
-        slot = []
-        setattr(builtins, _REGISTRY, slot)
-    slot.append(_guarded(callback))
-    return PyRunner(command=f"{_REGISTRY}[{len(slot) - 1}]()", iterPeriod=int(iter_period), initRun=True,
-                    label=label)
+    """A PyRunner that calls ``callback()`` every ``iter_period`` steps (its command imports this
+    module and calls ``call`` with its key). An exception in the callback pauses YADE and is kept
+    for ``raise_pending`` (never raised: the process exits with status 1)."""
+    key = new_key(label)
+    CALLBACKS[key] = guarded(callback)
+    return PyRunner(command=runner_command(__name__, key), iterPeriod=int(iter_period), initRun=True, label=label)
+
+
+def call(key):
+    """The command of a PyRunner made by ``py_runner``: its callback, or (a scene loaded by O.load in
+    another process) an error naming what to do."""
+    callback = CALLBACKS.get(key)
+    if callback is None:
+        def callback():
+            raise RuntimeError(f"PyRunner {key}: its engine was made in another process (a scene loaded by O.load); "
+                               "make the engine again and put its runner() in O.engines in place of this PyRunner")
+        callback = guarded(callback)
+    callback()

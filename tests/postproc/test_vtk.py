@@ -11,7 +11,7 @@ from engines.model import pores as pg
 from engines.run import scene as scenes
 from engines.yade.deposition import scene_packing
 from postproc import vtk as pv
-from postproc.run_files import snapshot_files
+from postproc.run_files import read_network, snapshot_files
 
 
 def read(path):
@@ -133,6 +133,14 @@ def test_a_runs_snapshots_convert(tmp_path):
     pore = array(po.GetCellData(), "pore")
     assert sorted(set(pore.tolist())) == sorted(set(last["tri_pore"].tolist()))
     assert np.array_equal(array(po.GetCellData(), "U"), last["U"][pore])
+    net = read_network(snapshot_files(str(run))[-1])  # the network under OpenPNM's names, beside the old keys
+    assert net["pore.coords"].shape == (len(net["polygon.ptr"]) - 1, 3) == (len(last["W"]), 3)
+    np.testing.assert_array_equal(net["pore.pressure"], last["U"])
+    assert np.array_equal(array(po.GetCellData(), "pore.inflow"), net["pore.inflow"].astype(np.int8))
+    th = read(run / "vtk" / collection(run / "vtk" / "throats.pvd")[-1][1])
+    assert cells(th.GetLines()) == net["throat.conns"].tolist()
+    assert np.array_equal(points_xz(th), net["pore.coords"][:, [0, 2]])
+    assert np.array_equal(array(th.GetCellData(), "throat.flux"), net["throat.flux"])
     fo = read(run / "vtk" / collection(run / "vtk" / "forces.pvd")[-1][1])
     assert cells(fo.GetLines()) == last["pairs"].tolist()
     assert np.array_equal(array(fo.GetCellData(), "normal_force"), last["f_n"])
@@ -155,3 +163,15 @@ def test_snapshot_pores_leave_islands_out_whatever_the_orientation():
         _, _, pores = pv.snapshot_frame(snap)
         assert len(pores["polygons"]) == 1 and sorted(pores["polygons"][0]) == [0, 1, 2, 3]
         assert pores["U"].tolist() == [7.0] and pores["pore"].tolist() == [0]
+
+
+def test_stored_entries_of_a_series_without_throats_are_taken_and_others_refused(tmp_path):
+    """A checkpoint's entries written before the throats series: its throats start at the next
+    frame; a name out of order is refused."""
+    series = pv.VtkSeries(str(tmp_path))
+    series.entries = {s: [[0.0, f"{s}_00000.vtp"], [0.5, f"{s}_00001.vtp"]] for s in pv.SERIES}
+    series.checkpoint_restored()
+    assert series.entries[pv.THROATS] == [] and series.entries["pores"][1] == (0.5, "pores_00001.vtp")
+    series.entries = {s: [[0.0, f"{s}_00001.vtp"], [0.5, f"{s}_00001.vtp"]] for s in pv.SERIES}
+    with pytest.raises(ValueError, match="increasing"):
+        series.checkpoint_restored()
