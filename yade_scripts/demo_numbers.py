@@ -32,6 +32,7 @@ if __name__ == "__main__":
         else:
             print(f"output: {os.path.abspath(args.out)} (the demo, then {demo_numbers.STARTS} starts)", flush=True)
             doc = demo_numbers.measure(args.out)
+            os.makedirs(os.path.dirname(demo_numbers.JSON), exist_ok=True)
             files.write_json(demo_numbers.JSON, doc)
         for path in demo_numbers.DOCS:
             demo_numbers.update(path, doc)

@@ -31,7 +31,7 @@ import time
 from engines.run import manifest
 from engines.run.preflight import ENSEMBLE, InputError, check_scale, number, preflight
 from engines.run.sweep import YADE, Job, run_sweep, yade_environment
-from engines.run.talk import interval_lines
+from engines.run.talk import interval_lines, say
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
 OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--scheduler-file", "--out", "--overwrite")  # not passed to a start
@@ -285,7 +285,7 @@ def run_starts(jobs, out, plan, args):
     t0 = time.time()
     try:
         run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
-                  scheduler_file=args.scheduler_file)
+                  scheduler_file=args.scheduler_file, log=say)  # --quiet: the starts' lines left out
     except (OSError, TimeoutError) as e:
         if not (args.scheduler or args.scheduler_file):
             raise

@@ -102,3 +102,16 @@ def test_the_eta_is_measured_from_the_first_progress_line_on():
     assert rec.eta(101.0, 1010) == ", about 9 s left"  # 1000 steps a second from there: 8990 steps
     assert rec.eta(102.0, 2010) == ", about 8 s left"
     assert math.isclose(rec.t_ref, 100.0)
+
+
+def test_a_sweep_ends_with_the_results_of_the_jobs_that_wrote_a_summary(tmp_path):
+    from engines.run.sweep import format_summary
+    (tmp_path / "k1=20").mkdir()
+    (tmp_path / "k1=20" / "summary.json").write_text(json.dumps({"results": RESULTS}))
+    (tmp_path / "other").mkdir()  # a job of another kind: no summary.json
+    records = [{"name": "k1=20", "status": "ok", "returncode": 0, "wall_s": 3.0},
+               {"name": "other", "status": "ok", "returncode": 0, "wall_s": 1.0}]
+    lines = format_summary(records, str(tmp_path)).splitlines()
+    assert lines[4] == "the results of the jobs that wrote a summary.json:"
+    assert lines[5].startswith("run    U_block1 U_max [N/m]") and lines[6].split()[:2] == ["k1=20", "221.9"]
+    assert len(lines) == 7 and "results" not in format_summary(records)
