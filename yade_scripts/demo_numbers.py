@@ -39,4 +39,4 @@ if __name__ == "__main__":
     except (OSError, ValueError, RuntimeError) as e:
         sys.exit(f"error: {e}")
     print(demo_numbers.text(doc))
-    print(f"written: {demo_numbers.JSON}, " + ", ".join(demo_numbers.DOCS))
+    print("written: " + ", ".join(([] if args.docs_only else [demo_numbers.JSON]) + list(demo_numbers.DOCS)))

@@ -10,6 +10,7 @@ paragraph the documents quote between MARKS; ``update`` writes it there, ``quote
 import json
 import os
 import subprocess
+import textwrap
 import time
 
 from engines import ROOT, __version__, files
@@ -68,7 +69,12 @@ def measure(out):
 
 
 def text(doc):
-    """The paragraph the documents quote (Markdown, one line per sentence)."""
+    """The paragraph the documents quote (Markdown, wrapped at 100 characters)."""
+    return textwrap.fill(_sentences(doc).replace("\n", " "), 100, break_on_hyphens=False, break_long_words=False)
+
+
+def _sentences(doc):
+    """The paragraph's sentences, unwrapped."""
     r, e, n = doc["demo"]["results"], doc["ensemble"]["results"], doc["ensemble"]["starts"]
     U = "peak_block_pressures.U_block{}.{}"
 
@@ -86,8 +92,9 @@ def text(doc):
             + (f"heave at {heave * 1e3:.1f} ms ({n} starts: {ci('heave_time_s', 1e3)} ms)" if heave is not None
                else "no heave") +
             f" and window porosity {r['porosity_end']:.3f} at the end ({n} starts: {ci('porosity_end', 1.0, '.3f')}); "
-            f"the 95 % intervals are those of {n} starts perturbed by "
-            f"{doc['ensemble']['perturbation_m']:g} m (the run is chaotic: one run is one sample).\n"
+            f"the ranges are the 95 % intervals of the mean of {n} starts perturbed by "
+            f"{doc['ensemble']['perturbation_m']:g} m (the run is chaotic: the demo is one sample, which may lie "
+            f"outside them).\n"
             f"The demo's {doc['demo']['steps']:,} steps took {doc['demo']['run_seconds']:.1f} s "
             f"({doc['demo']['us_per_step']:.0f} µs a step) and its whole `yade -n -x` command {doc['demo']['command_seconds']:.0f} s "
             f"with the kernels compiled, on {m['cores']} shared cores at a load of {m['load_1min_before']:g}.")
