@@ -72,18 +72,35 @@ def test_an_empty_cache_folder_is_announced_once(tmp_path, monkeypatch):
     assert not cache.is_empty(str(tmp_path))
 
 
+BANNER = ("Welcome to Yade", "Using python version", "TCP python prompt", "XMLRPC info provider", "Running script")
+
+
+def script_lines(argv, env):
+    """The stdout lines of ``yade -n -x`` argv without YADE's banner (its exit status checked)."""
+    ran = subprocess.run(["yade", "-n", "-x"] + argv, env=env, capture_output=True, text=True, timeout=1800)
+    assert ran.returncode == 0, ran.stdout + ran.stderr
+    return [x for x in ran.stdout.splitlines() if not x.startswith(BANNER)]
+
+
 @pytest.mark.check
-def test_after_the_warm_up_a_demo_like_run_compiles_nothing(tmp_path):
+def test_a_first_run_says_it_compiles_and_after_the_warm_up_a_demo_like_run_compiles_nothing(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"), PYTHONPATH=ROOT, MPLBACKEND="Agg")
     env.pop(cache.KEYED, None)
+    quicksand = [os.path.join(ROOT, "yade_scripts", "quicksand.py"), "--case", "1", "--duration", "0.0015",
+                 "--set", "output.progress_seconds=0.001"]
+    first = script_lines(quicksand + ["--out", str(tmp_path / "first")], env)  # an empty cache: it compiles
+    assert sum("compiling the numba kernels" in x for x in first) == 1
+    progress = [x for x in first if " step " in x and x.startswith("[quicksand-case1]")]
+    assert "left" not in progress[0] and "s left" in progress[1]  # no estimate before steps were measured
     done = subprocess.run([sys.executable, os.path.join(ROOT, "yade_scripts", "warmup.py")], env=env,
                           capture_output=True, text=True, timeout=3600)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.startswith("warm-up: the numba kernels into") and "the first compile takes about" in done.stdout
+    assert done.stdout.startswith("warm-up: the numba kernels in") and "warm-up 10/10" in done.stdout
     probe = tmp_path / "probe.py"
     probe.write_text(PROBE.format(root=ROOT, out=str(tmp_path / "run")))
-    ran = subprocess.run(["yade", "-n", "-x", str(probe)], env=env, capture_output=True, text=True, timeout=600)
-    line = [x for x in ran.stdout.splitlines() if x.startswith("PROBE ")]
-    assert ran.returncode == 0 and line, ran.stdout + ran.stderr
+    line = [x for x in script_lines([str(probe)], env) if x.startswith("PROBE ")]
     result = json.loads(line[0][6:])
     assert result["misses"] == {} and result["hits"] > 0
+    quiet = script_lines(quicksand + ["--quiet", "--out", str(tmp_path / "quiet")], env)
+    assert quiet[0].startswith("done: 1500 steps") and all(x.startswith("  ") for x in quiet[1:])
+    assert "  U_block1 U_max" in " ".join(quiet) and quiet[-1].startswith("  figure ")
