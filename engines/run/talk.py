@@ -51,8 +51,18 @@ def quantity(name, value):
 
 
 def result_lines(results):
-    """The lines of a run's headline ``results`` (summary.json), one per number, with its unit."""
-    return [quantity(name, value) for name, value in headline(results).items()]
+    """The lines of a run's headline ``results`` (summary.json), one per number with its unit, a
+    block's peak pressure and its time on one line ("U_block1 peak 221.9 N/m at 28.1 ms")."""
+    flat, lines = headline(results), []
+    for name, value in flat.items():
+        if name.endswith(".t_s") and name[:-4] + ".U_max_N_per_m" in flat:
+            continue  # said with its peak
+        time = flat.get(name.removesuffix(".U_max_N_per_m") + ".t_s") if name.endswith(".U_max_N_per_m") else None
+        if time is not None and value == value:
+            lines.append(f"{label(name)[0].removesuffix(' U_max')} peak {value:.4g} N/m at {time * 1e3:.4g} ms")
+        else:
+            lines.append(quantity(name, value))
+    return lines
 
 
 def results_table(runs):

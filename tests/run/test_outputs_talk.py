@@ -61,8 +61,8 @@ def test_the_end_lines_give_the_results_with_units_and_the_figures():
                       "results": RESULTS}, ["out/pressure_blocks.png"])
     lines = text.splitlines()
     assert lines[0].startswith("done: 60000 steps in 5.0 s")
-    assert lines[1:] == ["  U_block1 U_max 221.9 N/m", "  U_block1 t 28.1 ms", "  heave_time none",
-                         "  porosity_end 0.508", "  figure out/pressure_blocks.png"]
+    assert lines[1:] == ["  U_block1 peak 221.9 N/m at 28.1 ms", "  heave_time none", "  porosity_end 0.508",
+                         "  figure out/pressure_blocks.png"]
 
 
 def test_an_ensemble_says_each_mean_with_its_interval():
