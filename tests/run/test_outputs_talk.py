@@ -115,3 +115,11 @@ def test_a_sweep_ends_with_the_results_of_the_jobs_that_wrote_a_summary(tmp_path
     assert lines[4] == "the results of the jobs that wrote a summary.json:"
     assert lines[5].startswith("run    U_block1 U_max [N/m]") and lines[6].split()[:2] == ["k1=20", "221.9"]
     assert len(lines) == 7 and "results" not in format_summary(records)
+
+
+def test_the_results_give_the_porosity_change():
+    from postproc.run_files import headline_results
+    h = {"t": np.array([0.0, 0.01]), "porosity": np.array([0.47, 0.45]), "bed_top": np.array([0.01, 0.01]),
+         "U_block1": np.array([0.0, 5.0])}
+    res = headline_results(h, 4.5e-4)
+    assert res["porosity_change"] == pytest.approx(-0.02) and "porosity_change -0.02" in talk.result_lines(res)
