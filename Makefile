@@ -9,7 +9,7 @@ EXT_SO  := engines/yade/yadebulk/_yadebulk.so
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install demo test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext install warmup demo demo-numbers test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -21,6 +21,12 @@ deps:
 	fi
 	@$(MAKE) --no-print-directory ext || echo "warning: engines/yade/yadebulk not built: YADE I/O falls back to per-body calls"
 	@$(MAKE) --no-print-directory install
+	@$(MAKE) --no-print-directory warmup || echo "warning: the warm-up failed: a first run compiles the kernels it needs (about a minute)"
+
+# numba's kernels compiled once per version of the code (engines/run/warmup.py: short runs of the
+# presets and the examples; skipped when done for this code), so that a first run steps at once.
+warmup:
+	@$(PY) yade_scripts/warmup.py
 
 # The project for Debian's python3 (the interpreter `yade` runs), editable: a script of your own
 # anywhere imports engines, packing and postproc without PYTHONPATH (the last checkout installed wins).
@@ -38,6 +44,11 @@ $(EXT_SO): engines/yade/yadebulk/yadebulk.c engines/yade/yadebulk/steps.cpp
 # The main job: Tarumi & Hakuno quick sand, case 1, with its figures (a second demo replaces the first).
 demo: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --overwrite --out $(OUT)/quicksand-case1
+
+# The demo's numbers quoted in README.md and docs/OUTPUTS.md: the demo timed and 8 perturbed starts of
+# it (a few minutes) -> docs/demo/demo.json and the paragraphs between the demo-numbers marks.
+demo-numbers: deps
+	$(PY) yade_scripts/demo_numbers.py --out $(OUT)/demo-numbers
 
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
 # batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests

@@ -59,8 +59,9 @@ Where to add ...
   a wall type: the group codes of model/groups.py (WALL_*, the one table; packing files store
     them), which link discs to walls in build_pores (model/pores.py); boundary flows in
     PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
-  an output column: Recorder in run/runner.py (its ``columns`` and ``row``), from what the
-    coupling (yade/coupling.py) measured at the step.
+  an output column: history_columns and Recorder.row in run/runner.py (only for the scenes that
+    produce it), from what the coupling (yade/coupling.py) measured at the step; its unit in
+    run/history.py (UNITS) and docs/OUTPUTS.md.
   an attribute to a class of a run's state: its CHECKPOINT_FIELDS (stored) or CHECKPOINT_DERIVED
     (why not), else tests/yade/test_checkpoint_format.py fails; raise FORMAT in yade/checkpoint.py
     when the stored fields change.

@@ -103,11 +103,12 @@ def blocks_figure(history, title, bounds=None, snap0=None):
     grid = fig.add_gridspec(n + 1, 2, width_ratios=(1.0, 1.6), height_ratios=(2.4,) + (1,) * n)
     ax = fig.add_subplot(grid[0, 1])
     axes = [fig.add_subplot(grid[k, :], sharex=ax) for k in range(1, n + 1)]
-    ax.plot(t, history["base_acc"] * 100, color="0.2", lw=0.8, label="base acceleration [gal]")
+    zero = np.zeros_like(t)  # a scene without base motion has no base columns: drawn still
+    ax.plot(t, history.get("base_acc", zero) * 100, color="0.2", lw=0.8, label="base acceleration [gal]")
     ax.set_ylabel("a [gal]")
     ax.set_xlabel("t [ms]")
     ax2 = ax.twinx()
-    ax2.plot(t, history["base_disp"] * 1e6, color="C3", lw=0.9, label="base displacement [µm]")
+    ax2.plot(t, history.get("base_disp", zero) * 1e6, color="C3", lw=0.9, label="base displacement [µm]")
     ax2.set_ylabel("u [µm]", color="C3")
     ax.legend(handles=ax.get_lines() + ax2.get_lines(), fontsize=7.5, loc="lower center", ncol=2,
               bbox_to_anchor=(0.5, 1.0), frameon=False)
@@ -251,10 +252,11 @@ def case_summary(run_dir):
            "porosity_initial": float(n[0]), "porosity_end": end_mean(t, n),
            "porosity_change": end_mean(t, n) - float(n[0]), "porosity_min": float(np.nanmin(n)),
            "porosity_max": float(np.nanmax(n)),
-           "base_peak_acc": float(np.abs(h["base_acc"]).max()),
-           "base_disp_range": [float(h["base_disp"].min()), float(h["base_disp"].max())],
+           "base_peak_acc": float(np.abs(h["base_acc"]).max()) if "base_acc" in h else 0.0,
+           "base_disp_range": [float(h["base_disp"].min()), float(h["base_disp"].max())] if "base_disp" in h
+           else [0.0, 0.0],
            "side_wall_shift_max": float(np.nanmax(np.abs(np.r_[h["side_left_dx"], h["side_right_dx"]])))
-           if np.isfinite(h["side_left_dx"]).any() else None,
+           if "side_left_dx" in h and np.isfinite(h["side_left_dx"]).any() else None,
            "bed_top_change": float(h["bed_top"][-1] - h["bed_top"][0])}
     wb = summary.get("water_balance")
     if wb:

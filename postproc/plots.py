@@ -25,7 +25,7 @@ FORCE_COLOUR, ARROW_COLOUR = "darkred", "navy"
 FLAT_WALL_COLOUR = "dimgrey"  # a flat wall's face in the snapshots
 FORCE_WIDTH = (0.3, 3.5)    # line width [pt] = 0.3 + 3.5 f_n / f_max
 HISTORY_PANELS = [("porosity", "porosity [-]", 1.0), ("kinetic_energy", "kinetic energy [J/m]", 1.0),
-                  ("fn_bottom_mean", "mean normal force, block 1 [N]", 1.0), ("bed_top", "bed top [mm]", 1e3)]
+                  ("fn_bottom_mean", "mean normal force, block 1 [N/m]", 1.0), ("bed_top", "bed top [mm]", 1e3)]
 
 
 def nan_runs(t, y):
@@ -119,7 +119,7 @@ def plot_history_panels(history, path, title):
 
 
 def force_width(fn, f_max):
-    """Line width [pt] of a normal force [N] on the shared scale."""
+    """Line width [pt] of a normal force [N/m: per metre of thickness] on the shared scale."""
     lo, span = FORCE_WIDTH
     return lo + span * np.clip(fn, 0, None) / f_max
 
@@ -128,7 +128,7 @@ def draw_snapshot(ax, snap, U_norm=None, velocity_scale=None, force_scale=None):
     """Discs, pores coloured by U, normal-force network (width ~ force) and velocity arrows.
 
     U_norm: colour normalisation of U (default centred on 0 at +-max|U|); velocity_scale [m/s]
-    is drawn one mean diameter long; force_scale [N] gets the widest line. Returns the pore
+    is drawn one mean diameter long; force_scale [N/m] gets the widest line. Returns the pore
     collection (for a colour bar) or None and the quiver (for a key) or None."""
     xz, r, group = snap["xz"] * 1e3, snap["r"] * 1e3, snap["group"]
     polys = None
@@ -217,7 +217,7 @@ def snapshot_figure(snaps, title, blocks=None):
         key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
     if any("flat_walls" in s for s in snaps):
         key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
-    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N")
+    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N/m")
             for f in (f_max / 4, f_max)]
     if blocks:
         key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]

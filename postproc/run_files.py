@@ -76,7 +76,8 @@ def headline_results(history, heave_rise):
     """The headline numbers of a run from its history ({column: array}) for summary.json:
     per pressure block the peak of its mean excess pore pressure U [N/m] and when; the heave time:
     the first row whose bed top (highest particle top) lies ``heave_rise`` [m] or more above that
-    of the first row (None if it never does); the porosity of the last row. {} without rows."""
+    of the first row (None if it never does); the porosity of the last row and its change from the
+    first (a seismic run's compaction < 0, a heave's dilation > 0). {} without rows."""
     t = history.get("t", np.zeros(0))
     if not len(t):
         return {}
@@ -91,7 +92,8 @@ def headline_results(history, heave_rise):
     return {"peak_block_pressures": peaks,
             "heave_rise_m": heave_rise, "bed_top_initial_m": float(bed[0]), "bed_top_max_m": float(bed.max()),
             "heave_time_s": float(t[risen[0]]) if len(risen) else None,
-            "porosity_last_row": float(history["porosity"][-1]), "t_last_row_s": float(t[-1])}
+            "porosity_last_row": float(history["porosity"][-1]), "t_last_row_s": float(t[-1]),
+            "porosity_change": float(history["porosity"][-1] - history["porosity"][0])}
 
 
 NETWORK_PREFIXES = ("pore.", "throat.", "polygon.", "balance.")  # engines.model.network_view's keys

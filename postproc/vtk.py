@@ -37,6 +37,9 @@ from postproc.run_files import read_snapshot, run_dir, snapshot_files
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
 SERIES = ("discs", "forces", "pores")
 THROATS = "throats"  # the series of the network's throats (runs whose snapshots hold the network)
+# the arrays' names in the files, each with its unit (forces per metre of thickness, areas per metre too)
+ARRAYS = {"radius": "radius [m]", "velocity": "velocity [m/s]", "normal_force": "normal_force [N/m]",
+          "shear_force": "shear_force [N/m]", "U": "U [N/m]", "W": "W [m^2]", "A": "A [m^2]"}
 
 
 def _points(xz):
@@ -91,9 +94,9 @@ def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
     poly.SetPoints(_points(xz))
     poly.SetVerts(_cells(np.arange(n + 1), np.arange(n)))
     pd = poly.GetPointData()
-    _add(pd, "radius", np.asarray(r, float))
+    _add(pd, ARRAYS["radius"], np.asarray(r, float))
     if vel is not None:
-        _add(pd, "velocity", _in_plane(vel))
+        _add(pd, ARRAYS["velocity"], _in_plane(vel))
     if density_factor is not None:
         _add(pd, "density_factor", np.asarray(density_factor, float))
     if group is not None:
@@ -102,15 +105,16 @@ def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
 
 
 def write_forces(path, xz, pairs, f_n, f_s=None):
-    """The contact-force network: a line per pair (i, j) with normal (and shear) force [N]."""
+    """The contact-force network: a line per pair (i, j) with normal (and shear) force [N/m: N per
+    metre of thickness]."""
     pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
     poly = vtkPolyData()
     poly.SetPoints(_points(xz))
     poly.SetLines(_cells(2 * np.arange(len(pairs) + 1), pairs.ravel()))
     cd = poly.GetCellData()
-    _add(cd, "normal_force", np.asarray(f_n, float))
+    _add(cd, ARRAYS["normal_force"], np.asarray(f_n, float))
     if f_s is not None:
-        _add(cd, "shear_force", np.asarray(f_s, float))
+        _add(cd, ARRAYS["shear_force"], np.asarray(f_s, float))
     _write(poly, path)
 
 
@@ -134,7 +138,7 @@ def write_pores(path, xz, polygons, pore=None, U=None, W=None, A=None, rule=None
     cd = poly.GetCellData()
     for name, values in (("pore", pore), ("U", U), ("W", W), ("A", A)):
         if values is not None:
-            _add(cd, name, np.asarray(values, np.int32 if name == "pore" else float))
+            _add(cd, ARRAYS.get(name, name), np.asarray(values, np.int32 if name == "pore" else float))
     for name, values in (network or {}).items():
         values = np.asarray(values)
         _add(cd, name, values.astype(np.int8) if values.dtype == bool else values)

@@ -25,6 +25,8 @@ ENGINES = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOURCES = ("model", "compiled")  # the packages of engines/ whose code the kernels compile
 KEYED = "PORE_DEM_NUMBA_CACHE_DIR"  # the keyed folder this module set as NUMBA_CACHE_DIR (for child processes)
 KEEP = 8  # keyed folders kept under a root (about 20 MB each), the most recently used
+COMPILE_SECONDS = 60  # [s] about what compiling the kernels a scene uses takes (2 shared cores, 2026-12-04)
+fresh = False  # use() found its keyed folder holding no compiled kernel: the next run compiles them
 
 
 def cache_key(engines=ENGINES):
@@ -83,12 +85,30 @@ def _prune(root):
         shutil.rmtree(e.path, ignore_errors=True)
 
 
+def is_empty(path):
+    """Does the folder ``path`` hold no file (in any of its subfolders)?"""
+    for entry in os.scandir(path):
+        if entry.is_file(follow_symlinks=False) or entry.is_dir(follow_symlinks=False) and not is_empty(entry.path):
+            return False
+    return True
+
+
+def compile_note():
+    """The line a run says before it compiles the kernels afresh, or None when ``use`` found
+    compiled kernels."""
+    if fresh:
+        return f"compiling the numba kernels (about {COMPILE_SECONDS} s, once per version of the code)..."
+    return None
+
+
 def use():
     """Point numba at ``cache_dir()`` (NUMBA_CACHE_DIR, marked for child processes in KEYED),
     numba's configuration read again if it was loaded already. Returns the folder (None: none writable)."""
+    global fresh
     path = cache_dir()
     if path is None:
         return None
+    fresh = is_empty(path)
     os.environ["NUMBA_CACHE_DIR"] = os.environ[KEYED] = path
     config = sys.modules.get("numba.core.config")
     if config is not None:  # numba imported before this package: its settings taken from the environment again

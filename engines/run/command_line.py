@@ -4,6 +4,7 @@ its yade-batch form.
 A script adds its own choice of scene (e.g. --case, --scene) and then::
 
     add_run_arguments(ap, perturbation)           # --out --overwrite --duration --dt --set --vtk --force --resume
+                                                  # --quiet --verbose (engines.run.talk)
                                                   # and the ensemble's --starts --perturbation --jobs
                                                   # --scheduler --start (engines.run.ensemble)
     args = parse_run_arguments(ap, argv)          # argv, or the yade-batch job's table line
@@ -25,11 +26,12 @@ import sys
 import tomllib
 
 from engines.files.inputs import check_name
-from engines.run import ensemble, guard, history, manifest
+from engines.run import ensemble, guard, history, manifest, talk
 from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import BATCH, DESCRIPTION, batch_line
+from engines.run.talk import say
 from engines.studies.ensemble import perturbed
 from engines.yade.checkpoint import CheckpointError
 
@@ -84,6 +86,10 @@ def add_run_arguments(ap, perturbation):
     ap.add_argument("--resume", type=resume_dir, metavar="DIR",
                     help="continue the interrupted (or crashed) run in DIR from its checkpoint, in place "
                          "(an ensemble's DIR: its starts that did not complete)")
+    loud = ap.add_mutually_exclusive_group()
+    loud.add_argument("--quiet", action="store_true", help="print only errors and the end (results and figures)")
+    loud.add_argument("--verbose", action="store_true",
+                      help="print also where the compiled kernels are cached and the run's provenance")
     ensemble.add_arguments(ap, perturbation)
 
 
@@ -93,6 +99,7 @@ def parse_run_arguments(ap, argv):
     argv = job_argv(ap, argv)
     args = ap.parse_args(argv)
     args.argv = list(argv)
+    talk.set_level(args.quiet, args.verbose)
     return args
 
 
@@ -209,6 +216,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             from engines.model.start import Start
             from engines.yade.deposition import scene_packing
             packing = scene_packing(sc)
+            say_compile()  # the checks below build the pores: the first compiled kernels
             if many and args.scheduler:
                 check_scheduler(args.scheduler)
             if many:
@@ -220,7 +228,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
                 prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
                 notes = preflight(sc, packing, args.out, prepared, args.force)
             for note in notes:
-                print(note)
+                say(note)
     except ValueError as e:
         sys.exit(f"error: {e}")
     try:
@@ -232,6 +240,7 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
                 sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
             from engines.run import runner
             if args.resume:
+                say_compile()
                 summary = runner.resume_run(args.resume, args.duration)
             else:
                 start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
@@ -250,12 +259,23 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
         # on a busy 2-core machine), so that the process ends within a fraction of a second
         guard.release_all()
         os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
+    drawn = list(summary.get("figures", []))
     if figures is not None:
-        drawn = figures(out)
+        drawn += figures(out)
         manifest.claim(out, [os.path.basename(path) for path in drawn])
-        for path in drawn:
-            print("figure:", path)
-    print(runner.done_line(summary))
+    print(runner.done_line(summary, drawn), flush=True)
+
+
+def say_compile():
+    """Say (once per process) that the kernels are compiled now when numba's keyed cache folder
+    held none (engines.compiled.cache.compile_note); with --verbose, the folder and the provenance."""
+    from engines.compiled import cache
+    from engines.run.provenance import provenance
+    if not getattr(say_compile, "done", False):
+        say_compile.done = True
+        say(f"numba kernels: {os.environ.get('NUMBA_CACHE_DIR')}; provenance: {provenance()}", talk.VERBOSE)
+        if cache.compile_note():
+            say(cache.compile_note())
 
 
 def check_resume(run_dir, duration):

@@ -31,6 +31,7 @@ import time
 from engines.run import manifest
 from engines.run.preflight import ENSEMBLE, InputError, check_scale, number, preflight
 from engines.run.sweep import YADE, Job, run_sweep, yade_environment
+from engines.run.talk import interval_lines, say
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
 
 OWN_OPTIONS = ("--starts", "--perturbation", "--jobs", "--scheduler", "--scheduler-file", "--out", "--overwrite")  # not passed to a start
@@ -284,7 +285,7 @@ def run_starts(jobs, out, plan, args):
     t0 = time.time()
     try:
         run_sweep(jobs, out, workers=args.jobs or 2, scheduler=args.scheduler, resume=False,
-                  scheduler_file=args.scheduler_file)
+                  scheduler_file=args.scheduler_file, log=say)  # --quiet: the starts' lines left out
     except (OSError, TimeoutError) as e:
         if not (args.scheduler or args.scheduler_file):
             raise
@@ -310,8 +311,10 @@ def run_starts(jobs, out, plan, args):
     doc.update(interval=INTERVAL_TEXT, **ensemble_statistics(histories, [summaries[k]["results"] for k in plan["seeds"]]),
                cpu_seconds_per_start=[summaries[k]["cpu_seconds"] for k in plan["seeds"]])
     _write(out, doc)
-    for path in figures.figures(out):
-        print("figure:", path)
-    print(f"done: {len(status)} starts perturbed by {plan['perturbation_m']:g} m, {len(doc['results'])} results and "
-          f"{len(doc['history']['columns'])} history columns across them in {os.path.join(out, ENSEMBLE)}", flush=True)
+    drawn = figures.figures(out)
+    print("\n".join([f"done: {len(status)} starts perturbed by {plan['perturbation_m']:g} m, {len(doc['results'])} "
+                     f"results and {len(doc['history']['columns'])} history columns across them in "
+                     f"{os.path.join(out, ENSEMBLE)}; the means:"]
+                    + ["  " + line for line in interval_lines(doc["results"])]
+                    + [f"  figure {path}" for path in drawn]), flush=True)
     return 0

@@ -15,6 +15,24 @@ CHUNK = 1 << 20  # bytes read at a time
 LAST_LINE = 1 << 16  # bytes kept of the end of what was read (the last row: well under)
 
 
+# the unit of each column [per metre of thickness for forces, energies and areas]; a column whose
+# name starts with a key ending in "*" takes its unit (U_block1, wall_bottom_contact, ...)
+UNITS = {"t": "s", "U_block*": "N/m", "porosity": "1", "kinetic_energy": "J/m", "water_balance_error": "1",
+         "total_water": "m^2", "n_pores": "1", "fn_bottom_mean": "N/m", "bed_top": "m", "base_acc": "m/s^2",
+         "base_vel": "m/s", "base_disp": "m", "side_left_dx": "m", "side_right_dx": "m", "remesh_change": "m^2",
+         "wall_*": "N/m"}
+
+
+def units(columns):
+    """{column: unit} of history.csv's ``columns`` (UNITS; KeyError names a column without one)."""
+    def unit(name):
+        for key, u in UNITS.items():
+            if name == key or key.endswith("*") and name.startswith(key[:-1]):
+                return u
+        raise KeyError(f"history column {name!r} has no unit in engines.run.history.UNITS")
+    return {c: unit(c) for c in columns}
+
+
 class HistoryMismatch(ValueError):
     """history.csv does not hold the rows the checkpoint recorded; the message says what differs."""
 

@@ -22,6 +22,7 @@ import os
 import tempfile
 
 from engines.run import manifest
+from engines.run.talk import say
 from engines.run.manifest import ENSEMBLE  # noqa: F401  (an ensemble's statistics, engines.run.ensemble; the scripts import it from here)
 
 
@@ -99,7 +100,7 @@ def check_fresh_output(path, arg="--out", resumable=False):
 
 def announce_output(path):
     """Print the folder a script writes into, before it writes: ``output: /absolute/path``."""
-    print(f"output: {os.path.abspath(path)}", flush=True)
+    say(f"output: {os.path.abspath(path)}")
 
 
 def output_dir(path):
@@ -186,9 +187,9 @@ def estimate(scene, packing):
 
     The cost model: CPU = steps x bodies x (c_law + c_water / water_interval) with c_law, c_water
     the µs per body and step of ``cost_per_step`` (water only for a wet scene), bodies = the
-    packing's discs (walls included); outputs = history rows (steps / history_interval + 1) x
+    packing's discs (walls included); outputs = history rows (steps / history_interval + 1, and the end's) x
     columns (t, the blocks, 13 measures, 6 wall loads) x VALUE_BYTES + snapshots x bodies x
-    SNAPSHOT_BYTES + VTK frames x bodies x VTK_BYTES + bodies x CHECKPOINT_BYTES. The per-body sizes
+    SNAPSHOT_BYTES (the scene's snapshots and the end's) + VTK frames x bodies x VTK_BYTES + bodies x CHECKPOINT_BYTES. The per-body sizes
     are those of the quick-sand and seismic runs, rounded up. A dt = "auto" is estimated as chosen."""
     if scene.numerics.dt == "auto":
         from engines.model.start import Start
@@ -199,9 +200,9 @@ def estimate(scene, packing):
     c_law, c_water = cost_per_step(scene.contact.law)
     wet = scene.water.enabled
     cpu = steps * bodies * (c_law + (c_water / num.water_interval if wet else 0.0)) * 1e-6
-    rows = steps // out.history_interval + 1
+    rows = steps // out.history_interval + 1 + (steps % out.history_interval > 0)  # the end's row too
     columns = 1 + len(out.block_z) + 13 + 6
-    snapshots = sum(1 for t in out.snapshot_times if t <= num.duration)
+    snapshots = len({round(t / num.dt) for t in out.snapshot_times if t <= num.duration} | {steps})  # the end's too
     frames = (steps // out.vtk_interval + 1 if out.vtk_interval else snapshots) if out.vtk else 0
     size = (rows * columns * VALUE_BYTES + snapshots * bodies * SNAPSHOT_BYTES + frames * bodies * VTK_BYTES
             + bodies * CHECKPOINT_BYTES)

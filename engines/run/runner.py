@@ -55,6 +55,7 @@ from engines.run import guard, history, manifest
 from engines.run.preflight import announce_dt, timed
 from engines.run import scene as scenes
 from engines.run.provenance import provenance
+from engines.run.talk import result_lines, say
 from engines.yade import checkpoint, yade_io
 from engines.yade.coupling import YadeCoupling
 from packing.packing import Packing
@@ -68,8 +69,8 @@ SUMMARY = "summary.json"
 
 
 class Recorder:
-    """Coupling hook: history rows every history_interval steps, snapshots at the scene's snapshot
-    times and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
+    """Coupling hook: history rows every history_interval steps and at the end, snapshots at the
+    scene's snapshot times and at the end and, with [output] vtk, ParaView frames (postproc.vtk) every vtk_interval steps or at the
     snapshot times; taken between steps at the positions after k steps (t = k dt). Each is taken
     once per step index, so a resumed run does not repeat one. ``create`` starts history.csv (and
     the VTK folder; Run.go calls it for a new run); a resumed run's ``reopen`` checks the file
@@ -85,7 +86,8 @@ class Recorder:
         "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
         "file": "history.csv, opened by reopen", "path": "history.csv in the folder resumed in",
         "sha": "the checksum of history.csv's rows, read again by reopen (engines.run.history.kept)",
-        **{name: "progress lines: the wall clock of this segment" for name in ("t_wall0", "t_last", "k_wall0")}}
+        **{name: "progress lines: the wall clock of this segment" for name in ("t_wall0", "t_last", "k_wall0", "t_ref",
+                                                                               "k_ref")}}
 
     def __init__(self, cp, out_dir, n_steps):
         out = cp.scene.output
@@ -94,11 +96,7 @@ class Recorder:
         self.snapshot_times = out.snapshot_times
         self.progress_seconds = out.progress_seconds
         self.n_blocks = len(cp.block_bounds)
-        self.columns = (["t"] + [f"U_block{b + 1}" for b in range(self.n_blocks)] +
-                        ["porosity", "kinetic_energy", "water_balance_error", "total_water", "n_pores",
-                         "fn_bottom_mean", "bed_top", "base_acc", "base_vel", "base_disp", "side_left_dx",
-                         "side_right_dx", "remesh_change"] +
-                        [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")])
+        self.columns = history_columns(cp)
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
         self.last_t = None  # the last row's t [s] as written
         self.snapshot_steps = []  # steps whose snapshot file was written
@@ -118,9 +116,10 @@ class Recorder:
         self._write(header.getvalue())
 
     def schedule(self, n_steps):
-        """The run ends at step n_steps: snapshot steps within it."""
+        """The run ends at step n_steps: the snapshot steps within it, and the end (its last row too)."""
         self.n_steps = n_steps
-        self.snap_steps = sorted({int(round(t / self.dt)) for t in self.snapshot_times if round(t / self.dt) <= n_steps})
+        self.snap_steps = sorted({int(round(t / self.dt)) for t in self.snapshot_times
+                                  if round(t / self.dt) <= n_steps} | {n_steps})
 
     def _open(self, mode):
         self.path = os.path.join(self.out, history.NAME)
@@ -130,6 +129,7 @@ class Recorder:
             raise files.WriteError(f"cannot write {self.path}: {files.reason(e)}") from None
         self.t_wall0 = self.t_last = time.time()
         self.k_wall0 = O.iter
+        self.t_ref = self.k_ref = None  # the wall clock and step the speed of the ETA is measured from
 
     def _write(self, line):
         """Append ``line`` (text ending in a newline) to history.csv, flushed; the checksum follows
@@ -164,7 +164,7 @@ class Recorder:
     def __call__(self, cp):
         k = cp.step_index  # steps done: positions at t = k dt
         xz = cp.positions()
-        if k % self.history_interval == 0 and self.last_row < k < self.n_steps:
+        if (k % self.history_interval == 0 or k == self.n_steps) and self.last_row < k <= self.n_steps:
             self.row(cp, xz, k)
         snap_due = k in self.snap_steps and k not in self.snapshot_steps
         vtk_due = self.vtk is not None and k > self.last_vtk and \
@@ -181,20 +181,35 @@ class Recorder:
         now = time.time()
         if now - self.t_last >= self.progress_seconds:
             self.t_last = now
-            eta = (now - self.t_wall0) / max(k - self.k_wall0, 1) * (self.n_steps - k)
-            print(f"[{cp.scene.scene.name}] step {k}/{self.n_steps} t = {k * self.dt * 1e3:.2f} ms, "
-                  f"wall {now - self.t_wall0:.0f} s, about {eta:.0f} s left", flush=True)
+            say(f"[{cp.scene.scene.name}] step {k}/{self.n_steps} t = {k * self.dt * 1e3:.2f} ms, "
+                f"wall {now - self.t_wall0:.0f} s{self.eta(now, k)}")
+
+    def eta(self, now, k):
+        """The progress line's estimate of the wall time left at step k (wall clock ``now`` [s]): the
+        speed is measured from the first progress line on (the compile and the first steps before
+        it are not counted), so that line has none."""
+        if self.k_ref is None or k <= self.k_ref:
+            self.t_ref, self.k_ref = now, k
+            return ""
+        return f", about {(now - self.t_ref) / (k - self.k_ref) * (self.n_steps - k):.0f} s left"
 
     def row(self, cp, xz, k):
-        w = cp.water
+        """Append the row of step k (positions xz): the values of ``self.columns``."""
         mob = cp.packing.mobile
-        values = ([k * self.dt] + list(cp.block_pressures(xz)) +
-                  [cp.porosity(xz), cp.kinetic_energy(), w.balance_error() if w else 0.0,
-                   w.total_water() if w else 0.0, w.net.n_pores if w else 0,
-                   cp.bottom_normal_force(xz), float(np.max(xz[mob, 1] + cp.packing.r[mob]))] +
-                  list(cp.base_motion()) + list(cp.side_wall_shift(xz)) + [w.balance.remesh_change if w else 0.0] +
-                  [f for load in cp.wall_loads().values() for f in load])
-        texts = [f"{v:.9g}" for v in values]
+        v = {"t": k * self.dt, "porosity": cp.porosity(xz), "kinetic_energy": cp.kinetic_energy(),
+             "fn_bottom_mean": cp.bottom_normal_force(xz), "bed_top": float(np.max(xz[mob, 1] + cp.packing.r[mob]))}
+        w = cp.water
+        if w is not None:
+            v.update({f"U_block{b + 1}": u for b, u in enumerate(cp.block_pressures(xz))},
+                     water_balance_error=w.balance_error(), total_water=w.total_water(), n_pores=w.net.n_pores,
+                     remesh_change=w.balance.remesh_change)
+        if "base_acc" in self.columns:
+            v.update(zip(("base_acc", "base_vel", "base_disp"), cp.base_motion()))
+        if "side_left_dx" in self.columns:
+            v.update(zip(("side_left_dx", "side_right_dx"), cp.side_wall_shift(xz)))
+        v.update({f"wall_{name}_{part}": f for name, load in cp.wall_loads().items()
+                  for part, f in zip(("contact", "water"), load)})
+        texts = [f"{v[c]:.9g}" for c in self.columns]
         self._write(",".join(texts) + "\n")
         self.rows += 1
         self.last_row, self.last_t = k, float(texts[0])
@@ -204,6 +219,19 @@ class Recorder:
         if self.file is not None:
             with contextlib.suppress(OSError):
                 self.file.close()
+
+
+def history_columns(cp):
+    """The columns of history.csv for the coupling ``cp``: only those its scene produces (the
+    water's with water, the base motion's with a driven base, the side-wall shifts with side
+    walls on springs, each flat wall's loads; units: engines.run.history.UNITS)."""
+    water = cp.water is not None
+    ties = cp.core is not None and cp.core.ties is not None
+    return (["t"] + ([f"U_block{b + 1}" for b in range(len(cp.block_bounds))] if water else []) +
+            ["porosity", "kinetic_energy"] + (["water_balance_error", "total_water", "n_pores"] if water else []) +
+            ["fn_bottom_mean", "bed_top"] + (["base_acc", "base_vel", "base_disp"] if cp.base is not None else []) +
+            (["side_left_dx", "side_right_dx"] if ties else []) + (["remesh_change"] if water else []) +
+            [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")])
 
 
 def snapshot_data(cp, xz, k):
@@ -410,7 +438,8 @@ class Run:
     def go(self, overrides=None, figures=True, signals=None):
         """Run to step n_steps (or until a signal or an error); write the checkpoint, summary and
         (when completed) the figures. Returns the summary; re-raises an error after writing what
-        it can (a failed write: WriteError, one line naming the path). ``signals``: the active
+        it can (a failed write: WriteError, one line naming the path); a completed run's drawn PNGs are
+        its "figures" (not in summary.json). ``signals``: the active
         Interrupts (default: its own)."""
         cp, sc = self.cp, self.scene
         k0 = O.iter
@@ -419,9 +448,9 @@ class Run:
                               "cpu_seconds": 0.0, "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
                               "host": socket.gethostname(), "pid": os.getpid(),
                               "provenance": provenance(overrides=overrides)})
-        print(f"[{sc.scene.name}] {int(cp.packing.mobile.sum())} particles, {int((~cp.packing.mobile).sum())} wall discs, "
-              f"{cp.water.net.n_pores if cp.water else 0} pores, law = {sc.contact.law}, I/O {yade_io.BACKEND}, "
-              f"dt = {sc.numerics.dt:g} s, steps {k0} to {self.n_steps} -> {self.out}", flush=True)
+        say(f"[{sc.scene.name}] {int(cp.packing.mobile.sum())} particles, {int((~cp.packing.mobile).sum())} wall discs, "
+            f"{cp.water.net.n_pores if cp.water else 0} pores, law = {sc.contact.law}, I/O {yade_io.BACKEND}, "
+            f"dt = {sc.numerics.dt:g} s, steps {k0} to {self.n_steps} -> {self.out}")
         status, error = "completed", None
         with contextlib.ExitStack() as stack:
             if signals is None:
@@ -454,7 +483,7 @@ class Run:
         if status == "completed" and figures:
             guard.stage("while drawing the figures (the run's files are complete; python3 -m postproc.plots "
                         f"{self.out} draws them)")
-            plots.figures_of_run(self.out)
+            summary["figures"] = plots.figures_of_run(self.out)
         return summary
 
     def summarise(self, status, received):
@@ -481,6 +510,7 @@ class Run:
             "remesh_rules_last": w.remesh_counts if w else None,
             "contact_list_builds": cp.core.contact.list_builds if cp.core is not None else None,
             "block_bounds_m": cp.block_bounds,
+            "history_units": history.units(self.rec.columns),
             "start": self.start,
             "results": results,
             "checkpoint": {"file": CHECKPOINT, "step": self.checkpoint_step},
@@ -530,7 +560,7 @@ def run_scene(scene, packing, out_dir, duration=None, figures=True, start=None, 
     before anything is written; then the folder's lock is taken (engines.run.guard.FolderLocked if
     another run holds it) and a signal stops the run after its first checkpoint."""
     prepared = Start(scene.settings, packing) if prepared is None else prepared
-    announce_dt(prepared)
+    announce_dt(prepared, say)
     scene = timed(scene, prepared)
     duration = scene.numerics.duration if duration is None else duration
     run = Run(scene, packing, out_dir, int(round(duration / scene.numerics.dt)), start, prepared)
@@ -557,7 +587,11 @@ def resume_run(out_dir, duration=None, figures=True):
             return run.go({"numerics": {"duration": duration}} if duration is not None else None, figures, signals)
 
 
-def done_line(summary):
-    """The one line a scene script prints at the end of a run."""
-    return (f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s ({summary['us_per_step']:.0f} us/step), "
-            f"water balance error {summary['water_balance_error']:.2e}")
+def done_line(summary, figures=()):
+    """What a scene script prints at the end of a run (its only lines with --quiet): the steps, the
+    cost, the water balance, then its results with units (engines.run.talk.result_lines) and the
+    paths of its ``figures``."""
+    return "\n".join([f"done: {summary['steps']} steps in {summary['wall_seconds']:.1f} s "
+                      f"({summary['us_per_step']:.0f} us/step), water balance error {summary['water_balance_error']:.2e}"]
+                     + ["  " + line for line in result_lines(summary.get("results", {}))]
+                     + [f"  figure {path}" for path in figures])

@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 from engines import ROOT
 from engines.files.inputs import check_name
 from engines.run.table import BATCH, DESCRIPTION, read_table
+from engines.run.talk import results_table
 
 STDERR_TAIL = 2000  # characters of stderr kept in job.json
 TABLE_LIMIT = 10 << 20  # the largest table or jobs file read [bytes]
@@ -402,7 +403,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
     summary = {"root": root, "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
                "wall_s": time.time() - t0, "jobs": records}
     _write_json(os.path.join(root, "sweep.json"), summary)
-    log(format_summary(records))
+    log(format_summary(records, root))
     if stopped_by is not None:
         on_cluster = (f" (not finished: {', '.join(running_on_cluster)}; those already running on the cluster's "
                       "workers go on to their end: stop the workers to end them)") if running_on_cluster else ""
@@ -459,8 +460,10 @@ def _stop_jobs(signum, futures, signals):
     wait(futures, timeout=STOP_SECONDS)
 
 
-def format_summary(records):
-    """A table of the jobs: name, status, return code, wall seconds."""
+def format_summary(records, root=None):
+    """A table of the jobs: name, status, return code, wall seconds; then, of the jobs under
+    ``root`` that wrote a summary.json (a scene script's run), their headline results
+    (engines.run.talk.results_table)."""
     width = max([len(r["name"]) for r in records] + [4])
     lines = [f"{'job':<{width}}  status  rc    wall_s"]
     for r in records:
@@ -470,6 +473,15 @@ def format_summary(records):
     lines.append(f"{len(records) - len(failed)} ok ({sum(1 for r in records if r.get('kept'))} kept from before, *), "
                  f"{len(failed)} failed" + ("".join(f"\n  {r['name']}: {r.get('stderr_tail', '').splitlines()[-1:]}"
                                                     for r in failed)))
+    runs = []
+    for r in records if root is not None else ():
+        try:
+            with open(os.path.join(root, r["name"], "summary.json")) as f:
+                runs.append((r["name"], json.load(f)["results"]))
+        except (OSError, ValueError, KeyError, TypeError):
+            continue  # no run's summary there (a job of another kind, or one that failed before writing it)
+    if runs:
+        lines += ["the results of the jobs that wrote a summary.json:", results_table(runs)]
     return "\n".join(lines)
 
 

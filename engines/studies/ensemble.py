@@ -81,7 +81,7 @@ def on_common_grid(histories):
     lo, hi = max(h["t"][0] for h in histories), min(h["t"][-1] for h in histories)
     t = t0[(t0 >= lo) & (t0 <= hi)]
     columns = {}
-    for col in (c for c in histories[0] if c != "t"):
+    for col in (c for c in histories[0] if c != "t" and all(c in h for h in histories)):  # the columns all have
         rows = []
         for h in histories:
             tk, y = np.asarray(h["t"], float), np.asarray(h[col], float)

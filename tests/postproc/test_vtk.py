@@ -67,18 +67,18 @@ def test_written_files_hold_the_numbers_given(tmp_path):
     d = read(vdir / f)
     assert np.array_equal(points_xz(d), xz + t) and cells(d.GetVerts()) == [[k] for k in range(n)]
     pd = d.GetPointData()
-    assert np.array_equal(array(pd, "radius"), r) and np.array_equal(array(pd, "density_factor"), dens)
-    assert np.array_equal(array(pd, "velocity"), np.column_stack([vel[:, 0], np.zeros(n), vel[:, 1]]))
+    assert np.array_equal(array(pd, "radius [m]"), r) and np.array_equal(array(pd, "density_factor"), dens)
+    assert np.array_equal(array(pd, "velocity [m/s]"), np.column_stack([vel[:, 0], np.zeros(n), vel[:, 1]]))
     assert np.array_equal(array(pd, "group"), group)
     fo = read(vdir / collection(vdir / "forces.pvd")[1][1])
     assert cells(fo.GetLines()) == pairs.tolist()
-    assert np.array_equal(array(fo.GetCellData(), "normal_force"), f_n + t)
-    assert np.array_equal(array(fo.GetCellData(), "shear_force"), f_s)
+    assert np.array_equal(array(fo.GetCellData(), "normal_force [N/m]"), f_n + t)
+    assert np.array_equal(array(fo.GetCellData(), "shear_force [N/m]"), f_s)
     po = read(vdir / collection(vdir / "pores.pvd")[1][1])
     assert cells(po.GetPolys()) == polygons and np.array_equal(points_xz(po), xz + t)
     cd = po.GetCellData()
-    assert np.array_equal(array(cd, "U"), U + t) and np.array_equal(array(cd, "W"), W)
-    assert np.array_equal(array(cd, "A"), A) and array(cd, "pore").tolist() == [4, 9]
+    assert np.array_equal(array(cd, "U [N/m]"), U + t) and np.array_equal(array(cd, "W [m^2]"), W)
+    assert np.array_equal(array(cd, "A [m^2]"), A) and array(cd, "pore").tolist() == [4, 9]
     assert array(cd, "rule").tolist() == [0, 3]  # build, rule (c)
     names = po.GetFieldData().GetAbstractArray("rule_names")
     assert [names.GetValue(k) for k in range(names.GetNumberOfValues())] == list(pv.RULES)
@@ -126,13 +126,13 @@ def test_a_runs_snapshots_convert(tmp_path):
         assert [t for t, _ in collection(run / "vtk" / f"{name}.pvd")] == [float(s["t"]) for s in snaps]
     for s, (_, f) in zip(snaps, collection(run / "vtk" / "discs.pvd")):
         d = read(run / "vtk" / f)
-        assert np.array_equal(points_xz(d), s["xz"]) and np.array_equal(array(d.GetPointData(), "radius"), s["r"])
-        assert np.array_equal(array(d.GetPointData(), "velocity")[:, [0, 2]], s["vel"])
+        assert np.array_equal(points_xz(d), s["xz"]) and np.array_equal(array(d.GetPointData(), "radius [m]"), s["r"])
+        assert np.array_equal(array(d.GetPointData(), "velocity [m/s]")[:, [0, 2]], s["vel"])
     last, (_, f) = snaps[-1], collection(run / "vtk" / "pores.pvd")[-1]
     po = read(run / "vtk" / f)
     pore = array(po.GetCellData(), "pore")
     assert sorted(set(pore.tolist())) == sorted(set(last["tri_pore"].tolist()))
-    assert np.array_equal(array(po.GetCellData(), "U"), last["U"][pore])
+    assert np.array_equal(array(po.GetCellData(), "U [N/m]"), last["U"][pore])
     net = read_network(snapshot_files(str(run))[-1])  # the network under OpenPNM's names, beside the old keys
     assert net["pore.coords"].shape == (len(net["polygon.ptr"]) - 1, 3) == (len(last["W"]), 3)
     np.testing.assert_array_equal(net["pore.pressure"], last["U"])
@@ -143,7 +143,7 @@ def test_a_runs_snapshots_convert(tmp_path):
     assert np.array_equal(array(th.GetCellData(), "throat.flux"), net["throat.flux"])
     fo = read(run / "vtk" / collection(run / "vtk" / "forces.pvd")[-1][1])
     assert cells(fo.GetLines()) == last["pairs"].tolist()
-    assert np.array_equal(array(fo.GetCellData(), "normal_force"), last["f_n"])
+    assert np.array_equal(array(fo.GetCellData(), "normal_force [N/m]"), last["f_n"])
 
 
 def test_a_run_without_snapshots_is_named(tmp_path):
@@ -175,3 +175,17 @@ def test_stored_entries_of_a_series_without_throats_are_taken_and_others_refused
     series.entries = {s: [[0.0, f"{s}_00001.vtp"], [0.5, f"{s}_00001.vtp"]] for s in pv.SERIES}
     with pytest.raises(ValueError, match="increasing"):
         series.checkpoint_restored()
+
+
+def test_every_float_array_is_named_with_its_unit(tmp_path):
+    """The arrays ParaView lists carry their units (forces per metre of thickness)."""
+    xz = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    pv.write_discs(str(tmp_path / "d.vtp"), xz, np.ones(3), vel=np.zeros((3, 2)))
+    pv.write_forces(str(tmp_path / "f.vtp"), xz, [[0, 1]], [2.0], [1.0])
+    pv.write_pores(str(tmp_path / "p.vtp"), xz, [[0, 1, 2]], pore=[0], U=[1.0], W=[0.5], A=[0.4])
+    names = set()
+    for name, kind in (("d.vtp", "GetPointData"), ("f.vtp", "GetCellData"), ("p.vtp", "GetCellData")):
+        data = getattr(read(str(tmp_path / name)), kind)()
+        names |= {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())}
+    assert names == {"radius [m]", "velocity [m/s]", "normal_force [N/m]", "shear_force [N/m]", "U [N/m]",
+                     "W [m^2]", "A [m^2]", "pore"}

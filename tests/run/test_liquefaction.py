@@ -162,7 +162,7 @@ def test_history_porosity_is_the_window_porosity_and_the_columns(tmp_path):
     t, a, v, u = base_history(gm.input_acceleration(sc.settings), sc.numerics.dt, 300)
     np.testing.assert_allclose(h["base_disp"], u[::100][:len(h["t"])], rtol=csv, atol=0)
     np.testing.assert_allclose(h["base_acc"], a[::100][:len(h["t"])], rtol=csv)
-    assert np.all(np.abs(h["side_left_dx"]) < 1e-6) and np.any(h["side_left_dx"] != 0)
+    assert np.all(np.abs(h["side_left_dx"]) < 2e-6) and np.any(h["side_left_dx"] != 0)  # about 1 µm by 0.3 ms
 
 
 def yade_script(*args, cwd):

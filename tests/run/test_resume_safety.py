@@ -136,7 +136,7 @@ def test_the_resume_appends_or_rebuilds_and_is_never_caught_half_way(tmp_path, p
     O.reset()
     summary = resume_run(str(tmp_path), figures=False)
     assert summary["status"] == "completed" and summary["steps"] == STEPS
-    assert open(path, "rb").read().startswith(exact) and open(path, "rb").read().count(b"\n") == 1 + STEPS // 100
+    assert open(path, "rb").read().startswith(exact) and open(path, "rb").read().count(b"\n") == 2 + STEPS // 100  # header, rows 0 ... STEPS
 
 
 def test_a_killed_segment_stays_in_the_summary_with_the_first_command_line(tmp_path, packing, monkeypatch):

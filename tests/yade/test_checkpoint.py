@@ -267,9 +267,9 @@ def test_the_vtk_series_of_a_run_holds_the_numbers_of_its_history(full_run):
         di, fo, po = read(f_discs), read(f_forces), read(f_pores)
         xz = xz_of(di)
         assert np.array_equal(xz_of(fo), xz) and np.array_equal(xz_of(po), xz)
-        r, group = vtk_to_numpy(di.GetPointData().GetArray("radius")), vtk_to_numpy(di.GetPointData().GetArray("group"))
+        r, group = vtk_to_numpy(di.GetPointData().GetArray("radius [m]")), vtk_to_numpy(di.GetPointData().GetArray("group"))
         pcd, fcd = po.GetCellData(), fo.GetCellData()
-        pore, U, W = (vtk_to_numpy(pcd.GetArray(n)) for n in ("pore", "U", "W"))
+        pore, U, W = (vtk_to_numpy(pcd.GetArray(n)) for n in ("pore", "U [N/m]", "W [m^2]"))
         rule = vtk_to_numpy(pcd.GetArray("rule"))
         # the first rebuild is done in step 500, after the frame at t = 500 dt: rules a-d from then on
         assert set(rule) <= {0, 1, 2, 3, 4} and (t < 6e-4) == (set(rule) == {0})
@@ -285,14 +285,14 @@ def test_the_vtk_series_of_a_run_holds_the_numbers_of_its_history(full_run):
         zc = np.array([moment[p] / area[p] for p in ids])
         U_pore, W_pore = U[[first[p] for p in ids]], W[[first[p] for p in ids]]
         pairs = np.array(cells(fo.GetLines()))
-        f_n = vtk_to_numpy(fcd.GetArray("normal_force"))
+        f_n = vtk_to_numpy(fcd.GetArray("normal_force [N/m]"))
         row = np.flatnonzero(np.isclose(h["t"], t, rtol=0, atol=1e-12))
         if not len(row):  # the last frame, at the end of the run: the end snapshot holds the same arrays
             snap = read_snapshot(os.path.join(full_run, END))
             assert np.array_equal(snap["xz"], xz) and np.array_equal(snap["pairs"], pairs)
-            assert np.array_equal(snap["f_n"], f_n) and np.array_equal(snap["f_s"], vtk_to_numpy(fcd.GetArray("shear_force")))
+            assert np.array_equal(snap["f_n"], f_n) and np.array_equal(snap["f_s"], vtk_to_numpy(fcd.GetArray("shear_force [N/m]")))
             assert np.array_equal(snap["U"][ids], U_pore) and np.array_equal(snap["W"][ids], W_pore)
-            assert np.array_equal(snap["vel"][:, 1], vtk_to_numpy(di.GetPointData().GetArray("velocity"))[:, 2])
+            assert np.array_equal(snap["vel"][:, 1], vtk_to_numpy(di.GetPointData().GetArray("velocity [m/s]"))[:, 2])
             continue
         k = row[0]
         for b, (lo, hi) in enumerate(bounds):
@@ -305,6 +305,6 @@ def test_the_vtk_series_of_a_run_holds_the_numbers_of_its_history(full_run):
         bottom = (zmid >= z0) & (zmid < z1)
         assert f_n[bottom].mean() == pytest.approx(h["fn_bottom_mean"][k], rel=1e-8)
         checked_rows += 1
-    assert checked_rows == 3
+    assert checked_rows == 4  # the frames at 0, 0.5, 1 ms and the end's
 
 
