@@ -58,9 +58,6 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "k3": Field(float, 0.0, NONNEG, "permeability of drained side walls [1/s]"),
     "q_w": Field(float, 0.0, NONNEG, "inflow into every pore with a bottom-wall disc or an inflow flat wall as a "
                  "vertex [m^2/s per inflow pore] (§5.1, the paper's: the total grows with the number of such pores)"),
-    "inflow_velocity": Field(float, 0.0, NONNEG, "inflow as a Darcy flux per unit width [m/s] (SPEC §2.7): each link "
-                             "between two bottom-wall discs and each inflow flat-wall edge passes v x its length into "
-                             "the pore on its inner side, so the total is v x the row's span; exclusive with q_w"),
     "sides": Field(str, "undrained", ("undrained", "drained"), "side-wall drainage"),
     "smoothing": Field(bool, False, None, "eq 45-46"),
     "substep": Field(bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the "
@@ -69,6 +66,9 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "transfer": Field(str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
                       "(§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap "
                       "(engines.model.pore_water.conserving_water)"),
+    "inflow_velocity": Field(float, 0.0, NONNEG, "inflow as a Darcy flux per unit width [m/s] (SPEC §2.7): each link "
+                             "between two bottom-wall discs and each inflow flat-wall edge passes v x its length into "
+                             "the pore on its inner side, so the total is v x the row's span; exclusive with q_w"),
 }
 WaterSettings = settings_class("WaterSettings", WATER_FIELDS, "water", __name__,
                                "Constants of the pore water (WATER_FIELDS; the scene file's [water] table).")

@@ -116,7 +116,8 @@ def limits(settings, packing, mass, ties, pores):
 
 
 def check_start(settings, packing, mass, ties, lims):
-    """Refuse (ValueError, one line naming the field and the limit) settings whose numeric dt is
+    """Refuse (ValueError, one line naming the field and the limit) [water] l_m outside
+    pores.LINK_RANGE x the median radius or below [contact] eps_m, and settings whose numeric dt is
     above a limit at its start (``lims``, of ``limits``): eq 52 x dt_safety, the ties, the water
     stiffness, and a water step water_interval x dt above the Darcy check without [water] substep,
     or needing more than [water] max_substeps sub-steps with it."""
@@ -125,6 +126,7 @@ def check_start(settings, packing, mass, ties, lims):
     lim.check_ties(num.dt, ties, mass)
     if not w.enabled:
         return
+    pg.check_lengths(w.l_m, settings.contact.eps_m, packing.r, ("[water] l_m", "[contact] eps_m"))
     lim.check_water_stiffness(num.dt, num.water_interval * lims["water_stiffness"], w.E_w, num.water_interval)
     h, limit = num.water_interval * num.dt, num.water_interval * lims["darcy_check"]
     where = f"[numerics] dt = {num.dt:.3g} s, water_interval = {num.water_interval}: at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s) the"

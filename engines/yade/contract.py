@@ -91,7 +91,7 @@ def check_clump(bodies, i, b):
     what = f"clump {c.id if c is not None else b.clumpId}" if b.isClump else f"a member of clump {b.clumpId}"
     raise ContractError(f"body {i}: {what} (members {members[:6]}{' ...' if len(members) > 6 else ''}, the clump's "
                         f"mass {mass} moves them as one body): the WaterEngine moves each disc by its own mass and "
-                        f"forces and takes no clumps; make the discs as single spheres (no O.bodies.appendClumped "
+                        f"forces and takes no clumps; build the discs as single spheres (no O.bodies.appendClumped "
                         f"or clump()), or leave the clump's members out of disc_ids")
 
 
