@@ -147,10 +147,15 @@ class WaterModel(water_model.WaterModel):
         b.inflow += inflow
         b.surface_outflow += surface
         b.side_outflow += side
+        if self.watch is not None:
+            self.watch(self._part("void"), self._part("U"), self.settings.E_w, w.net.a_min, h)
 
-    def after_kernel_steps(self):
+    def after_kernel_steps(self, unwatched=False):
         """After water steps run by kernels with the arguments of ``kernel_args``: the eq 46 state
-        they hold and the Darcy limit of the last one."""
+        they hold and the Darcy limit of the last one. ``unwatched``: water steps the accuracy
+        watch did not see (a compiled drive's): its next comparison starts again."""
+        if unwatched and self.watch is not None:
+            self.watch.rebuilt()
         if self.settings.smoothing:
             self.water.q_prev = self._args[kernels.WATER.q_prev]
         self.last_limit = limits.gershgorin_limit(self._lam[0])

@@ -130,6 +130,55 @@ def check_water_stiffness(dt, limit, E_w, water_interval=1, names=SCENE_NAMES, w
         f"and this limit has no sub-steps; {fix}")
 
 
+# -- the accuracy of a water step -------------------------------------------------------------------
+# max |dA| / A of the pores between two water steps: warned once above WATCH_WARN, refused above
+# WATCH_STOP unless accepted (docs/ENGINE.md, "The accuracy watch": how they were chosen)
+WATCH_WARN, WATCH_STOP = 0.05, 0.3
+
+
+class AccuracyError(ValueError):
+    """A water step too long for the discs' motion (the accuracy watch)."""
+
+
+class AccuracyWatch:
+    """The accuracy of the water steps (docs/ENGINE.md): at each water step, max |dA| / A of the
+    open pores since the last water step on the same pores, and min U / E_w. Warns once (``log``)
+    above ``warn`` or at U < -E_w; above ``stop`` raises AccuracyError unless ``accept``. ``worst``
+    keeps the largest ratio seen, ``lowest`` the lowest U / E_w."""
+
+    def __init__(self, warn=WATCH_WARN, stop=WATCH_STOP, accept=False, log=print, names=ENGINE_NAMES):
+        self.warn, self.stop, self.accept, self.log, self.names = warn, stop, accept, log, names
+        self.worst, self.lowest, self.warned, self._A = 0.0, 0.0, False, None
+
+    def rebuilt(self):
+        """The pores were rebuilt: the next water step starts a new comparison."""
+        self._A = None
+
+    def __call__(self, A, U, E_w, a_min, h):
+        """Watch the water step of h [s] that ended at void areas A (Np,) [m^2], pressures U (Np,) [N/m]."""
+        A = np.array(A, float)
+        ratio = 0.0
+        if self._A is not None and len(self._A) == len(A):
+            open_ = (self._A > a_min) & (A > a_min)
+            if open_.any():
+                ratio = float(np.max(np.abs(A[open_] - self._A[open_]) / self._A[open_]))
+        self._A = A
+        low = float(np.min(U)) / E_w if len(U) else 0.0
+        self.worst, self.lowest = max(self.worst, ratio), min(self.lowest, low)
+        cause = (f"a pore's void area changed by {ratio:.0%} in one water step of {h:.3g} s" if ratio > self.warn else
+                 f"a pore's suction reached U = {low:.2f} E_w" if low < -1 else None)
+        if cause is None:
+            return
+        fix = (f"shorten the water step ({self.names['interval']} or {self.names['dt']}): the pressure forces are "
+               f"held for a water step while the discs move")
+        if ratio > self.stop and not self.accept:
+            raise AccuracyError(f"{cause} (above {self.stop:.0%}): the water lags the discs; {fix}, or accept it "
+                                f"(WaterEngine accept_inaccurate=True)")
+        if not self.warned:
+            self.warned = True
+            self.log(f"water: {cause} (warned above {self.warn:.0%}, stopped above {self.stop:.0%}): inaccurate; {fix}")
+
+
 # -- Darcy ------------------------------------------------------------------------------------------
 def exchange_matrix(water, A, link_contact):
     """(S, open) where S is the symmetric C^-1/2 G C^-1/2 [1/s] (sparse, over the open pores) of

@@ -74,7 +74,9 @@ class WaterEngine:
     The water step water_interval x O.dt is checked (``check_limits``) at construction, after each
     rebuild and each change of O.dt: above the water-stiffness limit it is refused, naming the
     largest stable water_interval; above the Darcy limit it is sub-stepped (refused without
-    settings.substep).
+    settings.substep). The accuracy watch (engines.model.limits.AccuracyWatch, ``model.watch``)
+    compares the void areas of each water step made from Python with the last one: above
+    WATCH_WARN it warns once, above WATCH_STOP it stops the run unless ``accept_inaccurate``.
     """
 
     # what a checkpoint stores (engines.model.state)
@@ -91,7 +93,7 @@ class WaterEngine:
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
                  water_interval=1, buoyancy=True, rho_w=1000.0, gravity=None, compiled=True,
-                 rebuild_distance=None, flat_walls=None):
+                 rebuild_distance=None, flat_walls=None, accept_inaccurate=False):
         from yade import O  # YADE only here and below
 
         from engines.yade import yade_io
@@ -143,6 +145,7 @@ class WaterEngine:
         self._run_kernel = yade_io.run_kernel
         self.k = O.iter  # DEM step of the last call (the model's k0 is that of creation)
         self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
+        self.model.watch = limits.AccuracyWatch(accept=accept_inaccurate)
         self.check_limits("at construction")
         self.model.on_change = self.check_limits  # at each rebuild and change of dt
 
@@ -261,7 +264,7 @@ class WaterEngine:
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
-            m.after_kernel_steps()
+            m.after_kernel_steps(unwatched=True)
         yade_io.check(rc)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
             m.finish_kernel_step(h, n_sub)
