@@ -133,7 +133,7 @@ def check_water_stiffness(dt, limit, E_w, water_interval=1, names=SCENE_NAMES, w
 # -- the accuracy of a water step -------------------------------------------------------------------
 # max |dA| / A of the pores between two water steps: warned once above WATCH_WARN, refused above
 # WATCH_STOP unless accepted (docs/ENGINE.md, "The accuracy watch": how they were chosen)
-WATCH_WARN, WATCH_STOP = 0.05, 0.3
+WATCH_WARN, WATCH_STOP = 0.05, 0.5
 
 
 class AccuracyError(ValueError):
