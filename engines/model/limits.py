@@ -146,6 +146,13 @@ class AccuracyWatch:
     above ``warn`` or at U < -E_w; above ``stop`` raises AccuracyError unless ``accept``. ``worst``
     keeps the largest ratio seen, ``lowest`` the lowest U / E_w."""
 
+    # what a checkpoint stores (engines.model.state): nothing; a restored run watches again from its step
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {**{name: "the engine's arguments" for name in ("warn", "stop", "accept", "names")},
+                          "log": "the print function",
+                          **{name: "what the watch saw of the run since it was made" for name in
+                             ("worst", "lowest", "warned", "_A")}}
+
     def __init__(self, warn=WATCH_WARN, stop=WATCH_STOP, accept=False, log=print, names=ENGINE_NAMES):
         self.warn, self.stop, self.accept, self.log, self.names = warn, stop, accept, log, names
         self.worst, self.lowest, self.warned, self._A = 0.0, 0.0, False, None

@@ -210,7 +210,8 @@ def run_script(tmp_path, code):
 
 def test_an_engine_error_ends_a_plain_script_with_status_1(tmp_path):
     """A Darcy refusal (substep=False, k1 = 1e8, O.dt raised after the construction) in a PyRunner
-    under O.run(200, True): the run stops at its first water step, the script goes on, and the process exits with status 1 and
+    under O.run(200, True): the run stops at its first water step, the script goes on, and the
+    process exits with status 1 and
     one line naming the engine's argument and the scene field."""
     p = run_script(tmp_path, SCRIPT)
     assert p.returncode == 1, p.stderr[-2000:]
