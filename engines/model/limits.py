@@ -121,7 +121,8 @@ def check_water_stiffness(dt, limit, E_w, water_interval=1, names=SCENE_NAMES, w
     if h <= limit:
         return
     largest = largest_water_interval(dt, limit)
-    fix = (f"set {names['interval']} <= {largest}" if largest >= 1 else
+    margin = f" ({largest // 2} leaves a margin: the limit moves with the pores)" if largest >= 2 else ""
+    fix = (f"set {names['interval']} <= {largest}{margin}" if largest >= 1 else
            f"reduce {names['dt']} to <= {limit:.3g} s with water_interval = 1, or reduce {names['E_w']}")
     raise WaterStiffnessError(
         f"water step {h:.3g} s ({names['interval']} {water_interval} x {names['dt']} {dt:.3g} s) exceeds the "
