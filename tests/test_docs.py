@@ -137,7 +137,7 @@ def test_snippet_errors_are_found():
     head = "from engines.model.pore_water import WaterSettings\n"
     assert snippet_errors(head + "s = WaterSettings(E_w=240.0, k1=1.0, k2=2.0)\n") == []
     assert snippet_errors(head + "s = WaterSettings(E_w=240.0, k1=1.0, k2=2.0, k4=1.0)\n")  # no such field
-    assert snippet_errors(head + "s = WaterSettings(240.0, 1.0, 2.0, 0.0, 0.0, \"undrained\", False, True, \"paper\", 1)\n")  # one too many
+    assert snippet_errors(head + "s = WaterSettings(240.0, 1.0, 2.0, 0.0, 0.0, \"undrained\", False, True, \"paper\", 0.0, 1)\n")  # one too many
 
 
 def test_python_snippets_match_the_code():

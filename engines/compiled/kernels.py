@@ -356,7 +356,9 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     sums of q over the throats of each pore as their first (out_i) and second (out_j) pore, in
     throat order (``darcy_update``'s, as PoreWater._step's np.bincount).
 
-    wp = (E_w, k1, k2, k3, q_w). Pores with A <= a_min exchange nothing. Returns the Gershgorin
+    wp = (E_w, k1, k2, k3, inflow rate), q_in = rate x bottom (PoreWater.inflow_weights: q_w and 1
+    per inflow pore, or inflow_velocity and each pore's inflow length). Pores with A <= a_min
+    exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
     exchange (PoreWater._limit; 0 without open pores); acc_i, acc_j and rate (1 / c_p) (Np,) are
     scratch. Two divisions fewer per pore and one per throat than PoreWater.flows, the same values

@@ -25,14 +25,16 @@ class WaterModel(water_model.WaterModel):
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
         super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
                          rebuild_distance, flat_walls)
-        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, settings.q_w])
+        # the kernels' inflow q_in = wp[4] x bottom: rate and weights of PoreWater.inflow_weights
+        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, self.water.inflow[0]])
         self._buffers()
 
     def _buffers(self):
         """The network's arrays for kernels.water_step, packed (allocated once per rebuild)."""
         net, n = self.water.net, len(self.r)
         n_p, n_l, n_t = net.n_pores, len(net.links), len(net.throat_conns)
-        surface, drained, bottom = self.water._boundary_masks()
+        surface, drained, _ = self.water._boundary_masks()
+        bottom = self.water.inflow[1]
         walls = net.flat_walls
         edge, edge_wall = pg.wall_edges(net)
         ints = {"links": net.links, "link_pores": net.link_pores, "throat_i": net.throat_conns[:, 0],
@@ -145,10 +147,15 @@ class WaterModel(water_model.WaterModel):
         b.inflow += inflow
         b.surface_outflow += surface
         b.side_outflow += side
+        if self.watch is not None:
+            self.watch(self._part("void"), self._part("U"), self.settings.E_w, w.net.a_min, h)
 
-    def after_kernel_steps(self):
+    def after_kernel_steps(self, unwatched=False):
         """After water steps run by kernels with the arguments of ``kernel_args``: the eq 46 state
-        they hold and the Darcy limit of the last one."""
+        they hold and the Darcy limit of the last one. ``unwatched``: water steps the accuracy
+        watch did not see (a compiled drive's): its next comparison starts again."""
+        if unwatched and self.watch is not None:
+            self.watch.rebuilt()
         if self.settings.smoothing:
             self.water.q_prev = self._args[kernels.WATER.q_prev]
         self.last_limit = limits.gershgorin_limit(self._lam[0])

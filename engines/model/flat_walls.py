@@ -33,7 +33,8 @@ class FlatWall:
     """The face x = position (axis 0) or z = position (axis 1) [m]; the discs are on its side
     ``inward`` (+1: x or z > position, -1: below). ``boundary``: "undrained" (no flow across the
     wall edge), "drained" (exchange with U = 0 outside through k3, as drained side walls) or
-    "inflow" (q_w into each pore that has the wall as a vertex, as the bottom wall of §5.1)."""
+    "inflow" (q_w [m^2/s] into each pore that has the wall as a vertex, as the bottom wall of §5.1;
+    or inflow_velocity x each wall edge's length into the pore beside it, SPEC §2.7)."""
 
     axis: int
     position: float

@@ -13,7 +13,10 @@ engines.compiled.kernels, tested equal).
 * water stiffness: a disc moved by dx changes the void of each pore it bounds by at most its
   width 2 r dx, so the pressure of that pore by E_w 2 r dx / A (eq 32 at W = A), which pushes the
   disc over at most 2 r: the water adds a spring k_w = E_w sum_p (2 r)^2 / A_p (over the open
-  pores p the disc bounds) and 2 sqrt(m / k_w) is the eq 52 bound of that spring;
+  pores p the disc bounds) and 2 sqrt(m / k_w) is the eq 52 bound of that spring. The pressure
+  forces are recomputed once per water step h = water_interval x dt and held in between, so the
+  spring acts with the step h: h is refused above the bound (no sub-steps; the message names the
+  largest stable water_interval);
 * Darcy: the explicit water update (eq 42) is stable for a water step h <= 2 / lambda_max of the
   linearised exchange dU/dt = -C^-1 G U (engines.model.pore_water: conductances g, boundary g_b,
   capacities c = W^2 / (E_w A)); ``darcy_eigen_limit`` computes it with eigsh. The engines check
@@ -80,12 +83,11 @@ def check_ties(dt, ties, mass):
 def water_stiffness(net, A, r, E_w):
     """k_w (N,) [N/m]: E_w sum over the open pores p that disc i bounds of (2 r_i)^2 / A_p (flat
     walls, vertices >= N, take none)."""
-    k = np.zeros(net.n_discs)
-    for p in np.flatnonzero(A > net.a_min):
-        v = net.vertices_of(p)
-        v = v[v < net.n_discs]
-        k[v] += E_w * (2 * r[v]) ** 2 / A[p]
-    return k
+    ptr, idx = net.pore_vertex_ptr, net.pore_vertex_idx
+    pore = np.repeat(np.arange(net.n_pores), np.diff(ptr))
+    keep = (idx < net.n_discs) & (np.asarray(A)[pore] > net.a_min)
+    v, p = idx[keep], pore[keep]
+    return np.bincount(v, E_w * (2 * r[v]) ** 2 / np.asarray(A)[p], minlength=net.n_discs)
 
 
 def water_stiffness_limit(net, A, r, E_w, mass, mobile):
@@ -96,11 +98,93 @@ def water_stiffness_limit(net, A, r, E_w, mass, mobile):
     return float(np.min(2 * np.sqrt(m[has] / k[has]))) if has.any() else math.inf
 
 
-def check_water_stiffness(dt, limit, E_w):
-    """Refuse dt above the water-stiffness limit ``limit`` [s]."""
-    refuse_dt(dt, limit, f"the water-stiffness limit {{limit}} at the start (2 sqrt(m / k_w), k_w = E_w sum "
-                         f"(2 r)^2 / A over the pores a disc bounds, [water] E_w = {E_w:g} N/m); reduce dt or E_w, "
-                         f"or set dt = \"auto\"")
+class WaterStiffnessError(ValueError):
+    """A water step above the water-stiffness limit (it has no sub-steps)."""
+
+
+# the names of the water step's parts in a scene file and in a YADE script (WaterEngine)
+SCENE_NAMES = {"interval": "[numerics] water_interval", "dt": "[numerics] dt", "E_w": "[water] E_w"}
+ENGINE_NAMES = {"interval": "WaterEngine water_interval=", "dt": "O.dt", "E_w": "WaterSettings E_w"}
+
+
+def largest_water_interval(dt, limit):
+    """The largest water_interval whose water step water_interval x dt [s] is within ``limit`` [s] (0: none)."""
+    return int(math.floor(limit / dt * (1 + 1e-12))) if math.isfinite(limit) else 2**62
+
+
+def check_water_stiffness(dt, limit, E_w, water_interval=1, names=SCENE_NAMES, when="at the start"):
+    """Refuse a water step water_interval x dt [s] above the water-stiffness limit ``limit`` [s]:
+    the pressure forces are held for a water step, the water's spring k_w acts with that step, and
+    it has no sub-steps; the message names the largest stable water_interval (or the dt and E_w
+    that would do when even water_interval = 1 is above it)."""
+    h = water_interval * dt
+    if h <= limit:
+        return
+    largest = largest_water_interval(dt, limit)
+    margin = f" ({largest // 2} leaves a margin: the limit moves with the pores)" if largest >= 2 else ""
+    fix = (f"set {names['interval']} <= {largest}{margin}" if largest >= 1 else
+           f"reduce {names['dt']} to <= {limit:.3g} s with water_interval = 1, or reduce {names['E_w']}")
+    raise WaterStiffnessError(
+        f"water step {h:.3g} s ({names['interval']} {water_interval} x {names['dt']} {dt:.3g} s) exceeds the "
+        f"water-stiffness limit {limit:.3g} s {when} (2 sqrt(m / k_w), k_w = E_w sum (2 r)^2 / A over the pores a "
+        f"disc bounds, E_w = {E_w:g} N/m): the pressure forces, held for a water step, would throw the discs about, "
+        f"and this limit has no sub-steps; {fix}")
+
+
+# -- the accuracy of a water step -------------------------------------------------------------------
+# max |dA| / A of the pores between two water steps: warned once above WATCH_WARN, refused above
+# WATCH_STOP unless accepted (docs/ENGINE.md, "The accuracy watch": how they were chosen)
+WATCH_WARN, WATCH_STOP = 0.05, 0.5
+
+
+class AccuracyError(ValueError):
+    """A water step too long for the discs' motion (the accuracy watch)."""
+
+
+class AccuracyWatch:
+    """The accuracy of the water steps (docs/ENGINE.md): at each water step, max |dA| / A of the
+    open pores since the last water step on the same pores, and min U / E_w. Warns once (``log``)
+    above ``warn`` or at U < -E_w; above ``stop`` raises AccuracyError unless ``accept``. ``worst``
+    keeps the largest ratio seen, ``lowest`` the lowest U / E_w."""
+
+    # what a checkpoint stores (engines.model.state): nothing; a restored run watches again from its step
+    CHECKPOINT_FIELDS = ()
+    CHECKPOINT_DERIVED = {**{name: "the engine's arguments" for name in ("warn", "stop", "accept", "names")},
+                          "log": "the print function",
+                          **{name: "what the watch saw of the run since it was made" for name in
+                             ("worst", "lowest", "warned", "_A")}}
+
+    def __init__(self, warn=WATCH_WARN, stop=WATCH_STOP, accept=False, log=print, names=ENGINE_NAMES):
+        self.warn, self.stop, self.accept, self.log, self.names = warn, stop, accept, log, names
+        self.worst, self.lowest, self.warned, self._A = 0.0, 0.0, False, None
+
+    def rebuilt(self):
+        """The pores were rebuilt: the next water step starts a new comparison."""
+        self._A = None
+
+    def __call__(self, A, U, E_w, a_min, h):
+        """Watch the water step of h [s] that ended at void areas A (Np,) [m^2], pressures U (Np,) [N/m]."""
+        A = np.array(A, float)
+        ratio = 0.0
+        if self._A is not None and len(self._A) == len(A):
+            open_ = (self._A > a_min) & (A > a_min)
+            if open_.any():
+                ratio = float(np.max(np.abs(A[open_] - self._A[open_]) / self._A[open_]))
+        self._A = A
+        low = float(np.min(U)) / E_w if len(U) else 0.0
+        self.worst, self.lowest = max(self.worst, ratio), min(self.lowest, low)
+        cause = (f"a pore's void area changed by {ratio:.0%} in one water step of {h:.3g} s" if ratio > self.warn else
+                 f"a pore's suction reached U = {low:.2f} E_w" if low < -1 else None)
+        if cause is None:
+            return
+        fix = (f"shorten the water step ({self.names['interval']} or {self.names['dt']}): the pressure forces are "
+               f"held for a water step while the discs move")
+        if ratio > self.stop and not self.accept:
+            raise AccuracyError(f"{cause} (above {self.stop:.0%}): the water lags the discs; {fix}, or accept it "
+                                f"(WaterEngine accept_inaccurate=True)")
+        if not self.warned:
+            self.warned = True
+            self.log(f"water: {cause} (warned above {self.warn:.0%}, stopped above {self.stop:.0%}): inaccurate; {fix}")
 
 
 # -- Darcy ------------------------------------------------------------------------------------------

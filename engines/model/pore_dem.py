@@ -109,15 +109,16 @@ def scene_flat_walls(settings, packing):
     """{wall code: FlatWall} of [walls] kind = "flat", {} for kind = "discs": each wall-disc group of
     the packing replaced by a flat wall at its inner face (Packing.inner_faces), moved back to the
     outermost particle where one reaches past it (a particle resting in the dip between two wall
-    discs would start overlapping the face); the bottom lets in q_w when [water] q_w > 0, the sides
+    discs would start overlapping the face); the bottom is an inflow wall when [water] q_w or
+    inflow_velocity is > 0, the sides
     drain when [water] sides = "drained", else undrained."""
     if settings.walls.kind != "flat":
         return {}
     w = settings.water
     side = "drained" if w.sides == "drained" else "undrained"
     # (axis, inward, boundary): the bottom a face z = const below the discs, the left and right x = const
-    kinds = {pg.WALL_BOTTOM: (1, 1, "inflow" if w.q_w > 0 else "undrained"), pg.WALL_LEFT: (0, 1, side),
-             pg.WALL_RIGHT: (0, -1, side)}
+    bottom = "inflow" if w.q_w > 0 or w.inflow_velocity > 0 else "undrained"
+    kinds = {pg.WALL_BOTTOM: (1, 1, bottom), pg.WALL_LEFT: (0, 1, side), pg.WALL_RIGHT: (0, -1, side)}
     m = packing.mobile
     walls = {}
     for code, face in sorted(packing.inner_faces().items()):

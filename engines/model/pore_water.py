@@ -9,7 +9,10 @@ modulus E_w in N/m, permeabilities k in 1/s, flows q in m^2/s.
 * W_i <- W_i - sum_j q_ij dt - boundary outflow dt + inflow dt           (eq 42)
 * free surface (a pore with a non-wall edge on the outer face): q = k1 W U / E_w to U = 0 outside
 * drained side walls: q = k3 W U / E_w for pores touching a side wall; undrained: nothing
-* quick-sand inflow: q_w into every pore that has a bottom-wall disc as a vertex (§5.1)
+* quick-sand inflow: q_w [m^2/s per pore] into every pore that has a bottom-wall disc as a vertex
+  (§5.1); or, with ``inflow_velocity`` v [m/s] (SPEC §2.7), v x the length of each inflow edge (a
+  link between two bottom-wall discs, centre to centre, or an inflow flat wall's edge) into the pore
+  on its inner side (``inflow_lengths``): the total is v x the row's span whatever the grain size
 * flat walls (engines.model.flat_walls, SPEC §2.6), by their boundary: a pore with a drained one as a
   vertex drains as a side-wall pore (booked as side outflow), one with an inflow one receives q_w
   as a bottom pore (once per pore, however many such walls or wall discs it has); undrained: nothing
@@ -53,7 +56,8 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "k1": Field(float, 200.0, NONNEG, "permeability across a gap link [1/s] (eq 43a)"),
     "k2": Field(float, 2.0, NONNEG, "permeability across a contact link [1/s] (eq 43b)"),
     "k3": Field(float, 0.0, NONNEG, "permeability of drained side walls [1/s]"),
-    "q_w": Field(float, 0.0, NONNEG, "inflow into every bottom pore [m^2/s] (§5.1)"),
+    "q_w": Field(float, 0.0, NONNEG, "inflow into every pore with a bottom-wall disc or an inflow flat wall as a "
+                 "vertex [m^2/s per inflow pore] (§5.1, the paper's: the total grows with the number of such pores)"),
     "sides": Field(str, "undrained", ("undrained", "drained"), "side-wall drainage"),
     "smoothing": Field(bool, False, None, "eq 45-46"),
     "substep": Field(bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the "
@@ -62,6 +66,9 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "transfer": Field(str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
                       "(§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap "
                       "(engines.model.pore_water.conserving_water)"),
+    "inflow_velocity": Field(float, 0.0, NONNEG, "inflow as a Darcy flux per unit width [m/s] (SPEC §2.7): each link "
+                             "between two bottom-wall discs and each inflow flat-wall edge passes v x its length into "
+                             "the pore on its inner side, so the total is v x the row's span; exclusive with q_w"),
 }
 WaterSettings = settings_class("WaterSettings", WATER_FIELDS, "water", __name__,
                                "Constants of the pore water (WATER_FIELDS; the scene file's [water] table).")
@@ -127,11 +134,18 @@ class PoreWater:
     # what a checkpoint stores (engines.model.state)
     CHECKPOINT_FIELDS = ("net", "W", "A_prev", "q_prev", "balance", "remesh_counts", "rule")
     CHECKPOINT_RESIZED = ("W", "A_prev", "rule")  # per pore
-    CHECKPOINT_DERIVED = {"settings": "the scene's [water]"}
+    CHECKPOINT_DERIVED = {"settings": "the scene's [water]", "walls": "the packing's wall codes",
+                          "inflow": "of the network (checkpoint_restored)"}
 
-    def __init__(self, net, A, settings, W=None):
-        """Water on ``net`` with void areas A [m^2]; W defaults to A (after packing, U = 0)."""
+    def __init__(self, net, A, settings, W=None, walls=None):
+        """Water on ``net`` with void areas A [m^2]; W defaults to A (after packing, U = 0); walls
+        (N,) the discs' wall codes (engines.model.pores; None: no wall discs), for the inflow by
+        velocity (``inflow_lengths``)."""
+        if settings.q_w > 0 and settings.inflow_velocity > 0:
+            raise ValueError(f"q_w = {settings.q_w:g} m^2/s per inflow pore and inflow_velocity = "
+                             f"{settings.inflow_velocity:g} m/s are two ways of one inflow; set one of them to 0")
         self.settings = settings
+        self.walls = np.zeros(net.n_discs, np.int64) if walls is None else np.asarray(walls, np.int64)
         self.net = net
         A = np.asarray(A, float)
         self.W = A.copy() if W is None else np.array(W, float)
@@ -142,6 +156,20 @@ class PoreWater:
         self.balance = WaterBalance(initial=float(self.W.sum()))
         self.remesh_counts = {}
         self.rule = np.zeros(net.n_pores, np.int8)  # per pore: 0 built with the network, 1-4 inherited by rule (a)-(d)
+        self.inflow = self.inflow_weights()
+
+    def checkpoint_restored(self):
+        """After a checkpoint set the network: its inflow weights again."""
+        self.inflow = self.inflow_weights()
+
+    def inflow_weights(self):
+        """(rate, weights (Np,)): the inflow into pore p is rate x weights[p] [m^2/s]: q_w [m^2/s] and 1
+        per inflow pore (§5.1), or inflow_velocity [m/s] and the pore's inflow length [m]
+        (``inflow_lengths``, SPEC §2.7)."""
+        s = self.settings
+        if s.inflow_velocity > 0:
+            return s.inflow_velocity, inflow_lengths(self.net, self.walls)
+        return s.q_w, self._boundary_masks()[2].astype(float)
 
     # -- state -----------------------------------------------------------------------------------
     def pressure(self, A):
@@ -176,11 +204,12 @@ class PoreWater:
         A_ij = W[i] * W[j] / np.where(both, A[i] + A[j], 1.0)  # eq 40 (the OCR's W' is W_i)
         g = np.where(both, k * A_ij / s.E_w, 0.0)
         q = g * (U[i] - U[j])  # eq 41 with i_ij = (U_i - U_j)/E_w (eq 39)
-        surface, drained, bottom = self._boundary_masks()
+        surface, drained, _ = self._boundary_masks()
         per_k = open_ * W / s.E_w  # outside at U = 0: A_ij -> W_i
         g_s, g_d = s.k1 * surface * per_k, s.k3 * drained * per_k
         q_s, q_d = g_s * U, g_d * U
-        q_in = s.q_w * bottom
+        rate, weight = self.inflow
+        q_in = rate * weight
         capacity = np.where(open_, W**2 / (s.E_w * np.where(open_, A, 1.0)), np.inf)
         return FlowState(q, q_s, q_d, q_in, g, g_s + g_d, capacity)
 
@@ -276,7 +305,36 @@ class PoreWater:
             self.balance.remesh_excess_edge += float(X_new[~new_on].sum() - X_old[~old_on].sum())
         self.net, self.W, self.A_prev, self.q_prev = new_net, W_new, A_new.copy(), None
         self.remesh_counts, self.rule = counts, rule
+        self.inflow = self.inflow_weights()
         return counts
+
+
+def inflow_lengths(net, walls):
+    """(Np,) [m]: each pore's length of inflow boundary at the build (SPEC §2.7): every link between
+    two bottom-wall discs (codes ``walls`` (N,), engines.model.pores) counts its length centre to
+    centre for the pore above it, every edge of an inflow flat wall its length for the pore on the
+    wall's inward side; a pore on the row at a vertex only gets none, the outer face none."""
+    n_p = net.n_pores
+    if n_p == 0:
+        return np.zeros(0)
+    codes = np.asarray(walls, np.int64)
+    links, vec = net.links, net.link_vec0
+    v = len(codes) if net.wall_vertices is None else net.wall_vertices.n_vertices
+    codes = np.concatenate([codes, np.full(v - len(codes), -1)])
+    row = (codes[links[:, 0]] == pg.WALL_BOTTOM) & (codes[links[:, 1]] == pg.WALL_BOTTOM)
+    inward = np.zeros((len(links), 2))
+    inward[row] = (0.0, 1.0)  # the bottom row's inner side is up
+    edge, wall = pg.wall_edges(net)
+    inflow = np.array([w.boundary == "inflow" for w in net.flat_walls], bool)
+    if len(edge):
+        edge, wall = edge[inflow[wall]], wall[inflow[wall]]
+        inward[edge] = [net.flat_walls[w].normal() for w in wall]
+        row[edge] = True
+    # the pore on the left of i -> j lies along (-dz, dx)
+    left = inward[:, 0] * -vec[:, 1] + inward[:, 1] * vec[:, 0] > 0
+    pore = np.where(left, net.link_pores[:, 0], net.link_pores[:, 1])
+    keep = row & (pore != pg.OUTER)
+    return np.bincount(pore[keep], np.hypot(vec[keep, 0], vec[keep, 1]), minlength=n_p)
 
 
 RULES = "abcd"  # PoreWater.rule codes 1-4; 0: built with the network

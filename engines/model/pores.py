@@ -72,6 +72,24 @@ def check_nonnegative(name, value):
         raise ValueError(f"{name} must be finite and >= 0, got {value}")
 
 
+LINK_RANGE = (0.01, 2.0)  # the accepted l_m, in median radii: below, a few pores; above, links across grains
+
+
+def check_lengths(l_m, eps_m, r, names=("l_m", "eps_m")):
+    """Refuse a link range l_m [m] outside LINK_RANGE x the median radius of r (N,) [m] (lengths
+    typed in another unit: l_m = 2.3e-4 radii builds two pores), or a contact range eps_m [m]
+    above l_m; ``names``: how the caller calls them."""
+    r_med = float(np.median(r))
+    lo, hi = LINK_RANGE
+    if not lo * r_med <= l_m <= hi * r_med:
+        raise ValueError(f"{names[0]} = {l_m:.3g} m is {l_m / r_med:.3g} x the median disc radius {r_med:.3g} m, "
+                         f"outside {lo:g}-{hi:g} x it: the link range beyond touching (eq 28) is a fraction of a "
+                         f"grain; check the units of the radii and of {names[0]} (both in m)")
+    if eps_m > l_m:
+        raise ValueError(f"{names[1]} = {eps_m:.3g} m exceeds {names[0]} = {l_m:.3g} m: the contact range (eq 43b) "
+                         f"lies within the link range (eq 28); reduce {names[1]} or raise {names[0]}")
+
+
 def check_discs(xz, r):
     """Validate disc centres (N, 2) [m] and radii (N,) [m] > 0; return float arrays."""
     xz = check_finite_array("xz", xz, (None, 2))

@@ -14,7 +14,8 @@ are those of the network that runs:
   first network (engines.model.water_model.WaterModel: the same discs, flat walls and ranges), or None
   for a dry scene;
 * ``limits``: {name: limit [s]} per DEM step, each computed once: contact (eq 52), ties (only with
-  [loading] side_walls = "springs"), water stiffness, darcy (2 / lambda_max from eigsh, divided by
+  [loading] side_walls = "springs"), water stiffness (its limit of the water step divided by
+  water_interval: the pressure forces are held for a water step), darcy (2 / lambda_max from eigsh, divided by
   water_interval since the water step is water_interval x dt) and darcy_check (the engines' Gershgorin
   check of the water step, per DEM step);
 * ``settings``: the settings with their time step: ``given`` for a numeric dt, for dt = "auto" a copy
@@ -94,7 +95,7 @@ def start_pores(settings, packing, flat_walls):
     net = pg.build_pores(packing.xz, packing.r, eps_m=settings.contact.eps_m, l_m=settings.water.l_m, walls=packing.group,
                          flat_walls=vertices)
     m = pg.measure(net, packing.xz, packing.r)
-    return net, m, PoreWater(net, m.void_area, settings.water_settings())
+    return net, m, PoreWater(net, m.void_area, settings.water_settings(), walls=packing.group)
 
 
 def limits(settings, packing, mass, ties, pores):
@@ -107,14 +108,16 @@ def limits(settings, packing, mass, ties, pores):
     if pores is not None:
         net, m, water = pores
         M = settings.numerics.water_interval
-        out["water_stiffness"] = lim.water_stiffness_limit(net, m.void_area, packing.r, settings.water.E_w, mass, mob)
+        out["water_stiffness"] = lim.water_stiffness_limit(net, m.void_area, packing.r, settings.water.E_w, mass,
+                                                           mob) / M
         out["darcy"] = lim.darcy_eigen_limit(water, m.void_area, m.link_contact) / M
         out["darcy_check"] = water.darcy_limit(m.void_area, m.link_contact) / M
     return out
 
 
 def check_start(settings, packing, mass, ties, lims):
-    """Refuse (ValueError, one line naming the field and the limit) settings whose numeric dt is
+    """Refuse (ValueError, one line naming the field and the limit) [water] l_m outside
+    pores.LINK_RANGE x the median radius or below [contact] eps_m, and settings whose numeric dt is
     above a limit at its start (``lims``, of ``limits``): eq 52 x dt_safety, the ties, the water
     stiffness, and a water step water_interval x dt above the Darcy check without [water] substep,
     or needing more than [water] max_substeps sub-steps with it."""
@@ -123,7 +126,8 @@ def check_start(settings, packing, mass, ties, lims):
     lim.check_ties(num.dt, ties, mass)
     if not w.enabled:
         return
-    lim.check_water_stiffness(num.dt, lims["water_stiffness"], w.E_w)
+    pg.check_lengths(w.l_m, settings.contact.eps_m, packing.r, ("[water] l_m", "[contact] eps_m"))
+    lim.check_water_stiffness(num.dt, num.water_interval * lims["water_stiffness"], w.E_w, num.water_interval)
     h, limit = num.water_interval * num.dt, num.water_interval * lims["darcy_check"]
     where = f"[numerics] dt = {num.dt:.3g} s, water_interval = {num.water_interval}: at the start (k1 = {w.k1:g}, k2 = {w.k2:g} 1/s) the"
     try:

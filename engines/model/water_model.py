@@ -43,7 +43,10 @@ class WaterModel:
     CHECKPOINT_FIELDS = ("wall_vertices", "F", "F_walls", "n_rebuilds", "schedule", "substeps_max",
                          "substeps_total", "last_limit", "xz_built", "water")
     CHECKPOINT_DERIVED = {name: "the scene's [water] and [numerics], the packing's discs and flat walls" for name in
-                          ("settings", "eps_m", "l_m", "flat_walls", "r", "walls", "dt")} | {"log": "the print function"}
+                          ("settings", "eps_m", "l_m", "flat_walls", "r", "walls", "dt")} | {
+        "log": "the print function", "on_change": "set by the engine that steps the model (its limit checks)",
+        "watch": "set by the engine that steps the model (engines.model.limits.AccuracyWatch): it watches "
+                 "again from the restored step"}
 
     def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
@@ -56,6 +59,8 @@ class WaterModel:
         self.dt = float(dt)
         self.schedule = Schedule(water_interval, rebuild_interval, rebuild_distance, k0)
         self.log = log
+        self.on_change = None  # called after each rebuild and change of dt: the stepping engine's limit checks
+        self.watch = None  # limits.AccuracyWatch of the water steps made from Python, or None
         self.F = np.zeros((len(self.r), 2))
         self.F_walls = np.zeros(len(self.flat_walls))
         self.n_rebuilds = 0
@@ -63,7 +68,7 @@ class WaterModel:
         self.last_limit = np.inf  # Darcy limit of the last water step [s]
         self.xz_built = np.array(xz, float)
         net = self._build(xz)
-        self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings)
+        self.water = PoreWater(net, pg.measure(net, xz, self.r).void_area, settings, walls=self.walls)
 
     def checkpoint_restored(self):
         """Refuse stored water that does not fit its network or these discs."""
@@ -85,6 +90,8 @@ class WaterModel:
         if not dt > 0:
             raise ValueError(f"dt must be > 0 [s], got {dt}")
         self.dt = float(dt)
+        if self.on_change is not None:
+            self.on_change()
 
     def move_walls(self, shift):
         """Translate the flat walls to the displacements ``shift`` (W, 2) [m] from their FlatWall
@@ -123,6 +130,10 @@ class WaterModel:
         self.xz_built = np.array(xz, float)
         if k is not None:
             self.schedule.built(k)
+        if self.watch is not None:
+            self.watch.rebuilt()
+        if self.on_change is not None:
+            self.on_change()
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29)."""
@@ -141,6 +152,8 @@ class WaterModel:
         U = self.water.pressure(A)
         self.F = pg.pressure_forces(self.water.net, self.r, U, m)
         self.F_walls = pg.flat_wall_forces(self.water.net, U, m)
+        if self.watch is not None:
+            self.watch(m.void_area, U, self.settings.E_w, self.water.net.a_min, h)
 
     # -- observations ------------------------------------------------------------------------------
     def void_area(self, xz):

@@ -152,6 +152,9 @@ def _cross_checks(t, path):
     if t["loading"]["type"] == "record" and not t["loading"]["record"]:
         raise SceneError("[loading] record: required when type = 'record'")
     _check_lists(t["output"])
+    if t["water"]["q_w"] > 0 and t["water"]["inflow_velocity"] > 0:
+        raise SceneError(f"[water] q_w = {t['water']['q_w']:g} m^2/s per inflow pore and inflow_velocity = "
+                         f"{t['water']['inflow_velocity']:g} m/s are two ways of one inflow; set one of them to 0")
     if t["loading"]["side_walls"] == "springs" and c["law"] == "yade":
         raise SceneError("[loading] side_walls = 'springs': the side-wall ties run in the paper's law engine; "
                          "use [contact] law = 'paper'")

@@ -3,8 +3,12 @@ naming the body id (``ContractError``), and ``set_disc_mass`` gives a sphere the
 
 The rules (docs/ENGINE.md):
 
-* every body of ``disc_ids`` exists and is a sphere (a YADE Box or Wall belongs in ``flat_walls``,
-  engines.yade.walls);
+* every body of ``disc_ids`` exists (an erased one is refused with the remedy), is listed once, is a
+  sphere (a YADE Box or Wall belongs in ``flat_walls``, engines.yade.walls) and is no clump nor a
+  clump's member (a clump moves its members as one body);
+* the scene is not periodic (``check_scene``);
+* gravity is read from the NewtonIntegrator in O.engines (``gravity_of``; none there and no
+  ``gravity=`` is refused; a y component is refused);
 * the discs lie in one plane y = const (the median y of the discs, to 1e-6 of each radius) and stay
   there: every dynamic disc has y among its blockedDOFs, and no disc has a velocity along y;
 * the masses are per metre of thickness (SPEC §1): m = f rho pi r^2 with rho the density of the
@@ -13,6 +17,7 @@ The rules (docs/ENGINE.md):
   4/3 r [m] of that (6.7e-4 at r = 0.5 mm), the message says when the mass is that one. A disc free
   to spin about y needs I_y >= MIN_FACTOR m r^2 / 2 (the disc's m r^2/2, eq 15; YADE's sphere
   inertia 2/5 m r^2 with its 3D mass is far below);
+* a drained flat wall needs k3 > 0 (``check_flat_boundaries``);
 * q_w > 0 needs an inflow boundary: a pore with a bottom wall disc or an inflow flat wall as a vertex;
 * the discs build pores;
 * O.dt may change between steps: the engines' models follow it (``follow_dt``) before their next
@@ -42,15 +47,22 @@ def set_disc_mass(body, rho, factor=1.0, r=None):
 def check_discs(bodies, ids, radii=None):
     """Refuse the bodies ``ids`` of O.bodies ``bodies`` that are not discs of the engine (the rules
     above), with radii (n,) [m] the true ones (None: the spheres'). Returns the radii."""
-    found = []
+    found, seen = [], set()
     for i in ids:
+        if i in seen:
+            raise ContractError(f"body {i}: listed twice in disc_ids (each disc bounds the pores once; drop the "
+                                f"repeats, e.g. disc_ids = sorted(set(disc_ids)))")
+        seen.add(i)
         b = bodies[i] if 0 <= i < len(bodies) else None
         if b is None:
-            raise ContractError(f"body {i}: not in O.bodies (disc_ids must be existing spheres)")
+            raise ContractError(f"body {i}: not in O.bodies (erased, or never made): disc_ids must be existing "
+                                f"spheres; drop it, e.g. disc_ids = [i for i in disc_ids if O.bodies[i]]")
         shape = type(b.shape).__name__
         if shape in ("Box", "Wall"):
             raise ContractError(f"body {i}: a YADE {shape} in disc_ids, which takes spheres only; give it as a flat "
                                 f"wall: flat_walls={{{i}: 'undrained' | 'drained' | 'inflow'}}")
+        if b.isClump or b.isClumpMember:
+            check_clump(bodies, i, b)
         if shape != "Sphere":
             raise ContractError(f"body {i}: a {shape}, not a sphere (disc_ids must be spheres)")
         found.append(b)
@@ -67,6 +79,56 @@ def check_discs(bodies, ids, radii=None):
         if b.dynamic:
             check_dynamic(i, b, r)
     return radii
+
+
+def check_clump(bodies, i, b):
+    """Refuse the clump or clump member b (id i): a clump moves its members as one body (its mass
+    and inertia are the clump's, the members carry none of their own), so the pores' discs and the
+    forces the engine writes on them would not be the bodies YADE moves."""
+    c = b if b.isClump else bodies[b.clumpId]
+    members = sorted(c.shape.members.keys()) if c is not None else []
+    mass = f"{c.state.mass:.3g} kg" if c is not None else "unknown"
+    what = f"clump {c.id if c is not None else b.clumpId}" if b.isClump else f"a member of clump {b.clumpId}"
+    raise ContractError(f"body {i}: {what} (members {members[:6]}{' ...' if len(members) > 6 else ''}, the clump's "
+                        f"mass {mass} moves them as one body): the WaterEngine moves each disc by its own mass and "
+                        f"forces and takes no clumps; build the discs as single spheres (no O.bodies.appendClumped "
+                        f"or clump()), or leave the clump's members out of disc_ids")
+
+
+def check_scene(O):
+    """Refuse a scene the engine cannot describe: a periodic cell (the pores are built in a plain
+    box: the seam would be taken for a free surface)."""
+    if O.periodic:
+        raise ContractError("O.periodic is True: the WaterEngine builds its pores in a plain box and would take the "
+                            "periodic seam for a free surface at U = 0 (periodic pores do not exist yet); bound the "
+                            "discs with walls and set O.periodic = False")
+
+
+def gravity_of(engines, given=None):
+    """The gravity (gx, gz) [m/s^2] in the x-z plane: ``given`` [m/s^2] along -z when a number, else
+    that of the NewtonIntegrator among ``engines`` (O.engines). Refuses a y component, and no
+    integrator without ``given``."""
+    if given is not None:
+        return np.array([0.0, -float(given)])
+    newton = newton_of(engines)
+    if newton is None:
+        raise ContractError("no NewtonIntegrator in O.engines to read gravity from (the WaterEngine adds buoyancy "
+                            "rho_w pi r^2 g): put the NewtonIntegrator in O.engines before making the WaterEngine, "
+                            "or give gravity=9.81 [m/s^2, along -z] (gravity=0: no buoyancy)")
+    return plane_gravity(newton.gravity)
+
+
+def newton_of(engines):
+    """The NewtonIntegrator among ``engines``, or None."""
+    return next((e for e in engines if type(e).__name__ == "NewtonIntegrator"), None)
+
+
+def plane_gravity(g):
+    """(gx, gz) [m/s^2] of a NewtonIntegrator's gravity g (3,); refuses a y component."""
+    if g[1] != 0:
+        raise ContractError(f"NewtonIntegrator gravity {tuple(g)} m/s^2 has a y component {g[1]:g}: the WaterEngine "
+                            f"works in the x-z plane; set NewtonIntegrator(gravity=(gx, 0, gz))")
+    return np.array([float(g[0]), float(g[2])])
 
 
 def check_dynamic(i, b, r):
@@ -92,14 +154,25 @@ def check_dynamic(i, b, r):
 
 def check_pores(net, settings, n_discs, l_m):
     """Refuse a pore network ``net`` (engines.model.pores) without pores, or without an inflow
-    boundary when settings.q_w > 0."""
+    boundary when settings.q_w > 0 or settings.inflow_velocity > 0."""
     if net.n_pores == 0:
         raise ContractError(f"no pores between the {n_discs} discs: the WaterEngine needs discs in the x-z plane that "
                             f"touch or lie within l_m = {l_m:g} m of each other")
-    if settings.q_w > 0 and not (net.pore_touches["bottom"] | net.flat_wall_pores("inflow")).any():
-        raise ContractError(f"q_w = {settings.q_w:g} m/s but no pore has a bottom wall disc or an inflow flat wall as "
+    inflow = settings.q_w > 0 or settings.inflow_velocity > 0
+    if inflow and not (net.pore_touches["bottom"] | net.flat_wall_pores("inflow")).any():
+        given = (f"q_w = {settings.q_w:g} m^2/s per inflow pore" if settings.q_w > 0 else
+                 f"inflow_velocity = {settings.inflow_velocity:g} m/s")
+        raise ContractError(f"{given} but no pore has a bottom wall disc or an inflow flat wall as "
                             f"a vertex: the inflow needs walls={{'bottom': ids}} under the discs or "
-                            f"flat_walls={{id: 'inflow'}} (or q_w = 0)")
+                            f"flat_walls={{id: 'inflow'}} (or no inflow)")
+
+
+def check_flat_boundaries(flat_walls, settings):
+    """Refuse a "drained" flat wall with settings.k3 = 0 (it would pass no water)."""
+    drained = [i for i, b in flat_walls.items() if b == "drained"]
+    if drained and settings.k3 == 0:
+        raise ContractError(f"body {drained[0]}: a drained flat wall with k3 = 0, which passes no water; set "
+                            f"WaterSettings k3 > 0 [1/s] (the wall's permeability) or call it 'undrained'")
 
 
 def check_added(bodies, n_bodies):

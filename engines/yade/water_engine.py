@@ -36,7 +36,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled import water_model as compiled_water_model
-from engines.model import pore_water
+from engines.model import limits, pore_water
 from engines.model import pores as pg
 from engines.model.water_model import WaterModel
 from engines.yade import contract
@@ -57,9 +57,12 @@ class WaterEngine:
     walls: {"bottom"|"left"|"right": ids} among disc_ids (inflow enters bottom pores; drained
     sides drain through left/right). radii: the true disc radii [m] (default: read from the
     bodies; give them when the contact law enlarges the spheres by eps_m/2). eps_m: contact range
-    of the links (eq 43b); l_m: link range (eq 28). buoyancy: add rho_w pi r^2 g upwards to the
-    dynamic discs (eq 34b), rho_w from ``rho_w``. Pressure forces act on dynamic bodies only.
-    flat_walls: {body id: "undrained" | "drained" | "inflow"} of YADE Box or Wall bodies (not in
+    of the links (eq 43b); l_m: link range (eq 28), within 0.01-2 x the median radius and >= eps_m
+    (engines.model.pores.check_lengths). buoyancy: add -rho_w pi r^2 g to the dynamic discs (eq 34b),
+    rho_w from ``rho_w``; g the gravity of the NewtonIntegrator in O.engines, read at every water
+    step (a ramp is followed), or ``gravity`` [m/s^2] along -z when given (needed without an
+    integrator). Pressure forces act on dynamic bodies only.
+    flat_walls: {body id: "undrained" | "drained" (needs settings.k3 > 0) | "inflow"} of YADE Box or Wall bodies (not in
     disc_ids) that close the pores (SPEC §2.6; engines.yade.walls takes the face the discs lie
     against); the water's push on them is ``wall_forces``. A flat wall may translate (a
     TranslationEngine or a velocity of its body): each water step reads where it is.
@@ -68,6 +71,12 @@ class WaterEngine:
     (engines.model.schedule.areas_in_range) (default None: REBUILD_FRACTION x l_m, see there;
     0: off); rebuild_interval [steps] bounds the time between rebuilds. A script may change O.dt
     between steps: the model follows it at the next water step (engines.yade.contract.follow_dt).
+    The water step water_interval x O.dt is checked (``check_limits``) at construction, after each
+    rebuild and each change of O.dt: above the water-stiffness limit it is refused, naming the
+    largest stable water_interval; above the Darcy limit it is sub-stepped (refused without
+    settings.substep). The accuracy watch (engines.model.limits.AccuracyWatch, ``model.watch``)
+    compares the void areas of each water step made from Python with the last one: above
+    WATCH_WARN it warns once, above WATCH_STOP it stops the run unless ``accept_inaccurate``.
     """
 
     # what a checkpoint stores (engines.model.state)
@@ -75,6 +84,8 @@ class WaterEngine:
     CHECKPOINT_DERIVED = {
         **{name: "the bodies, built from the scene" for name in ("io", "wall_ids", "_n_bodies", "forced", "_dynamic")},
         "compiled": "the caller's choice", "F_const": "buoyancy, from the scene",
+        **{name: "the bodies and the caller's arguments" for name in ("_mass", "_lift", "_newton")},
+        "g": "the NewtonIntegrator's gravity, read at each water step (or the caller's)",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
         "_run_kernel": "a function of engines.yade.yade_io",
         "arguments": "the constructor's arguments: the recipe of a saved scene's tag (engines.yade.scene_save)",
@@ -82,8 +93,8 @@ class WaterEngine:
                   "what they compute"}
 
     def __init__(self, disc_ids, walls, settings, l_m, eps_m=0.0, radii=None, rebuild_interval=1000,
-                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=9.81, compiled=True,
-                 rebuild_distance=None, flat_walls=None):
+                 water_interval=1, buoyancy=True, rho_w=1000.0, gravity=None, compiled=True,
+                 rebuild_distance=None, flat_walls=None, accept_inaccurate=False):
         self.arguments = {k: v for k, v in locals().items() if k != "self"}  # saved with the scene (scene_save)
         from yade import O  # YADE only here and below
 
@@ -91,9 +102,13 @@ class WaterEngine:
         from engines.yade.walls import WallMotion
         from engines.yade.walls import flat_walls as faces
 
+        contract.check_scene(O)
+        disc_ids = [int(i) for i in disc_ids]
+        radii = contract.check_discs(O.bodies, disc_ids, radii)
         self.io = yade_io.Bodies(disc_ids)
         ids = self.io.ids
-        radii = contract.check_discs(O.bodies, ids.tolist(), radii)
+        pg.check_lengths(l_m, eps_m, radii)
+        contract.check_flat_boundaries(flat_walls or {}, settings)
         self.wall_ids = [int(i) for i in (flat_walls or {})]
         walls_xz = faces(O.bodies, flat_walls or {}, self.io.positions())
         self.wall_motion = WallMotion(self.wall_ids) if self.wall_ids else None
@@ -117,16 +132,55 @@ class WaterEngine:
         contract.check_pores(self.model.water.net, settings, len(ids), l_m)
         self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
+        self._mass = np.array([O.bodies[i].state.mass for i in ids.tolist()])
         self.forced = yade_io.Bodies(ids[dynamic])
         self._dynamic = np.flatnonzero(dynamic)
         self.F_const = np.zeros((len(self._dynamic), 2))
-        if buoyancy:
-            self.F_const[:, 1] = pore_water.buoyancy(np.asarray(radii, float)[self._dynamic], rho_w, gravity)
+        # buoyancy -rho_w pi r^2 g (eq 34b) per unit g; gravity: given along -z, else the NewtonIntegrator's
+        self._lift = (pore_water.buoyancy(np.asarray(radii, float)[self._dynamic], rho_w, 1.0) if buoyancy
+                      else np.zeros(len(self._dynamic)))
+        self._newton = None if gravity is not None else contract.newton_of(O.engines)
+        self.g = contract.gravity_of(O.engines, gravity)
+        self.F_const[:] = -self._lift[:, None] * self.g
         self.forced.set_permanent_forces(self.F_const)
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
         self._run_kernel = yade_io.run_kernel
         self.k = O.iter  # DEM step of the last call (the model's k0 is that of creation)
         self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
+        self.model.watch = limits.AccuracyWatch(accept=accept_inaccurate)
+        self.check_limits("at construction")
+        self.model.on_change = self.check_limits  # at each rebuild and change of dt
+
+    def check_limits(self, when=None):
+        """Refuse the water step h = water_interval x O.dt above the water-stiffness limit of the
+        pores now (no sub-steps: the message names the largest stable water_interval), or above
+        the Darcy limit without settings.substep (engines.model.limits); at construction, after each
+        pore rebuild and each change of O.dt."""
+        from yade import O
+        m, s = self.model, self.model.settings
+        xz = self.io.positions()
+        meas = pg.measure(m.water.net, xz, m.r)
+        M = m.schedule.water_interval
+        when = when or f"at step {O.iter} (the pores rebuilt or O.dt changed)"
+        stiff = limits.water_stiffness_limit(m.water.net, meas.void_area, m.r, s.E_w, self._mass, self._mobile())
+        limits.check_water_stiffness(m.dt, stiff, s.E_w, M, limits.ENGINE_NAMES, when)
+        limits.substeps(M * m.dt, m.water.darcy_limit(meas.void_area, meas.link_contact), s.substep, s.E_w)
+
+    def _mobile(self):
+        """(N,) bool: the discs YADE moves (dynamic)."""
+        mobile = np.zeros(len(self._mass), bool)
+        mobile[self._dynamic] = True
+        return mobile
+
+    def _follow_gravity(self):
+        """Buoyancy -rho_w pi r^2 g of the NewtonIntegrator's gravity now (a ramp is followed), when
+        the gravity was not given."""
+        if self._newton is None:
+            return
+        g = contract.plane_gravity(self._newton.gravity)
+        if not np.array_equal(g, self.g):
+            self.g = g
+            self.F_const[:] = -self._lift[:, None] * g
 
     def due(self, k):
         """True when step k is a water step (every water_interval steps from the engine's creation)."""
@@ -158,6 +212,7 @@ class WaterEngine:
         due, errors = self.due, yade_io.ERRORS
         while done < n:
             contract.follow_dt(self.model)
+            self._follow_gravity()
             to_event = self.model.schedule.steps_to_event(O.iter, water_steps_only=True)
             m = min(n - done, to_event, self._chunk) if fast else 0
             if m > 0:
@@ -213,7 +268,7 @@ class WaterEngine:
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
-            m.after_kernel_steps()
+            m.after_kernel_steps(unwatched=True)
         yade_io.check(rc)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
             m.finish_kernel_step(h, n_sub)
@@ -230,6 +285,7 @@ class WaterEngine:
         m = self.model
         self.k = O.iter
         contract.follow_dt(m)
+        self._follow_gravity()
         h = m.schedule.water_interval * m.dt
         self._follow_walls()
         xz = self.io.positions() if m.schedule.by_displacement else None

@@ -63,6 +63,11 @@ def forces_reset_after_newton(engines):
     return "ForceResetter" not in names[:names.index("NewtonIntegrator")]
 
 
+# the remedy for a body of an engine erased after the engine was made
+ERASED_HINT = ("(an engine's discs are fixed when it is made: erase bodies before making the WaterEngine, or make a "
+               "new one with the discs left; its water starts again)")
+
+
 class Bodies:
     """Bulk access to the bodies ``ids`` (any order; each id once)."""
 
@@ -90,7 +95,8 @@ class Bodies:
             self._index = np.searchsorted(existing, self.ids)
             gone = (self._index >= len(existing)) | (existing[np.minimum(self._index, len(existing) - 1)] != self.ids)
             if gone.any():
-                raise IndexError(f"body id {self.ids[gone][0]} is out of range or erased; nothing was done")
+                raise IndexError(f"body id {self.ids[gone][0]} is out of range or erased; nothing was done "
+                f"{ERASED_HINT}")
             self._n_listed = len(x)
         out[:, 0] = np.asarray(x)[self._index]
         out[:, 1] = np.asarray(z)[self._index]

@@ -177,3 +177,36 @@ def test_a_tie_of_one_newton_per_metre_still_bounds_the_step():
     ties = _column(ks=1.0)
     mass = np.full(ties.n, 4.0)
     assert lim.tie_limit(ties, mass) == pytest.approx(2.0, rel=1e-15)
+
+
+def test_the_accuracy_watch_warns_once_then_stops_unless_accepted():
+    """max |dA| / A between two water steps on the same pores: quiet below WATCH_WARN, one warning
+    above it (or at U < -E_w), an AccuracyError above WATCH_STOP unless accepted; a rebuild
+    starts a new comparison."""
+    said = []
+    w = lim.AccuracyWatch(log=said.append)
+    A, U = np.array([1.0, 2.0, 1e-9]), np.zeros(3)
+    w(A, U, 240.0, 1e-6, 1e-4)
+    w(A * [1 + 0.5 * lim.WATCH_WARN, 1, 50], U, 240.0, 1e-6, 1e-4)  # the pinched pore does not count
+    assert said == [] and w.worst == pytest.approx(0.5 * lim.WATCH_WARN)
+    w(A * [1 + 2 * lim.WATCH_WARN, 1, 1], U, 240.0, 1e-6, 1e-4)
+    w(A * [1 + 0.1 * lim.WATCH_WARN, 1, 1], [-300.0, 0, 0], 240.0, 1e-6, 1e-4)
+    assert len(said) == 1 and "void area changed by" in said[0] and w.lowest == pytest.approx(-1.25)
+    w.rebuilt()
+    w(A * 10, U, 240.0, 1e-6, 1e-4)  # new pores: nothing to compare
+    with pytest.raises(lim.AccuracyError, match="shorten the water step .* accept_inaccurate=True"):
+        w(A * 10 * (1 + 2 * lim.WATCH_STOP), U, 240.0, 1e-6, 1e-4)
+    accepted = lim.AccuracyWatch(accept=True, log=said.append)
+    accepted(A, U, 240.0, 1e-6, 1e-4)
+    accepted(A * (1 + 2 * lim.WATCH_STOP), U, 240.0, 1e-6, 1e-4)
+    assert len(said) == 2
+
+
+def test_the_water_step_above_the_stiffness_limit_names_the_largest_water_interval():
+    lim.check_water_stiffness(1e-6, 1e-5, 240.0, 10)  # at the limit
+    with pytest.raises(lim.WaterStiffnessError,
+                       match=r"water_interval 11 x .*set \[numerics\] water_interval <= 10 \(5 leaves a margin"):
+        lim.check_water_stiffness(1e-6, 1e-5, 240.0, 11)
+    with pytest.raises(lim.WaterStiffnessError, match=r"reduce O.dt to <= 1e-05 s with water_interval = 1, or reduce "
+                                                      r"WaterSettings E_w$"):
+        lim.check_water_stiffness(2e-5, 1e-5, 240.0, 1, lim.ENGINE_NAMES)

@@ -139,7 +139,7 @@ def test_a_sphere_inertia_with_a_disc_mass_is_refused():
 
 def test_inflow_without_an_inflow_boundary_is_refused():
     bottom, left, right, grains = column()
-    with pytest.raises(ContractError, match=r"^q_w = 0.0005 m/s but no pore has a bottom wall disc"):
+    with pytest.raises(ContractError, match=r"^q_w = 0.0005 m\^2/s per inflow pore but no pore has a bottom wall disc"):
         engine([], left, right, bottom + grains)
     column()
     without = engine([], left, right, bottom + grains, settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0))
@@ -189,10 +189,11 @@ from engines.yade.water_engine import WaterEngine
 from yade_scripts.examples import viscel_column as ex
 bottom, left, right, grains = ex.build_column()
 O.engines = ex.engines()
-O.dt = 1e-6
+O.dt = 5e-11  # within the Darcy limit of k1 = 1e8 (5.9e-9 s) at construction
 water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
                     settings=WaterSettings(E_w=240.0, k1=1e8, k2=2.0, q_w=5e-4, substep=False), l_m=1.3e-4,
                     water_interval=10)
+O.dt = 1e-6  # checked at the first water step
 O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
 O.run(200, True)
 print("after the run at step", O.iter)
@@ -208,8 +209,9 @@ def run_script(tmp_path, code):
 
 
 def test_an_engine_error_ends_a_plain_script_with_status_1(tmp_path):
-    """A Darcy refusal (substep=False, k1 = 1e8) in a PyRunner under O.run(200, True): the run
-    stops at its first water step, the script goes on, and the process exits with status 1 and
+    """A Darcy refusal (substep=False, k1 = 1e8, O.dt raised after the construction) in a PyRunner
+    under O.run(200, True): the run stops at its first water step, the script goes on, and the
+    process exits with status 1 and
     one line naming the engine's argument and the scene field."""
     p = run_script(tmp_path, SCRIPT)
     assert p.returncode == 1, p.stderr[-2000:]

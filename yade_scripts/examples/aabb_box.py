@@ -67,7 +67,7 @@ def main():
     # the pore water, before NewtonIntegrator: the bottom box lets the water in, the sides are closed
     water = WaterEngine(grains, walls={}, flat_walls={bottom: "inflow", left: "undrained", right: "undrained"},
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=args.q_w, transfer="conserving"),
-                        l_m=1.3e-4, water_interval=10)
+                        l_m=1.3e-4, water_interval=5)
     O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
     O.run(args.steps, True)
     print(f"dt {O.dt:.3g} s, {len(grains)} grains, {O.iter} steps ({O.time * 1e3:.2f} ms)")

@@ -60,7 +60,7 @@ O.run(2000, True)  # dry settling
 # the pore water, before NewtonIntegrator. The pores are rebuilt when a grain has moved l_m / 4
 # since the last build (the engine's default rebuild_distance), at most 1000 steps apart
 water = WaterEngine(bottom + left + right + grains, walls={"bottom": bottom, "left": left, "right": right},
-                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4, transfer=args.transfer), l_m=1.3e-4, water_interval=10)
+                    settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4, transfer=args.transfer), l_m=1.3e-4, water_interval=5)
 O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
 O.run(args.steps, True)
 print(f"dt {O.dt:.3g} s, {len(grains)} grains, {O.iter} steps ({O.time * 1e3:.2f} ms)")

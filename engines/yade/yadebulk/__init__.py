@@ -141,7 +141,9 @@ def sha256(path):
 def raise_error(rc, ids=None):
     """Raise on a bulk function's error code."""
     if rc > 0:
-        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done")
+        raise IndexError(f"body id {ids[rc - 1]} (ids[{rc - 1}]) is out of range or erased; nothing was done "
+                         "(an engine's discs are fixed when it is made: erase bodies before making the WaterEngine, "
+                         "or make a new one with the discs left; its water starts again)")
     if rc == STEP_THREW:
         raise RuntimeError(f"a YADE engine failed in the step: {_lib.yb_error().decode()}")
     if rc < 0:
