@@ -200,7 +200,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[8]
+    motion, record = drive_args[8:10]
     rows = np.arange(len(eng._F_out))
     write = yade_io._ADD_UNSYNCED if eng._reset_last else yade_io._SET_PERM  # as the run writes them
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (write, eng.forced.ids, eng._F_out.copy(), rows,
@@ -216,7 +216,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "  of which eq 33 forces (kernels.pressure_forces)": (kernels.pressure_forces, forces),
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
         "bridge: write forces (add_force_unsynced or set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
-        "base motion (kernels.cosine_base_step)": (kernels.cosine_base_step, (motion, core.k)),
+        "base motion (kernels.base_step)": (kernels.base_step, (motion, *record, core.k)),
         "bridge: the driven walls' velocities (set_vel)": (kernels.read_bulk_io,  # the same bulk call, of set_vel
                                                            (yade_io._SET_VEL, eng.walls.ids, eng._wall_vel)),
     }

@@ -968,16 +968,42 @@ def _write_step_velocities(set_vel, ids, discs, V):
     return _c_bulk_call(set_vel, chosen.ctypes.data, chosen.size, W.ctypes.data)
 
 
-MOTION = Layout("MOTION", ("amplitude", "w", "dt", "acc", "vel", "disp", "wall_velocity"))  # of cosine_base_step
+# The base motion of the drive (engines.model.ground_motion.BaseMotion): its numbers, and for a
+# sampled input (Sampled) its record (t_s, a_s) passed beside them; a cosine passes empty records.
+MOTION = Layout("MOTION", ("amplitude", "w", "left", "right", "dt", "acc", "vel", "disp", "wall_velocity"))
 
 
 @jit
-def cosine_base_step(motion, k):
-    """Twin of engines.model.ground_motion.BaseMotion.step for a Cosine acceleration: motion =
-    (amplitude [m/s^2], 2 pi frequency [rad/s], dt [s], acc, vel, disp, wall velocity) (MOTION)
-    advanced in place from step k to k + 1; the wall velocity of that step is (u_k+1 - u_k) / dt [m/s]."""
-    amplitude, w, dt = motion[MOTION.amplitude], motion[MOTION.w], motion[MOTION.dt]
-    a_next = amplitude * math.cos(w * ((k + 1) * dt))
+def sampled_acceleration(t, t_s, a_s, left, right):
+    """Twin of engines.model.ground_motion.Sampled at a time t [s]: np.interp(t, t_s, a_s, left,
+    right) in NumPy's arithmetic (the interval's slope times the distance from its start, plus its
+    start value; a sample's own value at a sample time) [m/s^2]."""
+    last = len(t_s) - 1
+    if t > t_s[last]:
+        return right
+    if t < t_s[0]:
+        return left
+    if t == t_s[last]:
+        return a_s[last]
+    j = np.searchsorted(t_s, t, side="right") - 1  # t_s[j] <= t < t_s[j + 1]
+    if t == t_s[j]:
+        return a_s[j]
+    slope = (a_s[j + 1] - a_s[j]) / (t_s[j + 1] - t_s[j])
+    return slope * (t - t_s[j]) + a_s[j]
+
+
+@jit
+def base_step(motion, t_s, a_s, k):
+    """Twin of engines.model.ground_motion.BaseMotion.step: motion (MOTION: amplitude [m/s^2] and
+    2 pi frequency [rad/s] of a Cosine, left and right [m/s^2] of a Sampled record (t_s, a_s) (s,
+    m/s^2; empty for a Cosine), dt [s], acc, vel, disp, wall velocity) advanced in place from
+    step k to k + 1; the wall velocity of that step is (u_k+1 - u_k) / dt [m/s]."""
+    dt = motion[MOTION.dt]
+    t = (k + 1) * dt
+    if len(t_s):
+        a_next = sampled_acceleration(t, t_s, a_s, motion[MOTION.left], motion[MOTION.right])
+    else:
+        a_next = motion[MOTION.amplitude] * math.cos(motion[MOTION.w] * t)
     a_bar = 0.5 * (motion[MOTION.acc] + a_next)
     du = motion[MOTION.vel] * dt + 0.5 * a_bar * dt * dt
     motion[MOTION.vel] += a_bar * dt
@@ -987,7 +1013,8 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel,
+def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, t_s, a_s,
+                      wall_ids, wall_vel,
                       ids_in, xz, ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
@@ -999,7 +1026,7 @@ def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, s
     leaves a reference count of each array around a call of more than 30 arrays, two atomic adds
     each), write_forces(ids_out <- F_out), then the
     water's balance of the step added to totals (3,) [m^2], the base motion advanced
-    (``cosine_base_step`` when motion is not empty: MOTION; the walls wall_ids get its wall
+    (``base_step`` when motion is not empty: MOTION, the record t_s, a_s; the walls wall_ids get its wall
     velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and bridge's steps() (O.step()).
     With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``
     (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
@@ -1051,7 +1078,7 @@ def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, s
             for a in range(3):
                 totals[a] += balance[a]
         if len(motion):
-            cosine_base_step(motion, k + s)
+            base_step(motion, t_s, a_s, k + s)
             for b in range(len(wall_ids)):
                 wall_vel[b, 0], wall_vel[b, 1] = motion[MOTION.wall_velocity], 0.0
             rc = _c_bulk_call(bridge[BRIDGE.set_vel], wall_ids.ctypes.data, wall_ids.size, wall_vel.ctypes.data)
@@ -1063,7 +1090,7 @@ def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, s
     return n, 0, 1, 0, builds, pi, pj, state, lost
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 17).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 19).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
 
 
 @jit

@@ -7,7 +7,9 @@ from engines.compiled import kernels
 from engines.compiled.paper_law import PaperLaw
 from engines.compiled.water_model import WaterModel
 from engines.model import pore_dem
-from engines.model.ground_motion import Cosine
+from engines.model.ground_motion import Cosine, Sampled
+
+NO_RECORD = np.zeros(0)  # the record of a Cosine input (kernels.base_step)
 
 
 class PoreDEM(pore_dem.PoreDEM):
@@ -69,32 +71,29 @@ class PoreDEM(pore_dem.PoreDEM):
         return self.water_model is not None and self.schedule.water_due(self.k)
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args) for
+        """(steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args) for
         kernels.dem_drive_bulk_io: up to n steps from step k to the schedule's next event
         (Schedule.steps_to_event: none of them a pore rebuild), the water steps among them (the
         first water_in steps from k, then every water_interval; dry: none), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
-        lists it rebuilds [m], the water's balance so far (3,) [m^2], the base motion (kernels.MOTION; empty without one) and the arguments after F_out
-        (DEM_DRIVE), or None when step k needs ``kernel_step_args``'s other paths or the input
-        acceleration is not a Cosine. ``finish_kernel_drive`` books what the call did."""
-        base, wm = self.base, self.water_model
-        if base is not None and not isinstance(base.accel, Cosine):
-            return None
+        lists it rebuilds [m], the water's balance so far (3,) [m^2], the base motion and its record
+        (``base_motion_args``; an empty motion without one) and the arguments after F_out
+        (DEM_DRIVE), or None when step k needs ``kernel_step_args``'s other paths.
+        ``finish_kernel_drive`` books what the call did."""
+        wm = self.water_model
         step = self.kernel_step_args(rows, held)
         if step is None:
             return None
         args = step[:kernels.DEM_STEP.water_due] + step[kernels.DEM_STEP.water_due + 1:]  # DEM_DRIVE
-        motion = np.zeros(0) if base is None else np.array(kernels.MOTION.values(
-            amplitude=base.accel.amplitude, w=base.accel.w, dt=base.dt, acc=base.acc, vel=base.vel, disp=base.disp,
-            wall_velocity=self.wall_velocity))
+        motion, *record = base_motion_args(self.base, self.wall_velocity)
         s, skin = self.law.settings, self.law.contact.skin  # no flat walls here: no pair filter
         sch = self.schedule
         steps = min(n, sch.steps_to_event(self.k))
         if wm is None:
-            return steps, 0, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, args
+            return steps, 0, 1, s.separation_adjustment, s.restitution, self.law.mass, skin, np.zeros(3), motion, record, args
         b = wm.water.balance
         return (steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
-                self.law.mass, skin, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, args)
+                self.law.mass, skin, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, record, args)
 
     def finish_kernel_drive(self, done, totals, motion):
         """Book the ``done`` steps a kernels.dem_drive_bulk_io call made with the totals and motion
@@ -109,3 +108,26 @@ class PoreDEM(pore_dem.PoreDEM):
             b = wm.water.balance
             b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
             wm.after_kernel_steps()
+
+
+def base_motion_args(base, wall_velocity):
+    """(motion, t_s, a_s): the BaseMotion ``base`` as kernels.base_step advances it, with the
+    wall velocity [m/s] of the last step: motion (kernels.MOTION) and the record (t_s [s], a_s
+    [m/s^2]) of a Sampled input, empty for a Cosine; an empty motion for no base (None)."""
+    if base is None:
+        return NO_RECORD, NO_RECORD, NO_RECORD
+    a = base.accel
+    if isinstance(a, Cosine):
+        amplitude, w, left, right, t_s, a_s = a.amplitude, a.w, 0.0, 0.0, NO_RECORD, NO_RECORD
+    elif isinstance(a, Sampled):
+        t_s, a_s = np.ascontiguousarray(a.t_s, float), np.ascontiguousarray(a.a_s, float)
+        amplitude, w = 0.0, 0.0
+        left = a_s[0] if a.left is None else a.left  # None: the end sample's value, as np.interp
+        right = a_s[-1] if a.right is None else a.right
+    else:
+        raise TypeError(f"the input acceleration {type(a).__name__} has no compiled twin (kernels.base_step): "
+                        f"give a Cosine or a Sampled record")
+    motion = np.array(kernels.MOTION.values(amplitude=amplitude, w=w, left=left, right=right, dt=base.dt,
+                                            acc=base.acc, vel=base.vel, disp=base.disp, wall_velocity=wall_velocity),
+                      float)
+    return motion, t_s, a_s

@@ -6,6 +6,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled import paper_law as compiled_paper_law
+from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.paper_law import PaperLaw
 from engines.yade.contract import follow_dt
 
@@ -26,8 +27,8 @@ class PaperLawEngine:
     (engines.yade.yade_io.forces_reset_after_newton), added to the reset forces, which spares YADE
     the sync pass that permanent forces cost at every step (engines.yade.coupling does this). This
     saves the PyRunner's dispatch at every step, and with a core that offers
-    ``kernel_drive_args`` (PoreDEM) and the bridge runs the steps between pore rebuilds in one
-    compiled call (kernels.dem_drive_bulk_io), back in Python only for the steps that need it.
+    the compiled PoreDEM and the bridge runs the steps between pore rebuilds in one compiled call
+    (kernels.dem_drive_bulk_io; ``step_path`` chooses), back in Python only for the steps that need it.
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
@@ -114,38 +115,31 @@ class PaperLawEngine:
 
     def drive(self, n, stop=None):
         """n steps: this engine's work, then O.step(); ``stop()`` true ends early (asked after each
-        step made from Python and after each compiled run of steps). A core that offers
-        ``kernel_step_args`` (PoreDEM) does a step in one compiled call where it can, and with
-        ``kernel_drive_args`` and the bridge many steps in one call (``_kernel_steps``)."""
+        step made from Python and after each compiled run of steps). The steps are made the way
+        ``step_path`` chooses: many in one compiled call (``_kernel_steps``), one compiled call a
+        step (``_kernel_work``) or ``_work``; a step a compiled path cannot make falls to the next."""
         from yade import O
 
         from engines.yade import yade_io
         self._reset_last = yade_io.forces_reset_after_newton(O.engines)
-        many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
+        path = step_path(self.core, self._drive_dem is not None, self.hooks)
         done, n = 0, int(n)
         while done < n:
             follow_dt(self.core)
-            m = 0 if many is None else many(n - done)
+            m = self._kernel_steps(n - done) if path == "drive" else 0
             if m == 0:
-                self._python_step()
+                if not (path != "python" and self._kernel_work()):
+                    self._work(self._write_held)
+                O.step()
                 m = 1
             done += m
             if stop is not None and stop():
                 break
 
-    def _python_step(self):
-        """One step from Python: ``_kernel_work`` where the core offers it, else ``_work``; then O.step()."""
-        from yade import O
-        if not (hasattr(self.core, "kernel_step_args") and self._kernel_work()):
-            self._work(self._write_held)
-        O.step()
-
     def _kernel_steps(self, n):
-        """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
-        among them; a step it leaves after its force write (water sub-steps) is finished here with
-        its O.step(). Returns the steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
-        if self.hooks:
-            return 0
+        """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem); a step it
+        leaves after its force write (water sub-steps) is finished here with its O.step(). Returns
+        the steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
         core = self.core
         while True:
             drive = core.kernel_drive_args(self._dynamic, self.held, n)
@@ -153,9 +147,9 @@ class PaperLawEngine:
                 if not self._rebuild_pores():
                     return 0
                 continue
-            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args = drive
+            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args = drive
             done, n_lost, n_sub, rc, builds, *pairs = self._drive_dem(
-                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, self.walls,
+                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, self.walls,
                 self._wall_vel, self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
             if builds:
                 core.law.contact.take_list(builds, *pairs)
@@ -198,10 +192,20 @@ class PaperLawEngine:
     def _rebuild_pores(self):
         """The core's pore rebuild of this step at the positions read now, when that is all that
         keeps the step from a compiled call (``pores_due``); True if it was made."""
-        if not (hasattr(self.core, "pores_due") and self.core.pores_due()):
+        if not self.core.pores_due():
             return False
         self.core.rebuild_pores(self.io.positions())
         return True
 
     def _write_held(self, F):
         self.forced.write_forces(F, self._dynamic, self.held, self._reset_last)
+
+
+def step_path(core, bridge, hooks):
+    """How PaperLawEngine.drive makes the steps of ``core`` (the one choice of a path): "drive",
+    runs of steps in one compiled call (a compiled PoreDEM, the bulk bridge ``bridge`` and no
+    ``hooks``, which run between a step's force write and its O.step()); "kernel", one compiled
+    call a step (a compiled PoreDEM); "python", core.step (a PaperLaw or the NumPy PoreDEM)."""
+    if not isinstance(core, compiled_pore_dem.PoreDEM):
+        return "python"
+    return "drive" if bridge and not hooks else "kernel"

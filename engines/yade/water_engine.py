@@ -149,8 +149,8 @@ class WaterEngine:
 
         from engines.yade import yade_io
         n, done = int(n), 0
-        fast = (stop is None and self.compiled and yade_io.BACKEND == "yadebulk"
-                and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move())
+        alone = stop is None and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
+        fast = water_path(self.compiled, yade_io.BACKEND == "yadebulk", alone) == "drive"
         due, errors = self.due, yade_io.ERRORS
         while done < n:
             contract.follow_dt(self.model)
@@ -230,7 +230,7 @@ class WaterEngine:
         self._follow_walls()
         xz = self.io.positions() if m.schedule.by_displacement else None
         rebuild = m.rebuild_due(self.k, xz)
-        if self.compiled and not rebuild:
+        if water_path(self.compiled) == "kernel" and not rebuild:
             args = m.kernel_args(h)
             if xz is None:  # read, water, write: one compiled call
                 _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
@@ -269,3 +269,14 @@ class WaterEngine:
         discs' contacts on it are YADE's, in O.forces)."""
         return {i: tuple(-f * wall.normal()) for i, f, wall in zip(self.wall_ids, self.model.F_walls,
                                                                     self.model.flat_walls)}
+
+
+def water_path(compiled, bridge=False, alone=False):
+    """How WaterEngine makes its water steps (the one choice of a path): "drive", runs of DEM
+    steps with their water steps in one compiled call (kernels.water_drive_bulk_io: the compiled
+    model, the bulk ``bridge``, and ``alone``: drive without stop, no PyRunner among O.engines, no
+    flat wall that may move); "kernel", a water step in one compiled call (kernels.water_forces_step
+    or water_step: the compiled model); "python", the NumPy model's."""
+    if not compiled:
+        return "python"
+    return "drive" if bridge and alone else "kernel"
