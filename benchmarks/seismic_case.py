@@ -10,7 +10,7 @@ dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}, "breakdown_cpu_us": {...}}: the comparison times YADE alone on the same discs
 (fixed walls), our step with the compiled kernels (the steps from one pore rebuild to the next in
-one compiled run: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+one compiled run: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_drive_bulk_io, n = 1), on the general
 path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and with the NumPy
 path, interleaved in the same run (ratios hold on a shared machine; absolute times do not); the
 breakdown splits the run's CPU time a step into its parts, their sum against the measured mean
@@ -36,7 +36,7 @@ PRESET = "liquefaction_case1"
 def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
     + eps_m/2, no Python), our step with the compiled kernels (many steps in one call:
-    kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+    kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_drive_bulk_io, n = 1), on the general
     path and with the NumPy path, in turns (benchmarks.coupling.paired_runs: YADE alone and the
     compiled runs next to each other, the order swapped every repeat); medians of wall and CPU
     microseconds per step and their ratios to YADE alone. YADE alone has NewtonIntegrator's
@@ -54,10 +54,10 @@ def compare(scene, packing, steps, repeats):
 
     def coupling(one_call=True, many=True, compiled=True):
         cp = YadeCoupling(scene, packing, compiled=compiled)
-        if not many:
-            cp.core.kernel_drive_args = lambda rows, held, n: None
+        if not many:  # a hook: the drive one step a call
+            cp.engine.hooks.append(lambda: None)
         if not one_call:
-            cp.core.kernel_step_args = lambda rows, held: None
+            cp.core.kernel_drive_args = lambda rows, held, n: None
         return cp.run, lambda: cp.water_model.n_rebuilds
 
     setups = {"yade_alone": floor, "compiled": coupling, "yade_alone_defaults": lambda: floor(False),

@@ -179,22 +179,21 @@ def drive_water(n, water_in, water_interval, totals, xz_built, moved2, reader, x
                                        writer.ids, out, *args)
 
 
-def drive_dem(n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, walls, wall_vel, reader,
-              xz, writer, out, args, reset_last):
+def drive_dem(n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, walls,
+              wall_vel, reader, xz, writer, out, args, reset_last):
     """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
-    step k (the water at step water_in, then every water_interval; ``adjust``: the eq 18-24
-    adjustment is on, with restitution e and the discs' masses
-    mass (N,) [kg/m]; stale pair lists rebuilt with ``skin`` [m]), the positions read from
-    ``reader`` and the forces out written to ``writer`` (Bodies; held, or with ``reset_last``
-    added to the reset forces: ``Bodies.write_forces``), the velocities of the driven walls
-    ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base motion ``motion`` and its record
-    (t_s, a_s) (kernels.base_step), args those of
-    dem_drive_bulk_io after F_out. Returns its (steps done, n_lost, n_sub, error code, pair lists
-    built, pi, pj, state, lost)."""
-    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, water_in, water_interval,
-                                     adjust, e, mass, skin, totals, motion, record[0], record[1], walls.ids, wall_vel,
-                                     reader.ids, xz,
-                                     writer.ids, out, *args)
+    step k (the last one's O.step() left to the caller unless ``step_last``; the water at step
+    water_in, then every water_interval; ``adjust``: the eq 18-24 adjustment is on, with
+    restitution e and the discs' masses mass (N,) [kg/m]; stale pair lists rebuilt with ``skin``
+    [m]), the positions read from ``reader`` and the forces out written to ``writer`` (Bodies;
+    held, or with ``reset_last`` added to the reset forces: ``Bodies.write_forces``), the
+    velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base
+    motion ``motion`` and its record (t_s, a_s) (kernels.base_step), args those of
+    dem_drive_bulk_io after F_out. Returns its (steps made, of them stepped, list stale, water
+    answer, error code, pair lists built, pi, pj, state, lost)."""
+    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, step_last, water_in,
+                                     water_interval, adjust, e, mass, skin, totals, motion, record[0], record[1],
+                                     walls.ids, wall_vel, reader.ids, xz, writer.ids, out, *args)
 
 
 def check(rc, ids=None):
