@@ -43,8 +43,7 @@ engines.compiled.regular call).
 The drives call the C functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that
 this module stays cacheable and free of YADE): read, step, write and YADE's O.step() (the bridge's
 steps()), many DEM steps in one call (``dem_drive_bulk_io``; ``water_drive_bulk_io`` with its water
-steps between). ``with_bulk_io[water_forces_step]`` is one water step between a position read and a
-force write (the WaterEngine's PyRunner).
+steps between; one water step of the WaterEngine's PyRunner is a call of n = 1).
 
 The pore measure takes each link's turn since the build with ``turn`` (a short series for the
 small turns between rebuilds, else atan2) where engines.model.pores.measure calls arctan2: the same
@@ -732,43 +731,26 @@ def _write_forces(status, write, ids, F):
     return _c_bulk_call(write, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
 
 
-# The water step between a position read and a force write. Its arguments are spelled out: numba
-# 0.56 computes the type of a tuple argument of more than a few arrays through a fingerprint whose
-# first 40 bytes it leaves unset, so that its cache misses at random (a ~0.6 ms Python typeof each).
 @jit
-def water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
-                              h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
-    """get_pos(ids_in -> xz), water_forces_step(xz, F_out, ...), write_forces(ids_out <- F_out) if
-    its status is >= 0 (bridge: BRIDGE). Returns (the C functions' error code, its status, its info)."""
-    rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
-    if rc != 0:
-        return rc, -1, 0
-    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
-                                     ints, i_at, floats, f_at)
-    return _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out), status, info
-
-
-Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
-
-
-@jit
-def water_drive_bulk_io(bridge, n, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out, F_out,
-                        rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
-    """WaterEngine.drive without Python: n DEM steps, the water steps among them (step water_in
-    of the call, then every water_interval: engines.model.schedule.Schedule) each preceded by
-    water_forces_step_bulk_io (arguments
-    from ids_in on), each step made by bridge's steps() (YADE's O.step()). totals (3,) [m^2] gets
-    the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
-    before stepping after a water step that did not answer 1 (sub-steps or a failure: its
-    bookkeeping is the caller's) or at an error code; with moved2 > 0 [m^2], also before a water
-    step at which a disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a
-    void area is out of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step
-    is the caller's, nothing done of it. Returns
-    (DEM steps done, water steps done, the last water step's answer or 1, the bridge's error code)."""
+def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out,
+                        F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
+    """WaterEngine's step without Python (engines.model.water_model.WaterModel.step in YADE): n DEM
+    steps (one water step of the PyRunner is n = 1, water_in = 0, not ``step_last``), the water
+    steps among them (step water_in of the call, then every water_interval:
+    engines.model.schedule.Schedule) each get_pos(ids_in -> xz), ``water_forces_step`` (WATER: the
+    arguments from h on) and write_forces(ids_out <- F_out), each step made by bridge's steps()
+    (YADE's O.step()) but for the last when not ``step_last``. totals (3,) [m^2] gets the water
+    balance (inflow, surface, side) of every water step that needed no sub-steps. Stops before
+    stepping after a water step that did not answer 1 (sub-steps or a failure: its bookkeeping is
+    the caller's) or at an error code; with moved2 > 0 [m^2], also before a water step at which a
+    disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a void area is out
+    of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step is the
+    caller's, nothing done of it. Returns (DEM steps done, water steps done, the last water step's
+    answer or 1, the bridge's error code)."""
     balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water, next_water = 0, water_in
     for s in range(n):
-        if s == next_water:  # water_forces_step_bulk_io, the rebuild triggers between
+        if s == next_water:  # the rebuild triggers, then the water and the forces to write
             next_water += water_interval
             rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
             if rc != 0:
@@ -787,13 +769,15 @@ def water_drive_bulk_io(bridge, n, water_in, water_interval, totals, xz_built, m
                 return s, n_water, n_sub, 0
             for a in range(3):
                 totals[a] += balance[a]
+        if s == n - 1 and not step_last:
+            return s, n_water, 1, 0
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
             return s, n_water, 1, rc
     return n, n_water, 1, 0
 
 
-Layout.of(water_drive_bulk_io, 11).check(WATER_FORCES_STEP)
+Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
 
 
 @jit
@@ -1062,9 +1046,6 @@ def write_rows_bulk_io(write, ids, F, rows, add, out):
         out[k, 0] = F[rows[k], 0] + add[k, 0]
         out[k, 1] = F[rows[k], 1] + add[k, 1]
     return _write_forces(0, write, ids, out)
-
-
-with_bulk_io = {water_forces_step: water_forces_step_bulk_io}
 
 
 def dry_water_args():

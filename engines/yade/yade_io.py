@@ -150,32 +150,16 @@ class Bodies:
             list(map(O.forces.addF if reset_last else O.forces.setPermF, self.id_list, self._rows(self._F)))
 
 
-def run_kernel(kernel, reader, xz, writer, out, args, reset_last=False):
-    """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
-    into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
-    (m, 2) [N] as the permanent forces of ``writer`` (Bodies), or with ``reset_last`` added to its
-    reset forces (``Bodies.write_forces``). With the bridge this is one compiled call
-    (engines.compiled.kernels.with_bulk_io). Returns (status, info)."""
-    if _BULK is None:
-        xz[:] = reader.positions()
-        status, info = kernel(xz, out, *args)
-        if status >= 0:
-            writer.write_forces(out, None, None, reset_last)
-        return status, info
-    rc, status, info = kernels.with_bulk_io[kernel](_BRIDGE_RESET_LAST if reset_last else _BRIDGE, reader.ids, xz,
-                                                    writer.ids, out, *args)
-    check(rc, reader.ids if status < 0 else writer.ids)
-    return status, info
-
-
-def drive_water(n, water_in, water_interval, totals, xz_built, moved2, reader, xz, writer, out, args):
-    """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps, the water
+def drive_water(n, step_last, water_in, water_interval, totals, xz_built, moved2, reader, xz, writer, out, args):
+    """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps (the last
+    one's O.step() left to the caller unless ``step_last``), the water
     steps among them (step water_in, then every water_interval) with their positions read from
     ``reader`` and forces out written to ``writer``
     (Bodies), args those of kernels.water_forces_step after (xz, out); it stops early before a
     water step at which a disc is farther than sqrt(moved2) [m] from xz_built (moved2 > 0). Returns
     its (steps, water steps, answer, error code)."""
-    return kernels.water_drive_bulk_io(_BRIDGE, n, water_in, water_interval, totals, xz_built, moved2, reader.ids, xz,
+    return kernels.water_drive_bulk_io(_BRIDGE, n, step_last, water_in, water_interval, totals, xz_built, moved2,
+                                       reader.ids, xz,
                                        writer.ids, out, *args)
 
 
