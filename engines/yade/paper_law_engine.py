@@ -25,16 +25,17 @@ class PaperLawEngine:
 
     (engines.yade.yade_io.forces_reset_after_newton), added to the reset forces, which spares YADE
     the sync pass that permanent forces cost at every step (engines.yade.coupling does this). This
-    saves the PyRunner's dispatch at every step, and with a core that offers
-    the compiled PoreDEM and the bridge runs the steps between pore rebuilds in one compiled call
-    (kernels.dem_drive_bulk_io; ``step_path`` chooses), back in Python only for the steps that need it.
+    saves the PyRunner's dispatch at every step, and with the compiled PoreDEM as core and the
+    bridge runs the steps between pore rebuilds in one compiled call (kernels.dem_drive_bulk_io;
+    ``step_path`` chooses), back in Python only for the steps that need it.
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
-    run after each step's forces are written (with hooks, drive makes no compiled runs of steps).
+    run after each step's forces are written, before its O.step() (with hooks, drive makes one
+    compiled step a call).
     ``drive_walls(ids)``: the bodies ids move in x at the core's ``wall_velocity`` of each step
     (their velocity set before O.step()). A script may change O.dt between steps: the core follows
     it before its next step (engines.yade.contract.follow_dt: ``set_dt``, its limits checked again).

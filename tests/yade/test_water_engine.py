@@ -519,3 +519,18 @@ def test_the_paper_law_engine_follows_a_change_of_o_dt(packing):
     O.dt = 1.0
     with pytest.raises(ValueError, match="eq 52"):
         cp.run(1)
+
+
+def test_the_engines_choose_their_path_in_one_place():
+    """step_path: the compiled drive for the compiled PoreDEM with the bridge, else the general
+    step (the NumPy PoreDEM, no bridge); water_path: the drive, water_step, the NumPy model."""
+    from engines.compiled.pore_dem import PoreDEM as CompiledPoreDEM
+    from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
+    from engines.yade.paper_law_engine import step_path
+    from engines.yade.water_engine import water_path
+    from tests.model.test_pore_dem import scene, wet_box
+    s, pk = scene(numerics={"dt": 1e-6}), wet_box()
+    compiled, numpy_core = CompiledPoreDEM(s.settings, pk), NumpyPoreDEM(s.settings, pk)
+    assert [step_path(compiled, True), step_path(compiled, False), step_path(numpy_core, True)] == [
+        "drive", "python", "python"]
+    assert [water_path(True, True), water_path(True, False), water_path(False, True)] == ["drive", "kernel", "python"]
