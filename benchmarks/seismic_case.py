@@ -10,7 +10,7 @@ dt = 1e-6 s, water every step, pores rebuilt every 1000 steps, 180,000 steps (0.
 law runs as its engine. Writes {"steps": n, "wall_s": x, "us_per_step": y, "cpu_s": c, ...,
 "comparison": {...}, "breakdown_cpu_us": {...}}: the comparison times YADE alone on the same discs
 (fixed walls), our step with the compiled kernels (the steps from one pore rebuild to the next in
-one compiled run: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+one compiled run: kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_drive_bulk_io, n = 1), on the general
 path (PoreDEM.step between bulk reads and writes; the side-wall ties in NumPy) and with the NumPy
 path, interleaved in the same run (ratios hold on a shared machine; absolute times do not); the
 breakdown splits the run's CPU time a step into its parts, their sum against the measured mean
@@ -36,7 +36,7 @@ PRESET = "liquefaction_case1"
 def compare(scene, packing, steps, repeats):
     """Same run, same machine: YADE alone (benchmarks.floor: its collider and a linear law, radii
     + eps_m/2, no Python), our step with the compiled kernels (many steps in one call:
-    kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_step), on the general
+    kernels.dem_drive_bulk_io), with one compiled call a step (kernels.dem_drive_bulk_io, n = 1), on the general
     path and with the NumPy path, in turns (benchmarks.coupling.paired_runs: YADE alone and the
     compiled runs next to each other, the order swapped every repeat); medians of wall and CPU
     microseconds per step and their ratios to YADE alone. YADE alone has NewtonIntegrator's
@@ -54,10 +54,10 @@ def compare(scene, packing, steps, repeats):
 
     def coupling(one_call=True, many=True, compiled=True):
         cp = YadeCoupling(scene, packing, compiled=compiled)
-        if not many:
-            cp.core.kernel_drive_args = lambda rows, held, n: None
+        if not many:  # a hook: the drive one step a call
+            cp.engine.hooks.append(lambda: None)
         if not one_call:
-            cp.core.kernel_step_args = lambda rows, held: None
+            cp.core.kernel_drive_args = lambda rows, held, n: None
         return cp.run, lambda: cp.water_model.n_rebuilds
 
     setups = {"yade_alone": floor, "compiled": coupling, "yade_alone_defaults": lambda: floor(False),
@@ -200,7 +200,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
-    motion = drive_args[8]
+    motion, record = drive_args[8:10]
     rows = np.arange(len(eng._F_out))
     write = yade_io._ADD_UNSYNCED if eng._reset_last else yade_io._SET_PERM  # as the run writes them
     bridge = (yade_io._GET_POS, eng.io.ids, eng._xz), (write, eng.forced.ids, eng._F_out.copy(), rows,
@@ -216,7 +216,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "  of which eq 33 forces (kernels.pressure_forces)": (kernels.pressure_forces, forces),
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),
         "bridge: write forces (add_force_unsynced or set_perm)": (kernels.write_rows_bulk_io, bridge[1]),
-        "base motion (kernels.cosine_base_step)": (kernels.cosine_base_step, (motion, core.k)),
+        "base motion (kernels.base_step)": (kernels.base_step, (motion, *record, core.k)),
         "bridge: the driven walls' velocities (set_vel)": (kernels.read_bulk_io,  # the same bulk call, of set_vel
                                                            (yade_io._SET_VEL, eng.walls.ids, eng._wall_vel)),
     }

@@ -21,8 +21,11 @@ Outside engines/: packing/ (the Packing file format, size distributions, lattice
 reference/), postproc/ (reads run files, draws figures; after studies/, never imports yade/ or
 run/), yade_scripts/ (thin command-line scripts, scenes/ presets), tests/ (mirrors this tree).
 
-One step k of the model (model/pore_dem.py, PoreDEM.step, compiled/pore_dem.py in one kernel call;
-the YADE law skips a-c and e):
+One step k of the model (model/pore_dem.py, PoreDEM.step, the readable NumPy one; in YADE the one
+compiled step, compiled/kernels.py dem_drive_bulk_io, calls the same parts in the same order, n
+steps a call, the bridge and the base motion of every input as its arguments (compiled/pore_dem.py
+kernel_drive_args); the engines choose their path in one place, yade/paper_law_engine.py
+step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
   a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24
@@ -33,6 +36,7 @@ the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
+     its twin for every input (cosine, sampled record) compiled/kernels.py base_step
 What happens at step k (water due, pore rebuild due by interval, displacement or areas, output due,
 steps to the next event, counted from the model's start k0): model/schedule.py (Schedule), asked
 by the NumPy step, the compiled drives (given its steps to the water and to the next event),

@@ -20,15 +20,18 @@ a numba function costs ~0.1-0.3 us to unbox, each call ~0.5 us):
 
   law_step          engines.model.paper_law.PaperLaw.step    (eq 17, contact_forces, spin)
   water_step        engines.model.water_model.WaterModel.advance  (measure, flows, update, eq 32, 33)
-  dem_step          engines.model.pore_dem.PoreDEM.step: law_step, water_step when due, forces_to_write
-                    (the side-wall ties by tie_forces, the forces to write)
+  base_step         engines.model.ground_motion.BaseMotion.step (a Cosine, or a Sampled record by
+                    ``sampled_acceleration``, np.interp's arithmetic)
+  dem_drive_bulk_io engines.model.pore_dem.PoreDEM.step in YADE, its parts in its order (law_step,
+                    water_step when due, forces_to_write with the side-wall ties, separation_velocities,
+                    base_step), between the bridge's reads and writes: n steps, one step being n = 1
   water_forces_step engines.yade.water_engine.WaterEngine: water_step and the forces to write
 
 Arguments by name (engines.compiled.layout): each kernel called from Python has the layout of its
 parameters (``LAW = Layout.of(law_step, 1)``), and its callers build its arguments by name
 (``LAW_OWN.values(xz_prev=..., ...) + CONTACT.values(...)``); a kernel that spells out the
-arguments of those it calls has its list checked to be theirs one after the other (DEM_STEP is
-rows, held, water_due, LAW, WATER, TIES), and passes them on under their own names (tested). The
+arguments of those it calls has its list checked to be theirs one after the other (DEM_DRIVE is
+rows, held, LAW, WATER, TIES), and passes them on under their own names (tested). The
 network's arrays of water_step are the parts of two buffers (WATER_INTS, WATER_FLOATS), read by
 name as a WaterNet of views that hold no reference count (``water_net``, ``_view``). These lists
 stay in this file: numba's cache is renewed when this file changes (not when a module it imports
@@ -37,10 +40,10 @@ after changing them, delete engines/compiled/__pycache__; likewise after changin
 ``_grid``, ``_within``, ``_beyond`` or ``_grown``, which engines.compiled.pores and
 engines.compiled.regular call).
 
-``with_bulk_io[kernel]`` runs such a step between a position read and a force write through the C
-functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that this module stays cacheable
-and free of YADE): read, step, write in one call. ``water_drive_bulk_io`` also steps YADE (the
-bridge's O.step()) between its water steps: many DEM steps in one call.
+The drives call the C functions of engines.yade.yadebulk, passed as addresses (BRIDGE; so that
+this module stays cacheable and free of YADE): read, step, write and YADE's O.step() (the bridge's
+steps()), many DEM steps in one call (``dem_drive_bulk_io``; ``water_drive_bulk_io`` with its water
+steps between; one water step of the WaterEngine's PyRunner is a call of n = 1).
 
 The pore measure takes each link's turn since the build with ``turn`` (a short series for the
 small turns between rebuilds, else atan2) where engines.model.pores.measure calls arctan2: the same
@@ -662,28 +665,6 @@ TIES = Layout.of(tie_forces, 3)  # the arguments of tie_forces after (xz, du, dt
 
 
 @jit
-def dem_step(xz, F_out, rows, held, water_due,
-             xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring, F, M,
-             acc_j, lost,
-             h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
-             tie_pairs, tie_rest, tie_prm, T):
-    """One step of PoreDEM (its order a-e) without Python: ``law_step`` (LAW: its arguments from
-    xz_prev to lost), ``water_step`` when water_due (WATER: from h to f_at; a dry scene passes an
-    empty F_water), then ``forces_to_write`` (the side-wall ties, TIES: from tie_pairs on; no
-    ties: empty arrays). Returns (law_step's answer, water_step's or 1): (LIST_STALE, 0) having
-    changed nothing when the list is stale."""
-    n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
-                      r, pi, pj, state, prm, spring, F, M, acc_j, lost)
-    if n_lost == LIST_STALE:
-        return n_lost, 0
-    n_sub = 1
-    if water_due:
-        n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
-    forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T)
-    return n_lost, n_sub
-
-
-@jit
 def forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T):
     """The forces of a step to write, F_out = (F + T + F_water)[rows] + held (n, 2) [N]: the law's
     F, the x-forces T of the side-wall ties (``tie_forces`` at xz, du / dt; none when tie_rest
@@ -700,15 +681,6 @@ def forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_re
         if wet:
             fx, fz = fx + F_water[a, 0], fz + F_water[a, 1]
         F_out[k, 0], F_out[k, 1] = fx + held[k, 0], fz + held[k, 1]
-
-
-DEM_STEP = Layout.of(dem_step, 2).check(("rows", "held", "water_due"), LAW, WATER, TIES)
-
-
-def dem_step_args(rows, held, water_due, law, water, ties):
-    """The arguments of dem_step after (xz, F_out) (DEM_STEP): the forces to write F[rows] + held,
-    water_due, then the tuples LAW, WATER and TIES."""
-    return (rows, held, water_due) + law + water + ties
 
 
 @jit
@@ -761,64 +733,26 @@ def _write_forces(status, write, ids, F):
     return _c_bulk_call(write, ids.ctypes.data, ids.size, F.ctypes.data) if status >= 0 else 0
 
 
-# The two steps between a position read and a force write. Their arguments are spelled out: numba
-# 0.56 computes the type of a tuple argument of more than a few arrays through a fingerprint whose
-# first 40 bytes it leaves unset, so that its cache misses at random (a ~0.6 ms Python typeof each).
 @jit
-def dem_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held, water_due,
-                     xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
-                     F, M, acc_j, lost,
-                     h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
-                     tie_pairs, tie_rest, tie_prm, T):
-    """get_pos(ids_in -> xz), dem_step(xz, F_out, ...), write_forces(ids_out <- F_out) if its status
-    is >= 0 (bridge: BRIDGE). Returns (the C functions' error code, dem_step's status, its info)."""
-    rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
-    if rc != 0:
-        return rc, -1, 0
-    status, info = dem_step(xz, F_out, rows, held, water_due,
-                            xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm,
-                            spring, F, M, acc_j, lost,
-                            h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
-                            tie_pairs, tie_rest, tie_prm, T)
-    return _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out), status, info
-
-
-Layout.of(dem_step_bulk_io, 5).check(DEM_STEP)
-
-
-@jit
-def water_forces_step_bulk_io(bridge, ids_in, xz, ids_out, F_out, rows, held,
-                              h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
-    """As dem_step_bulk_io for water_forces_step."""
-    rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
-    if rc != 0:
-        return rc, -1, 0
-    status, info = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
-                                     ints, i_at, floats, f_at)
-    return _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out), status, info
-
-
-Layout.of(water_forces_step_bulk_io, 5).check(WATER_FORCES_STEP)
-
-
-@jit
-def water_drive_bulk_io(bridge, n, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out, F_out,
-                        rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
-    """WaterEngine.drive without Python: n DEM steps, the water steps among them (step water_in
-    of the call, then every water_interval: engines.model.schedule.Schedule) each preceded by
-    water_forces_step_bulk_io (arguments
-    from ids_in on), each step made by bridge's steps() (YADE's O.step()). totals (3,) [m^2] gets
-    the water balance (inflow, surface, side) of every water step that needed no sub-steps. Stops
-    before stepping after a water step that did not answer 1 (sub-steps or a failure: its
-    bookkeeping is the caller's) or at an error code; with moved2 > 0 [m^2], also before a water
-    step at which a disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a
-    void area is out of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step
-    is the caller's, nothing done of it. Returns
-    (DEM steps done, water steps done, the last water step's answer or 1, the bridge's error code)."""
+def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out,
+                        F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
+    """WaterEngine's step without Python (engines.model.water_model.WaterModel.step in YADE): n DEM
+    steps (one water step of the PyRunner is n = 1, water_in = 0, not ``step_last``), the water
+    steps among them (step water_in of the call, then every water_interval:
+    engines.model.schedule.Schedule) each get_pos(ids_in -> xz), ``water_forces_step`` (WATER: the
+    arguments from h on) and write_forces(ids_out <- F_out), each step made by bridge's steps()
+    (YADE's O.step()) but for the last when not ``step_last``. totals (3,) [m^2] gets the water
+    balance (inflow, surface, side) of every water step that needed no sub-steps. Stops before
+    stepping after a water step that did not answer 1 (sub-steps or a failure: its bookkeeping is
+    the caller's) or at an error code; with moved2 > 0 [m^2], also before a water step at which a
+    disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a void area is out
+    of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step is the
+    caller's, nothing done of it. Returns (DEM steps done, water steps done, the last water step's
+    answer or 1, the bridge's error code)."""
     balance = _part(floats, f_at, WATER_FLOATS.balance)
     n_water, next_water = 0, water_in
     for s in range(n):
-        if s == next_water:  # water_forces_step_bulk_io, the rebuild triggers between
+        if s == next_water:  # the rebuild triggers, then the water and the forces to write
             next_water += water_interval
             rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
             if rc != 0:
@@ -837,13 +771,15 @@ def water_drive_bulk_io(bridge, n, water_in, water_interval, totals, xz_built, m
                 return s, n_water, n_sub, 0
             for a in range(3):
                 totals[a] += balance[a]
+        if s == n - 1 and not step_last:
+            return s, n_water, 1, 0
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
             return s, n_water, 1, rc
     return n, n_water, 1, 0
 
 
-Layout.of(water_drive_bulk_io, 11).check(WATER_FORCES_STEP)
+Layout.of(water_drive_bulk_io, 12).check(WATER_FORCES_STEP)
 
 
 @jit
@@ -970,16 +906,42 @@ def _write_step_velocities(set_vel, ids, discs, V):
     return _c_bulk_call(set_vel, chosen.ctypes.data, chosen.size, W.ctypes.data)
 
 
-MOTION = Layout("MOTION", ("amplitude", "w", "dt", "acc", "vel", "disp", "wall_velocity"))  # of cosine_base_step
+# The base motion of the drive (engines.model.ground_motion.BaseMotion): its numbers, and for a
+# sampled input (Sampled) its record (t_s, a_s) passed beside them; a cosine passes empty records.
+MOTION = Layout("MOTION", ("amplitude", "w", "left", "right", "dt", "acc", "vel", "disp", "wall_velocity"))
 
 
 @jit
-def cosine_base_step(motion, k):
-    """Twin of engines.model.ground_motion.BaseMotion.step for a Cosine acceleration: motion =
-    (amplitude [m/s^2], 2 pi frequency [rad/s], dt [s], acc, vel, disp, wall velocity) (MOTION)
-    advanced in place from step k to k + 1; the wall velocity of that step is (u_k+1 - u_k) / dt [m/s]."""
-    amplitude, w, dt = motion[MOTION.amplitude], motion[MOTION.w], motion[MOTION.dt]
-    a_next = amplitude * math.cos(w * ((k + 1) * dt))
+def sampled_acceleration(t, t_s, a_s, left, right):
+    """Twin of engines.model.ground_motion.Sampled at a time t [s]: np.interp(t, t_s, a_s, left,
+    right) in NumPy's arithmetic (the interval's slope times the distance from its start, plus its
+    start value; a sample's own value at a sample time) [m/s^2]."""
+    last = len(t_s) - 1
+    if t > t_s[last]:
+        return right
+    if t < t_s[0]:
+        return left
+    if t == t_s[last]:
+        return a_s[last]
+    j = np.searchsorted(t_s, t, side="right") - 1  # t_s[j] <= t < t_s[j + 1]
+    if t == t_s[j]:
+        return a_s[j]
+    slope = (a_s[j + 1] - a_s[j]) / (t_s[j + 1] - t_s[j])
+    return slope * (t - t_s[j]) + a_s[j]
+
+
+@jit
+def base_step(motion, t_s, a_s, k):
+    """Twin of engines.model.ground_motion.BaseMotion.step: motion (MOTION: amplitude [m/s^2] and
+    2 pi frequency [rad/s] of a Cosine, left and right [m/s^2] of a Sampled record (t_s, a_s) (s,
+    m/s^2; empty for a Cosine), dt [s], acc, vel, disp, wall velocity) advanced in place from
+    step k to k + 1; the wall velocity of that step is (u_k+1 - u_k) / dt [m/s]."""
+    dt = motion[MOTION.dt]
+    t = (k + 1) * dt
+    if len(t_s):
+        a_next = sampled_acceleration(t, t_s, a_s, motion[MOTION.left], motion[MOTION.right])
+    else:
+        a_next = motion[MOTION.amplitude] * math.cos(motion[MOTION.w] * t)
     a_bar = 0.5 * (motion[MOTION.acc] + a_next)
     du = motion[MOTION.vel] * dt + 0.5 * a_bar * dt * dt
     motion[MOTION.vel] += a_bar * dt
@@ -989,30 +951,32 @@ def cosine_base_step(motion, k):
 
 
 @jit
-def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, wall_ids, wall_vel,
-                      ids_in, xz, ids_out, F_out, rows, held,
+def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, t_s,
+                      a_s, wall_ids, wall_vel, ids_in, xz, ids_out, F_out, rows, held,
                       xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
                       F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                       tie_pairs, tie_rest, tie_prm, T):
-    """PaperLawEngine.drive without Python: up to n DEM steps from step index k, each get_pos(ids_in
-    -> xz), ``dem_step`` (the water at step water_in of the call, then every water_interval
-    (engines.model.schedule.Schedule), when the scene is wet; its parts called one by one: numba
+    """PoreDEM's step (engines.model.pore_dem.PoreDEM.step, its order a-f) in YADE without Python,
+    up to n steps from step index k (one step is n = 1), each: get_pos(ids_in -> xz); a ``law_step``
+    (LAW: the arguments from xz_prev to lost; a stale pair list rebuilt at the step's centres by
+    ``near_pairs`` with the list's skin [m]: pi, pj, state and lost become new arrays, xz_list is
+    overwritten); ``water_step`` (WATER: from h to f_at) at step water_in of the call, then every
+    water_interval (engines.model.schedule.Schedule), when the scene is wet; ``forces_to_write``
+    (the side-wall ties, TIES: from tie_pairs on); write_forces(ids_out <- F_out); with ``adjust``
+    (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass`` (N,) [kg/m]) the
+    discs that pairs stopped touching set free (``free_discs``) get their ``separation_velocities``
+    by set_vel; the water's balance of the step added to totals (3,) [m^2] (not that of a step
+    that needed sub-steps: its books are the caller's); the base motion advanced (``base_step``
+    when motion is not empty: MOTION and the record t_s, a_s) and the walls wall_ids given its wall
+    velocity (v, 0) by set_vel (wall_vel (m, 2) is scratch); then bridge's steps() (O.step()),
+    but for the last step when not ``step_last``. Each part's arguments are spelled out: numba
     leaves a reference count of each array around a call of more than 30 arrays, two atomic adds
-    each), write_forces(ids_out <- F_out), then the
-    water's balance of the step added to totals (3,) [m^2], the base motion advanced
-    (``cosine_base_step`` when motion is not empty: MOTION; the walls wall_ids get its wall
-    velocity (v, 0) by set_vel, wall_vel (m, 2) is scratch) and bridge's steps() (O.step()).
-    With ``adjust`` (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass``
-    (N,) [kg/m]), pairs that stopped touching (dem_step's n_lost > 0) and set discs free
-    (``free_discs``) give those discs their ``separation_velocities`` by set_vel. A stale pair
-    list is rebuilt at the step's centres (``near_pairs`` with the list's skin [m]: pi, pj, state
-    and lost become new arrays, xz_list is overwritten); a list still stale then (skin 0) stops
-    the call at the start of that step (LIST_STALE: nothing done of it). It also stops after the
-    force write of a step that needs Python (a water step that needed sub-steps or failed) or at
-    an error code.
-    Returns (steps done, the next step's dem_step answer (n_lost, n_sub) or (0, 1), the error code,
-    the pair lists built, pi, pj, state, lost)."""
+    each. It stops after a step whose water answered other than 1 (sub-steps or a failure) before
+    its O.step(), at the start of a step whose list is still stale once rebuilt (skin 0: nothing
+    done of it), or at an error code.
+    Returns (steps made, of them stepped by O.step(), the list was stale, the last water step's
+    answer or 1, the error code, the pair lists built, pi, pj, state, lost)."""
     wet = len(W) > 0
     V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
@@ -1020,11 +984,11 @@ def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, s
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
-            return s, 0, 1, rc, builds, pi, pj, state, lost
+            return s, s, False, 1, rc, builds, pi, pj, state, lost
         water_due = wet and s == next_water
         if s == next_water:
             next_water += water_interval
-        for attempt in range(2):  # dem_step's parts, a stale list rebuilt once
+        for attempt in range(2):  # a stale list rebuilt once
             n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
                               r, pi, pj, state, prm, spring, F, M, acc_j, lost)
             if n_lost != LIST_STALE or attempt == 1:
@@ -1034,38 +998,40 @@ def dem_drive_bulk_io(bridge, n, k, water_in, water_interval, adjust, e, mass, s
             xz_list[:] = xz
             builds += 1
         if n_lost == LIST_STALE:
-            return s, n_lost, 0, 0, builds, pi, pj, state, lost
+            return s, s, True, 1, 0, builds, pi, pj, state, lost
         n_sub = 1
         if water_due:
             n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
         forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T)
         rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
-        if rc != 0 or n_sub != 1:
-            return s, n_lost, n_sub, rc, builds, pi, pj, state, lost
+        if rc != 0:
+            return s, s, False, n_sub, rc, builds, pi, pj, state, lost
         if adjust and n_lost > 0:
             free = free_discs(lost, n_lost, pi, pj, state, mobile)
             if free.any():
                 separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e, V)
                 rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, V)
                 if rc != 0:
-                    return s, n_lost, n_sub, rc, builds, pi, pj, state, lost
-        if water_due:
+                    return s, s, False, n_sub, rc, builds, pi, pj, state, lost
+        if water_due and n_sub == 1:
             for a in range(3):
                 totals[a] += balance[a]
         if len(motion):
-            cosine_base_step(motion, k + s)
+            base_step(motion, t_s, a_s, k + s)
             for b in range(len(wall_ids)):
                 wall_vel[b, 0], wall_vel[b, 1] = motion[MOTION.wall_velocity], 0.0
             rc = _c_bulk_call(bridge[BRIDGE.set_vel], wall_ids.ctypes.data, wall_ids.size, wall_vel.ctypes.data)
             if rc != 0:
-                return s, 0, 1, rc, builds, pi, pj, state, lost
+                return s + 1, s, False, n_sub, rc, builds, pi, pj, state, lost
+        if n_sub != 1 or (s == n - 1 and not step_last):
+            return s + 1, s, False, n_sub, 0, builds, pi, pj, state, lost
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
-            return s, 0, 1, rc, builds, pi, pj, state, lost
-    return n, 0, 1, 0, builds, pi, pj, state, lost
+            return s + 1, s, False, 1, rc, builds, pi, pj, state, lost
+    return n, n, False, 1, 0, builds, pi, pj, state, lost
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 17).check(("rows", "held"), LAW, WATER, TIES)  # DEM_STEP less water_due
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 20).check(("rows", "held"), LAW, WATER, TIES)
 
 
 @jit
@@ -1084,11 +1050,8 @@ def write_rows_bulk_io(write, ids, F, rows, add, out):
     return _write_forces(0, write, ids, out)
 
 
-with_bulk_io = {dem_step: dem_step_bulk_io, water_forces_step: water_forces_step_bulk_io}
-
-
 def dry_water_args():
-    """The arguments of dem_step from h to f_at (WATER) for a scene without water."""
+    """The arguments of dem_drive_bulk_io from h to f_at (WATER) for a scene without water."""
     no_i, no_f = np.zeros(0, np.int64), np.zeros(0)
     return WATER.values(h=0.0, W=no_f, A_prev=no_f, q_prev=no_f, smoothing=False, substep=False,
                         F_water=np.zeros((0, 2)), ints=no_i, i_at=np.zeros(1, np.int64), floats=no_f,
@@ -1096,7 +1059,7 @@ def dry_water_args():
 
 
 def no_tie_args():
-    """The arguments of dem_step from tie_pairs on (TIES) for a scene without side-wall ties."""
+    """The arguments of dem_drive_bulk_io from tie_pairs on (TIES) for a scene without side-wall ties."""
     return TIES.values(tie_pairs=np.zeros((0, 2), np.int64), tie_rest=np.zeros(0), tie_prm=np.zeros(2),
                        T=np.zeros((2, 0)))
 

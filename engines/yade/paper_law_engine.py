@@ -4,8 +4,8 @@ engines.model.paper_law.PaperLaw's (by its compiled twin engines.compiled.paper_
 """
 import numpy as np
 
-from engines.compiled import kernels
 from engines.compiled import paper_law as compiled_paper_law
+from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.paper_law import PaperLaw
 from engines.yade.contract import follow_dt
 
@@ -25,16 +25,17 @@ class PaperLawEngine:
 
     (engines.yade.yade_io.forces_reset_after_newton), added to the reset forces, which spares YADE
     the sync pass that permanent forces cost at every step (engines.yade.coupling does this). This
-    saves the PyRunner's dispatch at every step, and with a core that offers
-    ``kernel_drive_args`` (PoreDEM) and the bridge runs the steps between pore rebuilds in one
-    compiled call (kernels.dem_drive_bulk_io), back in Python only for the steps that need it.
+    saves the PyRunner's dispatch at every step, and with the compiled PoreDEM as core and the
+    bridge runs the steps between pore rebuilds in one compiled call (kernels.dem_drive_bulk_io;
+    ``step_path`` chooses), back in Python only for the steps that need it.
 
     disc_ids: spheres in the x-z plane; the dynamic ones get blockedDOFs 'yXYZ' (this engine
     integrates their spin). Masses and inertias are read from the bodies: set them per unit
     thickness (m = rho pi r^2, I = m r^2 / 2, SPEC §1). ``core``: an object with
     ``step(xz) -> (F, fixes)`` over the same discs to run instead of a plain PaperLaw (e.g.
     engines.compiled.pore_dem.PoreDEM, which adds the water in the paper's order). ``hooks``: callables
-    run after each step's forces are written (with hooks, drive makes no compiled runs of steps).
+    run after each step's forces are written, before its O.step() (with hooks, drive makes one
+    compiled step a call).
     ``drive_walls(ids)``: the bodies ids move in x at the core's ``wall_velocity`` of each step
     (their velocity set before O.step()). A script may change O.dt between steps: the core follows
     it before its next step (engines.yade.contract.follow_dt: ``set_dt``, its limits checked again).
@@ -47,7 +48,7 @@ class PaperLawEngine:
         "core": "its owner's part (YadeCoupling.core), stored there",
         "held": "buoyancy, from the scene", "hooks": "set by its owner",
         **{name: "scratch of each step" for name in ("_xz", "_F_out", "_wall_vel")},
-        **{name: "functions of engines.yade.yade_io" for name in ("_set_velocities", "_run_kernel", "_check",
+        **{name: "functions of engines.yade.yade_io" for name in ("_set_velocities", "_check",
                                                                   "_drive_dem")},
         "_reset_last": "read from O.engines by each drive"}
 
@@ -72,10 +73,10 @@ class PaperLawEngine:
         self._dynamic = np.flatnonzero(dynamic)
         self.forced = yade_io.Bodies(self.io.ids[dynamic])
         self.held = np.zeros((len(self._dynamic), 2))  # forces added in drive mode [N]
-        self._xz = np.zeros((self.io.n, 2))  # positions read and forces written by _kernel_work
+        self._xz = np.zeros((self.io.n, 2))  # positions read and forces written by the compiled drive
         self._F_out = np.zeros((len(self._dynamic), 2))
         self.hooks = []
-        self._set_velocities, self._run_kernel, self._check = yade_io.set_velocities, yade_io.run_kernel, yade_io.check
+        self._set_velocities, self._check = yade_io.set_velocities, yade_io.check
         self._drive_dem = yade_io.drive_dem if yade_io.BACKEND == "yadebulk" else None
         self._reset_last = False  # how drive writes the forces (set by drive from the engine list)
         self.drive_walls([])
@@ -114,38 +115,31 @@ class PaperLawEngine:
 
     def drive(self, n, stop=None):
         """n steps: this engine's work, then O.step(); ``stop()`` true ends early (asked after each
-        step made from Python and after each compiled run of steps). A core that offers
-        ``kernel_step_args`` (PoreDEM) does a step in one compiled call where it can, and with
-        ``kernel_drive_args`` and the bridge many steps in one call (``_kernel_steps``)."""
+        step made from Python and after each compiled run of steps). The steps are made the way
+        ``step_path`` chooses: by compiled runs of steps (``_kernel_steps``; one step a call with
+        hooks), or by ``_work``, which also makes a step a compiled run cannot make."""
         from yade import O
 
         from engines.yade import yade_io
         self._reset_last = yade_io.forces_reset_after_newton(O.engines)
-        many = self._kernel_steps if self._drive_dem is not None and hasattr(self.core, "kernel_drive_args") else None
+        path = step_path(self.core, self._drive_dem is not None)
         done, n = 0, int(n)
         while done < n:
             follow_dt(self.core)
-            m = 0 if many is None else many(n - done)
+            m = self._kernel_steps(1 if self.hooks else n - done) if path == "drive" else 0
             if m == 0:
-                self._python_step()
+                self._work(self._write_held)
+                O.step()
                 m = 1
             done += m
             if stop is not None and stop():
                 break
 
-    def _python_step(self):
-        """One step from Python: ``_kernel_work`` where the core offers it, else ``_work``; then O.step()."""
-        from yade import O
-        if not (hasattr(self.core, "kernel_step_args") and self._kernel_work()):
-            self._work(self._write_held)
-        O.step()
-
     def _kernel_steps(self, n):
-        """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem), no hooks
-        among them; a step it leaves after its force write (water sub-steps) is finished here with
-        its O.step(). Returns the steps done (0: the next step needs ``_kernel_work`` or ``_work``)."""
-        if self.hooks:
-            return 0
+        """Up to n steps by kernels.dem_drive_bulk_io (engines.yade.yade_io.drive_dem); a step it
+        leaves before its O.step() (water sub-steps, or the hooks') is finished here: the water's
+        books, the hooks, O.step(). Returns the steps done (0: the next step needs ``_work``)."""
+        from yade import O
         core = self.core
         while True:
             drive = core.kernel_drive_args(self._dynamic, self.held, n)
@@ -153,55 +147,42 @@ class PaperLawEngine:
                 if not self._rebuild_pores():
                     return 0
                 continue
-            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, args = drive
-            done, n_lost, n_sub, rc, builds, *pairs = self._drive_dem(
-                steps, core.k, water_in, water_interval, adjust, e, mass, skin, totals, motion, self.walls,
-                self._wall_vel, self.io, self._xz, self.forced, self._F_out, args, self._reset_last)
+            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args = drive
+            made, stepped, stale, n_sub, rc, builds, *pairs = self._drive_dem(
+                steps, core.k, not self.hooks, water_in, water_interval, adjust, e, mass, skin, totals, motion,
+                record, self.walls, self._wall_vel, self.io, self._xz, self.forced, self._F_out, args,
+                self._reset_last)
             if builds:
                 core.law.contact.take_list(builds, *pairs)
-            core.finish_kernel_drive(done, totals, motion)
+            core.finish_kernel_drive(made, totals, motion)
             self._check(rc)
-            if done == steps:
-                return done
-            if n_lost != kernels.LIST_STALE:  # step ``done``, made up to its force write: finished here
-                self._finish_in_python(n_lost, n_sub)
-                return done + 1
+            if stepped < made:  # its water's books, hooks and O.step() here
+                if n_sub != 1:
+                    core.finish_substeps(n_sub)
+                for hook in self.hooks:
+                    hook()
+                O.step()
+            if not stale:
+                return made
             core.law.contact._update_list(self._xz)
-            if done:
-                return done
-
-    def _finish_in_python(self, n_lost, n_sub):
-        """The rest of a step the compiled drive left after its force write, then O.step()."""
-        from yade import O
-        self._after(self.core.finish_kernel_step(self._xz, n_lost, n_sub, self.core.water_due()))
-        O.step()
-
-    def _kernel_work(self):
-        """This step as kernels.dem_step between a position read and the force write (one compiled
-        call with the bridge; engines.yade.yade_io.run_kernel). False when the step needs ``_work``."""
-        core = self.core
-        while True:
-            args = core.kernel_step_args(self._dynamic, self.held)
-            if args is None:
-                if not self._rebuild_pores():
-                    return False
-                continue
-            n_lost, n_sub = self._run_kernel(kernels.dem_step, self.io, self._xz, self.forced, self._F_out, args,
-                                             self._reset_last)
-            if n_lost != kernels.LIST_STALE:
-                break
-            core.law.contact._update_list(self._xz)
-        fixes = core.finish_kernel_step(self._xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due])
-        self._after(fixes)
-        return True
+            if made:
+                return made
 
     def _rebuild_pores(self):
         """The core's pore rebuild of this step at the positions read now, when that is all that
         keeps the step from a compiled call (``pores_due``); True if it was made."""
-        if not (hasattr(self.core, "pores_due") and self.core.pores_due()):
+        if not self.core.pores_due():
             return False
         self.core.rebuild_pores(self.io.positions())
         return True
 
     def _write_held(self, F):
         self.forced.write_forces(F, self._dynamic, self.held, self._reset_last)
+
+
+def step_path(core, bridge):
+    """How PaperLawEngine.drive makes the steps of ``core`` (the one choice of a path): "drive",
+    by kernels.dem_drive_bulk_io (a compiled PoreDEM and the bulk ``bridge``; with hooks one step
+    a call, the hooks run before its O.step()); "python", core.step between the reads and writes
+    of engines.yade.yade_io (a PaperLaw, the NumPy PoreDEM, or no bridge)."""
+    return "drive" if bridge and isinstance(core, compiled_pore_dem.PoreDEM) else "python"

@@ -87,7 +87,6 @@ class WaterEngine:
         **{name: "the bodies and the caller's arguments" for name in ("_mass", "_lift", "_newton")},
         "g": "the NewtonIntegrator's gravity, read at each water step (or the caller's)",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
-        "_run_kernel": "a function of engines.yade.yade_io",
         "arguments": "the constructor's arguments: the recipe of a saved scene's tag (engines.yade.scene_save)",
         "_chunk": "the steps of drive's next compiled call, adapted to the wall time: how steps are grouped, not "
                   "what they compute"}
@@ -144,7 +143,6 @@ class WaterEngine:
         self.F_const[:] = -self._lift[:, None] * self.g
         self.forced.set_permanent_forces(self.F_const)
         self._xz, self._F_out = np.zeros((len(ids), 2)), np.zeros((len(self._dynamic), 2))  # buffers of __call__
-        self._run_kernel = yade_io.run_kernel
         self.k = O.iter  # DEM step of the last call (the model's k0 is that of creation)
         self._chunk = 100  # steps of drive's next compiled call, adapted to CHUNK_SECONDS
         self.model.watch = limits.AccuracyWatch(accept=accept_inaccurate)
@@ -207,8 +205,8 @@ class WaterEngine:
 
         from engines.yade import yade_io
         n, done = int(n), 0
-        fast = (stop is None and self.compiled and yade_io.BACKEND == "yadebulk"
-                and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move())
+        alone = stop is None and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
+        fast = alone and water_path(self.compiled, yade_io.BACKEND == "yadebulk") == "drive"
         due, errors = self.due, yade_io.ERRORS
         while done < n:
             contract.follow_dt(self.model)
@@ -262,7 +260,7 @@ class WaterEngine:
         b = m.water.balance
         totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
         k = O.iter
-        done, n_water, n_sub, rc = yade_io.drive_water(n, sch.steps_to_water(k), sch.water_interval, totals,
+        done, n_water, n_sub, rc = yade_io.drive_water(n, True, sch.steps_to_water(k), sch.water_interval, totals,
                                                        m.xz_built, sch.moved2, self.io, self._xz, self.forced,
                                                        self._F_out, self._forces_step_args(args))
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
@@ -280,25 +278,36 @@ class WaterEngine:
         """One water step: rebuild when due (a disc farther than rebuild_distance from its centre
         at the last build or a void area out of range, or the first call at or after each multiple
         of rebuild_interval steps from the engine's creation), advance by water_interval x O.dt,
-        write the forces."""
+        write the forces. With the bridge it is one call of the compiled drive (n = 1, no O.step())."""
         from yade import O
+
+        from engines.yade import yade_io
         m = self.model
         self.k = O.iter
         contract.follow_dt(m)
         self._follow_gravity()
-        h = m.schedule.water_interval * m.dt
+        sch = m.schedule
+        h = sch.water_interval * m.dt
         self._follow_walls()
-        xz = self.io.positions() if m.schedule.by_displacement else None
-        rebuild = m.rebuild_due(self.k, xz)
-        if self.compiled and not rebuild:
-            args = m.kernel_args(h)
-            if xz is None:  # read, water, write: one compiled call
-                _, n_sub = self._run_kernel(kernels.water_forces_step, self.io, self._xz, self.forced, self._F_out,
-                                            self._forces_step_args(args))
-            else:  # the positions the displacement check read: water, then write (no second read)
-                n_sub = kernels.water_step(xz, *args)
-                if n_sub > 0:
-                    self.write_forces()
+        path = water_path(self.compiled, yade_io.BACKEND == "yadebulk")
+        xz = None
+        if path == "drive" and not sch.interval_due(self.k):  # read, triggers, water, write: one call
+            _, n_water, n_sub, rc = yade_io.drive_water(1, False, 0, sch.water_interval, np.zeros(3), m.xz_built,
+                                                        sch.moved2, self.io, self._xz, self.forced, self._F_out,
+                                                        self._forces_step_args(m.kernel_args(h)))
+            yade_io.check(rc)
+            if n_water:
+                m.finish_kernel_step(h, n_sub)
+                return
+            rebuild = True  # due by displacement or areas: nothing done, rebuilt and made below
+        else:
+            xz = self.io.positions() if sch.by_displacement else None
+            rebuild = m.rebuild_due(self.k, xz)
+        if path == "kernel" and not rebuild:  # the positions read, water, write
+            xz = self.io.positions() if xz is None else xz
+            n_sub = kernels.water_step(xz, *m.kernel_args(h))
+            if n_sub > 0:
+                self.write_forces()
             if n_sub != kernels.AREAS_OUT_OF_RANGE:
                 m.finish_kernel_step(h, n_sub)
                 return
@@ -335,3 +344,14 @@ class WaterEngine:
         discs' contacts on it are YADE's, in O.forces)."""
         return {i: tuple(-f * wall.normal()) for i, f, wall in zip(self.wall_ids, self.model.F_walls,
                                                                     self.model.flat_walls)}
+
+
+def water_path(compiled, bridge=False):
+    """How WaterEngine makes its water steps (the one choice of a path): "drive", by the compiled
+    kernels.water_drive_bulk_io (the compiled model and the bulk ``bridge``): runs of DEM steps with
+    their water steps (``drive`` without stop, no PyRunner among O.engines, no flat wall that may
+    move), else one water step a call; "kernel", kernels.water_step between the reads and
+    writes of engines.yade.yade_io (the compiled model, no bridge); "python", the NumPy model's."""
+    if not compiled:
+        return "python"
+    return "drive" if bridge else "kernel"

@@ -156,49 +156,34 @@ class Bodies:
             list(map(O.forces.addF if reset_last else O.forces.setPermF, self.id_list, self._rows(self._F)))
 
 
-def run_kernel(kernel, reader, xz, writer, out, args, reset_last=False):
-    """One compiled step between two reads of YADE: the positions of the bodies ``reader`` (Bodies)
-    into xz (n, 2), (status, info) = kernel(xz, out, *args), and when status >= 0 the forces out
-    (m, 2) [N] as the permanent forces of ``writer`` (Bodies), or with ``reset_last`` added to its
-    reset forces (``Bodies.write_forces``). With the bridge this is one compiled call
-    (engines.compiled.kernels.with_bulk_io). Returns (status, info)."""
-    if _BULK is None:
-        xz[:] = reader.positions()
-        status, info = kernel(xz, out, *args)
-        if status >= 0:
-            writer.write_forces(out, None, None, reset_last)
-        return status, info
-    rc, status, info = kernels.with_bulk_io[kernel](_BRIDGE_RESET_LAST if reset_last else _BRIDGE, reader.ids, xz,
-                                                    writer.ids, out, *args)
-    check(rc, reader.ids if status < 0 else writer.ids)
-    return status, info
-
-
-def drive_water(n, water_in, water_interval, totals, xz_built, moved2, reader, xz, writer, out, args):
-    """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps, the water
+def drive_water(n, step_last, water_in, water_interval, totals, xz_built, moved2, reader, xz, writer, out, args):
+    """kernels.water_drive_bulk_io through the bridge (BACKEND "yadebulk" only): n steps (the last
+    one's O.step() left to the caller unless ``step_last``), the water
     steps among them (step water_in, then every water_interval) with their positions read from
     ``reader`` and forces out written to ``writer``
     (Bodies), args those of kernels.water_forces_step after (xz, out); it stops early before a
     water step at which a disc is farther than sqrt(moved2) [m] from xz_built (moved2 > 0). Returns
     its (steps, water steps, answer, error code)."""
-    return kernels.water_drive_bulk_io(_BRIDGE, n, water_in, water_interval, totals, xz_built, moved2, reader.ids, xz,
+    return kernels.water_drive_bulk_io(_BRIDGE, n, step_last, water_in, water_interval, totals, xz_built, moved2,
+                                       reader.ids, xz,
                                        writer.ids, out, *args)
 
 
-def drive_dem(n, k, water_in, water_interval, adjust, e, mass, skin, totals, motion, walls, wall_vel, reader, xz,
-              writer, out, args, reset_last):
+def drive_dem(n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, walls,
+              wall_vel, reader, xz, writer, out, args, reset_last):
     """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
-    step k (the water at step water_in, then every water_interval; ``adjust``: the eq 18-24
-    adjustment is on, with restitution e and the discs' masses
-    mass (N,) [kg/m]; stale pair lists rebuilt with ``skin`` [m]), the positions read from
-    ``reader`` and the forces out written to ``writer`` (Bodies; held, or with ``reset_last``
-    added to the reset forces: ``Bodies.write_forces``), the velocities of the driven walls
-    ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base motion ``motion``, args those of
-    dem_drive_bulk_io after F_out. Returns its (steps done, n_lost, n_sub, error code, pair lists
-    built, pi, pj, state, lost)."""
-    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, water_in, water_interval,
-                                     adjust, e, mass, skin, totals, motion, walls.ids, wall_vel, reader.ids, xz,
-                                     writer.ids, out, *args)
+    step k (the last one's O.step() left to the caller unless ``step_last``; the water at step
+    water_in, then every water_interval; ``adjust``: the eq 18-24 adjustment is on, with
+    restitution e and the discs' masses mass (N,) [kg/m]; stale pair lists rebuilt with ``skin``
+    [m]), the positions read from ``reader`` and the forces out written to ``writer`` (Bodies;
+    held, or with ``reset_last`` added to the reset forces: ``Bodies.write_forces``), the
+    velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base
+    motion ``motion`` and its record (t_s, a_s) (kernels.base_step), args those of
+    dem_drive_bulk_io after F_out. Returns its (steps made, of them stepped, list stale, water
+    answer, error code, pair lists built, pi, pj, state, lost)."""
+    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, step_last, water_in,
+                                     water_interval, adjust, e, mass, skin, totals, motion, record[0], record[1],
+                                     walls.ids, wall_vel, reader.ids, xz, writer.ids, out, *args)
 
 
 def check(rc, ids=None):

@@ -298,21 +298,53 @@ def test_the_darcy_check_twins_equal_the_model_limits():
         assert kernels.substep_count(h, limit) == limits.substep_count(h, limit)
 
 
-@pytest.mark.parametrize("dt", [1e-6, 3.7e-4])
-def test_the_cosine_base_motion_twin_equals_base_motion_bit_for_bit(dt):
-    """kernels.cosine_base_step against engines.model.ground_motion.BaseMotion.step with the 1500
-    gal, 50 Hz cosine: acceleration, velocity, displacement and the wall velocity of every step
-    the same floats, over several periods."""
-    from engines.model.ground_motion import BaseMotion, Cosine
-    accel = Cosine(15.0, 50.0)
-    base = BaseMotion(accel, dt)
-    motion = np.array(kernels.MOTION.values(amplitude=accel.amplitude, w=accel.w, dt=dt, acc=base.acc, vel=0.0,
-                                            disp=0.0, wall_velocity=0.0))
+def _inputs():
+    """The ground motions the compiled drive runs: the paper's cosine, the El Centro record as
+    liquefaction_case6.toml scales it, and a short record with end values (None) and samples at
+    multiples of dt."""
+    import os
+
+    from engines.model.ground_motion import Cosine, Sampled, record_acceleration
+    from engines import ROOT
+    elcentro = os.path.join(ROOT, "yade_scripts", "scenes", "elcentro_ns_1940.txt")
+    return {"cosine": Cosine(15.0, 50.0), "elcentro": record_acceleration(elcentro, 0.02, 4.7976, "g"),
+            "ends": Sampled(np.array([0.002, 0.004, 0.01, 0.03]), np.array([1.0, -3.0, 2.5, 0.5]), None, None)}
+
+
+@pytest.mark.parametrize("dt", [1e-6, 3.7e-4, 4e-4])
+@pytest.mark.parametrize("name", ["cosine", "elcentro", "ends"])
+def test_the_base_motion_twin_equals_base_motion_bit_for_bit(dt, name):
+    """kernels.base_step (with engines.compiled.pore_dem.base_motion_args) against
+    engines.model.ground_motion.BaseMotion.step for every input: acceleration, velocity,
+    displacement and the wall velocity of every step the same floats, over 0.05 s."""
+    from engines.compiled.pore_dem import base_motion_args
+    from engines.model.ground_motion import BaseMotion
+    base = BaseMotion(_inputs()[name], dt)
+    motion, t_s, a_s = base_motion_args(base, 0.0)
     for k in range(int(0.05 / dt)):
         v = base.step()
-        kernels.cosine_base_step(motion, k)
+        kernels.base_step(motion, t_s, a_s, k)
         assert motion[kernels.MOTION.acc:].tolist() == [base.acc, base.vel, base.disp, v], k
-    assert abs(base.disp) > 1e-5
+    assert abs(base.disp) > 1e-7
+
+
+def test_the_sampled_twin_equals_np_interp_at_and_between_samples():
+    """kernels.sampled_acceleration against np.interp (Sampled) before, at, between and after the
+    samples of the El Centro record, and at random times."""
+    acc = _inputs()["elcentro"]
+    t_s, a_s = acc.t_s, acc.a_s
+    mid = 0.5 * (t_s[:-1] + t_s[1:])
+    times = np.concatenate(([-1.0, 0.0, t_s[-1] * 2], t_s, mid, np.random.default_rng(1).uniform(-0.1, t_s[-1] + 0.1, 2000)))
+    for t in times.tolist():
+        assert kernels.sampled_acceleration(t, t_s, a_s, 0.0, 0.0) == acc(t), t
+
+
+def test_an_input_without_a_compiled_twin_is_refused():
+    """base_motion_args names an acceleration it cannot compile instead of running it wrongly."""
+    from engines.compiled.pore_dem import base_motion_args
+    from engines.model.ground_motion import BaseMotion
+    with pytest.raises(TypeError, match="no compiled twin"):
+        base_motion_args(BaseMotion(lambda t: 1.0, 1e-4), 0.0)
 
 
 def test_separation_velocities_equal_the_velocity_adjustment_bit_for_bit():

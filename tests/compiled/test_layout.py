@@ -46,14 +46,14 @@ def shuffle_buffers(monkeypatch, seed=1):
         assert np.any(order != np.arange(len(names)))
         monkeypatch.setattr(kernels, name, Layout(name, [names[k] for k in order]))
     compiled_again = readers(BUFFERS)
-    assert {"water_step", "dem_step", "water_forces_step", "water_drive_bulk_io"} <= compiled_again
+    assert {"water_step", "dem_drive_bulk_io", "water_forces_step", "water_drive_bulk_io"} <= compiled_again
     for name in compiled_again:
         monkeypatch.setattr(kernels, name, numba.njit(nogil=True)(getattr(kernels, name).py_func))
 
 
 def wet_box_steps(n=12):
     """PoreDEM on a wet box with side walls on springs, eq 45-46 smoothing and sub-steps, stepped
-    by kernels.dem_step where it can (tests.model.test_pore_dem.fused_step): the forces of every
+    by kernels.dem_drive_bulk_io where it can (tests.model.test_pore_dem.fused_step): the forces of every
     step and the state at the end."""
     s = wet_scene(q_w=1e-4, k1=2e6, smoothing=True, substep=True)
     s = s.with_overrides({"loading": {"type": "cosine", "amplitude": 0.0, "side_walls": "springs"},
@@ -128,7 +128,7 @@ def test_a_layout_builds_its_tuple_by_name():
 
 def test_kernels_pass_their_arrays_on_under_the_callees_names():
     """Where a kernel calls another with a variable named like one of the callee's parameters
-    (dem_step's xz_prev ... T to law_step, water_step, tie_forces; the bulk drivers' to dem_step),
+    (dem_drive_bulk_io's xz_prev ... T to law_step, water_step, tie_forces; the water drivers' to water_forces_step),
     the variable is in that parameter's place: a spelled-out call cannot shift its arguments."""
     params = {n: list(inspect.signature(f.py_func).parameters) for n, f in dispatchers().items()}
     wrong, checked = [], 0

@@ -317,7 +317,7 @@ def test_side_wall_ties_add_their_forces_to_the_step(compiled):
         np.testing.assert_allclose(diff, expected, rtol=1e-9, atol=1e-9 * eta * dx / dt)
     rows, held = np.arange(len(pk.r)), np.zeros((len(pk.r), 2))
     if compiled:  # the ties run in the one-call step too
-        assert ties.kernel_step_args(rows, held) is not None and fixed.kernel_step_args(rows, held) is not None
+        assert ties.kernel_drive_args(rows, held, 1) is not None and fixed.kernel_drive_args(rows, held, 1) is not None
 
 
 def test_side_wall_ties_refuse_a_step_above_their_limit():
@@ -334,28 +334,73 @@ def test_side_wall_ties_refuse_a_step_above_their_limit():
                 PoreDEM(s.settings, pk)
 
 
-def fused_step(core, xz, vel=None):
-    """One step of ``core`` as PaperLawEngine.drive does it: kernels.dem_step between
-    kernel_step_args and finish_kernel_step (the pair list rebuilt when the kernel finds it
-    stale), or the general ``step`` where kernel_step_args says None. Returns (F, fixes, fused)."""
+class PythonBridge:
+    """The bridge of kernels.dem_drive_bulk_io (kernels.BRIDGE) as ctypes callbacks, without YADE:
+    get_pos reads the rows of ``xz`` (N, 2), write_forces keeps the forces in ``F`` (N, 2), set_vel
+    the velocities in ``vel`` {id: (vx, vz)}, steps counts the O.step() calls in ``steps``."""
+
+    def __init__(self):
+        import ctypes
+        proto = ctypes.CFUNCTYPE(ctypes.c_int64, ctypes.POINTER(ctypes.c_int64), ctypes.c_int64,
+                                 ctypes.POINTER(ctypes.c_double))
+        self.xz, self.F, self.vel, self.steps = None, None, {}, 0
+
+        def rows(ids, n, data):
+            return np.ctypeslib.as_array(ids, (n,)).copy(), np.ctypeslib.as_array(data, (n, 2))
+
+        def get_pos(ids, n, data):
+            i, out = rows(ids, n, data)
+            out[:] = self.xz[i]
+            return 0
+
+        def write_forces(ids, n, data):
+            i, F = rows(ids, n, data)
+            self.F[i] = F
+            return 0
+
+        def set_vel(ids, n, data):
+            if n:
+                i, V = rows(ids, n, data)
+                self.vel.update(zip(i.tolist(), V.tolist()))
+            return 0
+
+        def step(ids, n, data):
+            self.steps += 1
+            return 0
+        self._callbacks = [proto(f) for f in (get_pos, write_forces, set_vel, step)]  # kept alive
+        self.addresses = tuple(ctypes.cast(f, ctypes.c_void_p).value for f in self._callbacks)
+
+
+def fused_step(core, xz):
+    """One step of ``core`` as PaperLawEngine.drive makes it with hooks: kernels.dem_drive_bulk_io
+    with n = 1, its O.step() left to the caller (through a PythonBridge) and the water's books of
+    sub-steps (``finish_substeps``), or the general ``step`` where kernel_drive_args says None.
+    Returns (F, the velocities set {disc: (vx, vz)}, made in one compiled call)."""
     from engines.compiled import kernels
-    rows, held = np.arange(len(xz)), np.zeros_like(xz)
-    args = core.kernel_step_args(rows, held)
-    if args is None:
-        return (*core.step(xz, vel), False)
-    F = np.zeros_like(xz)
-    while True:
-        n_lost, n_sub = kernels.dem_step(xz, F, *args)
-        if n_lost != kernels.LIST_STALE:
-            return F, core.finish_kernel_step(xz, n_lost, n_sub, args[kernels.DEM_STEP.water_due], vel), True
-        core.law.contact._update_list(xz)
-        args = core.kernel_step_args(rows, held)
+    n = len(xz)
+    rows, held, ids = np.arange(n), np.zeros_like(xz), np.arange(n)
+    drive = core.kernel_drive_args(rows, held, 1)
+    if drive is None:
+        return (*core.step(xz), False)
+    bridge = PythonBridge()
+    bridge.xz, bridge.F = xz, np.zeros_like(xz)
+    steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args = drive
+    made, stepped, stale, n_sub, rc, builds, *pairs = kernels.dem_drive_bulk_io(
+        bridge.addresses, steps, core.k, False, water_in, water_interval, adjust, e, mass, skin, totals, motion,
+        *record, np.zeros(0, np.int64), np.zeros((0, 2)), ids, np.zeros_like(xz), ids, np.zeros_like(xz), *args)
+    assert rc == 0 and made == 1 and stepped == 0 and not stale and bridge.steps == 0
+    if builds:
+        core.law.contact.take_list(builds, *pairs)
+    core.finish_kernel_drive(made, totals, motion)
+    if n_sub != 1:
+        core.finish_substeps(n_sub)
+    return bridge.F, bridge.vel, True
 
 
 @pytest.mark.parametrize("wet", [None, "plain", "smoothing_substeps"])
 def test_one_compiled_call_per_step_equals_the_general_step(wet):
-    """kernels.dem_step with PoreDEM.kernel_step_args / finish_kernel_step (what PaperLawEngine.drive
-    does between YADE's position read and force write) gives the forces, water and rebuilds of
+    """kernels.dem_drive_bulk_io, one step a call (``fused_step``: what PaperLawEngine.drive does
+    with hooks) gives the forces, water and rebuilds of
     PoreDEM.step, step by step; it leaves the first step and the rebuild steps to ``step``. Also
     with smoothing (eq 45-46) and water steps above the Darcy limit taken in sub-steps."""
     if wet is None:
@@ -384,20 +429,22 @@ def test_one_compiled_call_per_step_equals_the_general_step(wet):
         assert (fused.water_model.last_limit < 3e-6) == (wet == "smoothing_substeps")   # sub-steps taken
     every = PoreDEM(wet_scene(rebuild_interval=1).settings, pk)
     every.step(pk.xz)
-    assert every.kernel_step_args(np.arange(len(pk.r)), np.zeros((len(pk.r), 2))) is None   # k = 1: a rebuild is due
+    assert every.kernel_drive_args(np.arange(len(pk.r)), np.zeros((len(pk.r), 2)), 1) is None   # k = 1: a rebuild is due
 
 
-def test_one_compiled_call_adjusts_the_caller_velocities():
-    """The separation adjustment of eq 18-23 in the one-call step: the disc leaving the wall gets
-    -Vn''/Vn = e from the caller's velocities, as in the general step."""
+def test_one_compiled_call_adjusts_the_velocities():
+    """The separation adjustment of eq 18-23 in the compiled drive: the disc leaving the wall at
+    du/dt = 0.1 m/s after coming at 0.1 m/s gets -Vn''/Vn = e, the velocity the general step gives."""
     s = scene(contact={"spring": "a", "eta_n": 0.0, "separation_adjustment": True}, numerics={"dt": 1e-7})
     pk = Packing(np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), np.full(2, R), [pg.WALL_BOTTOM, 0], [1.0, 1.0])
-    core = PoreDEM(s.settings, pk)
-    for z in (2 * R + 5e-9, 2 * R - 5e-9):
-        fused_step(core, np.array([[0.0, 0.0], [0.0, z]]))
-    _, fixes, one_call = fused_step(core, np.array([[0.0, 0.0], [0.0, 2 * R + 5e-9]]), vel=np.array([[0.0, 0.0], [0.3, 0.2]]))
-    assert one_call and set(fixes) == {1}
-    np.testing.assert_allclose(fixes[1], [0.3, s.contact.restitution * 0.1], rtol=1e-6)
+    core, general = PoreDEM(s.settings, pk), PoreDEM(s.settings, pk)
+    for z in (2 * R + 5e-9, 2 * R - 5e-9, 2 * R + 5e-9):
+        xz = np.array([[0.0, 0.0], [0.0, z]])
+        _, fixes, one_call = fused_step(core, xz.copy())
+        _, expected = general.step(xz.copy())
+    assert one_call and set(fixes) == set(expected) == {1}
+    np.testing.assert_array_equal(fixes[1], expected[1])
+    np.testing.assert_allclose(fixes[1], [0.0, s.contact.restitution * 0.1], rtol=1e-6, atol=1e-12)
 
 
 def test_an_isolated_pair_separating_keeps_its_momentum():
@@ -519,7 +566,7 @@ def test_the_compiled_pore_dem_with_flat_walls_is_the_numpy_one():
             v[d] = vel
         v += (Fa / m[:, None] + [0.0, -s.material.g]) * s.numerics.dt
         x += v * s.numerics.dt
-    assert cores[1].law.walls is not None and cores[1].kernel_step_args(np.arange(3), np.zeros((3, 2))) is None
+    assert cores[1].law.walls is not None and cores[1].kernel_drive_args(np.arange(3), np.zeros((3, 2)), 1) is None
     np.testing.assert_allclose(cores[1].law.wall_forces(), cores[0].law.wall_forces(), rtol=1e-9)
     np.testing.assert_allclose(cores[1].water.W, cores[0].water.W, rtol=1e-12)
 

@@ -215,7 +215,7 @@ def _fused_and_general(sc, packing, n=200):
     """The same run of n steps through PaperLawEngine.drive four ways: many steps in one compiled
     call where it can (kernels.dem_drive_bulk_io), the same with the forces held as permanent
     forces (ForceResetter first in the engine list, as a user's script may have it), one compiled
-    call a step (kernels.dem_step) and the general path only: (x, v, omega, pair-list builds, W,
+    call a step (the drive with n = 1, as with hooks) and the general path only: (x, v, omega, pair-list builds, W,
     O.iter) of each, the steps the first three made in compiled calls, and the pair lists that
     the first one's compiled calls rebuilt themselves (kernels.near_pairs inside the drive)."""
     from yade import O
@@ -233,28 +233,20 @@ def _fused_and_general(sc, packing, n=200):
             assert not yade_io.forces_reset_after_newton(O.engines)
         cp.core.contact.skin = 1e-8  # pair lists rebuilt often (the skin changes no force)
         counted = 0
-        if how in ("many", "held"):
+        if how == "general":
+            cp.core.kernel_drive_args = lambda rows, held, n: None
+        else:
             drive = cp.engine._drive_dem
 
             def many(*args):
                 nonlocal counted, kernel_lists
                 out = drive(*args)
                 counted += out[0]
-                kernel_lists += out[4] if how == "many" else 0
+                kernel_lists += out[5] if how == "many" else 0
                 return out
             cp.engine._drive_dem = many
-        else:
-            cp.core.kernel_drive_args = lambda rows, held, n: None
-        step_args = cp.core.kernel_step_args
-        if how == "one":
-            def one(rows, held):
-                nonlocal counted
-                args = step_args(rows, held)
-                counted += args is not None
-                return args
-            cp.core.kernel_step_args = one
-        elif how == "general":
-            cp.core.kernel_step_args = lambda rows, held: None
+        if how == "one":  # a hook: one step a compiled call, its O.step() made after the hook
+            cp.engine.hooks.append(lambda: None)
         cp.run(n)
         runs.append((cp.positions(), cp.velocities(), cp.core.omega.copy(), cp.core.contact.list_builds,
                      None if cp.water is None else cp.water.W.copy(), O.iter))
@@ -276,7 +268,7 @@ def _assert_same_runs(runs, n=200):
 @pytest.mark.parametrize("law_override", [{}, {"water": {"enabled": False}}])
 def test_paper_law_compiled_steps_equal_the_general_path(packing, law_override):
     """PaperLawEngine.drive runs many steps in one compiled call (kernels.dem_drive_bulk_io), or
-    kernels.dem_step (read, law, water, write in one call) where it can; the general path
+    one step a call (with hooks) where it can; the general path
     (PoreDEM.step between yade_io calls) gives the same run, bit for bit, through pair-list and
     pore rebuilds and steps without water, and so do the forces held as permanent forces."""
     over = {"numerics": {"rebuild_interval": 60, "water_interval": 3}}
@@ -289,8 +281,8 @@ def test_paper_law_compiled_steps_equal_the_general_path(packing, law_override):
 
 def test_seismic_compiled_steps_with_side_wall_ties_equal_the_general_path():
     """The seismic box (liquefaction_case1: base shaken, side walls on the springs of Fig. 27)
-    takes the compiled steps too (kernels.tie_forces inside dem_step; the base motion and the
-    walls' velocity inside dem_drive_bulk_io), and the run is bit for bit that of the general path
+    takes the compiled steps too (kernels.tie_forces, the base motion and the walls' velocity
+    inside dem_drive_bulk_io), and the run is bit for bit that of the general path
     (SideWallTies.forces in NumPy, BaseMotion in Python), the side walls and the base moving."""
     sc = scenes.preset("liquefaction_case1", {"numerics": {"rebuild_interval": 60, "water_interval": 3}})
     packing = Packing.load(sc.packing.file)
@@ -527,3 +519,18 @@ def test_the_paper_law_engine_follows_a_change_of_o_dt(packing):
     O.dt = 1.0
     with pytest.raises(ValueError, match="eq 52"):
         cp.run(1)
+
+
+def test_the_engines_choose_their_path_in_one_place():
+    """step_path: the compiled drive for the compiled PoreDEM with the bridge, else the general
+    step (the NumPy PoreDEM, no bridge); water_path: the drive, water_step, the NumPy model."""
+    from engines.compiled.pore_dem import PoreDEM as CompiledPoreDEM
+    from engines.model.pore_dem import PoreDEM as NumpyPoreDEM
+    from engines.yade.paper_law_engine import step_path
+    from engines.yade.water_engine import water_path
+    from tests.model.test_pore_dem import scene, wet_box
+    s, pk = scene(numerics={"dt": 1e-6}), wet_box()
+    compiled, numpy_core = CompiledPoreDEM(s.settings, pk), NumpyPoreDEM(s.settings, pk)
+    assert [step_path(compiled, True), step_path(compiled, False), step_path(numpy_core, True)] == [
+        "drive", "python", "python"]
+    assert [water_path(True, True), water_path(True, False), water_path(False, True)] == ["drive", "kernel", "python"]
