@@ -14,7 +14,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
-
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 from engines import files  # noqa: E402
 from engines.run import demo_numbers  # noqa: E402
 from engines.run.preflight import output_dir  # noqa: E402

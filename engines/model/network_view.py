@@ -42,7 +42,7 @@ def _outline(net, p, half_edges, xz):
     left = set(half_edges.tolist())
     best, best_area = [], -1.0
     while left:
-        start = h = min(left)
+        h = min(left)
         cycle = []
         while h in left:
             left.discard(h)

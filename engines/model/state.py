@@ -118,6 +118,15 @@ def _array(name, stored, current, resized):
     return stored
 
 
+def restore_all(obj, values):
+    """``restore`` of every value of ``values`` {dotted name: value} (left as given) on ``obj``;
+    StateError also for a value that no field of ``obj`` takes."""
+    left = dict(values)
+    restore(obj, left)
+    if left:
+        raise StateError(f"unknown field(s) {sorted(left)[:5]} (the state of other code?)")
+
+
 def restore(obj, values, prefix=""):
     """Set the checkpoint fields of ``obj`` (built afresh) and its parts from ``values`` {dotted
     name: value}, removing those it takes. Arrays of a fixed shape are copied into the object's

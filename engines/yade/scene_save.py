@@ -184,13 +184,10 @@ def restore(key):
     water = ENGINES.get(key)
     if water is None:
         water = WaterEngine(**arguments(ck.recipe))
-    values = dict(ck.state)
     try:
-        named_state.restore(water, values)
+        named_state.restore_all(water, ck.state)
     except named_state.StateError as e:
         raise RestoreError(f"{where}: {e}: {remedy}") from None
-    if values:
-        raise RestoreError(f"{where}: unknown field(s) {sorted(values)[:5]}: {remedy}")
     if water.model.F is not None:
         water.write_forces()
     ENGINES[key] = water

@@ -267,7 +267,7 @@ class WaterEngine:
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
             m.after_kernel_steps(unwatched=True)
-        yade_io.check(rc)
+        yade_io.check(rc, self.io.ids)  # an error code names the disc read (positions first)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
             m.finish_kernel_step(h, n_sub)
             O.step()
@@ -295,7 +295,7 @@ class WaterEngine:
             _, n_water, n_sub, rc = yade_io.drive_water(1, False, 0, sch.water_interval, np.zeros(3), m.xz_built,
                                                         sch.moved2, self.io, self._xz, self.forced, self._F_out,
                                                         self._forces_step_args(m.kernel_args(h)))
-            yade_io.check(rc)
+            yade_io.check(rc, self.io.ids)  # an error code names the disc read (positions first)
             if n_water:
                 m.finish_kernel_step(h, n_sub)
                 return

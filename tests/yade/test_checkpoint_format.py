@@ -291,5 +291,5 @@ def test_the_script_refuses_a_crafted_checkpoint_in_one_line(saved_run, tmp_path
     run = subprocess.run(["yade", "-n", "-x", "yade_scripts/quicksand.py", "--resume", run_dir], cwd=ROOT,
                          env=dict(os.environ, PYTHONPATH=ROOT), capture_output=True, text=True, timeout=600)
     assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
-    assert run.stderr.strip().splitlines()[-1] == f"error: {path}: unknown field(s) ['cp.hack'] (a checkpoint of other code?)"
+    assert run.stderr.strip().splitlines()[-1] == f"error: {path}: unknown field(s) ['cp.hack'] (the state of other code?)"
     assert open(os.path.join(run_dir, "history.csv"), "rb").read() == history

@@ -36,7 +36,7 @@ def flat_box():
     O.run(1000, True)
     water = WaterEngine(grains, walls={}, flat_walls={bottom: "inflow", left: "undrained", right: "undrained"},
                         settings=WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-5, transfer="conserving"),
-                        l_m=1.3e-4, water_interval=10)
+                        l_m=1.3e-4, water_interval=4)
     return water, 300
 
 
