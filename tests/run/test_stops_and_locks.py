@@ -143,7 +143,7 @@ def test_sigkill_then_resume_keeps_every_segment_and_the_first_command_line(tmp_
     assert summary["provenance"] == first["provenance"] and "--out" in first["provenance"]["command_line"]
     assert "--resume" in summary["segments"][1]["provenance"]["command_line"]
     t = [line.split(",")[0] for line in open(os.path.join(out, "history.csv")).read().splitlines()[1:]]
-    assert len(t) == len(set(t)) == 40  # rows every 100 steps of 4000, none twice
+    assert len(t) == len(set(t)) == 41  # rows every 100 steps from 0 to the end at 4000, none twice
     assert [n for n in os.listdir(out) if n.startswith(".")] == []
 
 
