@@ -27,7 +27,7 @@ import tomllib
 
 from engines.files.inputs import check_name
 from engines.run import ensemble, guard, history, manifest, talk
-from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
+from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_resume, number,
                                    output_dir, preflight)
 from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import BATCH, DESCRIPTION, batch_line
@@ -276,17 +276,3 @@ def say_compile():
         say(f"numba kernels: {os.environ.get('NUMBA_CACHE_DIR')}; provenance: {provenance()}", talk.VERBOSE)
         if cache.compile_note():
             say(cache.compile_note())
-
-
-def check_resume(run_dir, duration):
-    """A resume that can go on: writable, not held by another run, not complete unless a later
-    --duration is given, its history.csv holding the rows its checkpoint recorded (engines.run.history)."""
-    from engines.yade.checkpoint import NAME, read_info, resume_end
-    check_output_dir(run_dir, "--resume")
-    guard.check_free(run_dir)
-    info = read_info(os.path.join(run_dir, NAME))
-    try:
-        resume_end(info["step"], info["n_steps"], info["dt"], duration)
-    except ValueError as e:
-        raise InputError(f"--resume {run_dir}: {e}") from None
-    history.kept(run_dir, info)
