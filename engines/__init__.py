@@ -13,7 +13,9 @@ The packages, each importing only those before it (tests/test_layers.py checks i
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
   studies/    the speed-accuracy and stability studies (their points and analysis, no YADE); the
               perturbed starts of an ensemble and its statistics (ensemble.py); seed 003's judged
-              points and their intervals (biaxial_judged.py)
+              points and their intervals (biaxial_judged.py); every study's verdicts
+              (tradeoffs_judged.py, liquefaction.py: the paper's trends, reconstruction.py); never
+              imports yade/
   run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,
               sweeps, ensembles (--starts); the cross-check's cases; the studies' runs
 

@@ -11,10 +11,11 @@ porosity change, mean and peak U per block, wall time, re-meshing water change; 
 times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
 transfer comparison and ROOT/trends.md (the paper's trends against our numbers, each criterion's
-quantity with its 95 % interval over the starts and a verdict holds / fails / undecided: ``trends``).
+quantity with its 95 % interval over the starts and a verdict holds / fails / undecided:
+engines.studies.liquefaction.trends).
 ``run_figures`` also draws ``depth.png`` (``depth_figure``: pore pressure and porosity by depth over
-time); ``reconstruction(out, baseline)`` the trends on each variant of the reconstruction
-(engines.studies.reconstruction: reconstruction.json, .md, .png).
+time); ``reconstruction(out, baseline)`` writes the trends on each variant of the reconstruction
+(engines.studies.reconstruction.judged: reconstruction.json, .md, .png).
 
     /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
     /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
@@ -27,15 +28,15 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
 from engines import files  # noqa: E402
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
 from engines.model.observe import Window, porosity  # noqa: E402
-from engines.studies.ensemble import CONFIDENCE, t_half_width  # noqa: E402
-from engines.studies.reconstruction import VARIANTS, ensemble_path  # noqa: E402
+from engines.studies.ensemble import CONFIDENCE  # noqa: E402
+from engines.studies.liquefaction import PERIOD, TRENDS, holds_if, trends  # noqa: E402
+from engines.studies.reconstruction import VARIANTS, ensemble_path, judged  # noqa: E402
 from packing.packing import Packing  # noqa: E402
 from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
 from postproc.run_files import (  # noqa: E402
@@ -48,7 +49,6 @@ from postproc.run_files import (  # noqa: E402
     snapshot_files,
 )
 
-PERIOD = 0.02        # the cosine's period [s] (50 Hz): the averaging window of the end values
 LOW_BLOCKS = 4       # blocks 1-4: below the two surface blocks, whose U drains to the surface (§6.2)
 CASES = {  # SPEC §2.5
     1: "saturated, undrained, spring d, cosine",
@@ -285,118 +285,6 @@ def case_summary(run_dir):
     return out
 
 
-def _holds_if(low, high):
-    return f"> {low:g}" if high == np.inf else f"< {high:g}" if low == -np.inf else f"in ({low:g}, {high:g})"
-
-
-# The paper's trends (SPEC §2.5) with the study's criteria, fixed before the runs: per trend its
-# cases and its conditions (name, a quantity of the cases' means over their starts {case: {key:
-# mean}}, low, high); the trend holds where every quantity lies in (low, high).
-TRENDS = tuple(
-    [(f"dry settles more than saturated-undrained ({label}: case {dry} vs {wet})",
-      "undrained ≈ constant volume; dry porosity falls with time (Fig. 40/46)", (wet, dry),
-      [(f"-Δn(case {dry}) / |Δn(case {wet})|",
-        lambda m, w=wet, d=dry: -m[d]["porosity_change"] / abs(m[w]["porosity_change"]), 2.0, np.inf)])
-     for wet, dry, label in ((1, 2, "cosine"), (6, 7, "El Centro"))]
-    + [("drained sides with high k keep |U| small (case 3 vs 1)", "U hardly rises in any block, stays near 0 (Fig. 39)",
-        (1, 3), [("time-mean |U| of blocks 1-4, case 3 / case 1",
-                  lambda m: m[3]["U_low_abs_mean"] / m[1]["U_low_abs_mean"], -np.inf, 0.5)]),
-       ("drained case lies between undrained and dry in porosity (case 3)", "intermediate (Fig. 40)", (1, 2, 3),
-        [("(Δn3 - Δn1) / (Δn2 - Δn1)", lambda m: (m[3]["porosity_change"] - m[1]["porosity_change"])
-          / (m[2]["porosity_change"] - m[1]["porosity_change"]), 0.0, 1.0)]),
-       ("elastic springs keep porosity nearly constant (cases 4, 5 vs 2)",
-        "porosity hardly changes, saturated or dry (Fig. 41)", (2, 4, 5),
-        [("max(|Δn4|, |Δn5|) / |Δn2|", lambda m: max(abs(m[4]["porosity_change"]), abs(m[5]["porosity_change"]))
-          / abs(m[2]["porosity_change"]), -np.inf, 0.5)]),
-       ("elastic springs: U oscillates about 0 (case 4)",
-        "U oscillates near 0 in every block, with suction; no build-up (Fig. 42)", (1, 4),
-        [("|mean U| / std U of blocks 1-4, case 4", lambda m: abs(m[4]["U_low_mean"]) / m[4]["U_low_std"], -np.inf, 1.0),
-         ("|mean U| of blocks 1-4, case 4 / case 1", lambda m: abs(m[4]["U_low_mean"]) / abs(m[1]["U_low_mean"]),
-          -np.inf, 0.5)]),
-       ("hysteretic springs: U builds up with the input period (case 1)",
-        "U rises through the first cycle (0.02 s), then oscillates at the input period about a plateau (Fig. 37)", (1,),
-        [("rise of U (blocks 1-4) in the first 20 ms / std U",
-          lambda m: m[1]["U_low_rise_first_period"] / m[1]["U_low_std"], 0.0, np.inf),
-         ("U over the last 20 ms / std U", lambda m: m[1]["U_low_end"] / m[1]["U_low_std"], 0.5, np.inf),
-         ("dominant period of U / 20 ms", lambda m: m[1]["U_low_dominant_period"] / PERIOD, 0.75, 1.25)])])
-N_BOOT = 2000  # bootstrap resamples of the starts of each case for a quantity's interval
-
-
-def small_sample_factor(n):
-    """The factor that widens a percentile bootstrap interval of means of n starts about its
-    estimate to a Student-t one: t(q, n - 1) / z(q) x sqrt(n / (n - 1)), q = (1 + CONFIDENCE) / 2 (the
-    bootstrap's spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
-    q = 0.5 + CONFIDENCE / 2
-    return float(t_half_width(1.0, n) / stats.norm.ppf(q) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
-
-
-def _means(cases, keys, pick=None):
-    """{case: {key: mean over the starts (those of ``pick`` {case: indices}, default all)}}."""
-    return {k: {key: float(np.mean([runs[i][key] for i in (pick[k] if pick else range(len(runs)))]))
-                for key in keys} for k, runs in cases.items()}
-
-
-def _verdict(lo, hi, low, high):
-    """holds: the interval (lo, hi) inside (low, high); fails: outside; undecided: it straddles a
-    threshold (or is unknown)."""
-    if np.isnan(lo) or np.isnan(hi):
-        return "undecided"
-    if low < lo and hi < high:
-        return "holds"
-    if hi <= low or lo >= high:
-        return "fails"
-    return "undecided"
-
-
-def trends(cases, drainage=None, seed=0):
-    """The paper's trends (TRENDS) on our runs: a list of rows {trend, paper, cases, starts,
-    conditions: [{quantity, estimate, ci95, holds_if, verdict}], verdict}; rows whose cases are
-    missing are left out. ``cases``: {case: [summary of each start (``case_summary``)]} (a dict for
-    one run). Each quantity: its value on the means over the starts, its 95 % interval the
-    percentile interval over N_BOOT bootstrap resamples of each case's starts (numpy Generator(seed))
-    widened by ``small_sample_factor`` of the fewest starts,
-    its verdict holds (the interval inside the criterion's range), fails (outside) or undecided
-    (straddling a threshold, or a case with one start); the trend fails where a condition fails,
-    holds where all hold. ``drainage``: drainage.json (yade_scripts/liquefaction_drainage.py), quoted
-    in the drained row."""
-    cases = {k: v if isinstance(v, list) else [v] for k, v in cases.items()}
-    keys = ("porosity_change", "U_low_abs_mean", "U_low_mean", "U_low_std", "U_low_rise_first_period", "U_low_end",
-            "U_low_dominant_period")
-    rng = np.random.default_rng(seed)
-    rows = []
-    for trend, paper, need, conditions in TRENDS:
-        if not all(k in cases for k in need):
-            continue
-        sub = {k: cases[k] for k in need}
-        have = [key for key in keys if all(key in r for runs in sub.values() for r in runs)]
-        mean = _means(sub, have)
-        boot = [_means(sub, have, {k: rng.integers(0, len(runs), len(runs)) for k, runs in sub.items()})
-                for _ in range(N_BOOT)]
-        one = min(len(runs) for runs in sub.values()) < 2
-        out = []
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for name, f, low, high in conditions:
-                est = float(f(mean))
-                values = np.array([f(b) for b in boot], float)
-                tails = [50 * (1 - CONFIDENCE), 50 * (1 + CONFIDENCE)]  # percent
-                lo, hi = (np.nanpercentile(values, tails) if not one and np.isfinite(values).any()
-                          else (np.nan, np.nan))
-                widen = small_sample_factor(min(len(runs) for runs in sub.values()))
-                lo, hi = est - widen * (est - lo), est + widen * (hi - est)
-                out.append({"quantity": name, "estimate": est, "ci95": [float(lo), float(hi)],
-                            "holds_if": _holds_if(low, high),
-                            "verdict": "undecided" if one else _verdict(lo, hi, low, high)})
-        verdicts = {c["verdict"] for c in out}
-        row = {"trend": trend, "paper": paper, "cases": list(need), "starts": {k: len(sub[k]) for k in need},
-               "conditions": out,
-               "verdict": "fails" if "fails" in verdicts else "holds" if verdicts == {"holds"} else "undecided"}
-        tau = (drainage or {}).get("case3", {}).get("1", {}).get("tau")
-        if 3 in need and "U_low_abs_mean" in have and tau:
-            row["note"] = f"slowest drainage time constant of case 3 {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
-        rows.append(row)
-    return rows
-
-
 def _wet(runs):
     return [k for k, (_, s, _) in runs.items() if s.get("parameters", {}).get("water", {}).get("enabled")]
 
@@ -547,39 +435,18 @@ def _cases_of(summary):
     return {int(k[len("case"):]): v for k, v in summary["cases"].items()}
 
 
-def variant_cases(base, changed, runs):
-    """The cases a variant's trends are evaluated on: ``runs`` {case: [start summaries]} of the
-    ``changed`` cases that completed, the baseline's ``base`` for the cases the variant does not
-    change; a changed case not in ``runs`` is left out (never taken from the baseline)."""
-    return {**{k: r for k, r in base.items() if k not in changed}, **runs}
-
-
 def reconstruction(out, baseline, packings=None):
-    """The trends on each variant of engines.studies.reconstruction: its cases' ensembles (under
-    OUT/runs) with the study's own (BASELINE/summary.json; those of the variant it is ``on``) for
-    the cases it does not change; a case it changes that has not completed drops the trends that
-    need it. ``packings``: {variant: facts of its deposit} (engines.run.reconstruction.packing_facts).
-    Writes OUT/reconstruction.json, reconstruction.md and reconstruction.png; returns the JSON's dict."""
+    """The trends on each variant of engines.studies.reconstruction (its ``judged``): its cases'
+    ensembles under OUT/runs, the study's own from BASELINE/summary.json. ``packings``: {variant:
+    facts of its deposit} (engines.run.reconstruction.packing_facts). Writes OUT/reconstruction.json,
+    reconstruction.md and reconstruction.png; returns the JSON's dict."""
     with open(os.path.join(baseline, "summary.json")) as f:
         base = _cases_of(json.load(f))
-    doc = {"baseline": os.path.abspath(baseline), "confidence": CONFIDENCE, "reference": trends(base), "variants": {}}
-    evaluated = {}  # the cases each variant's trends were evaluated on, for the variants built on it
+    runs = {}
     for name, v in VARIANTS.items():
         got = {k: _case_runs(ensemble_path(os.path.join(out, "runs"), name, k)) for k in v.cases}
-        done = [k for k in v.cases if got[k] is not None]
-        if not done or (v.on and v.on not in evaluated):
-            continue
-        cases = variant_cases(evaluated[v.on] if v.on else base, v.cases, {k: got[k][0] for k in done})
-        evaluated[name] = cases
-        changed = sorted(set(done) | set(doc["variants"][v.on]["changed"] if v.on else ()))  # against the presets
-        doc["variants"][name] = {
-            "unknown": v.unknown, "reason": v.reason, "cases": list(v.cases), "done": done, "on": v.on,
-            "changed": changed,
-            "starts": {k: len(cases[k]) for k in done}, "packing": (packings or {}).get(name),
-            "case_means": {k: {key: float(np.mean([r[key] for r in cases[k]]))
-                               for key in ("porosity_initial", "porosity_change", "U_low_mean") if key in cases[k][0]}
-                           for k in done},
-            "trends": trends(cases)}
+        runs[name] = {k: None if g is None else g[0] for k, g in got.items()}
+    doc = {"baseline": os.path.abspath(baseline), **judged(base, runs, packings)}
     files.write_json(os.path.join(out, "reconstruction.json"), doc, indent=1)
     files.write_text(os.path.join(out, "reconstruction.md"), reconstruction_markdown(doc))
     fig = reconstruction_figure(doc)
@@ -620,7 +487,7 @@ def reconstruction_markdown(doc):
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     lines += ["", "Trends (each quantity's criterion in brackets):", ""]
     for i, (trend, _, _, conditions) in enumerate(TRENDS):
-        lines.append(f"- T{i + 1}: {trend}: " + "; ".join(f"{q} ({_holds_if(lo, hi)})" for q, _, lo, hi in conditions))
+        lines.append(f"- T{i + 1}: {trend}: " + "; ".join(f"{q} ({holds_if(lo, hi)})" for q, _, lo, hi in conditions))
     lines += ["", "| variant | unknown | why a candidate | cases run (starts) | packing | "
               "case means: porosity at t = 0, Δn, U_low mean [N/m] |", "|---|---|---|---|---|---|"]
     for name, v in doc["variants"].items():

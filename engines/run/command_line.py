@@ -27,8 +27,7 @@ import tomllib
 
 from engines.files.inputs import check_name
 from engines.run import ensemble, guard, history, manifest, talk
-from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_resume, number,
-                                   output_dir, preflight)
+from engines.run.preflight import ENSEMBLE, announce_output, check_fresh_output, check_resume, number, output_dir, preflight
 from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import BATCH, DESCRIPTION, batch_line
 from engines.run.talk import say
