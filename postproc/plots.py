@@ -197,30 +197,10 @@ def snapshot_figure(snaps, title, blocks=None):
     n = len(snaps)
     cols = min(n, min(SNAPSHOT_COLUMNS, key=lambda c: -n % c))
     rows = -(-n // cols)
-    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
-    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
-    window = ""
-    n_discs = len(snaps[0]["r"])
-    if n_discs > WINDOW_DISCS:  # a large scene: the panels show its middle, about WINDOW_DISCS discs wide
-        mid, half = (lo[0] + hi[0]) / 2, (hi[0] - lo[0]) * WINDOW_DISCS / n_discs / 2
-        window = (f" (x = {mid - half:.0f} to {mid + half:.0f} mm of {lo[0]:.0f} to {hi[0]:.0f} mm; "
-                  f"the titles' maxima of the whole scene)")
-        lo[0], hi[0] = mid - half, mid + half
+    lo, hi, window = _snapshot_bounds(snaps)
     aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])  # panel height / width of the scene
     f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
-    dense = max(s["density_factor"].max() for s in snaps)
-    key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
-    if dense > 1:
-        key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
-                         label=f"dense top particle (density x {dense:g})"))
-    if any((s["group"] != 0).any() for s in snaps):
-        key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
-    if any("flat_walls" in s for s in snaps):
-        key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
-    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N/m")
-            for f in (f_max / 4, f_max)]
-    if blocks:
-        key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
+    key = _snapshot_key(snaps, f_max, blocks)
     width = max(4.3 * cols + 1.2, 8.6)
     key_cols = max(1, int(KEY_SHARE * width / KEY_ENTRY_WIDTH))
     key_height = 0.22 * -(-len(key) // key_cols) + 0.2  # [in]: the key's rows
@@ -232,23 +212,11 @@ def snapshot_figure(snaps, title, blocks=None):
     key_ax.axis("off")
     Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
     u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
-    norm = Normalize(-u_max, u_max)
     speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
     moving = max(v.max(initial=0.0) for v in speed) > 0
     v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
     v_key = _nice(v_max / 2)
-    colour_source = quiver = None
-    for ax, s, v in zip(axes, snaps, speed):
-        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
-        colour_source = colour_source or polys
-        quiver = quiver or q
-        lines = [f"max |v| = {v.max(initial=0.0):.3g} m/s, max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
-        if "U" in s and len(s["U"]):
-            lines.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
-        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + "\n".join(lines), fontsize=8.5)
-        if blocks:
-            for k, (z0, z1) in enumerate(blocks):
-                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    colour_source, quiver = _snapshot_panels(axes, snaps, speed, Normalize(-u_max, u_max), v_max, f_max, blocks)
     pad = 0.3
     for k, ax in enumerate(axes):
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -269,6 +237,57 @@ def snapshot_figure(snaps, title, blocks=None):
                           color=ARROW_COLOUR, fontproperties={"size": 8})
     fig.suptitle(title + ":\npores coloured by U, normal forces (line width), particle velocities (arrows)" + window)
     return fig
+
+
+def _snapshot_bounds(snaps):
+    """(lower left, upper right) [mm] of the panels and the title's note of the window: a scene of
+    more than WINDOW_DISCS discs is drawn in a window of its middle about WINDOW_DISCS discs wide."""
+    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    window = ""
+    n_discs = len(snaps[0]["r"])
+    if n_discs > WINDOW_DISCS:
+        mid, half = (lo[0] + hi[0]) / 2, (hi[0] - lo[0]) * WINDOW_DISCS / n_discs / 2
+        window = (f" (x = {mid - half:.0f} to {mid + half:.0f} mm of {lo[0]:.0f} to {hi[0]:.0f} mm; "
+                  f"the titles' maxima of the whole scene)")
+        lo[0], hi[0] = mid - half, mid + half
+    return lo, hi, window
+
+
+def _snapshot_key(snaps, f_max, blocks):
+    """The key's handles: the kinds of discs and walls drawn, two force widths, the blocks."""
+    dense = max(s["density_factor"].max() for s in snaps)
+    key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
+    if dense > 1:
+        key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
+                         label=f"dense top particle (density x {dense:g})"))
+    if any((s["group"] != 0).any() for s in snaps):
+        key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
+    if any("flat_walls" in s for s in snaps):
+        key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
+    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N/m")
+            for f in (f_max / 4, f_max)]
+    if blocks:
+        key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
+    return key
+
+
+def _snapshot_panels(axes, snaps, speed, norm, v_max, f_max, blocks):
+    """Draw each snapshot on its panel on the shared scales, titled with its own maxima (``speed``:
+    each snapshot's particle speeds [m/s]); returns (the first pore collection, the first quiver)."""
+    colour_source = quiver = None
+    for ax, s, v in zip(axes, snaps, speed):
+        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
+        colour_source = colour_source or polys
+        quiver = quiver or q
+        lines = [f"max |v| = {v.max(initial=0.0):.3g} m/s, max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
+        if "U" in s and len(s["U"]):
+            lines.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
+        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + "\n".join(lines), fontsize=8.5)
+        if blocks:
+            for k, (z0, z1) in enumerate(blocks):
+                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    return colour_source, quiver
 
 
 def figures_of_run(run_dir):
