@@ -62,9 +62,17 @@ Where to add ...
   a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
     a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WATER_FIELDS
     (model/pore_water.py: WaterSettings and the scene's [water] table are made from them).
-  a wall type: the group codes of model/groups.py (WALL_*, the one table; packing files store
-    them), which link discs to walls in build_pores (model/pores.py); boundary flows in
-    PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
+  a wall type (a boundary kind): one row of BOUNDARY_KINDS in model/groups.py (name; a disc group
+    code, which packing files store, or a flat-wall word; what it does to a pore's water: surface,
+    drained, inflow, undrained; a disc group's face). The pores' wall codes, the water's masks
+    (pore_water.boundary_masks) and inflow lengths, the compiled twins (they take those masks), the
+    scene's flat walls and [water] sides, packing faces, WaterEngine's ``walls``/``flat_walls`` and
+    its contract read it: 1 place (tests/compiled/test_boundary_kinds.py adds a toy word and a toy
+    group there and nowhere else). Besides: the independent reference (reference/model.py, its own
+    codes and words: 1 file, 3-4 places) for the cross-check; a disc group the deposition should
+    build, yade/deposition.py (1 place). A new action on the water (e.g. a fixed pressure) is a
+    physics change: WATER and the table, PoreWater.flows, its twins (compiled/kernels.py darcy_flows
+    and compiled/water_model.py) and the balance, and the reference: 5 files.
   an output column: history_columns and Recorder.row in run/runner.py (only for the scenes that
     produce it), from what the coupling (yade/coupling.py) measured at the step; its unit in
     run/history.py (UNITS) and docs/OUTPUTS.md.

@@ -42,7 +42,7 @@ from engines.model import pore_water
 from engines.model import pores as pg
 
 jit = nb.njit(cache=True, nogil=True)
-OUTER, WALL_RIGHT = pg.OUTER, pg.WALL_RIGHT
+OUTER, LAST_GROUP = pg.OUTER, pg.LAST_GROUP
 NO_WALL_VERTICES = np.zeros(0, np.int64)  # owner and bits of _is_link without flat walls
 
 
@@ -325,7 +325,7 @@ def links_and_corners(xz, r, walls, tri, nb_, is_link, tri_pore, bounded, n_pore
         ptr[p + 1] = c
     pv_pore, pv_disc = pv_pore[:c].copy(), pv_disc[:c].copy()
     signature = np.zeros(n_pores, np.uint64)
-    touches = np.zeros((max(WALL_RIGHT, walls.max()) + 1, n_pores), np.bool_)
+    touches = np.zeros((max(LAST_GROUP, walls.max()) + 1, n_pores), np.bool_)
     for s in range(c):
         signature[pv_pore[s]] += _mix64(pv_disc[s])
         touches[walls[pv_disc[s]], pv_pore[s]] = True

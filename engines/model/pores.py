@@ -49,10 +49,10 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from engines.model import flat_walls as fw
-from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
+from engines.model.groups import LAST_GROUP, WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES, WALL_NONE, WALL_RIGHT  # noqa: F401
 
 OUTER = -1  # pore label of the outer face (and of closed faces) in link_pores
-FLAT_VERTEX = WALL_RIGHT + 1  # the wall code of a flat wall's vertex: a link between two is a wall edge
+FLAT_VERTEX = LAST_GROUP + 1  # the wall code of a flat wall's vertex: a link between two is a wall edge
 
 
 def check_finite_array(name, a, shape=None):
@@ -540,9 +540,9 @@ def build_pores(xz, r, eps_m=0.0, l_m=0.0, walls=None, degenerate_fraction=1e-4,
     walls = np.zeros(n, np.int64) if walls is None else np.asarray(walls, np.int64)
     if walls.shape != (n,):
         raise ValueError(f"walls: expected shape ({n},), got {walls.shape}")
-    bad = (walls < WALL_NONE) | (walls > WALL_RIGHT)
+    bad = (walls < WALL_NONE) | (walls > LAST_GROUP)
     if bad.any():
-        raise ValueError(f"walls: codes must be {WALL_NONE}-{WALL_RIGHT}, got {walls[bad][0]}")
+        raise ValueError(f"walls: codes must be {WALL_NONE}-{LAST_GROUP}, got {walls[bad][0]}")
     a_min = degenerate_fraction * float(np.mean(np.pi * r**2)) if n else 0.0
     steps = steps or NUMPY_BUILD
     if flat_walls:
@@ -718,7 +718,7 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     pv_pore, pv_disc = pv_key // n, pv_key % n
     ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
     signature = _set_signatures(ptr, pv_disc)
-    touches = np.zeros((max(WALL_RIGHT, int(walls.max(initial=0))) + 1, n_pores), bool)
+    touches = np.zeros((max(LAST_GROUP, int(walls.max(initial=0))) + 1, n_pores), bool)
     touches[walls[pv_disc], pv_pore] = True
 
     # Boundary corners of the pores: the paper's walk over the link half-edges.
