@@ -19,7 +19,6 @@ BEING_SPLIT = {
     ("engines/compiled/kernels.py", "contact_forces"),
     ("engines/model/pores.py", "_links_and_corners"),
     ("engines/model/contact.py", "separation_adjustment"),
-    ("engines/yade/coupling.py", "YadeCoupling.__init__"),
 }
 
 
