@@ -103,6 +103,9 @@ def main(argv):
         return study_main(argv[1:])
     if argv and argv[0] == "speed":
         return speed_main(argv[1:])
+    if argv and argv[0] in ("-h", "--help"):
+        print(__doc__.strip() + "\n\n`tradeoffs.py run|study|speed --help` lists each command's options.")
+        return
     sys.exit("usage: tradeoffs.py run ... | study ... | speed ... (see the docstring)")
 
 
