@@ -244,6 +244,8 @@ RULES = [
            "its short form (MAKE_TARGETS)"),
     exempt(r"^yade -n -j 1 -x yade_scripts/tradeoffs\.py speed --points .*\.\.\.",
            "`...` stands for the reader's settings; tests/studies test the speed measurement's numbers"),
+    exempt(r"^make liquefaction LIQ_", "the target of the line above it with other cases or starts (variables "
+           "only): that line runs it short, and SHORT=1 sets these variables itself"),
     Rule(r"^make \S+", "a Makefile target: MAKE_TARGETS says how (short, or exempt and why)", "make"),
 ]
 
