@@ -139,12 +139,15 @@ QUICK_BIAXIAL = "--n-discs 150 --max-strain 1.5 --strain-rate 400"
 class Rule:
     """A documented command's treatment: ``pattern`` (a regular expression searched in the
     command), ``reason``; ``rewrite`` (the command -> the commands run, None: exempt), ``files``
-    (created in the page's folder first: name -> text) and ``outputs`` (more files it must write)."""
+    (created in the page's folder first: name -> text), ``outputs`` (more files it must write;
+    {out}: its --out) and ``refuses`` (where the page leaves nothing for it: its last command must
+    refuse in one line, exit status 2, and write nothing)."""
     pattern: str
     reason: str
     rewrite: object = None
     files: dict = field(default_factory=dict)
     outputs: tuple = ()
+    refuses: bool = False
 
 
 def exempt(pattern, reason):
@@ -224,8 +227,8 @@ RULES = [
            "a study of 30-60 biaxial tests (hours); its parts are tested on synthetic runs "
            "(tests/studies/test_biaxial_judged.py, tests/seeds) and biaxial.py runs above"),
     Rule(r"^/usr/bin/python3 yade_scripts/biaxial_study\.py --out out/biaxial_hypotheses --parts hypotheses --analyse-only$",
-         "as written: on a fresh folder it must refuse in one line (no jobs done)", lambda c: [c],
-         outputs=()),
+         "as written, where the page ran no hypotheses job (the study is exempt above): it refuses in one line",
+         lambda c: [c], refuses=True),
     exempt(r"^nohup nice -n 10 /usr/bin/python3 yade_scripts/biaxial_study\.py",
            "the same study in the background (hours); its foreground line is in BIAXIAL.md's Commands"),
     # companions, cross-check, benchmarks, studies
@@ -340,18 +343,17 @@ def make_commands(cmd):
 
 
 def plan(page, commands):
-    """[(documented command, [commands run] or None, reason, files first, outputs)] of a page; fails
-    on a command that no rule matches."""
+    """[(documented command, [commands run] or None, reason, files first, outputs, refuses)] of a page."""
     steps = []
     for cmd, comment in commands:
         rule = rule_of(cmd)
         assert rule, f"{page}: `{cmd}` matches no rule of tests/test_documented_commands.py: add one (run short or exempt)"
         if rule.rewrite == "make":
             run, outputs = make_commands(cmd)
-            steps.append((cmd, run, rule.reason, {}, tuple(outputs) if run else ()))
+            steps.append((cmd, run, rule.reason, {}, tuple(outputs) if run else (), False))
             continue
         if rule.rewrite is None:
-            steps.append((cmd, None, rule.reason, {}, ()))
+            steps.append((cmd, None, rule.reason, {}, (), False))
             continue
         unique = "out/dir-%08x" % zlib.crc32(cmd.encode())  # a folder for --out DIR
         written = re.sub(r"--out DIR\b", f"--out {unique}", optional_parts(cmd))
@@ -359,7 +361,7 @@ def plan(page, commands):
         outs = [m.group(1) for c in rule.rewrite(written) for m in [re.search(r"--out (\S+)", c)] if m]
         outputs = [p for c in rule.rewrite(written) for p in named_outputs(c, comment)] + \
             [p.format(out=o) for p in rule.outputs for o in (outs if "{out}" in p else [None])]
-        steps.append((cmd, run, rule.reason, rule.files, tuple(outputs)))
+        steps.append((cmd, run, rule.reason, rule.files, () if rule.refuses else tuple(outputs), rule.refuses))
     return steps
 
 
@@ -378,7 +380,7 @@ def run_page(page, steps, folder):
     """Run a page's steps in order in ``folder``; [(command, problem)], and the wall seconds of each run."""
     os.makedirs(folder)
     problems, walls = [], []
-    for cmd, run, reason, files, outputs in steps:
+    for cmd, run, reason, files, outputs, refuses in steps:
         if run is None:
             continue
         for name, text in files.items():
@@ -392,7 +394,11 @@ def run_page(page, steps, folder):
                 problems.append((cmd, f"`{c}` ran over {TIMEOUT} s"))
                 break
             walls.append((c, time.monotonic() - t0))
-            if proc.returncode != 0:
+            if refuses and c == run[-1]:
+                if proc.returncode != 2 or len(proc.stderr.strip().splitlines()) != 1:
+                    problems.append((cmd, f"`{c}` should refuse in one line (exit 2), gave exit {proc.returncode}: "
+                                          f"{proc.stderr.strip()[-600:]}"))
+            elif proc.returncode != 0:
                 problems.append((cmd, f"`{c}` exit {proc.returncode}: {(proc.stderr or proc.stdout).strip()[-600:]}"))
                 break
         else:
@@ -421,7 +427,47 @@ def test_documented_commands_run(tmp_path):
 def test_short_study_targets_not_in_the_docs_run(tmp_path):
     """The SHORT targets that no page's code block names run here (the others run with their page)."""
     named = {shlex.split(c)[1] for cmds in doc_commands().values() for c, _ in cmds if c.startswith("make ")}
-    steps = [(f"make {t}", make_commands(f"make {t}")[0], "SHORT=1", {}, SHORT_TARGETS[t])
+    steps = [(f"make {t}", make_commands(f"make {t}")[0], "SHORT=1", {}, SHORT_TARGETS[t], False)
              for t in SHORT_TARGETS if t not in named]
     problems, _ = run_page("Makefile", steps, str(tmp_path / "make"))
     assert not problems, problems
+
+
+SCRIPTS = sorted(glob.glob(os.path.join(ROOT, "yade_scripts", "*.py")))
+POSTPROC = sorted(os.path.basename(p)[:-3] for p in glob.glob(os.path.join(ROOT, "postproc", "*.py"))
+                  if "__main__" in open(p, encoding="utf-8").read())
+
+
+@pytest.mark.parametrize("argv", [[s] for s in SCRIPTS if not s.endswith("__init__.py")]
+                         + [[os.path.join(ROOT, "yade_scripts", "tradeoffs.py"), c] for c in ("run", "study", "speed")]
+                         + [["-m", f"postproc.{m}"] for m in POSTPROC], ids=lambda a: " ".join(os.path.basename(w) for w in a))
+def test_help_everywhere(argv):
+    """`--help` of every script and command line of postproc prints its usage and exits 0 (under
+    Debian's python3, which imports YADE as `yade -n -x` does; the scripts' options are the same)."""
+    proc = subprocess.run(["/usr/bin/python3", *argv, "--help"], cwd=ROOT, env=ENV, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0 and not proc.stderr.strip(), proc.stderr[-800:]
+    assert "usage" in proc.stdout.lower() or "--out" in proc.stdout, proc.stdout[:400]
+
+
+EMPTY_INPUTS = [
+    ["-m", "postproc.liquefaction", "--study", "{empty}"],
+    ["-m", "postproc.plots", "{empty}"],
+    ["-m", "postproc.vtk", "{empty}"],
+    ["-m", "postproc.ensemble", "{empty}"],
+    ["yade_scripts/biaxial_study.py", "--out", "{empty}", "--analyse-only"],
+    ["yade_scripts/tradeoffs.py", "study", "--out", "{empty}", "--analyse-only"],
+    ["yade_scripts/liquefaction_reconstruction.py", "--out", "{empty}/study", "--baseline", "{empty}", "--analyse-only"],
+    ["yade_scripts/stability.py", "--out", "{empty}", "--plot-only"],
+]
+
+
+@pytest.mark.parametrize("argv", EMPTY_INPUTS, ids=lambda a: " ".join(a[:2]))
+def test_empty_inputs_are_refused_in_one_line(tmp_path, argv):
+    """An analysis of an empty folder refuses in one line (exit 2) and writes nothing."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    proc = subprocess.run(["/usr/bin/python3", *[w.format(empty=empty) for w in argv]], cwd=ROOT, env=ENV,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr[-800:]
+    assert not os.listdir(empty)
