@@ -117,21 +117,24 @@ bench-before-after: deps
 	-$(MAKE) --no-print-directory -C $(OLD_TREE) ext 2>/dev/null
 	$(YADE) -n -x benchmarks/before_after.py --old-tree $(OLD_TREE) --json $(OUT)/bench-before-after-$(OLD).json
 
-# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
+# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes;
+# SHORT=1 leaves it out);
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene yade_scripts/scenes/quicksand_case1_flat.toml \
 	  --from $(OUT)/packings/quicksand-case1.csv --out $(OUT)/packings/quicksand-case1-flat.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
-	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+	$(if $(SHORT),,$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv)
 
 # Seed 003 (about 85 CPU minutes, niced, resumable: finished jobs are kept): biaxial tests of the
 # paper's specimen, φ*(φe), E50, eq 4-6 and their sensitivity, through the sweep runner
 # (docs/BIAXIAL.md). `biaxial_study.py --estimate` prints what is left to run and its predicted
 # cost. SCHEDULER=tcp://host:8786 runs the jobs on a Dask cluster instead of the local cores.
+# SHORT=1: the main grid's 3 jobs on one packing, biaxial_study.py --quick's specimen.
 biaxial: deps
-	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
+	  $(if $(SHORT),--quick --parts main --seeds 1)
 
 # Seismic liquefaction (seed 000 §6): the seven cases over 0.18 s, each an ensemble of LIQ_STARTS
 # starts perturbed by 1e-7 m, with the fast numerics where the validation passed for the case (its

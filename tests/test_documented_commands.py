@@ -258,6 +258,9 @@ SHORT_TARGETS = {
     "ground": ("out/ground/run/summary.json",),
     "liquefaction": ("out/liquefaction/summary.json", "out/liquefaction/case1/summary.json"),
     "stability": ("out/stability/map.json",),
+    "packings": ("out/packings/quicksand-case1.csv", "out/packings/quicksand-case1-flat.csv",
+                 "out/packings/liquefaction-case1.csv"),
+    "biaxial": ("out/biaxial/study.json", "out/biaxial/fit.json", "out/biaxial/table.md"),
 }
 EXEMPT_TARGETS = {
     "deps": "installs with apt-get (root); make check ran it",
@@ -275,14 +278,13 @@ EXEMPT_TARGETS = {
     "bench-seismic": "a cost measurement", "bench-scaling": "a cost measurement",
     "bench-ground": "a cost measurement", "bench-before-after": "a cost measurement of an older checkout",
     "clean": "removes out/",
-    "packings": "deposits of 96-1,089 discs (minutes: the 1,089-disc one); deposit.py runs in README's rules",
-    "biaxial": "the seed-003 study (85 CPU minutes); biaxial_study.py has --quick, which still runs its whole "
-               "grid (tens of minutes)",
-    "reconstruction": "ensembles of 8 starts over 0.18 s per variant (55 CPU minutes); its jobs are the "
-                      "liquefaction script's, which runs short above",
-    "tradeoffs": "the trade study (60 CPU minutes): its knobs' errors need whole windows; tests/studies test "
-                 "its analysis",
-    "validation": "the validation (90 CPU minutes) over whole runs, by its definition",
+    "reconstruction": "no short form: its jobs are the study's ensembles of 8 starts over 0.18 s per variant "
+                      "(55 CPU minutes, engines/run/reconstruction.py), run by the liquefaction script, which runs "
+                      "short above; tests/run/test_reconstruction.py tests its jobs and analysis",
+    "tradeoffs": "no short form: each knob's error is against a reference over the study's whole window from "
+                 "5-20 starts (60 CPU minutes); tests/studies test its analysis, tradeoffs.py study --analyse-only's "
+                 "refusal runs below",
+    "validation": "no short form: the validation is whole runs of every preset by its definition (90 CPU minutes)",
 }
 MAKE_ENV = {"SHORT": "1"}
 
