@@ -23,6 +23,7 @@ import glob
 import os
 import re
 import shlex
+import signal
 import subprocess
 import time
 import zlib
@@ -41,7 +42,7 @@ LATER = "0.004"  # [s] the later end a resume of a short run goes on to
 WORKERS = 2  # pages at a time (each page in a folder of its own; the machine has 2 cores)
 TIMEOUT = 300  # [s] the longest one command may take
 ENV = dict(os.environ, PYTHONPATH=ROOT, MPLBACKEND="Agg", OMP_NUM_THREADS="1")
-COMMAND = re.compile(r"^(?:yade|yade-batch|python3|/usr/bin/python3|make|nohup|\$[A-Z]+)\b")
+COMMAND = re.compile(r"^(?:yade|yade-batch|python3|/usr/bin/python3|make|nohup|mkdir|\$[A-Z]+)\b")
 FENCE = re.compile(r"^```[^\n]*\n(.*?)^```", re.M | re.S)
 PLACEHOLDER = re.compile(r"\b[A-Z][A-Z0-9_]{2,}\b")  # FILE, PATH, HOST ... in an optional part
 OPTIONAL = re.compile(r"\s\[([^\[\]]*)\]")
@@ -100,7 +101,7 @@ def doc_commands():
 
 
 def test_the_reader_finds_commands_in_both_kinds_of_block():
-    text = ("intro\n\n```\nyade -n -x a.py --out out/x \\\n    --vtk   # -> out/x/vtk/\nmkdir y\n```\n\nprose\n\n"
+    text = ("intro\n\n```\nyade -n -x a.py --out out/x \\\n    --vtk   # -> out/x/vtk/\nls y\n```\n\nprose\n\n"
             '    Q="yade -n -x b.py"\n    $Q --out DIR\n    make demo    # the demo\n\n  - item\n')
     cmds = [c for b in code_blocks(text) for c in block_commands(b)]
     assert cmds == [("yade -n -x a.py --out out/x --vtk", "-> out/x/vtk/"), ("yade -n -x b.py --out DIR", ""),
@@ -174,6 +175,7 @@ RULES = [
          f"resumes out/liq1, which the page does not make: a short run of case 1 first, then on to {LATER} s",
          lambda c: [f"yade -n -x yade_scripts/liquefaction.py --case 1 --duration {SHORT} --out out/liq1",
                     set_option(c, "--duration", LATER)]),
+    Rule(r"^mkdir -p out/[\w/.-]+$", "as written (a folder the next command needs)", lambda c: [c]),
     Rule(r"^yade-batch -j 2 (--log \S+ )?yade_scripts/quicksand_sweep\.table yade_scripts/quicksand\.py$",
          "the example table's first line, short (sweep.table in the page's folder): yade-batch writes its "
          "logs beside the table; tests/run/test_batch.py reads every line of the table",
@@ -390,9 +392,13 @@ def run_page(page, steps, folder):
                 f.write(text)
         for c in run:
             t0 = time.monotonic()
+            proc = subprocess.Popen(c, shell=True, cwd=folder, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    text=True, start_new_session=True)
             try:
-                proc = subprocess.run(c, shell=True, cwd=folder, env=ENV, capture_output=True, text=True, timeout=TIMEOUT)
+                proc.stdout, proc.stderr = proc.communicate(timeout=TIMEOUT)
             except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)  # the command's whole process group (yade-batch's jobs too)
+                proc.communicate()
                 problems.append((cmd, f"`{c}` ran over {TIMEOUT} s"))
                 break
             walls.append((c, time.monotonic() - t0))
