@@ -542,8 +542,8 @@ def reconstruction_figure(doc):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.liquefaction",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.liquefaction",
                                  description="Redraw seismic runs' blocks.png and depth.png, or (--study ROOT) the "
                                              "study of `make liquefaction`'s ensembles: summary.json, trends.md, "
                                              "Fig. 40, 41, 46.")

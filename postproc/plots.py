@@ -338,8 +338,8 @@ def plot_packing(packing, path, title, flat_walls=()):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.plots",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.plots",
                                  description="Redraw the figures of runs from their files (history.csv, snapshots, "
                                              "summary.json): pressure_blocks.png, history_panels.png, snapshots.png.")
     ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")

@@ -314,8 +314,8 @@ def convert_run(run_dir, out_dir=None):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.vtk",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.vtk",
                                  description="Write a ParaView series of runs' snapshots into RUN_DIR/vtk/*.pvd.")
     ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")
     for run in ap.parse_args().runs:

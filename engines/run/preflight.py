@@ -22,6 +22,7 @@ import math
 import os
 import tempfile
 
+from engines.files.inputs import ArgumentParser  # noqa: F401  (the scripts import it from here)
 from engines.run import guard, history, manifest
 from engines.run.talk import say
 from engines.run.manifest import ENSEMBLE  # noqa: F401  (an ensemble's statistics, engines.run.ensemble; the scripts import it from here)
@@ -32,13 +33,6 @@ class InputError(ValueError):
 
 
 # -- arguments ------------------------------------------------------------------------------------
-class ArgumentParser(argparse.ArgumentParser):
-    """argparse with a one-line error (``prog: error: ...``, no usage block), exit status 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
 def number(kind=float, lo=None, hi=None, lo_open=False, unit=""):
     """argparse type: a finite ``kind`` in [lo, hi] (lo excluded when ``lo_open``); the error
     names the limit, argparse adds the argument's name."""

@@ -74,6 +74,21 @@ def test_paths_resolve_against_the_file_that_names_them(tmp_path):
     assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
 
 
+def test_a_preset_name_stands_for_its_file_in_load_and_extends(tmp_path):
+    """--scene and extends take a preset's name (engines.run.scene.resolve) as well as a path."""
+    assert scenes.load("quicksand_case2").as_dict() == scenes.preset("quicksand_case2").as_dict()
+    mine = tmp_path / "mine.toml"
+    mine.write_text('extends = "quicksand_case2"\n[water]\nk2 = 0.5\n')
+    sc = scenes.load(str(mine))
+    assert sc.water.k2 == 0.5 and sc.water.k1 == scenes.preset("quicksand_case2").water.k1
+    assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
+    with pytest.raises(scenes.SceneError, match=r"scene 'quicksand_case9': no preset of that name \(presets: .*quicksand_case1"):
+        scenes.load("quicksand_case9")
+    mine.write_text('extends = "nosuch"\n')
+    with pytest.raises(scenes.SceneError, match=r"mine.toml: extends: scene 'nosuch': no preset"):
+        scenes.load(str(mine))
+
+
 def test_extends_loops_and_bad_extends_are_refused(tmp_path):
     (tmp_path / "a.toml").write_text('extends = "b.toml"\n[scene]\nname = "a"\n')
     (tmp_path / "b.toml").write_text('extends = "a.toml"\n')
