@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from engines.compiled import pores as kp
+from engines.compiled.pores.overlaps import _clip_area
 from engines.model import pores as pg
 from engines.model.pores import links, overlaps, triangulation
 from engines.model.flat_walls import FlatWall, WallVertices
@@ -249,8 +250,8 @@ def test_compiled_clip_areas_of_triangles_in_all_positions():
         cw = triangulation._signed_area(t) < 0
         t[cw] = t[cw][:, [0, 2, 1]]
     scratch = np.empty((9, 2)), np.empty((9, 2))
-    assert_same([kp._clip_area(P, Q, *scratch) for P, Q in zip(subj, clip)], overlaps._clip_areas(subj, clip), "areas")
-    assert_same([kp._clip_area(P, P, *scratch) for P in subj], np.abs(triangulation._signed_area(subj)), "a triangle with itself")
+    assert_same([_clip_area(P, Q, *scratch) for P, Q in zip(subj, clip)], overlaps._clip_areas(subj, clip), "areas")
+    assert_same([_clip_area(P, P, *scratch) for P in subj], np.abs(triangulation._signed_area(subj)), "a triangle with itself")
 
 
 @pytest.mark.parametrize("flat", [False, True])

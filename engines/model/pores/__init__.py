@@ -55,7 +55,7 @@ from engines.model.groups import WALL_BOTTOM, WALL_CODES, WALL_LEFT, WALL_NAMES,
 from engines.model.pores.build import (BuildSteps, NUMPY_BUILD, build_pores, insert_missing_links,  # noqa: F401
                                        regular_triangulation)
 from engines.model.pores.checks import LINK_RANGE, check_discs, check_finite_array, check_lengths, check_nonnegative  # noqa: F401
-from engines.model.pores.faces import NETWORK_ARRAYS  # noqa: F401
+from engines.model.pores.faces import NetworkArrays  # noqa: F401
 from engines.model.pores.links import eq28_pairs  # noqa: F401
 from engines.model.pores.measure import (WallReactions, flat_wall_forces, measure, pore_centroids,  # noqa: F401
                                          pressure_forces, vertex_positions, vertex_radii, wall_edges, wall_reactions)

@@ -8,7 +8,7 @@ from scipy.spatial import ConvexHull, QhullError
 from engines.model import flat_walls as fw
 from engines.model.groups import WALL_NAMES, WALL_NONE, WALL_RIGHT
 from engines.model.pores.checks import check_discs, check_nonnegative
-from engines.model.pores.faces import NETWORK_ARRAYS, _faces, _links_and_corners, _set_signatures
+from engines.model.pores.faces import _faces, _links_and_corners, _set_signatures
 from engines.model.pores.links import _FlipTriangulation, _missing_pairs
 from engines.model.pores.network import FLAT_VERTEX, OUTER, PoreNetwork, _empty_network
 from engines.model.pores.triangulation import _lifted_points, _locate, _lower_triangles
@@ -133,9 +133,9 @@ def _network(xz, r, walls, tri, n_inserted, eps_m, l_m, a_min, faces, links_and_
     nb, is_link, tri_pore_all, bounded, n_pores, n_closed, off_mesh = faces(xz, r, tri, eps_m + l_m, a_min)
     t_in = _locate(xz, tri, xz[off_mesh]) if len(off_mesh) else off_mesh  # empty power cells: rattlers where they lie
     p_in = np.where(t_in >= 0, tri_pore_all[t_in], OUTER)
-    *arrays, touches = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
-                                   off_mesh[p_in >= 0], p_in[p_in >= 0])
-    arrays = dict(zip(NETWORK_ARRAYS, arrays))
+    arrays = links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore_all, bounded, n_pores,
+                               off_mesh[p_in >= 0], p_in[p_in >= 0])._asdict()
+    touches = arrays.pop("touches")
     links = arrays["links"]
     return PoreNetwork(
         n_discs=len(r), **arrays, link_vec0=xz[links[:, 1]] - xz[links[:, 0]], **_sector_terms(r, arrays),

@@ -12,10 +12,34 @@ from engines.model.pores.network import OUTER
 from engines.model.pores.triangulation import _neighbours, _signed_area
 
 
-NETWORK_ARRAYS = ("tri", "tri_pore", "links", "link_pores", "throat_conns", "throat_link", "pore_surface",
-                  "pore_vertex_ptr", "pore_vertex_idx", "pore_signature", "he_org", "he_dst", "he_left", "he_next",
-                  "corner_pore", "corner_disc", "corner_link", "corner_next_link", "corner_sign", "corner_r2",
-                  "corner_theta0", "rattler_area")  # of PoreNetwork, as _links_and_corners returns them
+class NetworkArrays(NamedTuple):
+    """What ``_links_and_corners`` and its compiled twin return: the arrays of PoreNetwork under
+    its names (its docstring gives their meaning), then touches (codes, Np) bool: touches[c, p] is
+    True when pore p has a disc of wall code c as a vertex."""
+
+    tri: np.ndarray
+    tri_pore: np.ndarray
+    links: np.ndarray
+    link_pores: np.ndarray
+    throat_conns: np.ndarray
+    throat_link: np.ndarray
+    pore_surface: np.ndarray
+    pore_vertex_ptr: np.ndarray
+    pore_vertex_idx: np.ndarray
+    pore_signature: np.ndarray
+    he_org: np.ndarray
+    he_dst: np.ndarray
+    he_left: np.ndarray
+    he_next: np.ndarray
+    corner_pore: np.ndarray
+    corner_disc: np.ndarray
+    corner_link: np.ndarray
+    corner_next_link: np.ndarray
+    corner_sign: np.ndarray
+    corner_r2: np.ndarray
+    corner_theta0: np.ndarray
+    rattler_area: np.ndarray
+    touches: np.ndarray
 
 
 def _faces(xz, r, tri, reach, a_min, wall_vertices=None):
@@ -61,16 +85,34 @@ def _faces(xz, r, tri, reach, a_min, wall_vertices=None):
 
 def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pores, rat_disc, rat_pore):
     """Links, throats, free surface, vertex sets and pore corners of the faces of ``_faces``;
-    rat_disc, rat_pore: the discs in no triangle that lie in a pore, and that pore.
-
-    Returns the arrays of PoreNetwork named in NETWORK_ARRAYS, in that order, then touches (4, Np):
-    touches[code, p] is True when pore p has a disc of wall code ``code`` as a vertex.
-    """
-    n = len(r)
+    rat_disc, rat_pore: the discs in no triangle that lie in a pore, and that pore. Returns the
+    NetworkArrays."""
     a = tri[:, [1, 2, 0]].ravel()
     b = tri[:, [2, 0, 1]].ravel()
+    links, link_pores, flip, left_tri, right_tri = _link_records(len(r), a, b, nb, is_link, tri_pore)
+    lp0, lp1 = link_pores[:, 0], link_pores[:, 1]
+    is_throat = (lp0 >= 0) & (lp1 >= 0) & (lp0 != lp1)  # a link between two distinct pores
+    in_pore = tri_pore >= 0
+    tp = tri_pore[in_pore]
+    ptr, pv_pore, pv_disc, touches = _vertex_sets(len(r), walls, tri[in_pore], tp, n_pores, rat_disc, rat_pore)
+    he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
+    h, he_link, theta0 = _corner_angles(xz, links, he_left, he_next)
+    n_l = len(links)
+    return NetworkArrays(
+        tri=tri[in_pore], tri_pore=tp, links=links, link_pores=link_pores, throat_conns=link_pores[is_throat],
+        throat_link=np.flatnonzero(is_throat),
+        pore_surface=_surface_pores(walls, links, link_pores, flip, left_tri, right_tri, bounded, n_pores),
+        pore_vertex_ptr=ptr, pore_vertex_idx=pv_disc, pore_signature=_set_signatures(ptr, pv_disc),
+        he_org=he_org, he_dst=he_dst, he_left=he_left, he_next=he_next, corner_pore=he_left[h],
+        corner_disc=he_dst[h], corner_link=he_link[h], corner_next_link=he_link[he_next[h]],
+        corner_sign=np.where(h < n_l, 1.0, -1.0), corner_r2=r[he_dst[h]] ** 2, corner_theta0=theta0,
+        rattler_area=_rattler_areas(r, links, pv_pore, pv_disc, n_pores), touches=touches)
 
-    # Links: one record per undirected link, pores on the left and right of i->j (i < j).
+
+def _link_records(n, a, b, nb, is_link, tri_pore):
+    """Links (eq 28): one record per undirected link among the half-edges a -> b (3T,), as (i, j)
+    with i < j in order, and the pores on the left and right of i -> j; then for the record's
+    first half-edge: flip (it runs j -> i) and the triangles on its left and right (-1: none)."""
     lk = np.flatnonzero(is_link)
     la, lb = a[lk], b[lk]
     left_tri, right_tri = lk // 3, nb[lk]
@@ -82,33 +124,42 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     flip = la[first] > lb[first]
     link_pores = np.column_stack([np.where(flip, right_p[first], left_p[first]),
                                   np.where(flip, left_p[first], right_p[first])])
+    return links, link_pores, flip, left_tri[first], right_tri[first]
 
-    # Throats between two distinct pores, and the free surface.
+
+def _surface_pores(walls, links, link_pores, flip, left_tri, right_tri, bounded, n_pores):
+    """(Np,) bool, the free surface: the pore has a link on the true outer face that is not a wall
+    edge (two discs of walls); the records as ``_link_records`` gives them."""
     lp0, lp1 = link_pores[:, 0], link_pores[:, 1]
-    is_throat = (lp0 >= 0) & (lp1 >= 0) & (lp0 != lp1)
     wall_edge = (walls[links[:, 0]] != WALL_NONE) & (walls[links[:, 1]] != WALL_NONE)
     outer_link = ((lp0 == OUTER) ^ (lp1 == OUTER)) & ~wall_edge
     # a link next to a closed face is not on the free surface: only the true outer face counts
-    left_bounded = bounded[left_tri[first]]
-    right_bounded = np.where(right_tri[first] >= 0, bounded[np.maximum(right_tri[first], 0)], False)
+    left_bounded = bounded[left_tri]
+    right_bounded = np.where(right_tri >= 0, bounded[np.maximum(right_tri, 0)], False)
     outer_side_is_outer = np.where(lp0 == OUTER, ~np.where(flip, right_bounded, left_bounded),
                                    ~np.where(flip, left_bounded, right_bounded))
     surface_pores = np.where(lp0 == OUTER, lp1, lp0)[outer_link & outer_side_is_outer]
     pore_surface = np.zeros(n_pores, bool)
     pore_surface[surface_pores[surface_pores >= 0]] = True
+    return pore_surface
 
-    # Pore vertex sets.
-    in_pore = tri_pore >= 0
-    tp = tri_pore[in_pore]
-    pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri[in_pore].ravel(), rat_pore * n + rat_disc]))
+
+def _vertex_sets(n, walls, tri, tp, n_pores, rat_disc, rat_pore):
+    """The vertex sets of the pores: the discs of the triangles ``tri`` in pores ``tp`` and the
+    rattlers rat_disc in rat_pore, each once, as CSR (ptr (Np + 1,), pv_pore, pv_disc sorted), and
+    touches (codes, Np) of NetworkArrays from the wall codes ``walls`` of the n discs."""
+    pv_key = np.unique(np.concatenate([np.repeat(tp, 3) * n + tri.ravel(), rat_pore * n + rat_disc]))
     pv_pore, pv_disc = pv_key // n, pv_key % n
     ptr = np.searchsorted(pv_pore, np.arange(n_pores + 1))
-    signature = _set_signatures(ptr, pv_disc)
     touches = np.zeros((max(WALL_RIGHT, int(walls.max(initial=0))) + 1, n_pores), bool)
     touches[walls[pv_disc], pv_pore] = True
+    return ptr, pv_pore, pv_disc, touches
 
-    # Boundary corners of the pores: the paper's walk over the link half-edges.
-    he_org, he_dst, he_left, he_next = _link_half_edges(xz, links, link_pores)
+
+def _corner_angles(xz, links, he_left, he_next):
+    """The pores' corners, from the paper's walk over the link half-edges: the boundary half-edges h
+    of the pores, the link of every half-edge (2 L,), and the interior angle theta0 (eq 29) at the
+    disc each h leads to, in [0, 2 pi) (2 pi at the end of a dangling link)."""
     n_l = len(links)
     h = np.flatnonzero(he_left >= 0)
     he_link = np.concatenate([np.arange(n_l), np.arange(n_l)])
@@ -117,15 +168,16 @@ def _links_and_corners(xz, r, walls, tri, nb, is_link, tri_pore, bounded, n_pore
     phi_he = phi[he_link] + np.pi * (np.arange(2 * n_l) >= n_l)
     theta0 = np.mod(phi_he[twin[h]] - phi_he[he_next[h]], 2 * np.pi)  # eq 29, in [0, 2 pi)
     theta0[he_next[h] == twin[h]] = 2 * np.pi  # the end of a dangling link: all around the disc
+    return h, he_link, theta0
 
-    # Unlinked discs (rattlers) inside a pore are void-free: subtract them whole.
-    linked = np.zeros(n, bool)
+
+def _rattler_areas(r, links, pv_pore, pv_disc, n_pores):
+    """(Np,) [m^2] the area of the unlinked discs (rattlers) in each pore's vertex set: void-free,
+    subtracted whole (eq 29)."""
+    linked = np.zeros(len(r), bool)
     linked[links.ravel()] = True
     rat = ~linked[pv_disc]
-    rattler_area = np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)
-    return (tri[in_pore], tp, links, link_pores, link_pores[is_throat], np.flatnonzero(is_throat), pore_surface,
-            ptr, pv_disc, signature, he_org, he_dst, he_left, he_next, he_left[h], he_dst[h], he_link[h],
-            he_link[he_next[h]], np.where(h < n_l, 1.0, -1.0), r[he_dst[h]] ** 2, theta0, rattler_area, touches)
+    return np.bincount(pv_pore[rat], np.pi * r[pv_disc[rat]] ** 2, minlength=n_pores).astype(float)
 
 
 def _set_signatures(ptr, v):
