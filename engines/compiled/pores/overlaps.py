@@ -66,7 +66,28 @@ def pore_overlaps(to, tp_old, tn, tp_new, xz, n_new):
     (tp_old, tp_new) at xz, summed per pore pair, sorted by (p, q). A triangle of the same three discs
     in both overlaps only itself; the others are clipped against the triangles of the other network
     whose bounding circle (about the centroid) they cross."""
-    n = len(xz)
+    match_o, match_n = _same_triangles(to, tn, len(xz))
+    ro, rn = np.flatnonzero(match_o < 0), np.flatnonzero(match_n < 0)
+    n_pairs = len(to) - len(ro)
+    cap = n_pairs + 16 * (len(ro) + len(rn)) + 16
+    p, q, area = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
+    m = 0
+    for t in range(len(to)):  # a triangle in both: its own area
+        if match_o[t] >= 0:
+            p[m], q[m] = tp_old[t], tp_new[match_o[t]]
+            area[m] = abs(_signed_area(xz, to[t, 0], to[t, 1], to[t, 2]))
+            m += 1
+    if len(ro) and len(rn):
+        P, cp = _placed(xz, to, ro, True)  # an old triangle turned over since its build: counter-clockwise again
+        Q, cq = _placed(xz, tn, rn, False)
+        p, q, area, m = _clipped(P, cp, Q, cq, tp_old[ro], tp_new[rn], p, q, area, m)
+    return _summed_by_pair(p, q, area, m, n_new)
+
+
+@jit
+def _same_triangles(to, tn, n):
+    """match_o (len(to),): the triangle of tn with the same three of the n vertices as each of
+    ``to`` (-1: none), and match_n (len(tn),) the other way round."""
     lo_n = np.empty(len(tn), np.int64)
     for t in range(len(tn)):
         lo_n[t] = min(tn[t, 0], tn[t, 1], tn[t, 2])
@@ -80,44 +101,50 @@ def pore_overlaps(to, tp_old, tn, tp_new, xz, n_new):
             x, y, z = tn[u, 0], tn[u, 1], tn[u, 2]
             if (a == x or a == y or a == z) and (b == x or b == y or b == z) and (c == x or c == y or c == z):
                 match_o[t], match_n[u] = u, t
-    ro, rn = np.flatnonzero(match_o < 0), np.flatnonzero(match_n < 0)
-    n_pairs = len(to) - len(ro)
-    cap = n_pairs + 16 * (len(ro) + len(rn)) + 16
-    p, q, area = np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap)
-    m = 0
-    for t in range(len(to)):
-        if match_o[t] >= 0:
-            p[m], q[m] = tp_old[t], tp_new[match_o[t]]
-            area[m] = abs(_signed_area(xz, to[t, 0], to[t, 1], to[t, 2]))
-            m += 1
-    if len(ro) and len(rn):
-        P = np.empty((len(ro), 3, 2))
-        Q = np.empty((len(rn), 3, 2))
-        cp, cq = np.empty((len(ro), 3)), np.empty((len(rn), 3))  # centroid x, z, radius
-        for s in range(len(ro)):
-            P[s] = _corners(xz, to[ro[s]])
-            if _signed_area(xz, to[ro[s], 0], to[ro[s], 1], to[ro[s], 2]) < 0:  # turned over since its build
-                P[s, 1], P[s, 2] = _corners(xz, to[ro[s]])[2], _corners(xz, to[ro[s]])[1]
-            cp[s, 0], cp[s, 1], cp[s, 2] = _bounding_circle(P[s])
-        for s in range(len(rn)):
-            Q[s] = _corners(xz, tn[rn[s]])
-            cq[s, 0], cq[s, 1], cq[s, 2] = _bounding_circle(Q[s])
-        x0, z0, cell, nx, nz, start, in_cell = _grid(cq[:, 0], cq[:, 1], cp[:, 2].max() + cq[:, 2].max())
-        poly, cut = np.empty((9, 2)), np.empty((9, 2))
-        for s in range(len(ro)):
-            ix = int(np.floor((cp[s, 0] - x0) / cell))
-            iz = int(np.floor((cp[s, 1] - z0) / cell))
-            for hx in range(max(ix - 1, 0), min(ix + 2, nx)):
-                for hz in range(max(iz - 1, 0), min(iz + 2, nz)):
-                    g = hx * nz + hz
-                    for e in range(start[g], start[g + 1]):
-                        u = in_cell[e]
-                        if np.hypot(cp[s, 0] - cq[u, 0], cp[s, 1] - cq[u, 1]) < cp[s, 2] + cq[u, 2]:
-                            a_ = _clip_area(P[s], Q[u], poly, cut)
-                            if m == len(area):
-                                p, q, area = _grown(p, m), _grown(q, m), _grown(area, m)
-                            p[m], q[m], area[m] = tp_old[ro[s]], tp_new[rn[u]], a_
-                            m += 1
+    return match_o, match_n
+
+
+@jit
+def _placed(xz, tri, rest, upright):
+    """The corners (K, 3, 2) at xz of the triangles tri[rest] (counter-clockwise when ``upright``)
+    and their bounding circles (K, 3): centroid x, z and radius."""
+    P = np.empty((len(rest), 3, 2))
+    c = np.empty((len(rest), 3))
+    for s in range(len(rest)):
+        P[s] = _corners(xz, tri[rest[s]])
+        if upright and _signed_area(xz, tri[rest[s], 0], tri[rest[s], 1], tri[rest[s], 2]) < 0:
+            P[s, 1], P[s, 2] = _corners(xz, tri[rest[s]])[2], _corners(xz, tri[rest[s]])[1]
+        c[s, 0], c[s, 1], c[s, 2] = _bounding_circle(P[s])
+    return P, c
+
+
+@jit
+def _clipped(P, cp, Q, cq, pore_p, pore_q, p, q, area, m):
+    """Append to (p, q, area)[:m] the pores (pore_p, pore_q) and overlap area of every pair of
+    triangles P, Q whose bounding circles cp, cq cross (found on a grid of cells); returns the
+    arrays (grown when full) and the new count."""
+    x0, z0, cell, nx, nz, start, in_cell = _grid(cq[:, 0], cq[:, 1], cp[:, 2].max() + cq[:, 2].max())
+    poly, cut = np.empty((9, 2)), np.empty((9, 2))
+    for s in range(len(P)):
+        ix = int(np.floor((cp[s, 0] - x0) / cell))
+        iz = int(np.floor((cp[s, 1] - z0) / cell))
+        for hx in range(max(ix - 1, 0), min(ix + 2, nx)):
+            for hz in range(max(iz - 1, 0), min(iz + 2, nz)):
+                g = hx * nz + hz
+                for e in range(start[g], start[g + 1]):
+                    u = in_cell[e]
+                    if np.hypot(cp[s, 0] - cq[u, 0], cp[s, 1] - cq[u, 1]) < cp[s, 2] + cq[u, 2]:
+                        a_ = _clip_area(P[s], Q[u], poly, cut)
+                        if m == len(area):
+                            p, q, area = _grown(p, m), _grown(q, m), _grown(area, m)
+                        p[m], q[m], area[m] = pore_p[s], pore_q[u], a_
+                        m += 1
+    return p, q, area, m
+
+
+@jit
+def _summed_by_pair(p, q, area, m, n_new):
+    """The positive areas of (p, q, area)[:m] summed per pore pair, sorted by (p, q): (p, q, area)."""
     keep = np.flatnonzero(area[:m] > 0)
     key = p[keep] * max(n_new, 1) + q[keep]
     order = np.argsort(key, kind="mergesort")
