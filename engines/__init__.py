@@ -31,7 +31,8 @@ step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
   a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24
-  d. pores: build, measure, re-mesh rules a-d         model/pores.py, model/pore_water.py  eq 28-31
+  d. pores: build, measure, re-mesh rules a-d         model/pores/ (build, links, faces, measure, overlaps),
+                                                      model/pore_water.py  eq 28-31
      the regular triangulation without Qhull          compiled/regular.py
      flat walls as pore boundaries (SPEC §2.6)        model/flat_walls.py
      water: pressure, Darcy flows, update, forces    model/pore_water.py, model/water_model.py
