@@ -10,15 +10,8 @@ TOPS = ("engines", "packing", "postproc", "yade_scripts")
 # being split now by other helpers (the pores' and kernels' module split, the contact-law classes,
 # the coupling); the developer empties this list at merge
 BEING_SPLIT = {
-    ("engines/reference/model.py", "build_pores"),
-    ("engines/reference/model.py", "adjust_free_particles"),
-    ("engines/compiled/pores.py", "links_and_corners"),
-    ("engines/compiled/pores.py", "pore_overlaps"),
-    ("engines/compiled/regular.py", "_regular_from"),
     ("engines/compiled/kernels.py", "dem_drive_bulk_io"),
     ("engines/compiled/kernels.py", "contact_forces"),
-    ("engines/model/pores.py", "_links_and_corners"),
-    ("engines/model/contact.py", "separation_adjustment"),
 }
 
 
