@@ -84,3 +84,63 @@ def test_overburden_of_a_stack_of_discs():
     weight = w * np.pi * r * r
     ob = es.overburden(xz, np.full(k, r), w, -r, r, [(0.0, 4 * r), (4 * r, 12 * r)], samples=400)
     assert ob == pytest.approx([(4 + 1) * weight / (2 * r), 2 * weight / (2 * r)], rel=1e-4)
+
+
+# -- a settled column ---------------------------------------------------------------------------------
+R = 0.5e-3                      # the mean radius [m] of the column's discs
+RHO, RHO_W, G = 2700.0, 1000.0, 9.81
+
+
+def settled_column(unit_weight, n=700, steps=12000, boosted=5000):
+    """About n polydisperse discs (packing.layouts.random_discs: radii 0.7-1 R on a jittered
+    hexagonal lattice, width/height 0.5) between frictionless flat walls at their outermost edges
+    (left, right, bottom; mu = 0) settled with the paper's law (compiled twin, spring a) under the
+    unit weight [N/m^3] (rho g dry, (rho - rho_w) g submerged): ten times it and local damping 0.3
+    for the first ``boosted`` steps (the discs fall into the lattice's gaps sooner), then itself
+    and local damping 0.7: (PaperLaw,
+    centres, radii, x of the left and the right wall)."""
+    from engines.compiled.paper_law import PaperLaw
+    from engines.model.contact import ContactSettings
+    from engines.model.flat_walls import FlatWall
+    from packing.layouts import random_discs
+    xz, r = random_discs(n, np.random.default_rng(7), r_mean=R, r_spread=0.3, aspect=0.5)
+    x0, x1, z0 = (xz[:, 0] - r).min(), (xz[:, 0] + r).max(), (xz[:, 1] - r).min()
+    xz = xz - [0.0, z0]
+    mass = RHO * np.pi * r ** 2
+    dt = 1e-5
+    law = PaperLaw(ContactSettings(spring="a", kn=1.4e6, eta_n=5.2, ks=3.5e5, eta_s=1.3, mu=0.0,
+                                   separation_adjustment=False), r, np.ones(len(r), bool), mass, 0.5 * mass * r ** 2,
+                   dt, (FlatWall(1, 0.0, 1), FlatWall(0, x0, 1), FlatWall(0, x1, -1)))
+    v = np.zeros_like(xz)
+    load = np.zeros_like(xz)
+    for k in range(steps):
+        load[:, 1] = -unit_weight * np.pi * r ** 2 * (10.0 if k < boosted else 1.0)
+        F, _ = law.step(xz)
+        F = F + load
+        F -= (0.3 if k < boosted else 0.7) * np.abs(F) * np.sign(v)  # local damping
+        v += F / mass[:, None] * dt
+        xz = xz + v * dt
+    return law, xz, r, x0, x1
+
+
+@pytest.mark.parametrize("unit_weight", [RHO * G, (RHO - RHO_W) * G], ids=["dry", "submerged"])
+def test_settled_column_carries_its_buoyant_overburden(unit_weight):
+    """sigma'_v by band of a settled column between frictionless walls equals the buoyant overburden
+    within 5 % in the bands more than 2 diameters from the bed's bottom and top (SPEC §2.8)."""
+    law, xz, r, x0, x1 = settled_column(unit_weight)
+    width = x1 - x0
+    c = law.stress_contacts(xz)
+    top = float(np.max(xz[:, 1] + r))
+    bounds = es.bands(0.0, top)
+    s = es.region_stress(xz, c, x0, x1, bounds, es.region_areas(x0, x1, bounds, top))
+    sv = es.invariants(s)[0]
+    expected = es.overburden(xz, r, unit_weight, x0, x1, bounds)
+    inner = [k for k, (z0, z1) in enumerate(bounds) if z0 >= 4 * R and z1 <= top - 4 * R]
+    assert len(inner) >= 4
+    assert sv[inner] == pytest.approx(expected[inner], rel=0.05)
+    # and independently of overburden(): the weight of the discs whose centre lies above each band's middle
+    mid = np.array([0.5 * (a + b) for a, b in bounds])
+    above = np.array([unit_weight * np.sum(np.pi * r[xz[:, 1] > z] ** 2) / width for z in mid])
+    assert sv[inner] == pytest.approx(above[inner], rel=0.08)
+    # at rest the contacts, the walls' included, carry the weight
+    assert np.sum(c.force[:, 1]) == pytest.approx(unit_weight * np.pi * np.sum(r ** 2), rel=1e-2)
