@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from engines.model.observe import disc_rectangle_area
+from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 
 N_BANDS = 8  # horizontal bands of the bed (history.csv's *_band columns)
 
@@ -86,12 +87,15 @@ def tensor_terms(xz, contacts):
 
 def region_stress(xz, contacts, x0, x1, bounds, areas):
     """(R, 3) sigma'_xx, sigma'_zz, sigma'_xz [Pa] of the regions x in [x0, x1], z in [z0, z1) of
-    ``bounds`` [(z0, z1)] [m] with areas (R,) [m^2] (L1: the contacts whose point lies in each)."""
+    ``bounds`` [(z0, z1)] [m] (bottom first) with areas (R,) [m^2] (L1: the contacts whose point
+    lies in each). The lowest region reaches down and the highest up: a contact with the bottom wall
+    has its point half the overlap below the face, a heaving bed's top rises above its start."""
     terms = tensor_terms(xz, contacts)
     px, pz = contacts.point[:, 0], contacts.point[:, 1]
     across = (px >= x0) & (px <= x1)
     out = np.zeros((len(bounds), 3))
     for k, (z0, z1) in enumerate(bounds):
+        z0, z1 = -np.inf if k == 0 else z0, np.inf if k == len(bounds) - 1 else z1
         sel = across & (pz >= z0) & (pz < z1)
         out[k] = terms[sel].sum(axis=0) / areas[k]
     return out
@@ -156,3 +160,17 @@ def overburden(xz, r, unit_weight, x0, x1, bounds, samples=32):
         zs = z0 + (np.arange(samples) + 0.5) / samples * (z1 - z0)
         out[k] = np.mean([np.sum(w * disc_rectangle_area(xz, r, lo[0], hi[0], z, hi[1])) for z in zs]) / (x1 - x0)
     return out
+
+
+def bed_bands(packing, faces, n=N_BANDS):
+    """(bands, areas (n,) [m^2]) of the bed of ``packing`` at the start: n equal bands from the
+    bottom face (``faces``: {wall code: position [m]}, Start.faces; else Packing.bed_bottom) to the
+    particles' top (Packing.bed_top), as wide as the box between the side faces (else the
+    particles' extent)."""
+    m = packing.mobile
+    xz, r = packing.xz[m], packing.r[m]
+    x0 = faces.get(WALL_LEFT, float(np.min(xz[:, 0] - r)))
+    x1 = faces.get(WALL_RIGHT, float(np.max(xz[:, 0] + r)))
+    bottom, top = faces.get(WALL_BOTTOM, packing.bed_bottom), packing.bed_top
+    b = bands(bottom, top, n)
+    return b, region_areas(x0, x1, b, top)
