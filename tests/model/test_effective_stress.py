@@ -1,4 +1,7 @@
 """Love–Weber effective stress, its invariants, regions and r_u (engines.model.effective_stress, SPEC §2.8)."""
+import copy
+import functools
+
 import numpy as np
 import pytest
 
@@ -91,6 +94,7 @@ R = 0.5e-3                      # the mean radius [m] of the column's discs
 RHO, RHO_W, G = 2700.0, 1000.0, 9.81
 
 
+@functools.lru_cache(maxsize=None)
 def settled_column(unit_weight, n=700, steps=12000, boosted=5000):
     """About n polydisperse discs (packing.layouts.random_discs: radii 0.7-1 R on a jittered
     hexagonal lattice, width/height 0.5) between frictionless flat walls at their outermost edges
@@ -144,3 +148,33 @@ def test_settled_column_carries_its_buoyant_overburden(unit_weight):
     assert sv[inner] == pytest.approx(above[inner], rel=0.08)
     # at rest the contacts, the walls' included, carry the weight
     assert np.sum(c.force[:, 1]) == pytest.approx(unit_weight * np.pi * np.sum(r ** 2), rel=1e-2)
+
+
+def test_a_uniform_pore_pressure_changes_no_effective_stress():
+    """The settled column closed by a lid above its top, its pores at one excess pressure U: eq 33
+    pushes no particle (the pores around each close), so stepping on with the water's forces leaves
+    every contact, and sigma' by band, as stepping without them does."""
+    from engines.model import pores as pg
+    from engines.model.flat_walls import FlatWall
+    law, xz, r, x0, x1 = settled_column(RHO * G)
+    top = float(np.max(xz[:, 1] + r))
+    walls = (FlatWall(1, 0.0, 1), FlatWall(0, x0, 1), FlatWall(0, x1, -1), FlatWall(1, top + 0.1 * R, -1))
+    net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+    U = 500.0  # [N/m], about the bottom band's sigma'_v x 1 m
+    F_water = pg.pressure_forces(net, r, np.full(net.n_pores, U), pg.measure(net, xz, r))
+    assert np.abs(F_water).max() < 1e-9 * U * R
+    bounds = es.bands(0.0, top)
+    areas = es.region_areas(x0, x1, bounds, top)
+    load = np.zeros_like(xz)
+    load[:, 1] = -RHO * G * np.pi * r ** 2
+    mass = RHO * np.pi * r ** 2
+    stress = []
+    for extra in (0.0, F_water):
+        stepped, x, v = copy.deepcopy(law), xz.copy(), np.zeros_like(xz)
+        for _ in range(200):
+            F = stepped.step(x)[0] + load + extra
+            v += F / mass[:, None] * stepped.dt
+            x = x + v * stepped.dt
+        stress.append(es.region_stress(x, stepped.stress_contacts(x), x0, x1, bounds, areas))
+    np.testing.assert_allclose(stress[1], stress[0], rtol=1e-6, atol=1e-6)
+    assert stress[0][:, 1].max() > 100.0  # the bands carry their weight
