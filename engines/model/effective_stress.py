@@ -71,11 +71,8 @@ def pair_contacts(xz, r, pairs, f_n, f_s, particle):
     point = xz[i] + (0.5 * (r[i] - r[j] + R))[:, None] * n  # r_i - delta/2 along n
     f_n, f_s = np.asarray(f_n, float), np.asarray(f_s, float)
     on_i = -f_n[:, None] * n - f_s[:, None] * np.column_stack([-n[:, 1], n[:, 0]])
-    out = no_contacts()
-    for disc, force in ((i, on_i), (j, -on_i)):
-        sel = particle[disc]
-        out = out + Contacts(disc[sel], point[sel], force[sel])
-    return out
+    si, sj = particle[i], particle[j]
+    return Contacts(np.concatenate([i[si], j[sj]]), np.vstack([point[si], point[sj]]), np.vstack([on_i[si], -on_i[sj]]))
 
 
 def tensor_terms(xz, contacts):
@@ -92,13 +89,11 @@ def region_stress(xz, contacts, x0, x1, bounds, areas):
     has its point half the overlap below the face, a heaving bed's top rises above its start."""
     terms = tensor_terms(xz, contacts)
     px, pz = contacts.point[:, 0], contacts.point[:, 1]
-    across = (px >= x0) & (px <= x1)
-    out = np.zeros((len(bounds), 3))
-    for k, (z0, z1) in enumerate(bounds):
-        z0, z1 = -np.inf if k == 0 else z0, np.inf if k == len(bounds) - 1 else z1
-        sel = across & (pz >= z0) & (pz < z1)
-        out[k] = terms[sel].sum(axis=0) / areas[k]
-    return out
+    z0 = np.array([z for z, _ in bounds], float)
+    z1 = np.array([z for _, z in bounds], float)
+    z0[0], z1[-1] = -np.inf, np.inf
+    inside = ((px >= x0) & (px <= x1))[:, None] & (pz[:, None] >= z0) & (pz[:, None] < z1)  # (M, R)
+    return (inside.T.astype(float) @ terms) / np.asarray(areas, float)[:, None]
 
 
 def disc_stress(xz, r, contacts, porosity):
