@@ -100,14 +100,15 @@ def _number(text):
         return None
 
 
-def first_row(run_dir):
-    """{column: value} of history.csv's first row in ``run_dir`` (None when it has none)."""
+def first_loaded_row(run_dir, columns):
+    """{column: value} of history.csv's first row in ``run_dir`` whose ``columns`` sum to more than 0
+    (None when no row does)."""
     try:
         with open(os.path.join(run_dir, NAME), newline="") as f:
-            reader = csv.reader(f)
-            header, row = next(reader, None), next(reader, None)
+            for row in csv.DictReader(f):
+                values = {name: _number(text) for name, text in row.items()}
+                if all(values.get(c) is not None for c in columns) and sum(values[c] for c in columns) > 0:
+                    return values
     except OSError:
         return None
-    if header is None or row is None or len(row) != len(header):
-        return None
-    return {name: _number(text) for name, text in zip(header, row)}
+    return None

@@ -83,7 +83,7 @@ class Recorder:
     CHECKPOINT_FIELDS = ("rows", "last_row", "last_t", "last_vtk", "snapshot_steps", "vtk")
     CHECKPOINT_DERIVED = {
         "bands": "the packing and the walls (effective_stress.bed_bands)", "band_areas": "with the bands",
-        "sigma_v0": "history.csv's first row (its sv_band columns), read again by reopen",
+        "sigma_v0": "history.csv's first row whose sv_band columns carry a load, read again by reopen",
         **{name: "the scene's [output] and the coupling's blocks and walls" for name in
            ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns")},
         "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
@@ -100,7 +100,7 @@ class Recorder:
         self.progress_seconds = out.progress_seconds
         self.n_blocks = len(cp.block_bounds)
         self.bands, self.band_areas = es.bed_bands(cp.packing, box_faces(cp))
-        self.sigma_v0 = None  # sigma'_v of each band at the first row [Pa]: r_u's reference
+        self.sigma_v0 = None  # sigma'_v of each band at the first loaded row [Pa]: r_u's reference (stress_row)
         self.columns = history_columns(cp)
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
         self.last_t = None  # the last row's t [s] as written
@@ -164,9 +164,10 @@ class Recorder:
                     new.write(old.read(min(history.CHUNK, size - new.tell())))
         if self.vtk is not None:
             self.vtk.dir = os.path.join(out_dir, "vtk")
-        first = history.first_row(out_dir)
-        if first and "sv_band1" in first:
-            self.sigma_v0 = np.array([first[f"sv_band{k + 1}"] for k in range(len(self.bands))])
+        bands = [f"sv_band{k + 1}" for k in range(len(self.bands))]
+        first = history.first_loaded_row(out_dir, bands)
+        if first is not None:
+            self.sigma_v0 = np.array([first[c] for c in bands])
         self._open("a")
 
     def __call__(self, cp):
@@ -226,10 +227,11 @@ class Recorder:
     def stress_row(self, cp, xz):
         """{column: value} of the bands' effective stress at centres xz (engines.model.effective_stress:
         sigma'_v, p', q [Pa] from the contacts, eq L1-L2) and, with water, their r_u (L3) against
-        sigma'_v at the first row."""
+        sigma'_v at the first row whose contacts carry a load (the first; with law = "yade" the
+        second, as YADE finds its contacts in the first step; nan before it)."""
         s = es.region_stress(xz, cp.stress_contacts(xz), -np.inf, np.inf, self.bands, self.band_areas)
         sv, _, p, q = es.invariants(s)
-        if self.sigma_v0 is None:
+        if self.sigma_v0 is None and sv.sum() > 0:  # YADE's law finds its contacts at the first step
             self.sigma_v0 = sv.copy()
         v = {}
         for name, values in (("sv", sv), ("p", p), ("q", q)):
@@ -238,7 +240,8 @@ class Recorder:
         if state is not None:
             net, A, U = state
             u = es.region_pressure(pg.pore_centroids(net, xz)[:, 1], A, U, self.bands)
-            v.update({f"ru_band{k + 1}": x for k, x in enumerate(es.pore_pressure_ratio(u, self.sigma_v0))})
+            ru = es.pore_pressure_ratio(u, self.sigma_v0) if self.sigma_v0 is not None else np.full(len(u), np.nan)
+            v.update({f"ru_band{k + 1}": x for k, x in enumerate(ru)})
         return v
 
     def close(self):
