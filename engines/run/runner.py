@@ -232,7 +232,7 @@ class Recorder:
         s = es.region_stress(xz, cp.stress_contacts(xz), -np.inf, np.inf, self.bands, self.band_areas)
         sv, _, p, q = es.invariants(s)
         if self.sigma_v0 is None and sv.sum() > 0:  # YADE's law finds its contacts at the first step
-            self.sigma_v0 = sv.copy()
+            self.sigma_v0 = np.array([float(f"{x:.9g}") for x in sv])  # as history.csv holds it: reopen reads it
         v = {}
         for name, values in (("sv", sv), ("p", p), ("q", q)):
             v.update({f"{name}_band{k + 1}": x for k, x in enumerate(values)})
