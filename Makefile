@@ -14,7 +14,7 @@ SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -54,6 +54,12 @@ demo: deps
 # it (a few minutes) -> docs/demo/demo.json and the paragraphs between the demo-numbers marks.
 demo-numbers: deps
 	$(PY) yade_scripts/demo_numbers.py --out $(OUT)/demo-numbers
+
+# The effective-stress reading judged on the quick sand (docs/READINGS.md E1-E7): the bottom band's r_u at
+# the heave from 8 perturbed starts of case 1 (a few minutes) -> docs/readings/quicksand_ru.json.
+readings: deps
+	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --out $(OUT)/readings-quicksand
+	$(PY) -m postproc.readings $(OUT)/readings-quicksand docs/readings/quicksand_ru.json
 
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
 # batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests

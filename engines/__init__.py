@@ -53,7 +53,10 @@ where dt_auto_factor was validated: studies/tradeoffs.py (VALIDATED_ON).
 Observables: the window porosity and block means (model/observe.py); block pressures from one
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
 without taking it (ContactLaw.touching_at: the bottom wall's normal force); the pores as a network
-in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py.
+in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py. The effective stress
+of the contacts (Love-Weber) by band of the bed, per disc, and the pore-pressure ratio r_u (SPEC
+§2.8): model/effective_stress.py, from the contacts the step gives (PaperLaw.stress_contacts,
+YadeCoupling.stress_contacts).
 Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
 What a checkpoint stores of each object (its CHECKPOINT_FIELDS, and CHECKPOINT_DERIVED with reasons):
 model/state.py; the file (data only, no pickle): yade/checkpoint.py; a WaterEngine's state in

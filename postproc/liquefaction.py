@@ -145,10 +145,12 @@ def band_porosity(snap, bounds, top):
                      for z0, z1 in bounds])
 
 
-def depth_figure(history, snaps, bounds, title):
+def depth_figure(history, snaps, bounds, title, band_bounds=None):
     """Pore pressure and porosity by depth over time: the block-mean U (history) and the porosity
     change of the same bands since t = 0 (the snapshots ``snaps``) as colour over time and height,
-    both centred on 0, and the porosity profile at t = 0. ``bounds``: the blocks' [z0, z1] [m]."""
+    both centred on 0, and the porosity profile at t = 0. ``bounds``: the blocks' [z0, z1] [m].
+    With the bands' r_u in the history (ru_band*) and their ``band_bounds`` [m], a fourth panel:
+    r_u by height over time (``draw_ru_by_depth``)."""
     s0 = snaps[0]
     mobile = s0["group"] == 0
     top = max(float(np.max(s0["xz"][mobile, 1] + s0["r"][mobile])), bounds[-1][0] + 1e-9)  # the bed's top at t = 0
@@ -157,8 +159,9 @@ def depth_figure(history, snaps, bounds, title):
     n = np.array([band_porosity(s, bounds, top) for s in snaps])
     ts = np.array([float(s["t"]) for s in snaps]) * 1e3
     t_edges = np.r_[ts[0], 0.5 * (ts[1:] + ts[:-1]), ts[-1]] if len(ts) > 1 else np.r_[ts, ts + 1]
-    fig, axes = plt.subplots(1, 3, figsize=(14, 5.6), sharey=True, layout="constrained",
-                             gridspec_kw={"width_ratios": (1.4, 1.4, 0.7)})
+    ru = band_bounds is not None and "ru_band1" in history
+    fig, axes = plt.subplots(1, 4 if ru else 3, figsize=(19 if ru else 14, 5.6), sharey=True, layout="constrained",
+                             gridspec_kw={"width_ratios": (1.4, 1.4, 0.7) + ((1.4,) if ru else ())})
     t_end = float(history["t"][-1]) * 1e3
     lim = max(float(np.nanpercentile(np.abs(U), 99)), 1e-9)  # the surface block's rare spikes saturate
     im = axes[0].pcolormesh(history["t"] * 1e3, edges, U[:-1].T if len(U) > 1 else U.T, cmap="RdBu_r",
@@ -180,10 +183,41 @@ def depth_figure(history, snaps, bounds, title):
         ax.set_xlim(0.0, max(t_end, t_edges[-1]))  # both panels over the run's whole time
         ax.set_title(f"{what} by height", fontsize=9)
     axes[0].set_ylabel("z [mm]")
+    if ru:
+        draw_ru_by_depth(fig, axes[3], history, band_bounds)
+        axes[3].set_xlim(0.0, max(t_end, t_edges[-1]))
     for ax in axes:
         ax.grid(alpha=0.3)
     fig.suptitle(f"{title}: pore pressure and porosity by depth over time")
     return fig
+
+
+RU_CMAP = "viridis"  # sequential: dark r_u <= 0, bright r_u >= 1 (the contacts carry nothing)
+RU_RANGE = (-0.2, 1.2)  # the colour scale of r_u: 0 and 1 inside it, beyond it the end colours
+
+
+def draw_ru_by_depth(fig, ax, history, band_bounds):
+    """The bands' pore-pressure ratio r_u (history.csv's ru_band*, engines.model.effective_stress) as
+    colour over time and height on ``ax`` on the scale RU_RANGE with 0 and 1 marked on the colour
+    bar and the contour r_u = 1 drawn (a black line: where the contacts carry nothing)."""
+    cols = sorted((c for c in history if c.startswith("ru_band")), key=lambda c: int(c[len("ru_band"):]))
+    ru = np.column_stack([history[c] for c in cols])
+    t = history["t"] * 1e3
+    edges = 1e3 * np.array([b[0] for b in band_bounds] + [band_bounds[-1][1]])
+    finite = ru[np.isfinite(ru)]
+    low, top = RU_RANGE
+    im = ax.pcolormesh(t, edges, ru[:-1].T if len(ru) > 1 else ru.T, cmap=RU_CMAP, vmin=low, vmax=top, shading="flat")
+    mids = 0.5 * (edges[1:] + edges[:-1])
+    if finite.size and np.nanmax(ru) >= 1.0 and len(t) > 1 and len(mids) > 1:
+        ax.contour(t, mids, np.where(np.isfinite(ru), ru, 0.0).T, levels=[1.0], colors="k", linewidths=1.0)
+    bar = fig.colorbar(im, ax=ax, extend="both", location="bottom", shrink=0.9,
+                       label=f"pore-pressure ratio r_u = U / σ'_v0 [-], black line: r_u = 1\n(range {finite.min():.2f} "
+                             f"to {finite.max():.2f}; beyond {low:g}, {top:g}: the end colours)"
+                       if finite.size else "pore-pressure ratio r_u [-] (no pore in any band)")
+    for level, colour in ((0.0, "white"), (1.0, "red")):
+        bar.ax.axvline(level, color=colour, lw=2.0)
+    ax.set_xlabel("t [ms]")
+    ax.set_title("pore-pressure ratio by height (bands of the bed)", fontsize=9)
 
 
 def run_figures(run_dir):
@@ -202,7 +236,8 @@ def run_figures(run_dir):
     plt.close(fig)
     bounds = summary.get("block_bounds_m")
     if len(snap_files) > 1 and bounds:
-        fig = depth_figure(history, [read_snapshot(f) for f in snap_files], bounds, summary.get("scene", run_dir))
+        fig = depth_figure(history, [read_snapshot(f) for f in snap_files], bounds, summary.get("scene", run_dir),
+                           summary.get("band_bounds_m"))
         paths.append(os.path.join(run_dir, "depth.png"))
         files.save_figure(fig, paths[-1], dpi=110)
         plt.close(fig)

@@ -290,6 +290,45 @@ def _snapshot_panels(axes, snaps, speed, norm, v_max, f_max, blocks):
     return colour_source, quiver
 
 
+def stress_path_figure(history, title, band_bounds=None):
+    """The p'-q stress path of each band of the bed (history.csv's p_band*, q_band* [Pa]:
+    engines.model.effective_stress, q the radius of Mohr's circle), one panel per band from the
+    surface down, coloured by time, its start and end marked; each panel's scale its own (a band
+    near the surface carries far less). ``band_bounds``: the bands' [z0, z1] [m] for the titles."""
+    n = sum(c.startswith("p_band") for c in history)
+    cols = min(n, 4)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.0 * rows + 0.8), squeeze=False, layout="constrained")
+    t_ms = history["t"] * 1e3
+    norm = Normalize(t_ms[0], t_ms[-1])
+    for k, ax in zip(range(n, 0, -1), axes.ravel()):
+        p, q = history[f"p_band{k}"], history[f"q_band{k}"]
+        pts = np.column_stack([p, q])
+        lines = LineCollection(np.stack([pts[:-1], pts[1:]], axis=1), cmap="viridis", norm=norm, linewidths=1.0)
+        lines.set_array(0.5 * (t_ms[:-1] + t_ms[1:]))
+        ax.add_collection(lines)
+        ax.plot(p[0], q[0], "o", color="k", ms=4, label="start")
+        ax.plot(p[-1], q[-1], "s", color="C3", ms=4, label="end")
+        hi = max(float(np.nanmax(np.r_[p, q, 1e-9])), 1e-9)
+        ax.plot([0, hi], [0, hi], color="0.6", lw=0.6, ls="--")  # q = p': a band's stress without tension
+        ax.set_xlim(min(0.0, float(np.nanmin(p))) - 0.05 * hi, 1.05 * hi)
+        ax.set_ylim(0.0, 1.05 * hi)
+        where = f"z {1e3 * band_bounds[k - 1][0]:.1f}–{1e3 * band_bounds[k - 1][1]:.1f} mm" if band_bounds else ""
+        ax.set_title(f"band {k}" + (" (bottom)" if k == 1 else " (surface)" if k == n else "") +
+                     (f"\n{where}" if where else ""), fontsize=8.5)
+        ax.set_xlabel("p' [Pa]", fontsize=8)
+        ax.set_ylabel("q [Pa]", fontsize=8)
+        ax.tick_params(labelsize=7.5)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    axes[0, 0].legend(fontsize=7, loc="upper left")
+    fig.colorbar(plt.cm.ScalarMappable(norm, "viridis"), ax=axes, label="t [ms]", shrink=0.8)
+    fig.suptitle(f"{title}: stress paths of the bed's bands (p' = (σ'_xx + σ'_zz)/2, q = Mohr's radius; "
+                 "dashed: q = p')", fontsize=10)
+    return fig
+
+
 def figures_of_run(run_dir):
     """Redraw a run's figures from its files (history.csv, snapshot_*.npz, summary.json)."""
     summary = read_summary(run_dir)
@@ -304,6 +343,11 @@ def figures_of_run(run_dir):
                                  f"{title}: block-mean excess pore pressure", summary.get("block_bounds_m"))
         written.append(os.path.join(run_dir, "history_panels.png"))
         plot_history_panels(history, written[-1], title)
+        if "p_band1" in history:
+            written.append(os.path.join(run_dir, "stress_paths.png"))
+            fig = stress_path_figure(history, title, summary.get("band_bounds_m"))
+            files.save_figure(fig, written[-1], dpi=110)
+            plt.close(fig)
     snaps = [read_snapshot(f) for f in snapshot_files(run_dir)]
     if snaps:
         written.append(os.path.join(run_dir, "snapshots.png"))

@@ -52,7 +52,7 @@ from yade.wrapper import (
     ViscElMat,
 )
 
-from engines.model import ground_motion, limits, pore_dem
+from engines.model import effective_stress, ground_motion, limits, pore_dem
 from engines.model import pores as pg
 from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
@@ -545,6 +545,30 @@ class YadeCoupling:
         about i), without its dashpot part, as YADE's phys.shearForce. The paper's law evaluates its
         pairs at xz without advancing its state (PaperLaw.contact_pairs)."""
         return self.law.contact_pairs(xz, keep)
+
+    def stress_contacts(self, xz):
+        """The particles' contacts at centres xz for the effective stress (Contacts of
+        engines.model.effective_stress): the paper's law's own, its flat walls' feet included
+        (PaperLaw.stress_contacts); with law = 'yade' the pairs of ``contact_pairs`` (wall discs
+        counted for their particle) and the contacts with the flat walls' boxes at YADE's contact
+        point, with the force YADE puts on the disc (normalForce + shearForce on id2)."""
+        if self.core is not None:
+            return self.core.law.stress_contacts(xz)
+        pk = self.packing
+        c = effective_stress.pair_contacts(xz, pk.r, *self.contact_pairs(xz), pk.mobile)
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        disc, point, force = [], [], []
+        for box in self.wall_ids.values():
+            for inter in O.interactions.withBody(box):
+                if inter.isReal:
+                    other = inter.id2 if inter.id1 == box else inter.id1
+                    f = (inter.phys.normalForce + inter.phys.shearForce) * (1.0 if inter.id2 == other else -1.0)
+                    disc.append(index[other])
+                    point.append((inter.geom.contactPoint[0], inter.geom.contactPoint[2]))
+                    force.append((f[0], f[2]))
+        if not disc:
+            return c
+        return c + effective_stress.Contacts(np.array(disc, np.int64), np.array(point, float), np.array(force, float))
 
     def wall_loads(self):
         """{wall name: (contact, water)} of the flat walls [N per m thickness]: the sum of the normal

@@ -116,5 +116,23 @@ def test_depth_figure_draws_pressure_and_porosity_by_height(tmp_path):
     bars = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
     assert [ax.get_xlabel().split(" [")[0] for ax in bars] == ["block-mean excess pore pressure U",
                                                                 "porosity change since t = 0"]
+
+
+def test_depth_figure_draws_ru_by_height_with_0_and_1_marked(tmp_path):
+    """With the bands' r_u in the history: a fourth panel, its colour bar spanning 0 and 1, both
+    marked, and the contour r_u = 1 where a band reaches it."""
+    r = 1e-3
+    snaps = [_square_box(6, 4, r), {**_square_box(6, 4, r, dz=-0.1 * r), "t": 0.01}]
+    tt = np.arange(0, 0.0101, 1e-3)
+    h = {"t": tt, "U_block1": 50 * np.sin(300 * tt), "U_block2": -20 * tt / tt[-1],
+         "ru_band1": 1.1 * tt / tt[-1], "ru_band2": 0.5 * tt / tt[-1], "ru_band3": np.zeros_like(tt)}
+    fig = depth_figure(h, snaps, [[0.0, 4 * r], [4 * r, 10.0]], "square lattice", [[0.0, r], [r, 2 * r], [2 * r, 3 * r]])
+    fig.savefig(tmp_path / "d.png")
+    assert_drawn(str(tmp_path / "d.png"))
+    ru = [ax for ax in fig.axes if ax.get_title().startswith("pore-pressure ratio")]
+    assert len(ru) == 1 and len(ru[0].collections) >= 2  # the colour mesh and the contour r_u = 1
+    bar = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"][-1]
+    lo, hi = bar.get_xlim()
+    assert lo <= 0.0 and hi >= 1.0 and sorted(line.get_xdata()[0] for line in bar.lines) == [0.0, 1.0]
     boxes = [ax.get_tightbbox() for ax in fig.axes]
     assert not any(_overlap(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
