@@ -226,6 +226,10 @@ class PaperLawDrive:
     def contact_pairs(self, xz, keep):
         return self.core.law.contact_pairs(xz, keep)
 
+    def stress_contacts(self, xz, packing):
+        """The paper's law's own contacts, its flat walls' feet included (PaperLaw.stress_contacts)."""
+        return self.core.law.stress_contacts(xz)
+
     def wall_loads(self, flat_walls):
         """{wall name: (contact, water)}: the law's own contacts and water on its flat walls."""
         if not flat_walls:
@@ -352,6 +356,25 @@ class YadeLawDrive:
             return pairs, fn, fs
         sel = keep(pairs[:, 0], pairs[:, 1])
         return pairs[sel], fn[sel], fs[sel]
+
+    def stress_contacts(self, xz, packing):
+        """With YADE's law: the pairs of ``contact_pairs`` (wall discs counted for their particle) and
+        the contacts with the flat walls' boxes at YADE's contact point, with the force YADE puts on
+        the disc (normalForce + shearForce on id2)."""
+        c = effective_stress.pair_contacts(xz, packing.r, *self.contact_pairs(xz, None), packing.mobile)
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        disc, point, force = [], [], []
+        for box in self.wall_ids.values():
+            for inter in O.interactions.withBody(box):
+                if inter.isReal:
+                    other = inter.id2 if inter.id1 == box else inter.id1
+                    f = (inter.phys.normalForce + inter.phys.shearForce) * (1.0 if inter.id2 == other else -1.0)
+                    disc.append(index[other])
+                    point.append((inter.geom.contactPoint[0], inter.geom.contactPoint[2]))
+                    force.append((f[0], f[2]))
+        if not disc:
+            return c
+        return c + effective_stress.Contacts(np.array(disc, np.int64), np.array(point, float), np.array(force, float))
 
     def wall_loads(self, flat_walls):
         """{wall name: (contact, water)}: YADE's contacts on each box and the water engine's push."""
@@ -552,23 +575,7 @@ class YadeCoupling:
         (PaperLaw.stress_contacts); with law = 'yade' the pairs of ``contact_pairs`` (wall discs
         counted for their particle) and the contacts with the flat walls' boxes at YADE's contact
         point, with the force YADE puts on the disc (normalForce + shearForce on id2)."""
-        if self.core is not None:
-            return self.core.law.stress_contacts(xz)
-        pk = self.packing
-        c = effective_stress.pair_contacts(xz, pk.r, *self.contact_pairs(xz), pk.mobile)
-        index = {i: k for k, i in enumerate(self.ids.tolist())}
-        disc, point, force = [], [], []
-        for box in self.wall_ids.values():
-            for inter in O.interactions.withBody(box):
-                if inter.isReal:
-                    other = inter.id2 if inter.id1 == box else inter.id1
-                    f = (inter.phys.normalForce + inter.phys.shearForce) * (1.0 if inter.id2 == other else -1.0)
-                    disc.append(index[other])
-                    point.append((inter.geom.contactPoint[0], inter.geom.contactPoint[2]))
-                    force.append((f[0], f[2]))
-        if not disc:
-            return c
-        return c + effective_stress.Contacts(np.array(disc, np.int64), np.array(point, float), np.array(force, float))
+        return self.law.stress_contacts(xz, self.packing)
 
     def wall_loads(self):
         """{wall name: (contact, water)} of the flat walls [N per m thickness]: the sum of the normal
