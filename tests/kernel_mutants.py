@@ -462,8 +462,8 @@ class Runner:
         return ["tests/compiled", *test_files(callers(m.function.split(".")[0], self.refs))]
 
     def killers(self, work, tag, tests):
-        """Run the tests, then the cross-check unless they failed: a row's fields (status, by, reason,
-        cpu_s, wall_s)."""
+        """Run the tests, then the cross-check unless they killed: a row's fields (status, by, reason,
+        cpu_s and wall_s, and cost: {killer: [CPU s, wall s]})."""
         cache = os.path.join(self.out, "cache", tag)
         xc = os.path.join(self.out, "xc", tag)
         for d in (cache, xc):
@@ -472,30 +472,30 @@ class Runner:
         env = {k: v for k, v in os.environ.items() if k != "PORE_DEM_NUMBA_CACHE_DIR"}
         env.update(PYTHONPATH=work, MPLBACKEND="Agg", NUMBA_CACHE_DIR=cache, PYTHONDONTWRITEBYTECODE="1",
                    OMP_NUM_THREADS="1")
-        cpu = wall = 0.0
+        cost = {}
+
+        def verdict(status, by, reason):
+            return dict(status=status, by=by, reason=reason, cpu_s=sum(c for c, _ in cost.values()),
+                        wall_s=sum(w for _, w in cost.values()), cost=cost)
+
         try:
-            rc, text, c, w = run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-m", "not check",
-                                  *tests], work, env, self.timeout_tests, self.nice)
-            cpu, wall = cpu + c, wall + w
+            rc, text, *cost["tests"] = run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider",
+                                            "-m", "not check", *tests], work, env, self.timeout_tests, self.nice)
             if rc == "timeout":
-                return dict(status="timeout", by="tests", reason=f"no end within {self.timeout_tests} s (a hang counts as killed)",
-                            cpu_s=cpu, wall_s=wall)
+                return verdict("timeout", "tests", f"no end within {self.timeout_tests} s (a hang counts as killed)")
             if rc != 0:
                 why = {1: "a test failed", 2: "the tests could not be collected or run"}.get(
                     rc, f"pytest ended by signal {-rc}" if rc < 0 else f"pytest exit {rc}")
-                status = "killed" if rc in (1, 2) or rc < 0 else "error"
-                return dict(status=status, by="tests", reason=f"{why}: {reason_of(text)}", cpu_s=cpu, wall_s=wall)
+                return verdict("killed" if rc in (1, 2) or rc < 0 else "error", "tests", f"{why}: {reason_of(text)}")
             cmd = ["yade", "-n", "-x", "yade_scripts/crosscheck.py", "--out", xc, *(["--only", *self.xc_only] if self.xc_only else [])]
-            rc, text, c, w = run(cmd, work, env, self.timeout_xc, self.nice)
-            cpu, wall = cpu + c, wall + w
+            rc, text, *cost["crosscheck"] = run(cmd, work, env, self.timeout_xc, self.nice)
             if rc == "timeout":
-                return dict(status="timeout", by="crosscheck", reason=f"no end within {self.timeout_xc} s (a hang counts as killed)",
-                            cpu_s=cpu, wall_s=wall)
+                return verdict("timeout", "crosscheck", f"no end within {self.timeout_xc} s (a hang counts as killed)")
             if rc != 0:
                 failed = _failed_cases(os.path.join(xc, "crosscheck.json"))
-                why = f"cases failed: {', '.join(failed)}" if failed else f"crosscheck exit {rc}: {reason_of(text)}"
-                return dict(status="killed", by="crosscheck", reason=why, cpu_s=cpu, wall_s=wall)
-            return dict(status="survived", by=None, reason="the tests and the cross-check passed", cpu_s=cpu, wall_s=wall)
+                return verdict("killed", "crosscheck", f"cases failed: {', '.join(failed)}" if failed
+                               else f"crosscheck exit {rc}: {reason_of(text)}")
+            return verdict("survived", None, "the tests and the cross-check passed")
         finally:
             for d in (cache, xc):
                 shutil.rmtree(d, ignore_errors=True)
@@ -519,9 +519,8 @@ def _failed_cases(path):
             result = json.load(f)
     except (OSError, ValueError):
         return []
-    cases = result.get("cases", {})
-    items = cases.items() if isinstance(cases, dict) else ((c.get("name"), c) for c in cases)
-    return sorted(str(name) for name, c in items if isinstance(c, dict) and c.get("passed") is False)
+    return [c.get("name", "?") for group in ("cases", "feature_cases") for c in result.get(group, [])
+            if isinstance(c, dict) and not c.get("passed", True)]
 
 
 def commit():
@@ -538,9 +537,12 @@ def write_summary(out, chosen, rows, equivalent, args, sources, other_rows):
     s = summarise(rows, ids, equivalent)
     done = [rows[i] for i in ids if i in rows]
     cpu = sum(r["cpu_s"] for r in done)
+    per_killer = {k: [r["cost"][k][0] for r in done if k in r.get("cost", {})] for k in ("tests", "crosscheck")}
     s.update(date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), commit=commit(),
              sources=sources, seed=args.seed, n=args.n, done=len(done),
              cpu_seconds=cpu, cpu_seconds_per_mutant=cpu / len(done) if done else None,
+             cpu_seconds_per_run={k: {"runs": len(v), "mean": sum(v) / len(v) if v else None}
+                                  for k, v in per_killer.items()},
              wall_seconds=sum(r["wall_s"] for r in done),
              baseline=rows.get("baseline"), rows_of_other_sources=other_rows,
              equivalent_mutants={i: equivalent[i] for i in ids if i in equivalent},

@@ -177,3 +177,34 @@ def test_a_killer_past_its_timeout_is_killed_and_its_cpu_time_counted(tmp_path):
     rc, text, cpu, wall = km.run([sys.executable, "-c", "import time\nt = time.process_time()\n"
                                   "while time.process_time() - t < 0.3: pass\nraise SystemExit(3)"], str(tmp_path), env, 60, 0)
     assert rc == 3 and cpu >= 0.25
+
+
+def test_the_killers_in_order_with_a_fresh_numba_cache(tmp_path, monkeypatch):
+    """A toy project: its test fails when the file ``fail_tests`` exists; a stand-in ``yade`` on PATH
+    fails the cross-check (a case named) when ``fail_xc`` exists."""
+    work, bin_ = tmp_path / "work", tmp_path / "bin"
+    (work / "tests").mkdir(parents=True)
+    bin_.mkdir()
+    (work / "tests" / "test_toy.py").write_text(
+        "import os\n\ndef test_toy():\n"
+        "    open('env.txt', 'w').write(os.environ['NUMBA_CACHE_DIR'] + ' ' + os.environ.get('PORE_DEM_NUMBA_CACHE_DIR', '-'))\n"
+        "    assert not os.path.exists('fail_tests'), 'toy failure'\n")
+    yade = bin_ / "yade"
+    yade.write_text("#!/bin/sh\nmkdir -p \"$5\"\nif [ -e fail_xc ]; then echo '{\"cases\": [], \"feature_cases\": "
+                    "[{\"name\": \"toy_case\", \"passed\": false}]}' > \"$5/crosscheck.json\"; exit 1; fi\n")
+    yade.chmod(0o755)
+    monkeypatch.setenv("PATH", f"{bin_}{os.pathsep}{os.environ['PATH']}")
+    monkeypatch.setenv("PORE_DEM_NUMBA_CACHE_DIR", "/a/parent/key")
+    runner = km.Runner(str(tmp_path / "out"), {}, None, 120, 120, 0)
+    row = runner.killers(str(work), "t1", ["tests"])
+    assert (row["status"], row["by"], set(row["cost"])) == ("survived", None, {"tests", "crosscheck"})
+    cache, parent = (work / "env.txt").read_text().split()
+    assert cache == str(tmp_path / "out" / "cache" / "t1") and parent == "-"
+    assert not os.path.exists(cache)                     # removed after the mutant
+    (work / "fail_xc").touch()
+    row = runner.killers(str(work), "t2", ["tests"])
+    assert (row["status"], row["by"], row["reason"]) == ("killed", "crosscheck", "cases failed: toy_case")
+    (work / "fail_tests").touch()
+    row = runner.killers(str(work), "t3", ["tests"])
+    assert (row["status"], row["by"], set(row["cost"])) == ("killed", "tests", {"tests"})
+    assert "a test failed" in row["reason"] and "toy failure" in row["reason"]
