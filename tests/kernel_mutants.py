@@ -81,6 +81,7 @@ AUG = {ast.Add: ("+=", ast.Sub, "-="), ast.Sub: ("-=", ast.Add, "+="),
        ast.Mult: ("*=", ast.Div, "/="), ast.Div: ("/=", ast.Mult, "*=")}
 Z95 = 1.959963984540054  # the normal quantile of 0.975
 KILLED = {"killed", "timeout"}
+TIMEOUT_FACTOR, TIMEOUT_MIN, TIMEOUT_NO_BASELINE = 4, 600, 3600  # [-, s, s] a killer's timeout (Runner.timeouts)
 TAIL = 400  # [characters] of a killer's output kept as the reason
 
 
@@ -447,9 +448,18 @@ def reason_of(text):
 class Runner:
     """The killers of one run (module docstring), in the work copies OUT/work/slotK."""
 
-    def __init__(self, out, refs, xc_only, timeout_tests, timeout_xc, nice):
-        self.out, self.refs, self.xc_only = out, refs, xc_only
-        self.timeout_tests, self.timeout_xc, self.nice = timeout_tests, timeout_xc, nice
+    def __init__(self, out, refs, xc_only, nice, timeout=None):
+        self.out, self.refs, self.xc_only, self.nice = out, refs, xc_only, nice
+        self.timeout = {"tests": TIMEOUT_NO_BASELINE, "crosscheck": TIMEOUT_NO_BASELINE, **(timeout or {})}
+
+    def timeouts(self, given, baseline):
+        """Each killer's timeout [s]: as ``given`` ({killer: s or None}), else TIMEOUT_FACTOR x its wall
+        time in the ``baseline`` row (at least TIMEOUT_MIN: a kernel looping for ever is common among
+        the mutants, and each hang costs its timeout in CPU), else TIMEOUT_NO_BASELINE."""
+        cost = (baseline or {}).get("cost", {})
+        for k in self.timeout:
+            self.timeout[k] = given.get(k) or (max(TIMEOUT_MIN, TIMEOUT_FACTOR * cost[k][1]) if k in cost else TIMEOUT_NO_BASELINE)
+        return self.timeout
 
     def prepare(self, slot):
         """A fresh copy of the project in OUT/work/slot<slot> (whatever an interrupted run left is replaced)."""
@@ -480,17 +490,17 @@ class Runner:
 
         try:
             rc, text, *cost["tests"] = run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider",
-                                            "-m", "not check", *tests], work, env, self.timeout_tests, self.nice)
+                                            "-m", "not check", *tests], work, env, self.timeout["tests"], self.nice)
             if rc == "timeout":
-                return verdict("timeout", "tests", f"no end within {self.timeout_tests} s (a hang counts as killed)")
+                return verdict("timeout", "tests", f"no end within {self.timeout['tests']:.0f} s (a hang counts as killed)")
             if rc != 0:
                 why = {1: "a test failed", 2: "the tests could not be collected or run"}.get(
                     rc, f"pytest ended by signal {-rc}" if rc < 0 else f"pytest exit {rc}")
                 return verdict("killed" if rc in (1, 2) or rc < 0 else "error", "tests", f"{why}: {reason_of(text)}")
             cmd = ["yade", "-n", "-x", "yade_scripts/crosscheck.py", "--out", xc, *(["--only", *self.xc_only] if self.xc_only else [])]
-            rc, text, *cost["crosscheck"] = run(cmd, work, env, self.timeout_xc, self.nice)
+            rc, text, *cost["crosscheck"] = run(cmd, work, env, self.timeout["crosscheck"], self.nice)
             if rc == "timeout":
-                return verdict("timeout", "crosscheck", f"no end within {self.timeout_xc} s (a hang counts as killed)")
+                return verdict("timeout", "crosscheck", f"no end within {self.timeout['crosscheck']:.0f} s (a hang counts as killed)")
             if rc != 0:
                 failed = _failed_cases(os.path.join(xc, "crosscheck.json"))
                 return verdict("killed", "crosscheck", f"cases failed: {', '.join(failed)}" if failed
@@ -531,7 +541,7 @@ def commit():
     return (head or "unknown") + ("+dirty" if dirty else "")
 
 
-def write_summary(out, chosen, rows, equivalent, args, sources, other_rows):
+def write_summary(out, chosen, rows, equivalent, args, sources, other_rows, timeout):
     """OUT/summary.json and OUT/survivors.txt from the rows of the sample."""
     ids = [m.id for m in chosen]
     s = summarise(rows, ids, equivalent)
@@ -549,7 +559,7 @@ def write_summary(out, chosen, rows, equivalent, args, sources, other_rows):
              killed_by={k: sum(1 for r in done if r["status"] in KILLED and r["by"] == k) for k in ("tests", "crosscheck")},
              killers={"tests": "pytest -q -x -m 'not check' tests/compiled + the test files naming the kernel or its callers",
                       "crosscheck": "yade -n -x yade_scripts/crosscheck.py" + (f" --only {' '.join(args.xc_only)}" if args.xc_only else ""),
-                      "timeout_s": {"tests": args.timeout_tests, "crosscheck": args.timeout_xc},
+                      "timeout_s": timeout,
                       "timeout_note": "a killer past its timeout (a hang) counts as killing the mutant"})
     files.write_json(os.path.join(out, "summary.json"), s)
     by_id = {m.id: m for m in chosen}
@@ -574,8 +584,9 @@ def main(argv=None):
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "mutants-kernels"))
     ap.add_argument("--jobs", type=int, default=1, help="mutants run at once (each in its own work copy)")
     ap.add_argument("--nice", type=int, default=10, help="niceness of the killers")
-    ap.add_argument("--timeout-tests", type=float, default=3600, help="[s] the tests of one mutant (a hang: killed)")
-    ap.add_argument("--timeout-xc", type=float, default=3600, help="[s] the cross-check of one mutant (a hang: killed)")
+    ap.add_argument("--timeout-tests", type=float, help=f"[s] the tests of one mutant (a hang: killed); default "
+                    f"{TIMEOUT_FACTOR} x the baseline's, at least {TIMEOUT_MIN}")
+    ap.add_argument("--timeout-xc", type=float, help="[s] the cross-check of one mutant, the same way")
     ap.add_argument("--xc-only", nargs="+", metavar="CASE", help="cross-check only these cases")
     ap.add_argument("--no-baseline", action="store_true", help="skip the killers' run on the unmutated sources")
     ap.add_argument("--list", action="store_true", help="print the sample's ids and stop")
@@ -601,7 +612,9 @@ def main(argv=None):
     rows, other = read_results(results, sources)
     print(f"{len(mutants)} mutants in the jit functions of {COMPILED}; sample of {len(chosen)} (seed {args.seed}); "
           f"{sum(m.id in rows for m in chosen)} done before on these sources ({sources})", flush=True)
-    runner = Runner(out, call_graph(), args.xc_only, args.timeout_tests, args.timeout_xc, args.nice)
+    runner = Runner(out, call_graph(), args.xc_only, args.nice)
+    given = {"tests": args.timeout_tests, "crosscheck": args.timeout_xc}
+    runner.timeouts(given, rows.get("baseline"))
     lock = threading.Lock()
     if not args.report_only:
         originals = {m.file: open(os.path.join(ROOT, m.file), encoding="utf-8").read() for m in chosen}
@@ -619,6 +632,8 @@ def main(argv=None):
             rows["baseline"] = row
             if row["status"] != "survived":
                 sys.exit(f"the killers fail on the unmutated sources ({row['by']}: {row['reason']}); fix that first")
+            runner.timeouts(given, row)
+        print(f"timeouts: {runner.timeout} s", flush=True)
 
         def one(m):
             k, work = slots.get()
@@ -635,7 +650,7 @@ def main(argv=None):
         with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
             for f in [pool.submit(one, m) for m in todo]:
                 f.result()
-    s = write_summary(out, chosen, rows, equivalent, args, sources, other)
+    s = write_summary(out, chosen, rows, equivalent, args, sources, other, runner.timeout)
     lo, hi = s["wilson95"]
     print(f"score {s['score']} ({s['killed']} killed of {s['total'] - s['equivalent']}; 95 % interval "
           f"{lo}-{hi}); {s['survived']} survivors in {out}/survivors.txt; {s['cpu_seconds']:.0f} CPU s"

@@ -195,7 +195,7 @@ def test_the_killers_in_order_with_a_fresh_numba_cache(tmp_path, monkeypatch):
     yade.chmod(0o755)
     monkeypatch.setenv("PATH", f"{bin_}{os.pathsep}{os.environ['PATH']}")
     monkeypatch.setenv("PORE_DEM_NUMBA_CACHE_DIR", "/a/parent/key")
-    runner = km.Runner(str(tmp_path / "out"), {}, None, 120, 120, 0)
+    runner = km.Runner(str(tmp_path / "out"), {}, None, 0, {"tests": 120, "crosscheck": 120})
     row = runner.killers(str(work), "t1", ["tests"])
     assert (row["status"], row["by"], set(row["cost"])) == ("survived", None, {"tests", "crosscheck"})
     cache, parent = (work / "env.txt").read_text().split()
@@ -208,3 +208,12 @@ def test_the_killers_in_order_with_a_fresh_numba_cache(tmp_path, monkeypatch):
     row = runner.killers(str(work), "t3", ["tests"])
     assert (row["status"], row["by"], set(row["cost"])) == ("killed", "tests", {"tests"})
     assert "a test failed" in row["reason"] and "toy failure" in row["reason"]
+
+
+def test_timeouts_are_given_or_a_multiple_of_the_baselines_wall_time():
+    runner = km.Runner("out", {}, None, 0)
+    none = {"tests": None, "crosscheck": None}
+    assert runner.timeouts(none, None) == {"tests": km.TIMEOUT_NO_BASELINE, "crosscheck": km.TIMEOUT_NO_BASELINE}
+    baseline = {"cost": {"tests": [100.0, 400.0], "crosscheck": [50.0, 100.0]}}
+    assert runner.timeouts(none, baseline) == {"tests": km.TIMEOUT_FACTOR * 400.0, "crosscheck": km.TIMEOUT_MIN}
+    assert runner.timeouts({"tests": 50.0, "crosscheck": None}, baseline)["tests"] == 50.0
