@@ -103,14 +103,23 @@ class Mutant:
         return f"{self.file}:{self.function}:{self.line}:{self.col}:{self.kind}"
 
 
-def _jit_names(tree):
-    """(names that are numba's jit/njit or bound to one of their calls, names bound to the numba module)."""
-    names, modules = set(JIT), set(NUMBA)
+def _jit_names(tree, package="", exported=None):
+    """(names that are numba's jit/njit or bound to one of their calls, {module alias: its jit names})
+    in a module of ``package`` (dotted); ``exported``: {dotted module: the jit names it binds} of the
+    other modules, so that ``from engines.compiled.x import kernel`` or ``x.kernel`` count too."""
+    exported = exported or {}
+    names, modules = set(JIT), {"numba": JIT}
     for node in tree.body:
         if isinstance(node, ast.Import):
-            modules |= {a.asname or a.name for a in node.names if a.name == "numba"}
-        elif isinstance(node, ast.ImportFrom) and node.module == "numba":
-            names |= {a.asname or a.name for a in node.names if a.name in JIT}
+            for a in node.names:
+                if a.name == "numba" or a.name in exported:
+                    modules[a.asname or a.name] = JIT if a.name == "numba" else exported[a.name]
+        elif isinstance(node, ast.ImportFrom):
+            module = ".".join(filter(None, [package] * (node.level == 1) + [node.module]))
+            own = JIT if module == "numba" else exported.get(module, set())
+            names |= {a.asname or a.name for a in node.names if a.name in own}
+            modules.update({a.asname or a.name: exported[f"{module}.{a.name}"] for a in node.names
+                            if f"{module}.{a.name}" in exported})
     for node in tree.body:
         if isinstance(node, ast.Assign) and _is_jit(node.value, names, modules):
             names |= {t.id for t in node.targets if isinstance(t, ast.Name)}
@@ -122,13 +131,19 @@ def _is_jit(node, names, modules):
     f = node.func if isinstance(node, ast.Call) else node
     if isinstance(f, ast.Name):
         return f.id in names
-    return (isinstance(f, ast.Attribute) and f.attr in JIT and isinstance(f.value, ast.Name)
-            and f.value.id in modules)
+    return (isinstance(f, ast.Attribute) and isinstance(f.value, ast.Name)
+            and f.attr in modules.get(f.value.id, ()))
 
 
-def jit_functions(tree):
-    """The functions of a module's AST decorated with numba's jit/njit: [(qualified name, FunctionDef)]."""
-    names, modules = _jit_names(tree)
+def exported_jit_names(trees):
+    """{dotted module: the names it binds to a jit call} of ``trees`` ({dotted module: AST})."""
+    return {m: _jit_names(t, m.rpartition(".")[0])[0] - JIT for m, t in trees.items()}
+
+
+def jit_functions(tree, module="", exported=None):
+    """The functions of a module's AST (``module``: its dotted name) decorated with numba's jit/njit,
+    directly or by a name bound to it here or in ``exported``: [(qualified name, FunctionDef)]."""
+    names, modules = _jit_names(tree, module.rpartition(".")[0], exported)
     out = []
 
     def visit(body, prefix):
@@ -232,17 +247,20 @@ def enumerate_mutants(root=ROOT, folder=COMPILED):
     """Every mutant of the jit functions of the .py files of ``folder`` (under ``root``), sorted by
     file, line, column and kind (each still parses: a swapped operator, a number for a number, a
     dropped minus)."""
-    out = []
+    out, sources, trees = [], {}, {}
     for path in sorted(_py_files(root, folder)):
         with open(os.path.join(root, path), encoding="utf-8") as f:
-            source = f.read()
-        tree = ast.parse(source, path)
+            sources[path] = f.read()
+        trees[path] = ast.parse(sources[path], path)
+    exported = exported_jit_names({p[:-3].replace("/", "."): t for p, t in trees.items()})
+    for path, tree in trees.items():
+        source = sources[path]
         lines = source.split("\n")  # the AST's and the tokenizer's lines (str.splitlines also splits at \f, \u2028...)
         tokens = {}
         for t in tokenize.generate_tokens(io.StringIO(source).readline):
             if t.type in (tokenize.OP, tokenize.NAME, tokenize.NUMBER):
                 tokens.setdefault(t.start[0], []).append(t)
-        for name, fn in jit_functions(tree):
+        for name, fn in jit_functions(tree, path[:-3].replace("/", "."), exported):
             out += function_mutants(path, tokens, lines, name, fn)
     return sorted(out, key=lambda m: (m.file, m.line, m.col, m.kind))
 
