@@ -86,11 +86,12 @@ mutants: deps $(MUTANT_VENV)/bin/mutmut
 # Mutation testing of the numba kernels (mutmut skips decorated functions): a seeded sample of N mutants of
 # the @jit bodies of engines/compiled, each killed by tests/compiled + the tests naming it, then the cross-check,
 # with a fresh numba cache each (minutes of CPU per mutant): $(OUT)/mutants-kernels/summary.json, survivors.txt.
-# Resumable: the same command skips the mutants done. Not part of `make test`.
+# Resumable: the same command skips the mutants done. JOBS mutants at once (a work copy each). Not part of `make test`.
 N    ?= 200
 SEED ?= 1
+JOBS ?= 1
 mutants-kernels: deps
-	$(PY) tests/kernel_mutants.py --n $(N) --seed $(SEED) --out $(OUT)/mutants-kernels
+	$(PY) tests/kernel_mutants.py --n $(N) --seed $(SEED) --jobs $(JOBS) --out $(OUT)/mutants-kernels
 
 # Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
