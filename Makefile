@@ -14,7 +14,7 @@ SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants mutants-kernels clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -93,6 +93,16 @@ $(MUTANT_VENV)/bin/mutmut:
 
 mutants: deps $(MUTANT_VENV)/bin/mutmut
 	$(MUTANT_VENV)/bin/python tests/mutants.py --out $(OUT)/mutants
+
+# Mutation testing of the numba kernels (mutmut skips decorated functions): a seeded sample of N mutants of
+# the @jit bodies of engines/compiled, each killed by tests/compiled + the tests naming it, then the cross-check,
+# with a fresh numba cache each (minutes of CPU per mutant): $(OUT)/mutants-kernels/summary.json, survivors.txt.
+# Resumable: the same command skips the mutants done. JOBS mutants at once (a work copy each). Not part of `make test`.
+N    ?= 200
+SEED ?= 1
+JOBS ?= 1
+mutants-kernels: deps
+	$(PY) tests/kernel_mutants.py --n $(N) --seed $(SEED) --jobs $(JOBS) --out $(OUT)/mutants-kernels
 
 # Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
