@@ -280,6 +280,8 @@ EXEMPT_TARGETS = {
     "test-fast": "a part of make test",
     "precision": "the reference in three precisions (minutes); tests/reference",
     "mutants": "mutation testing, hours",
+    "mutants-kernels": "mutation testing of the numba kernels (CPU hours); tests/test_kernel_mutants.py tests the driver",
+    "readings": "rewrites the tracked docs/readings/quicksand_ru.json from 8 starts; tests/postproc/test_readings.py",
     "bench": "cost measurements (tens of minutes, an idle machine)",
     "bench-seismic": "a cost measurement", "bench-scaling": "a cost measurement",
     "bench-ground": "a cost measurement", "bench-before-after": "a cost measurement of an older checkout",
