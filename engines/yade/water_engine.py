@@ -72,7 +72,7 @@ class WaterEngine:
     0: off); rebuild_interval [steps] bounds the time between rebuilds. A script may change O.dt
     between steps: the model follows it at the next water step (engines.yade.contract.follow_dt).
     The water step water_interval x O.dt is checked (``check_limits``) at construction, after each
-    rebuild and each change of O.dt: above the water-stiffness limit it is refused, naming the
+    rebuild, each change of O.dt and of the settable ``water_interval``: above the water-stiffness limit it is refused, naming the
     largest stable water_interval; above the Darcy limit it is sub-stepped (refused without
     settings.substep). The accuracy watch (engines.model.limits.AccuracyWatch, ``model.watch``)
     compares the void areas of each water step made from Python with the last one: above
@@ -149,16 +149,37 @@ class WaterEngine:
         self.check_limits("at construction")
         self.model.on_change = self.check_limits  # at each rebuild and change of dt
 
-    def check_limits(self, when=None):
-        """Refuse the water step h = water_interval x O.dt above the water-stiffness limit of the
-        pores now (no sub-steps: the message names the largest stable water_interval), or above
-        the Darcy limit without settings.substep (engines.model.limits); at construction, after each
-        pore rebuild and each change of O.dt."""
+    @property
+    def water_interval(self):
+        """Steps between water steps (settable between steps: ``water.water_interval = M`` is checked
+        like a change of O.dt, ``check_limits``, and takes effect at the next water step,
+        engines.model.schedule.Schedule.set_water_interval; the runner follows)."""
+        return self.model.schedule.water_interval
+
+    @water_interval.setter
+    def water_interval(self, value):
+        from yade import O
+
+        from engines.yade import scene_save
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"water_interval = {value!r}: the steps between water steps, an integer >= 1")
+        value = int(value)
+        self.check_limits(f"when water_interval was set at step {O.iter}", value)
+        first = self.model.schedule.set_water_interval(value, O.iter)
+        self.arguments["water_interval"] = value  # a saved scene's engine is made again with it
+        scene_save.set_period(self, value, first)
+
+    def check_limits(self, when=None, water_interval=None):
+        """Refuse the water step h = water_interval x O.dt (default the schedule's water_interval)
+        above the water-stiffness limit of the pores now (no sub-steps: the message names the
+        largest stable water_interval), or above the Darcy limit without settings.substep
+        (engines.model.limits); at construction, after each pore rebuild, each change of O.dt and
+        of ``water_interval``."""
         from yade import O
         m, s = self.model, self.model.settings
         xz = self.io.positions()
         meas = pg.measure(m.water.net, xz, m.r)
-        M = m.schedule.water_interval
+        M = water_interval or m.schedule.water_interval
         when = when or f"at step {O.iter} (the pores rebuilt or O.dt changed)"
         stiff = limits.water_stiffness_limit(m.water.net, meas.void_area, m.r, s.E_w, self._mass, self._mobile())
         limits.check_water_stiffness(m.dt, stiff, s.E_w, M, limits.ENGINE_NAMES, when)

@@ -47,6 +47,40 @@ def test_a_larger_o_dt_is_checked_at_the_next_water_step():
         water.drive(5, lambda: False)
 
 
+def test_water_interval_set_on_a_live_engine_is_checked_and_the_runner_follows():
+    """water.water_interval = M between steps: above the stiffness limit refused naming the largest
+    stable value (the old interval kept); a stable M takes effect at the next water step, the
+    PyRunner then calls every M steps; not an integer >= 1: refused."""
+    from yade import O
+    water = column(water_interval=1)
+    O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+    O.run(3, True)
+    with pytest.raises(WaterStiffnessError, match=r"when water_interval was set at step 3 .*water_interval= <= "):
+        water.water_interval = 200
+    assert water.water_interval == 1
+    with pytest.raises(WaterStiffnessError) as e:
+        water.water_interval = 200
+    largest = int(str(e.value).split("water_interval= <= ")[1].split()[0])
+    assert largest >= 2
+    water.water_interval = largest
+    assert water.model.schedule.k_water == 3 and water.arguments["water_interval"] == largest
+    calls = []
+    seen = water.__class__.__call__
+
+    def counted(self):
+        calls.append(O.iter)
+        seen(self)
+    water.__class__.__call__ = counted
+    try:
+        O.run(2 * largest + 1, True)
+    finally:
+        water.__class__.__call__ = seen
+    assert calls == [3, 3 + largest, 3 + 2 * largest]
+    for bad in (0, 2.5, True):
+        with pytest.raises(ValueError, match="water_interval = .*integer >= 1"):
+            water.water_interval = bad
+
+
 def test_buoyancy_follows_the_newton_integrators_gravity():
     from yade import O
     water = column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=1)
