@@ -75,7 +75,8 @@ class WaterEngine:
     rebuild, each change of O.dt and of the settable ``water_interval``: above the water-stiffness limit it is refused, naming the
     largest stable water_interval; above the Darcy limit it is sub-stepped (refused without
     settings.substep). The accuracy watch (engines.model.limits.AccuracyWatch, ``model.watch``)
-    compares the void areas of each water step made from Python with the last one: above
+    compares the void areas of every water step with the last one (on every path; the compiled
+    drive's, kernels.watch_areas, reported at the end of each call): above
     WATCH_WARN it warns once, above WATCH_STOP it stops the run unless ``accept_inaccurate``.
     """
 
@@ -287,7 +288,8 @@ class WaterEngine:
         b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
-            m.after_kernel_steps(unwatched=True)
+            m.after_kernel_steps()
+            m.report_watch(h)  # every water step of the call watched (kernels.watch_areas)
         yade_io.check(rc, self.io.ids)  # an error code names the disc read (positions first)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
             m.finish_kernel_step(h, n_sub)

@@ -175,3 +175,43 @@ def test_a_drained_flat_wall_without_k3_is_refused():
     from engines.yade.water_engine import WaterEngine
     with pytest.raises(ContractError, match=f"body {wall}: a drained flat wall with k3 = 0.*k3 > 0.*'undrained'"):
         WaterEngine(grains, walls={}, settings=WaterSettings(), l_m=1.3e-4, flat_walls={wall: "drained"})
+
+
+def _watched(path, monkeypatch, steps=800, water_interval=40):
+    """(worst max |dA| / A, lowest U / E_w) the accuracy watch saw on viscel_column's column driven
+    ``steps`` steps with water every ``water_interval`` steps on one path of WaterEngine."""
+    from engines.yade import water_engine, yade_io
+    if path in ("drive", "chunks") and yade_io.BACKEND != "yadebulk":
+        pytest.skip("the compiled drive needs the bulk bridge (make ext)")
+    if path == "kernel":
+        monkeypatch.setattr(water_engine, "water_path", lambda compiled, bridge=False: "kernel")
+    water = column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=water_interval,
+                   compiled=path != "python", accept_inaccurate=True)
+    water.drive(steps, None if path == "chunks" else (lambda: False))
+    monkeypatch.undo()
+    return water.model.watch.worst, water.model.watch.lowest
+
+
+def test_the_accuracy_watch_sees_every_water_step_on_every_path(monkeypatch):
+    """The NumPy model (Python at each water step), kernels.water_step between Python's reads and
+    writes, the compiled drive one water step a call (a PyRunner's path) and in chunks of many
+    water steps: the watch sees the same largest area change and lowest U (the chunks' water steps
+    compared one with the next inside the kernel, kernels.watch_areas)."""
+    worst, lowest = _watched("python", monkeypatch)
+    assert 1e-4 < worst < 0.5
+    for path in ("kernel", "drive", "chunks"):
+        got = _watched(path, monkeypatch)
+        np.testing.assert_allclose(got, (worst, lowest), rtol=1e-6, atol=1e-12, err_msg=path)
+
+
+def test_the_compiled_drive_stops_at_an_area_change_above_the_stop_threshold():
+    """A water step far too long for the discs' motion, run in the compiled drive's chunks: stopped
+    by the watch (AccuracyError naming water_interval) unless accepted."""
+    from engines.model.limits import AccuracyError
+    from engines.yade import yade_io
+    if yade_io.BACKEND != "yadebulk":
+        pytest.skip("the compiled drive needs the bulk bridge (make ext)")
+    water = column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=10)
+    water.model.watch.warn = water.model.watch.stop = 1e-5
+    with pytest.raises(AccuracyError, match="in one water step of 1e-05 s .*water_interval"):
+        water.drive(400)
