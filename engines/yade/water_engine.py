@@ -48,6 +48,11 @@ CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (sign
 # the built links stay those the discs would be given now to within half the link range, and the
 # measured areas stay close to the true ones (frictmat_box: every U <= E_w).
 REBUILD_FRACTION = 0.25
+# A disc farther than this fraction of its radius (plus twice what its velocity covers in the steps
+# between) from its centre at the engine's last water step, with no water step missed in between,
+# was put there by something else than the steps: a scene loaded or its bodies moved by hand
+# (``check_same_scene``).
+JUMP_FRACTION = 0.5
 
 
 class WaterEngine:
@@ -88,6 +93,7 @@ class WaterEngine:
         **{name: "the bodies and the caller's arguments" for name in ("_mass", "_lift", "_newton")},
         "g": "the NewtonIntegrator's gravity, read at each water step (or the caller's)",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
+        "_seen": "(O.iter, centres) at the last water step or drive's end: a restored engine starts afresh",
         "arguments": "the constructor's arguments: the recipe of a saved scene's tag (engines.yade.scene_save)",
         "_chunk": "the steps of drive's next compiled call, adapted to the wall time: how steps are grouped, not "
                   "what they compute"}
@@ -149,6 +155,44 @@ class WaterEngine:
         self.model.watch = limits.AccuracyWatch(accept=accept_inaccurate)
         self.check_limits("at construction")
         self.model.on_change = self.check_limits  # at each rebuild and change of dt
+        self._seen = (O.iter, self.io.positions())
+
+    def checkpoint_restored(self):
+        """Restored with its scene (engines.model.state): the next water step starts the comparison
+        of ``check_same_scene`` afresh."""
+        self._seen = None
+
+    def check_same_scene(self, xz):
+        """Stop (scene_save.RestoreError, one line naming what to do) when the scene is not the one
+        the water belongs to: O.iter before that of the engine's last water step (an earlier scene
+        loaded without the engine's saved water), or, no water step missed since, a disc farther than
+        JUMP_FRACTION of its radius plus twice its velocity x the steps' time from its centre then
+        (a scene loaded, bodies moved by hand); xz (N, 2) [m] the centres now."""
+        from yade import O
+
+        from engines.yade.scene_save import RestoreError
+        if self._seen is None:
+            return
+        k, seen = self._seen
+        remedy = ("the engine's water is not this scene's: restore it with the scene (water.runner() in O.engines "
+                  "when O.save/O.saveTmp is called: O.load/O.loadTmp then restore it, engines.yade.scene_save), or "
+                  "make the WaterEngine again after the load (its water starts afresh)")
+        if O.iter < k:
+            raise RestoreError(f"the scene went back from step {k} to step {O.iter} (O.load or O.loadTmp of an earlier "
+                               f"scene?): {remedy}")
+        if O.iter > k + self.water_interval:
+            return
+        d = np.hypot(*(np.asarray(xz) - seen).T)
+        r = self.model.r
+        far = np.flatnonzero(d > JUMP_FRACTION * r)
+        if len(far):
+            v = np.array([O.bodies[int(self.io.ids[i])].state.vel.norm() for i in far.tolist()])
+            far = far[d[far] > JUMP_FRACTION * r[far] + 2 * v * (O.iter - k) * O.dt]
+        if len(far):
+            i = int(far[np.argmax(d[far] / r[far])])
+            raise RestoreError(f"body {int(self.io.ids[i])}: moved {d[i]:.3g} m ({d[i] / r[i]:.2g} of its radius) since "
+                               f"the water step at step {k} in {O.iter - k} steps, more than its velocity allows (a "
+                               f"scene loaded, or bodies moved by hand): {remedy}")
 
     @property
     def water_interval(self):
@@ -226,6 +270,7 @@ class WaterEngine:
         from yade.wrapper import PyRunner
 
         from engines.yade import yade_io
+        self.check_same_scene(self.io.positions())
         n, done = int(n), 0
         alone = stop is None and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
         fast = alone and water_path(self.compiled, yade_io.BACKEND == "yadebulk") == "drive"
@@ -249,6 +294,7 @@ class WaterEngine:
             done += 1
             if errors or (stop is not None and stop()):
                 break
+        self._seen = (O.iter, self.io.positions())
 
     def _walls_may_move(self):
         """Can a flat wall move in the next steps: its body has a velocity, or a kinematic engine
@@ -306,6 +352,9 @@ class WaterEngine:
 
         from engines.yade import yade_io
         m = self.model
+        xz = self.io.positions()
+        self.check_same_scene(xz)
+        self._seen = (O.iter, xz)
         self.k = O.iter
         contract.follow_dt(m)
         self._follow_gravity()
@@ -313,7 +362,6 @@ class WaterEngine:
         h = sch.water_interval * m.dt
         self._follow_walls()
         path = water_path(self.compiled, yade_io.BACKEND == "yadebulk")
-        xz = None
         if path == "drive" and not sch.interval_due(self.k):  # read, triggers, water, write: one call
             _, n_water, n_sub, rc = yade_io.drive_water(1, False, 0, sch.water_interval, np.zeros(3), m.xz_built,
                                                         sch.moved2, self.io, self._xz, self.forced, self._F_out,
@@ -324,10 +372,8 @@ class WaterEngine:
                 return
             rebuild = True  # due by displacement or areas: nothing done, rebuilt and made below
         else:
-            xz = self.io.positions() if sch.by_displacement else None
-            rebuild = m.rebuild_due(self.k, xz)
+            rebuild = m.rebuild_due(self.k, xz if sch.by_displacement else None)
         if path == "kernel" and not rebuild:  # the positions read, water, write
-            xz = self.io.positions() if xz is None else xz
             n_sub = kernels.water_step(xz, *m.kernel_args(h))
             if n_sub > 0:
                 self.write_forces()
@@ -335,8 +381,6 @@ class WaterEngine:
                 m.finish_kernel_step(h, n_sub)
                 return
             rebuild = True  # nothing done: rebuilt and made below
-        if xz is None:
-            xz = self.io.positions()
         if rebuild:
             contract.check_added(O.bodies, self._n_bodies)
             m.rebuild(xz, self.k)
