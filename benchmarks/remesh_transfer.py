@@ -16,19 +16,22 @@ statistics over the starts (engines.studies.ensemble.statistics: mean and 95 % i
 "decision" the rule's verdict.
 """
 import argparse
+import builtins
 import dataclasses
 import json
 import os
-import runpy
 import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] if __name__ == "__main__" else __file__))))
 
+import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened)
+# isort: split
 import numpy as np
 
 from benchmarks import write_json
+from engines import ROOT
 
 EXAMPLES = ("frictmat_box", "viscel_column", "makecloud_discs", "aabb_box")
 TRANSFERS = ("paper", "conserving")
@@ -72,8 +75,9 @@ def one(example, transfer, start, out):
     water_engine.WaterEngine = Measured
     sys.argv = [example]
     t0 = time.process_time()
-    runpy.run_path(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "yade_scripts",
-                                "examples", example + ".py"), run_name="__main__")
+    path = os.path.join(ROOT, "yade_scripts", "examples", example + ".py")
+    # as `yade -x` runs a script: YADE's engine labels set attributes of the module __builtins__
+    exec(compile(open(path).read(), path, "exec"), {"__name__": "__main__", "__file__": path, "__builtins__": builtins})
     water = made[-1]
     b, w = water.model.water.balance, water.model.water
     write_json(out, {"example": example, "transfer": transfer, "start": start,
@@ -128,10 +132,11 @@ def main(argv):
     todo = [(e, t, s) for s in range(args.starts) for e in args.examples for t in TRANSFERS if (e, t, s) not in done]
     for e, t, s in todo:
         tmp = f"{args.json}.run.json"
-        p = subprocess.run(["yade", "-n", "-x", os.path.abspath(__file__), "--json", args.json, "--one", e, t, str(s),
-                            tmp], capture_output=True, text=True)
+        p = subprocess.run(["yade", "-n", "-x", os.path.join(ROOT, "benchmarks", "remesh_transfer.py"), "--json",
+                            args.json, "--one", e, t, str(s), tmp], capture_output=True, text=True)
         if p.returncode != 0 or not os.path.exists(tmp):
-            print(f"{e} {t} start {s}: failed (exit {p.returncode}): {p.stderr.strip().splitlines()[-1:]}", flush=True)
+            print(f"{e} {t} start {s}: failed (exit {p.returncode}): {(p.stderr.strip().splitlines() or [''])[-1]}",
+                  flush=True)
             continue
         runs.append(json.load(open(tmp)))
         os.remove(tmp)
