@@ -23,7 +23,10 @@ def column(settings=STIFF, water_interval=1, **kw):
     O.engines = ex.engines()
     O.dt = 1e-6
     ids = kw.pop("ids", bottom + left + right + grains)
-    return WaterEngine(ids, walls={"bottom": bottom, "left": left, "right": right}, settings=settings,
+    if kw.pop("ids_drop_first", False):
+        ids = ids[1:]
+    walls = {"bottom": bottom, "left": left, "right": right, **kw.pop("walls_extra", {})}
+    return WaterEngine(ids, walls=walls, settings=settings,
                        l_m=kw.pop("l_m", 1.3e-4), water_interval=water_interval, **kw)
 
 
@@ -215,3 +218,18 @@ def test_the_compiled_drive_stops_at_an_area_change_above_the_stop_threshold():
     water.model.watch.warn = water.model.watch.stop = 1e-5
     with pytest.raises(AccuracyError, match="in one water step of 1e-05 s .*water_interval"):
         water.drive(400)
+
+
+def test_unknown_wall_groups_walls_outside_disc_ids_and_no_o_dt_are_refused():
+    from yade import O
+    with pytest.raises(ValueError, match=r"walls: unknown group 'top'; known: \['bottom', 'left', 'right'\]"):
+        column(WaterSettings(E_w=240.0), walls_extra={"top": [0]})
+    with pytest.raises(ValueError, match=r"walls\['bottom'\]: ids \[0\] are not among disc_ids"):
+        column(WaterSettings(E_w=240.0), ids_drop_first=True)
+    from engines.yade.water_engine import WaterEngine
+    from yade_scripts.examples import viscel_column as ex
+    bottom, left, right, grains = ex.build_column()
+    O.engines = ex.engines()
+    O.dt = 0.0
+    with pytest.raises(ValueError, match="set O.dt before creating the WaterEngine"):
+        WaterEngine(bottom + grains, walls={"bottom": bottom}, settings=WaterSettings(E_w=240.0), l_m=1.3e-4)
