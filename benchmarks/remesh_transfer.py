@@ -117,16 +117,44 @@ def summary(runs, starts):
                          "(overlaps included) goes to conserving"}
 
 
+def table(path):
+    """ENGINE.md's table of the study in the JSON ``path``: each number with its marker (tests/test_doc_numbers.py)."""
+    doc = json.load(open(path))
+
+    def cell(example, transfer, q, scale=1.0):
+        keys = f"summary/{example}/{transfer}/{q}"
+        st = doc["summary"][example][transfer][q]
+        if st["mean"] is None:
+            return "none"
+        num = [f"{st[k] * scale:.3g}<!--json:{path}#{keys}/{k}{'' if scale == 1 else f'*{scale:g}'}-->"
+               for k in ("mean", "ci95_low", "ci95_high") if st[k] is not None]
+        n = f" (n = {st['n']:.0f}<!--json:{path}#{keys}/n-->)" if q == "heave_time" else ""
+        return num[0] + (f" [{num[1]}, {num[2]}]" if len(num) == 3 else "") + n
+
+    lines = ["| example | starts | `\"paper\"`: re-meshing / inflow | `\"conserving\"`: re-meshing / inflow | wins | "
+             "heave time [ms], `\"paper\"` | `\"conserving\"` |", "|---|---|---|---|---|---|---|"]
+    for e in EXAMPLES:
+        n = doc["summary"][e]["paper"]["starts"]
+        lines.append(f"| `{e}.py` | {n}<!--json:{path}#summary/{e}/paper/starts--> | "
+                     f"{cell(e, 'paper', 'remesh_over_inflow')} | {cell(e, 'conserving', 'remesh_over_inflow')} | "
+                     f"{doc['summary'][e]['winner'] or 'overlap'} | {cell(e, 'paper', 'heave_time', 1000.0)} | "
+                     f"{cell(e, 'conserving', 'heave_time', 1000.0)} |")
+    return "\n".join(lines)
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", required=True)
     ap.add_argument("--starts", type=int, default=8)
     ap.add_argument("--examples", nargs="+", default=list(EXAMPLES), choices=EXAMPLES)
+    ap.add_argument("--table", action="store_true", help="print ENGINE.md's table of the JSON and stop")
     ap.add_argument("--one", nargs=4, metavar=("EXAMPLE", "TRANSFER", "START", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.one:
         example, transfer, start, out = args.one
         return one(example, transfer, int(start), out)
+    if args.table:
+        return print(table(args.json))
     runs = json.load(open(args.json))["runs"] if os.path.exists(args.json) else []
     done = {(r["example"], r["transfer"], r["start"]) for r in runs}
     todo = [(e, t, s) for s in range(args.starts) for e in args.examples for t in TRANSFERS if (e, t, s) not in done]
