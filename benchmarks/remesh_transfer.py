@@ -5,8 +5,10 @@
 
 Each run is one example of yade_scripts/examples/ (its own steps and settings) in a YADE process of
 its own, with WaterSettings transfer set to "paper" or "conserving" and, for start k > 0, its
-grains moved at the engine's construction by PERTURBATION x the grains' median radius times a
-standard normal in x and z (numpy's Generator(k); start 0 is the example as it is). Per run:
+grains moved by PERTURBATION x the grains' median radius times a standard normal in x and z
+(numpy's Generator(k); start 0 is the example as it is) before the example's first O.run (its dry
+settling: moved at the engine's construction, a settled FrictMat bed was thrown apart and the
+accuracy watch stopped the run), or at the engine's construction where there is none. Per run:
 |re-meshing change| / inflow (WaterBalance.remesh_excess_change, all of it, as the examples'
 checks print it) and the heave time [s] (from the engine's construction to the first water step at
 which the bed top, max z + r over the grains, stands one median radius above its value then;
@@ -42,9 +44,31 @@ QUANTITIES = ("remesh_over_inflow", "heave_time")
 def one(example, transfer, start, out):
     """Run ``example`` with ``transfer`` from ``start`` in this YADE process; its numbers to ``out``."""
     from yade import O
+    from yade.wrapper import Omega
 
     from engines.yade import water_engine
-    made = []
+    made, perturbed = [], [start == 0]
+
+    def perturb(ids):
+        """Move the grains ``ids`` of start k > 0, once: before the example's first O.run (its dry
+        settling), or at the engine's construction where it has none."""
+        if perturbed[0]:
+            return
+        perturbed[0] = True
+        r = np.array([O.bodies[i].shape.radius for i in ids])
+        rng = np.random.default_rng(start)
+        for i in ids:
+            p = O.bodies[i].state.pos
+            dx, dz = PERTURBATION * np.median(r) * rng.standard_normal(2)
+            O.bodies[i].state.pos = (p[0] + dx, p[1], p[2] + dz)
+
+    run = Omega.run
+
+    def first_run(self, *args, **kw):
+        perturb([b.id for b in O.bodies if b is not None and b.dynamic and type(b.shape).__name__ == "Sphere"])
+        return run(self, *args, **kw)
+
+    Omega.run = first_run
 
     class Measured(water_engine.WaterEngine):
         """The example's WaterEngine with the study's transfer, start and heave clock."""
@@ -52,12 +76,7 @@ def one(example, transfer, start, out):
         def __init__(self, disc_ids, walls, settings, *args, **kw):
             grains = [i for i in disc_ids if O.bodies[i].dynamic]
             r = np.array([O.bodies[i].shape.radius for i in grains])
-            if start > 0:
-                rng = np.random.default_rng(start)
-                for i in grains:
-                    p = O.bodies[i].state.pos
-                    dx, dz = PERTURBATION * np.median(r) * rng.standard_normal(2)
-                    O.bodies[i].state.pos = (p[0] + dx, p[1], p[2] + dz)
+            perturb(grains)
             super().__init__(disc_ids, walls, dataclasses.replace(settings, transfer=transfer), *args, **kw)
             self.rise, self.t0, self.heave = float(np.median(r)), O.time, None
             self.top0 = self.top()
