@@ -14,7 +14,7 @@ SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants mutants-kernels clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -213,6 +213,10 @@ validation: deps
 # (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.
 stability: deps
 	nice -n 10 $(YADE) -n -j 1 -x yade_scripts/stability.py --out $(OUT)/stability $(if $(SHORT),--window 0.0002)
+
+# The re-meshing transfers on the four examples, 8 starts each (docs/ENGINE.md: the rule); resumable
+remesh-transfer: deps
+	nice -n 10 $(YADE) -n -x benchmarks/remesh_transfer.py --json docs/engine/remesh_transfer.json
 
 clean:
 	rm -rf $(OUT) .pytest_cache

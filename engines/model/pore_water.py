@@ -63,7 +63,7 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "substep": Field(bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the "
                      "engine prints the count and its cost); false: refuse such a step (preflight at the start, the "
                      "engine mid-run)"),
-    "transfer": Field(str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
+    "transfer": Field(str, "conserving", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
                       "(§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap "
                       "(engines.model.pore_water.conserving_water)"),
     "inflow_velocity": Field(float, 0.0, NONNEG, "inflow as a Darcy flux per unit width [m/s] (SPEC §2.7): each link "

@@ -82,6 +82,13 @@ def _step(key):
     water()
 
 
+def set_period(water, period, first):
+    """The runners of the engine ``water`` call it every ``period`` steps from step ``first`` on."""
+    for key in [k for k, e in ENGINES.items() if e is water]:
+        for r in _runners(key):
+            r.iterPeriod, r.iterLast = int(period), int(first) - int(period)
+
+
 def _runners(key):
     """The PyRunners of ``key`` among O.engines."""
     from yade import O

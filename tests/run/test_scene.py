@@ -146,3 +146,14 @@ def test_flat_walls_follow_a_loading_but_are_not_on_springs():
         scenes.preset("liquefaction_case1", {"walls": {"kind": "flat"}})
     assert "\n" not in str(e.value)
     assert scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}}).walls.kind == "flat"  # the paper's law too
+
+
+def test_every_preset_states_the_papers_transfer():
+    """The presets keep the paper's re-meshing (the cross-check's reference), whatever the field's
+    default: each base preset states transfer = "paper", the others extend one."""
+    names = sorted(f[:-5] for f in os.listdir(scenes.SCENE_DIR) if f.endswith(".toml"))
+    assert len(names) >= 10
+    for name in names:
+        assert scenes.preset(name).water.transfer == "paper", name
+        raw = open(os.path.join(scenes.SCENE_DIR, name + ".toml")).read()
+        assert "extends = " in raw or 'transfer = "paper"' in raw, name
