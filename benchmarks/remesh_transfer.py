@@ -191,9 +191,9 @@ def main(argv):
         print(f"{e} {t} start {s}: re-meshing {r['remesh_over_inflow']:.3g} of the inflow, heave "
               f"{r['heave_time']}, max U/E_w {r['max_U_over_E_w']:.3g}, balance {r['balance_error']:.1e}, "
               f"{r['cpu_s']:.0f} CPU s", flush=True)
-        table, decision = summary(runs, args.starts)
+        per_example, decision = summary(runs, args.starts)
         write_json(args.json, {"what": __doc__.strip().splitlines()[0], "perturbation": PERTURBATION,
-                               "starts": args.starts, "summary": table, "decision": decision, "runs": runs})
+                               "starts": args.starts, "summary": per_example, "decision": decision, "runs": runs})
 
 
 if __name__ == "__main__":
