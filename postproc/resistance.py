@@ -35,7 +35,7 @@ def resistance_figure(doc, path):
             if censored or n_l["high"] is None:
                 ax.annotate("", xy=(x * 1.6, y), xytext=(x, y), arrowprops=dict(arrowstyle="->", color=colour))
             ax.plot([x], [r["csr_simplified"]["mean"]], marker, color="0.55", ms=4, mfc="none",
-                    label="simplified CSR 0.65 a_max/g σv/σ'v0")
+                    label="grey: the simplified CSR 0.65 a_max/g σv/σ'v0 of the row")
     ax.set_xscale("log")
     ax.axvline(cycles, color="0.7", lw=0.8, ls=":")
     ax.set_xlabel("cycles to liquefaction N_L (cycle-mean r_u ≥ %g)" % doc["ru_liquefied"])
