@@ -10,6 +10,7 @@ N_L. Loose: circles; dense: squares. The key sits outside the axes.
 import numpy as np
 
 from engines.files import save_figure
+from engines.studies.resistance import read_rows
 from postproc.plots import plt
 
 STYLE = {"loose": ("o", "C0"), "dense": ("s", "C3")}
@@ -22,7 +23,7 @@ def resistance_figure(doc, path):
     for name, p in doc["packings"].items():
         marker, colour = STYLE.get(name, ("^", "C2"))
         label = f"{name} (e = {p['void_ratio']:.3f})"
-        for r in p["rows"]:
+        for r in read_rows(p):
             n_l, csr = r["n_l"], r["csr"]
             censored = n_l["median"] is None
             x = cycles if censored else n_l["median"]

@@ -45,6 +45,14 @@ FREQUENCY = 50.0      # Hz: case 1's
 # amplitudes: case 1's times sqrt(2)^k, k = 0..4 (15 to 60 m/s^2): case 1 itself (one run, 30
 # cycles) holds its cycle-mean r_u near 0.5 in the bed, so the curve's liquefied part lies above it
 AMPLITUDES = tuple(round(BASE_AMPLITUDE * math.sqrt(2.0) ** k, 3) for k in range(5))
+BASE_DT = 1e-6        # s: case 1's step, kept up to its amplitude
+
+
+def time_step(amplitude):
+    """The step [s] at ``amplitude`` [m/s^2]: case 1's, times BASE_AMPLITUDE / amplitude above it
+    (the grains' speeds grow with the input: at 3000 gal and 1e-6 s a pore's water area fell
+    through zero within a step, DarcyStabilityError, 2026-12-05)."""
+    return BASE_DT * min(1.0, BASE_AMPLITUDE / amplitude)
 STARTS = 8
 SCENE = "liquefaction_case1"
 PACKINGS = {"loose": {}, "dense": {"mu": 0.0}}  # the deposit's [contact] changes (none: the preset's file)
@@ -190,6 +198,11 @@ def _bounds(n_l):
     return tuple(np.inf if v is None else v for v in (n_l["low"], n_l["high"]))
 
 
+def read_rows(packing):
+    """The rows of a packing with a reading (not those whose every start failed)."""
+    return [r for r in packing["rows"] if "n_l" in r]
+
+
 def statements(packings):
     """What the intervals decide ({"csr_falls_with_n_l": {packing: text}, "loose_below_dense": {amplitude: text}}):
     CSR falls with N_L in a packing when two of its rows separate in both (one's CSR interval wholly
@@ -198,9 +211,9 @@ def statements(packings):
     CSR interval not above dense's (and the reverse); else undecided with these intervals."""
     falls = {}
     for name, p in packings.items():
-        ways = set()
-        for a in p["rows"]:
-            for b in p["rows"]:
+        ways, rows = set(), read_rows(p)
+        for a in rows:
+            for b in rows:
                 if a["csr"]["ci95_low"] > b["csr"]["ci95_high"]:
                     (a_lo, a_hi), (b_lo, b_hi) = _bounds(a["n_l"]), _bounds(b["n_l"])
                     ways |= {"falls"} if a_hi < b_lo else {"rises"} if a_lo > b_hi else set()
@@ -209,8 +222,8 @@ def statements(packings):
                        "contradictory pairs" if ways else "undecided with these intervals (no pair separates in both)")
     below = {}
     if {"loose", "dense"} <= set(packings):
-        dense = {r["amplitude_m_s2"]: r for r in packings["dense"]["rows"]}
-        for r in packings["loose"]["rows"]:
+        dense = {r["amplitude_m_s2"]: r for r in read_rows(packings["dense"])}
+        for r in read_rows(packings["loose"]):
             d = dense.get(r["amplitude_m_s2"])
             if d is None:
                 continue
