@@ -109,7 +109,8 @@ def simplified_csr(a_max, g, overburden, depth, rho_w):
 
 def run_reading(history, summary, frequency, amplitude, cycles=CYCLES):
     """{"n_l" (None: censored), "censored", "band" (1-based), "csr", "csr_simplified", "sigma_v0_Pa",
-    "tau_amplitude_Pa", "cycles_run"} of one run (csr nan where the band's sigma'_v0 is not > 0): ``history`` {column: array} (history.csv),
+    "tau_amplitude_Pa", "cycles_run", "ru_cycle_mean_max" (the largest cycle-mean r_u of the counted
+    bands; None before a cycle)} of one run (csr nan where the band's sigma'_v0 is not > 0): ``history`` {column: array} (history.csv),
     ``summary`` (its summary.json), the input's frequency [Hz] and amplitude [m/s^2]. A run shorter
     than ``cycles`` that did not liquefy raises ValueError (it was stopped, not censored)."""
     t = np.asarray(history["t"], float)
@@ -124,9 +125,10 @@ def run_reading(history, summary, frequency, amplitude, cycles=CYCLES):
     ran = float(frequency * t[-1])
     if n_l is None and ran < cycles * (1 - 1e-9):
         raise ValueError(f"a run of {ran:.3g} cycles did not liquefy: it stopped before the {cycles} cycles that censor it")
+    peak = np.nan_to_num(cycle_mean(t, ru, frequency), nan=-np.inf).max(axis=0)
     if band is None:
-        peak = np.nan_to_num(cycle_mean(t, ru, frequency), nan=-np.inf).max(axis=0)
         band = int(np.argmax(peak))  # the first counted band when no cycle has passed
+    ru_peak = float(peak.max()) if np.isfinite(peak.max()) else None
     band = counted[band]
     sv0 = float(history[f"sv_band{band + 1}"][0])
     t1 = max(1.0, min(n_l if n_l is not None else np.inf, CSR_CYCLES)) / frequency
@@ -137,7 +139,7 @@ def run_reading(history, summary, frequency, amplitude, cycles=CYCLES):
     depth = bed_top - 0.5 * (z0 + z1)
     simple = simplified_csr(amplitude, mat["g"], summary["band_overburden_Pa"][band], depth, mat["rho_w"])
     return {"n_l": n_l, "censored": n_l is None, "band": band + 1, "csr": tau / sv0 if sv0 > 0 else np.nan, "csr_simplified": simple,
-            "sigma_v0_Pa": sv0, "tau_amplitude_Pa": tau, "cycles_run": ran}
+            "sigma_v0_Pa": sv0, "tau_amplitude_Pa": tau, "cycles_run": ran, "ru_cycle_mean_max": ru_peak}
 
 
 def median_interval(n_l, cycles=CYCLES, confidence=CONFIDENCE):
@@ -175,12 +177,13 @@ def wilson(k, n, confidence=CONFIDENCE):
 def group_reading(readings, cycles=CYCLES):
     """The entry of one amplitude and packing from its runs' ``run_reading``s: n_starts, N_L's
     median and interval (``median_interval``), the fraction liquefied with its Wilson interval,
-    and CSR and the simplified CSR as {"mean", "ci95_low", "ci95_high", "values"} over the starts."""
+    each run's band and largest cycle-mean r_u, and CSR and the simplified CSR as {"mean", "ci95_low",
+    "ci95_high", "values"} over the starts."""
     n_l = [r["n_l"] for r in readings]
     k = sum(v is not None for v in n_l)
     out = {"n_starts": len(readings), "n_l": {**median_interval(n_l, cycles), "values": n_l},
            "liquefied": {"fraction": k / len(readings), **dict(zip(("low", "high"), wilson(k, len(readings))))},
-           "bands": [r["band"] for r in readings]}
+           "bands": [r["band"] for r in readings], "ru_cycle_mean_max": [r["ru_cycle_mean_max"] for r in readings]}
     for key in ("csr", "csr_simplified"):
         s = statistics(np.array([r[key] for r in readings]))
         out[key] = {"mean": float(s["mean"]), "ci95_low": float(s["ci95_low"]), "ci95_high": float(s["ci95_high"]),

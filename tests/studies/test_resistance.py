@@ -47,7 +47,7 @@ def test_a_run_that_never_gets_there_is_censored_on_its_band_of_largest_ru_and_a
         return np.full(len(t), 0.2 + 0.1 * (k == 4) + 2.0 * (k == 6))  # band 7 (near the top) ignored
 
     r = rs.run_reading(history(ru), summary(), F, 15.0)
-    assert r["censored"] and r["n_l"] is None and r["band"] == 5
+    assert r["censored"] and r["n_l"] is None and r["band"] == 5 and r["ru_cycle_mean_max"] == pytest.approx(0.3)
     with pytest.raises(ValueError, match="did not liquefy"):
         rs.run_reading(history(ru, cycles=12), summary(), F, 15.0)
     short = rs.run_reading(history(ru, cycles=12), summary(), F, 15.0, cycles=12)
@@ -91,7 +91,7 @@ def test_the_median_interval_of_order_statistics_with_censored_runs_and_its_cove
 
 def _row(a, csr, n_l):
     vals = [n_l] * 4
-    return {"amplitude_m_s2": a, **rs.group_reading([{"n_l": v, "band": 1, "csr": csr * (1 + 0.01 * i), "csr_simplified": 1.0}
+    return {"amplitude_m_s2": a, **rs.group_reading([{"n_l": v, "band": 1, "ru_cycle_mean_max": 1.0, "csr": csr * (1 + 0.01 * i), "csr_simplified": 1.0}
                                                      for i, v in enumerate(vals)])}
 
 
