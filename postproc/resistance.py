@@ -5,7 +5,7 @@ Per amplitude and packing: the median N_L of the starts with its interval (horiz
 mean CSR with its 95 % interval (vertical bar), filled; a censored median (more than half the
 starts not liquefied within the runs' cycles) open at the runs' end with an arrow to the right;
 the simplified CSR (0.65 a_max/g sigma_v/sigma'_v0) of the same row as a small grey mark at the same
-N_L. Loose: circles; dense: squares. The key sits outside the axes.
+N_L. Loose: circles; dense: squares. The key sits below the axes.
 """
 import numpy as np
 
@@ -19,7 +19,7 @@ STYLE = {"loose": ("o", "C0"), "dense": ("s", "C3")}
 def resistance_figure(doc, path):
     """Draw ``doc`` (engines.run.resistance.analyse's document) to ``path``."""
     cycles = doc["cycles"]
-    fig, ax = plt.subplots(figsize=(7.2, 4.2))
+    fig, ax = plt.subplots(figsize=(6.4, 5.0))
     for name, p in doc["packings"].items():
         marker, colour = STYLE.get(name, ("^", "C2"))
         label = f"{name} (e = {p['void_ratio']:.3f})"
@@ -36,19 +36,21 @@ def resistance_figure(doc, path):
             if censored or n_l["high"] is None:
                 ax.annotate("", xy=(x * 1.6, y), xytext=(x, y), arrowprops=dict(arrowstyle="->", color=colour))
             ax.plot([x], [r["csr_simplified"]["mean"]], marker, color="0.55", ms=4, mfc="none",
-                    label="grey: the simplified CSR 0.65 a_max/g σv/σ'v0 of the row")
+                    label="grey: simplified CSR 0.65 a_max/g σv/σ'v0")
     ax.set_xscale("log")
+    ax.set_xlim(0.8, 3 * cycles)
     ax.axvline(cycles, color="0.7", lw=0.8, ls=":")
     ax.set_xlabel("cycles to liquefaction N_L (cycle-mean r_u ≥ %g)" % doc["ru_liquefied"])
     ax.set_ylabel("CSR = amplitude of σ'_xz / σ'_v0")
-    ax.set_title(("PILOT: " if doc.get("pilot") else "") + "resistance curve, seismic box (case 1), "
+    ax.set_title(("PILOT: " if doc.get("pilot") else "") + "resistance curve, seismic box (case 1),\n"
                  f"{doc['frequency_Hz']:g} Hz, runs of {cycles:g} cycles", fontsize=9)
     handles, labels = ax.get_legend_handles_labels()
     keep = dict(zip(labels, handles))  # one entry per label
-    ax.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
+    ax.legend(keep.values(), keep.keys(), fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2,
+              frameon=False)
     fig.text(0.01, 0.01, "bars: N_L interval of the median (order statistics), CSR 95 % interval; open + arrow: "
              f"censored (N_L > {cycles:g})", fontsize=7)
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
     save_figure(fig, path, dpi=130)
     plt.close(fig)
     return path

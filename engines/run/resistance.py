@@ -133,7 +133,7 @@ def analyse(root, plan):
             starts, failed = _starts(ensemble_path(root, packing, a))
             if not starts:
                 if failed:
-                    rows.append({"amplitude_m_s2": a, "n_starts": 0, "failed": failed})
+                    rows.append({"amplitude_m_s2": a, "n_starts": 0, "not_completed": failed})
                 continue
             readings = []
             for d in starts:
@@ -143,7 +143,7 @@ def analyse(root, plan):
                 cpu.append(s["cpu_seconds"])
             g = s["parameters"]["material"]["g"]
             rows.append({"amplitude_m_s2": a, "a_max_g": a / g, "dt_s": rs.time_step(a),
-                         **rs.group_reading(readings, plan.cycles), "failed": failed})
+                         **rs.group_reading(readings, plan.cycles), "not_completed": failed})
         if porosity:
             n = float(np.mean(porosity))
             doc["packings"][packing] = {"deposit": change or "the preset's (liquefaction_packing.csv)",
@@ -170,6 +170,7 @@ def run_study(out, plan, workers=1, scheduler=None, analyse_only=False, docs=Non
     from postproc.resistance import resistance_figure
     doc = analyse(root, plan)
     for folder in [out] + ([docs] if docs else []):
+        os.makedirs(folder, exist_ok=True)
         files.write_json(os.path.join(folder, "resistance.json"), doc)
         resistance_figure(doc, os.path.join(folder, "resistance.png"))
     return doc
