@@ -14,7 +14,7 @@ SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels resistance clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -190,6 +190,17 @@ LIQ_BASELINE ?= $(OUT)/liquefaction
 reconstruction: deps
 	nice -n 10 $(PY) yade_scripts/liquefaction_reconstruction.py --out $(OUT)/reconstruction \
 	   --baseline $(LIQ_BASELINE) --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+
+# The liquefaction resistance curve (issue 42 item 3; engines/studies/resistance.py): seismic case 1's
+# box under its 50 Hz cosine at 5 amplitudes (1500 gal x sqrt(2)^k, k = 0..4), ensembles of
+# RES_STARTS starts over 30 cycles, loose (the preset's) and dense (deposited with mu = 0) packings,
+# through the sweep runner (resumable: finished ensembles are kept; SCHEDULER as below) ->
+# $(OUT)/resistance/ and docs/resistance/{resistance.json,resistance.png}. SHORT=1: milliseconds
+# runs into $(OUT)/resistance-short/ (the pipeline only; the check test runs it).
+RES_STARTS ?= 8
+resistance: deps
+	nice -n 10 $(PY) yade_scripts/resistance.py --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
+	   $(if $(SHORT),--short --out $(OUT)/resistance-short,--starts $(RES_STARTS) --out $(OUT)/resistance --docs docs/resistance)
 
 # Speed against accuracy (docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
 # and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows

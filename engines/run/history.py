@@ -21,7 +21,7 @@ LAST_LINE = 1 << 16  # bytes kept of the end of what was read (the last row: wel
 UNITS = {"t": "s", "U_block*": "N/m", "porosity": "1", "kinetic_energy": "J/m", "water_balance_error": "1",
          "total_water": "m^2", "n_pores": "1", "fn_bottom_mean": "N/m", "bed_top": "m", "base_acc": "m/s^2",
          "base_vel": "m/s", "base_disp": "m", "side_left_dx": "m", "side_right_dx": "m", "remesh_change": "m^2",
-         "wall_*": "N/m", "sv_band*": "Pa", "p_band*": "Pa", "q_band*": "Pa", "ru_band*": "1"}
+         "wall_*": "N/m", "sv_band*": "Pa", "p_band*": "Pa", "q_band*": "Pa", "sxz_band*": "Pa", "ru_band*": "1"}
 
 
 def units(columns):

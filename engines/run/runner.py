@@ -226,15 +226,15 @@ class Recorder:
 
     def stress_row(self, cp, xz):
         """{column: value} of the bands' effective stress at centres xz (engines.model.effective_stress:
-        sigma'_v, p', q [Pa] from the contacts, eq L1-L2) and, with water, their r_u (L3) against
-        sigma'_v at the first row whose contacts carry a load (the first; with law = "yade" the
-        second, as YADE finds its contacts in the first step; nan before it)."""
+        sigma'_v, p', q and the shear stress sigma'_xz [Pa] from the contacts, eq L1-L2) and, with
+        water, their r_u (L3) against sigma'_v at the first row whose contacts carry a load (the first;
+        with law = "yade" the second, as YADE finds its contacts in the first step; nan before it)."""
         s = es.region_stress(xz, cp.stress_contacts(xz), -np.inf, np.inf, self.bands, self.band_areas)
         sv, _, p, q = es.invariants(s)
         if self.sigma_v0 is None and sv.sum() > 0:  # YADE's law finds its contacts at the first step
             self.sigma_v0 = np.array([float(f"{x:.9g}") for x in sv])  # as history.csv holds it: reopen reads it
         v = {}
-        for name, values in (("sv", sv), ("p", p), ("q", q)):
+        for name, values in (("sv", sv), ("p", p), ("q", q), ("sxz", s[:, 2])):
             v.update({f"{name}_band{k + 1}": x for k, x in enumerate(values)})
         state = pore_state(cp.water_model, xz)
         if state is not None:
@@ -264,7 +264,7 @@ def history_columns(cp):
             ["fn_bottom_mean", "bed_top"] + (["base_acc", "base_vel", "base_disp"] if cp.base is not None else []) +
             (["side_left_dx", "side_right_dx"] if ties else []) + (["remesh_change"] if water else []) +
             [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")] +
-            [f"{name}_band{k}" for name in ("sv", "p", "q") + (("ru",) if water else ()) for k in bands])
+            [f"{name}_band{k}" for name in ("sv", "p", "q", "sxz") + (("ru",) if water else ()) for k in bands])
 
 
 def box_faces(cp):
