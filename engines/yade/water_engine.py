@@ -39,7 +39,8 @@ from engines.compiled import water_model as compiled_water_model
 from engines.model import limits, pore_water
 from engines.model import pores as pg
 from engines.model.water_model import WaterModel
-from engines.yade import contract
+from engines.yade import contract, scene_save
+from engines.yade.scene_save import RestoreError, call  # noqa: F401  (call: the runners' command, scene_save.RUNNER_MODULE)
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
 # The default rebuild_distance, a fraction of l_m. Links join discs closer than l_m beyond touching
@@ -169,8 +170,6 @@ class WaterEngine:
         JUMP_FRACTION of its radius plus twice its velocity x the steps' time from its centre then
         (a scene loaded, bodies moved by hand); xz (N, 2) [m] the centres now."""
         from yade import O
-
-        from engines.yade.scene_save import RestoreError
         if self._seen is None:
             return
         k, seen = self._seen
@@ -204,8 +203,6 @@ class WaterEngine:
     @water_interval.setter
     def water_interval(self, value):
         from yade import O
-
-        from engines.yade import scene_save
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise ValueError(f"water_interval = {value!r}: the steps between water steps, an integer >= 1")
         value = int(value)
@@ -255,7 +252,6 @@ class WaterEngine:
         PyRunner adds its dispatch to every call (``drive`` does not pay it). O.save and O.saveTmp
         save the engine's water with the scene, O.load and O.loadTmp restore it, in a new process
         too (engines.yade.scene_save)."""
-        from engines.yade import scene_save
         return scene_save.runner(self, label)
 
     def drive(self, n, stop=None):
@@ -422,3 +418,6 @@ def water_path(compiled, bridge=False):
     if not compiled:
         return "python"
     return "drive" if bridge else "kernel"
+
+
+scene_save.ENGINE_CLASS = WaterEngine  # the class a saved scene's recipe makes again (scene_save.restore)
