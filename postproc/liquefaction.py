@@ -30,6 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from engines import files  # noqa: E402
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
@@ -173,9 +174,11 @@ def depth_figure(history, snaps, bounds, title, band_bounds=None):
     dlim = max(float(np.nanmax(np.abs(dn[:, :-1] if dn.shape[1] > 1 else dn))), 1e-9)  # the bands below the surface
     im = axes[1].pcolormesh(t_edges, edges, dn.T, cmap="RdBu_r",  # a cell about each snapshot's time
                             vmin=-dlim, vmax=dlim, shading="flat")
-    fig.colorbar(im, ax=axes[1], extend="both", location="bottom", shrink=0.9,
-                 label="porosity change since t = 0 [-], a cell about each snapshot\n"
-                       f"(scaled to the bands below the surface; max |Δn| {np.nanmax(np.abs(dn)):.3f})")
+    bar = fig.colorbar(im, ax=axes[1], extend="both", location="bottom", shrink=0.9,
+                       label="porosity change since t = 0 [-], a cell about each snapshot\n"
+                             f"(scaled to the bands below the surface; max |Δn| {np.nanmax(np.abs(dn)):.3f})")
+    bar.locator = MaxNLocator(4, symmetric=True)  # five ticks: the labels of a narrow bar do not run together
+    bar.update_ticks()
     axes[2].step(np.r_[n[0], n[0][-1]], edges, where="post", color="k")
     axes[2].set_xlabel("porosity at t = 0 [-]\n(top band: to the highest disc)", fontsize=9)
     for ax, what in zip(axes[:2], ("pore pressure", "porosity (at the snapshots)")):
