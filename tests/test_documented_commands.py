@@ -280,6 +280,7 @@ EXEMPT_TARGETS = {
     "test-fast": "a part of make test",
     "precision": "the reference in three precisions (minutes); tests/reference",
     "mutants": "mutation testing, hours",
+    "liquefaction-bands": "56 seismic runs (about 20 CPU minutes), rewrites the tracked docs/liquefaction/bands.json; tests/postproc/test_liquefaction_bands.py tests the table and tests/studies its verdicts",
     "resistance": "SHORT=1 runs in tests/run/test_resistance.py (twice: it checks the resume); the full curve is 80 runs, about 2 CPU hours",
     "remesh-transfer": "the transfer study, 64 runs (about an hour of CPU), rewrites the tracked docs/engine/remesh_transfer.json; tests/studies/test_remesh_transfer_rule.py tests its rule",
     "mutants-kernels": "mutation testing of the numba kernels (CPU hours); tests/test_kernel_mutants.py tests the driver",

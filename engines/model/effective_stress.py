@@ -36,6 +36,8 @@ from engines.model.observe import disc_rectangle_area
 from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 
 N_BANDS = 8  # horizontal bands of the bed (history.csv's *_band columns)
+SURFACE_DIAMETERS = 2.0  # a band whose top is closer to the bed's top [mean diameters] has too little
+#                         overburden for its r_u and p'/p'_0 to be read (sigma'_v0 -> 0)
 
 
 @dataclass(frozen=True)
@@ -110,6 +112,12 @@ def invariants(s):
     s = np.asarray(s, float)
     xx, zz, xz = s[..., 0], s[..., 1], s[..., 2]
     return zz, xx, 0.5 * (xx + zz), np.hypot(0.5 * (zz - xx), xz)
+
+
+def counted_bands(bounds, bed_top, mean_diameter):
+    """The indices of the bands (bounds [(z0, z1)] [m], bottom first) whose top lies at least
+    SURFACE_DIAMETERS mean diameters below the bed's top ``bed_top`` [m]."""
+    return [k for k, (_, z1) in enumerate(bounds) if z1 <= bed_top - SURFACE_DIAMETERS * mean_diameter]
 
 
 def bands(bottom, top, n=N_BANDS):

@@ -123,3 +123,30 @@ def trends(cases, drainage=None, seed=0):
             row["note"] = f"slowest drainage time constant of case 3 {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
         rows.append(row)
     return rows
+
+
+# The paper's statement "full liquefaction (zero effective stress) was not reached in 2D" (SPEC
+# §2.5) measured by band (engines.model.effective_stress). A band
+# liquefied when the upper end of the 95 % interval of its min p'/p'_0 over the starts lies below
+# P_RATIO_LIQUEFIED (zero effective stress, within the contacts' noise). Its max r_u (an instant's,
+# the shaking's dynamic swing included) and the starts where r_u reached RU_LIQUEFIED ("n of N") are
+# reported beside it, not judged. Bands within SURFACE_DIAMETERS of the bed's top are reported,
+# not judged (effective_stress.counted_bands: too little overburden to lose).
+P_RATIO_LIQUEFIED = 0.05
+RU_LIQUEFIED = 0.9  # the r_u whose first time the summaries record (t_ru_0p9_s)
+
+
+def band_verdicts(results, counted):
+    """{band: {"p_ratio_min", "ru_max": interval dicts or None, "starts_ru_0p9": [n, N] or None,
+    "judged": bool, "liquefied": bool or None}} of one case's ensemble results (ensemble.json's
+    ``results``: keys "bands.<band>.<quantity>", each {"n", "mean", "ci95_low", "ci95_high",
+    "values"}); ``counted``: the 0-based indices of the bands judged (counted_bands)."""
+    names = sorted({k.split(".")[1] for k in results if k.startswith("bands.")}, key=lambda b: int(b[4:]))
+    out = {}
+    for b in names:
+        p, ru, t = (results.get(f"bands.{b}.{q}") for q in ("p_ratio_min", "ru_max", "t_ru_0p9_s"))
+        reached = None if t is None else [sum(v is not None for v in t["values"]), len(t["values"])]
+        judged = int(b[4:]) - 1 in counted
+        liquefied = bool(p["ci95_high"] < P_RATIO_LIQUEFIED) if judged and p is not None else None
+        out[b] = {"p_ratio_min": p, "ru_max": ru, "starts_ru_0p9": reached, "judged": judged, "liquefied": liquefied}
+    return out

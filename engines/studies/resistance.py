@@ -34,12 +34,12 @@ import math
 import numpy as np
 from scipy import stats
 
+from engines.model.effective_stress import SURFACE_DIAMETERS, counted_bands  # noqa: F401  (the study's rule)
 from engines.studies.ensemble import CONFIDENCE, statistics
 
 CYCLES = 30           # a run's length [cycles]; longer is censored
 RU_LIQUEFIED = 0.9    # r_u at which a band has liquefied
 CSR_CYCLES = 3        # cycles over which sigma'_xz's amplitude is fitted
-SURFACE_DIAMETERS = 2.0  # bands whose top is closer to the bed's top [mean diameters] do not count
 BASE_AMPLITUDE = 15.0  # m/s^2: case 1's 1500 gal
 FREQUENCY = 50.0      # Hz: case 1's
 # amplitudes: case 1's times sqrt(2)^k, k = 0..4 (15 to 60 m/s^2): case 1 itself (one run, 30
@@ -84,12 +84,6 @@ def liquefaction_cycle(t, ru, frequency, threshold=RU_LIQUEFIED):
         return None, None
     k = rows[0]
     return float(frequency * t[k]), int(np.flatnonzero(hit[k])[0])
-
-
-def counted_bands(bounds, bed_top, mean_diameter):
-    """The indices of the bands (bounds [(z0, z1)] [m], bottom first) whose top lies at least
-    SURFACE_DIAMETERS mean diameters below the bed's top ``bed_top`` [m]."""
-    return [k for k, (_, z1) in enumerate(bounds) if z1 <= bed_top - SURFACE_DIAMETERS * mean_diameter]
 
 
 def sinusoid_amplitude(t, y, frequency):
