@@ -489,8 +489,12 @@ def conserving_water(old_net, W_old, A_old, new_net, A_new, xz, overlaps=None):
     W_new[matched] = np.asarray(A_new, float)[matched] + np.bincount(q, X[p] * share, minlength=n_new)[matched]
     if np.any(W_new[matched] <= 0):
         k = int(np.flatnonzero(matched & ~(W_new > 0))[0])
-        raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2): the discs "
-                         f"moved far on one mesh; rebuild by displacement (WaterEngine rebuild_distance; [numerics] "
+        over = p[q == k]
+        raise ValueError(f"conserving transfer: new pore {k} would hold no water (W = {W_new[k]:.3e} m^2): the old "
+                         f"pores over it, at suction (W/A down to {np.min(np.asarray(W_old, float)[over] / np.asarray(A_old, float)[over]):.2f}), hand on "
+                         f"their water missing whole, and their void is {tot_a[gb[k]] / tot_b[gb[k]]:.2f} x that of "
+                         f"the new pores it goes to (the discs moved far on one mesh); rebuild more often "
+                         f"(WaterEngine rebuild_interval= or rebuild_distance=; [numerics] rebuild_interval or "
                          f"rebuild_distance) or use the paper's transfer (WaterSettings transfer='paper'; [water] "
                          f"transfer = \"paper\" in a scene file)")
     return W_new, matched

@@ -44,6 +44,7 @@ from engines.compiled.pores.remesh import near_vertex_sets, spread_to_neighbours
 from engines.compiled.pores.triangulation import lifted_points, lower_ccw
 from engines.model import pore_water
 from engines.model import pores as pg
+from engines.model.pores.overlaps import without_slivers
 
 NO_WALL_VERTICES = np.zeros(0, np.int64)  # owner and bits of links._is_link without flat walls
 
@@ -87,8 +88,8 @@ def _near_vertex_sets(old_net, U_old, old_valid, new_net, todo):
 
 
 def _pore_overlaps(old_net, new_net, xz):
-    return pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore,
-                         pg.vertex_positions(old_net, xz), new_net.n_pores)
+    return without_slivers(*pore_overlaps(old_net.tri, old_net.tri_pore, new_net.tri, new_net.tri_pore,
+                                          pg.vertex_positions(old_net, xz), new_net.n_pores))
 
 
 BUILD = pg.BuildSteps(_lifted_points, _lower_triangles, _missing_pairs, _faces, links_and_corners, _certain_triangles)

@@ -6,6 +6,8 @@ from scipy.spatial import cKDTree
 from engines.model.pores.measure import vertex_positions
 from engines.model.pores.triangulation import _signed_area
 
+SLIVER = 1e-10  # an overlap <= SLIVER x its pores' larger overlap total is round-off (without_slivers)
+
 
 def _clip_areas(subj, clip):
     """Areas (K,) of the intersections of triangles subj (K, 3, 2) and clip (K, 3, 2), both
@@ -42,9 +44,10 @@ def _clip_areas(subj, clip):
 def pore_overlaps(old_net, new_net, xz):
     """Polygon overlap areas of the pores of two networks at positions xz (N, 2) [m].
 
-    Returns (p_old, q_new, area [m^2]) for every overlapping pair. Each pore is a union of
-    triangles: a triangle present in both networks (same three discs) overlaps only itself; the
-    others are clipped against the nearby triangles of the other network (``_clip_areas``).
+    Returns (p_old, q_new, area [m^2]) for every overlapping pair, round-off slivers dropped
+    (``without_slivers``). Each pore is a union of triangles: a triangle present in both networks
+    (same three discs) overlaps only itself; the others are clipped against the nearby triangles of
+    the other network (``_clip_areas``).
     Compiled twin: engines.compiled.pores.REMESH.pore_overlaps (the same pairs, the areas summed in
     another order). Both networks have the same flat walls, if any.
     """
@@ -76,4 +79,15 @@ def pore_overlaps(old_net, new_net, xz):
     p, q, area = np.concatenate(p), np.concatenate(q), np.concatenate(area)
     keep = area > 0
     key, inv = np.unique(p[keep] * max(new_net.n_pores, 1) + q[keep], return_inverse=True)
-    return key // max(new_net.n_pores, 1), key % max(new_net.n_pores, 1), np.bincount(inv, area[keep])
+    return without_slivers(key // max(new_net.n_pores, 1), key % max(new_net.n_pores, 1), np.bincount(inv, area[keep]))
+
+
+def without_slivers(p, q, area):
+    """The pore pairs (p, q, area) less those whose area is <= SLIVER x the larger of the total
+    overlap of p and of q. Two triangles that share an edge (flat walls' feet and corners line up
+    with the discs' centres) clip to nothing or to a sliver of ~1e-17 of a pore, by the last bits
+    of the positions, and pore_water.conserving_water would hand a new pore met only by such a
+    sliver a full share of the old pore's water."""
+    big = np.maximum(np.bincount(p, area)[p], np.bincount(q, area)[q]) if len(area) else area
+    keep = area > SLIVER * big
+    return p[keep], q[keep], area[keep]
