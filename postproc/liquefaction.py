@@ -401,13 +401,21 @@ def needed_text(entry):
     return f" ({n} starts a case would decide it)" if n else f" (more than {MAX_STARTS} starts a case)"
 
 
-def trends_markdown(rows):
-    """The trends as a table: per condition its estimate, 95 % interval, criterion and verdict."""
+def trends_markdown(rows, marked=None):
+    """The trends as a table: per condition its estimate, 95 % interval, criterion and verdict.
+    ``marked``: the path of the study's summary.json as the docs name it, to follow each number with
+    its ``<!--json:...-->`` marker (tests/test_doc_numbers.py) for the docs' copy of the table."""
+    def num(value, i, j, key):
+        mark = f"<!--json:{marked}#trends/{i}/conditions/{j}/{key}-->" if marked else ""
+        return f"{value:.3g}{mark}"
+
     lines = ["| trend | the paper | quantity: estimate [95 % interval] (holds if) → verdict | starts | verdict |",
              "|---|---|---|---|---|"]
-    for r in rows:
-        cells = "; ".join(f"{c['quantity']}: {c['estimate']:.3g} [{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}] "
-                          f"({c['holds_if']}) → {c['verdict']}{needed_text(c)}" for c in r["conditions"])
+    for i, r in enumerate(rows):
+        cells = "; ".join(f"{c['quantity']}: {num(c['estimate'], i, j, 'estimate')} "
+                          f"[{num(c['ci95'][0], i, j, 'ci95/0')}, {num(c['ci95'][1], i, j, 'ci95/1')}] "
+                          f"({c['holds_if']}) → {c['verdict']}{needed_text(c)}"
+                          for j, c in enumerate(r["conditions"]))
         if r.get("note"):
             cells += f"; {r['note']}"
         starts = ", ".join(f"{n} (case {k})" for k, n in r["starts"].items())

@@ -149,3 +149,16 @@ def test_trends_table_states_the_starts_an_undecided_row_needs():
     decide = "(65 starts a case would decide it)"
     assert first.endswith(f"→ undecided {decide} | 8 (case 1) | undecided {decide} |")
     assert second.endswith("| undecided (more than 80 starts a case) |")
+
+
+def test_the_marked_trends_table_names_each_number_in_the_summary():
+    """trends_markdown(rows, marked): each estimate and interval end followed by its json marker,
+    the key of the very value (tests/test_doc_numbers.py reads them)."""
+    a = {"quantity": "a", "estimate": 0.25, "ci95": [0.2, 0.3], "holds_if": "< 0.5", "verdict": "holds"}
+    b = {"quantity": "b", "estimate": 3.0, "ci95": [2.5, 3.5], "holds_if": "> 1", "verdict": "holds"}
+    rows = [{"trend": "t", "paper": "p", "starts": {1: 8}, "verdict": "holds", "conditions": [a, b]}]
+    text = trends_markdown(rows, "docs/x.json")
+    mark = "<!--json:docs/x.json#trends/0/conditions/"
+    assert f"a: 0.25{mark}0/estimate--> [0.2{mark}0/ci95/0-->" in text
+    assert "3.5<!--json:docs/x.json#trends/0/conditions/1/ci95/1-->] (> 1) → holds |" in text
+    assert trends_markdown(rows).count("<!--") == 0
