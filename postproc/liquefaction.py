@@ -35,7 +35,7 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 from engines import files  # noqa: E402
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
 from engines.model.observe import Window, porosity  # noqa: E402
-from engines.studies.ensemble import CONFIDENCE  # noqa: E402
+from engines.studies.ensemble import CONFIDENCE, MAX_STARTS  # noqa: E402
 from engines.studies.liquefaction import PERIOD, TRENDS, holds_if, trends  # noqa: E402
 from engines.studies.reconstruction import VARIANTS, ensemble_path, judged  # noqa: E402
 from packing.packing import Packing  # noqa: E402
@@ -392,17 +392,34 @@ def transfer_figure(pairs):
     return fig
 
 
-def trends_markdown(rows):
-    """The trends as a table: per condition its estimate, 95 % interval, criterion and verdict."""
+def needed_text(entry):
+    """" (N starts a case would decide it)" of an undecided trend or quantity with ``starts_needed``
+    (" (more than MAX_STARTS ...)" where it is None); "" otherwise."""
+    if "starts_needed" not in entry:
+        return ""
+    n = entry["starts_needed"]
+    return f" ({n} starts a case would decide it)" if n else f" (more than {MAX_STARTS} starts a case)"
+
+
+def trends_markdown(rows, marked=None):
+    """The trends as a table: per condition its estimate, 95 % interval, criterion and verdict.
+    ``marked``: the path of the study's summary.json as the docs name it, to follow each number with
+    its ``<!--json:...-->`` marker (tests/test_doc_numbers.py) for the docs' copy of the table."""
+    def num(value, i, j, key):
+        mark = f"<!--json:{marked}#trends/{i}/conditions/{j}/{key}-->" if marked else ""
+        return f"{value:.3g}{mark}"
+
     lines = ["| trend | the paper | quantity: estimate [95 % interval] (holds if) → verdict | starts | verdict |",
              "|---|---|---|---|---|"]
-    for r in rows:
-        cells = "; ".join(f"{c['quantity']}: {c['estimate']:.3g} [{c['ci95'][0]:.3g}, {c['ci95'][1]:.3g}] "
-                          f"({c['holds_if']}) → {c['verdict']}" for c in r["conditions"])
+    for i, r in enumerate(rows):
+        cells = "; ".join(f"{c['quantity']}: {num(c['estimate'], i, j, 'estimate')} "
+                          f"[{num(c['ci95'][0], i, j, 'ci95/0')}, {num(c['ci95'][1], i, j, 'ci95/1')}] "
+                          f"({c['holds_if']}) → {c['verdict']}{needed_text(c)}"
+                          for j, c in enumerate(r["conditions"]))
         if r.get("note"):
             cells += f"; {r['note']}"
         starts = ", ".join(f"{n} (case {k})" for k, n in r["starts"].items())
-        lines.append(f"| {r['trend']} | {r['paper']} | {cells} | {starts} | {r['verdict']} |")
+        lines.append(f"| {r['trend']} | {r['paper']} | {cells} | {starts} | {r['verdict']}{needed_text(r)} |")
     return "\n".join(lines) + "\n"
 
 

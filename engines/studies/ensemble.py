@@ -60,6 +60,20 @@ def t_half_width(standard_error, n):
     return stats.t.ppf(0.5 + CONFIDENCE / 2, np.maximum(np.asarray(n) - 1, 1)) * standard_error
 
 
+MAX_STARTS = 80  # the most starts a study's row is given (issue 42: starts chosen from sigma ~ 1/sqrt(n))
+
+
+def starts_needed(n, half_width, distance, cap=MAX_STARTS):
+    """The starts that would shrink an interval's half-width (n starts) below ``distance`` (the
+    estimate's distance to the criterion's threshold, same units), with the interval narrowing as
+    1/sqrt(starts): ceil(n (half_width / distance)^2), at least n + 1; None where it exceeds
+    ``cap`` (or the distance is 0)."""
+    if distance <= 0:
+        return None
+    need = max(int(np.ceil(n * (half_width / distance) ** 2)), n + 1)
+    return need if need <= cap else None
+
+
 def flat_results(results, prefix=""):
     """The numbers of a run's ``results`` (summary.json, nested dicts) as {"a.b.c": value}; a
     None (e.g. a heave that did not happen) as NaN."""

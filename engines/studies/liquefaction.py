@@ -7,7 +7,7 @@ the study's tables and figures; the reconstruction judges its variants with the 
 import numpy as np
 from scipy import stats
 
-from engines.studies.ensemble import CONFIDENCE, t_half_width
+from engines.studies.ensemble import CONFIDENCE, starts_needed, t_half_width
 
 PERIOD = 0.02  # the cosine's period [s] (50 Hz): the averaging window of the end values
 
@@ -76,6 +76,14 @@ def _verdict(lo, hi, low, high):
     return "undecided"
 
 
+def _needed(n, est, lo, hi, low, high):
+    """The starts that would decide an undecided quantity (``starts_needed`` of the half-width on the
+    side of the threshold the interval straddles and the estimate's distance to it)."""
+    threshold = low if lo <= low < hi else high
+    half = est - lo if threshold < est else hi - est
+    return starts_needed(n, half, abs(est - threshold))
+
+
 def trends(cases, drainage=None, seed=0):
     """The paper's trends (TRENDS) on our runs: a list of rows {trend, paper, cases, starts,
     conditions: [{quantity, estimate, ci95, holds_if, verdict}], verdict}; rows whose cases are
@@ -84,7 +92,9 @@ def trends(cases, drainage=None, seed=0):
     percentile interval over N_BOOT bootstrap resamples of each case's starts (numpy Generator(seed))
     widened by ``small_sample_factor`` of the fewest starts,
     its verdict holds (the interval inside the criterion's range), fails (outside) or undecided
-    (straddling a threshold, or a case with one start); the trend fails where a condition fails,
+    (straddling a threshold, or a case with one start); an undecided quantity of an ensemble also
+    gives ``starts_needed`` (the starts per case that would decide it, None beyond MAX_STARTS) and an
+    undecided trend the largest of its quantities'; the trend fails where a condition fails,
     holds where all hold. ``drainage``: drainage.json (yade_scripts/liquefaction_drainage.py), quoted
     in the drained row."""
     cases = {k: v if isinstance(v, list) else [v] for k, v in cases.items()}
@@ -111,13 +121,18 @@ def trends(cases, drainage=None, seed=0):
                           else (np.nan, np.nan))
                 widen = small_sample_factor(min(len(runs) for runs in sub.values()))
                 lo, hi = est - widen * (est - lo), est + widen * (hi - est)
+                verdict = "undecided" if one else _verdict(lo, hi, low, high)
                 out.append({"quantity": name, "estimate": est, "ci95": [float(lo), float(hi)],
-                            "holds_if": holds_if(low, high),
-                            "verdict": "undecided" if one else _verdict(lo, hi, low, high)})
+                            "holds_if": holds_if(low, high), "verdict": verdict})
+                if verdict == "undecided" and not one and np.isfinite([lo, hi]).all():
+                    out[-1]["starts_needed"] = _needed(min(len(runs) for runs in sub.values()), est, lo, hi, low, high)
         verdicts = {c["verdict"] for c in out}
         row = {"trend": trend, "paper": paper, "cases": list(need), "starts": {k: len(sub[k]) for k in need},
                "conditions": out,
                "verdict": "fails" if "fails" in verdicts else "holds" if verdicts == {"holds"} else "undecided"}
+        if row["verdict"] == "undecided" and all("starts_needed" in c for c in out if c["verdict"] == "undecided"):
+            need_n = [c["starts_needed"] for c in out if c["verdict"] == "undecided"]
+            row["starts_needed"] = None if None in need_n else max(need_n)
         tau = (drainage or {}).get("case3", {}).get("1", {}).get("tau")
         if 3 in need and "U_low_abs_mean" in have and tau:
             row["note"] = f"slowest drainage time constant of case 3 {1e3 * tau[0]:.0f} ms vs the 20-ms input period"

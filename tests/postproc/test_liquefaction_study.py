@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from engines.studies.ensemble import ensemble_statistics
-from postproc.liquefaction import band_porosity, compaction_correlation, depth_figure, dominant_period, end_mean, study
+from postproc.liquefaction import (band_porosity, compaction_correlation, depth_figure, dominant_period, end_mean, study,
+                                   trends_markdown)
 from tests.figures import assert_drawn
 
 t = np.arange(0, 0.18, 1e-4)
@@ -136,3 +137,28 @@ def test_depth_figure_draws_ru_by_height_with_0_and_1_marked(tmp_path):
     assert lo <= 0.0 and hi >= 1.0 and sorted(line.get_xdata()[0] for line in bar.lines) == [0.0, 1.0]
     boxes = [ax.get_tightbbox() for ax in fig.axes]
     assert not any(_overlap(a, b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
+def test_trends_table_states_the_starts_an_undecided_row_needs():
+    cond = {"quantity": "q", "estimate": 0.52, "ci95": [0.45, 0.6], "holds_if": "< 0.5", "verdict": "undecided"}
+    rows = [{"trend": "t", "paper": "p", "starts": {1: 8}, "conditions": [{**cond, "starts_needed": 65}],
+             "verdict": "undecided", "starts_needed": 65},
+            {"trend": "u", "paper": "p", "starts": {1: 8}, "conditions": [{**cond, "starts_needed": None}],
+             "verdict": "undecided", "starts_needed": None}]
+    first, second = trends_markdown(rows).splitlines()[2:]
+    decide = "(65 starts a case would decide it)"
+    assert first.endswith(f"→ undecided {decide} | 8 (case 1) | undecided {decide} |")
+    assert second.endswith("| undecided (more than 80 starts a case) |")
+
+
+def test_the_marked_trends_table_names_each_number_in_the_summary():
+    """trends_markdown(rows, marked): each estimate and interval end followed by its json marker,
+    the key of the very value (tests/test_doc_numbers.py reads them)."""
+    a = {"quantity": "a", "estimate": 0.25, "ci95": [0.2, 0.3], "holds_if": "< 0.5", "verdict": "holds"}
+    b = {"quantity": "b", "estimate": 3.0, "ci95": [2.5, 3.5], "holds_if": "> 1", "verdict": "holds"}
+    rows = [{"trend": "t", "paper": "p", "starts": {1: 8}, "verdict": "holds", "conditions": [a, b]}]
+    text = trends_markdown(rows, "docs/x.json")
+    mark = "<!--json:docs/x.json#trends/0/conditions/"
+    assert f"a: 0.25{mark}0/estimate--> [0.2{mark}0/ci95/0-->" in text
+    assert "3.5<!--json:docs/x.json#trends/0/conditions/1/ci95/1-->] (> 1) → holds |" in text
+    assert trends_markdown(rows).count("<!--") == 0

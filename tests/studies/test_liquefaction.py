@@ -3,6 +3,7 @@ starts of known means."""
 import numpy as np
 import pytest
 
+from engines.studies.ensemble import starts_needed
 from engines.studies.liquefaction import trends
 
 
@@ -60,4 +61,35 @@ def test_one_run_per_case_decides_no_trend():
     rows = _rows({1: _case(140, 40, -0.02), 3: _case(10, 20, -0.03)})
     row = rows["drained sides with h"]
     assert row["verdict"] == "undecided" and np.isnan(row["conditions"][0]["ci95"]).all()
+    assert "starts_needed" not in row and "starts_needed" not in row["conditions"][0]  # one run: no interval to scale
     assert row["conditions"][0]["estimate"] == pytest.approx(10 / 140)
+
+
+def test_an_undecided_trend_states_the_starts_that_would_decide_it():
+    """n (half-width / distance)^2 from the interval on the threshold's side: an estimate near the
+    threshold needs more starts than one farther from it, a decided row states none, and beyond the
+    cap of 80 (an estimate on the threshold) the row says so with None."""
+    rng = np.random.default_rng(3)
+    needed = {}
+    for u3 in (65, 80):  # drained |U| at ~45 % and ~55 % of the undrained: both straddle 0.5
+        row = _rows({1: _ensemble(rng, 8, 140, 40, -0.02, 0.3), 3: _ensemble(rng, 8, u3, 20, -0.03, 0.3)}
+                    )["drained sides with h"]
+        (cond,) = row["conditions"]
+        assert row["verdict"] == cond["verdict"] == "undecided", cond
+        est, (lo, hi) = cond["estimate"], cond["ci95"]
+        half = est - lo if est > 0.5 else hi - est
+        expect = max(int(np.ceil(8 * (half / abs(est - 0.5)) ** 2)), 9)
+        assert cond["starts_needed"] == row["starts_needed"] == (expect if expect <= 80 else None)
+        needed[u3] = expect
+    assert all(n > 8 for n in needed.values())
+    decided = _rows({1: _ensemble(rng, 8, 140, 40, -0.02), 3: _ensemble(rng, 8, 10, 20, -0.03)})["drained sides with h"]
+    assert decided["verdict"] == "holds" and "starts_needed" not in decided
+    assert "starts_needed" not in decided["conditions"][0]
+
+
+def test_starts_needed_scales_as_the_squared_ratio_and_is_capped():
+    assert starts_needed(8, 0.1, 0.05) == 32            # half the distance of the half-width: 4x the starts
+    assert starts_needed(8, 0.1, 0.099) == 9            # at least one more start than now
+    assert starts_needed(8, 0.1, 0.03) is None           # 89 > 80
+    assert starts_needed(8, 0.1, 0.0) is None
+    assert starts_needed(20, 0.1, 0.05, cap=100) == 80
