@@ -357,11 +357,13 @@ class Run:
     CHECKPOINT_FIELDS = ("n_steps", "segments", "checkpoint_step", "run_id", "cp", "rec")
     CHECKPOINT_DERIVED = {"scene": "the recipe", "packing": "the recipe", "start": "the recipe",
                           "out": "the folder resumed in", "_last_checkpoint": "the wall clock of this segment",
-                          "_clock": "the wall and CPU clocks of this segment (set by go)"}
+                          "_clock": "the wall and CPU clocks of this segment (set by go)",
+                          "_overburden": "band_overburden's value, computed from the recipe at its first call"}
 
     def __init__(self, scene, packing, out_dir, n_steps, start=None, prepared=None):
         self.scene, self.packing, self.out, self.n_steps, self.start = scene, packing, out_dir, n_steps, start
         self.run_id = uuid.uuid4().hex
+        self._overburden = None
         self.cp = YadeCoupling(scene, packing, prepared=prepared)
         self.rec = Recorder(self.cp, out_dir, n_steps)
         self.cp.hooks += [self.rec, self]
@@ -530,13 +532,17 @@ class Run:
 
     def band_overburden(self):
         """The buoyant overburden [Pa] of each band at the start (effective_stress.overburden: the
-        particles' unit weight rho f g, less rho_w g with water), beside sigma'_v0 from the contacts."""
+        particles' unit weight rho f g, less rho_w g with water), beside sigma'_v0 from the contacts;
+        computed once (each summary writes it)."""
+        if self._overburden is not None:
+            return self._overburden
         pk, m = self.packing, self.packing.mobile
         mat = self.scene.material
         unit = (mat.rho * pk.density_factor[m] - (mat.rho_w if self.scene.water.enabled else 0.0)) * mat.g
         b = self.rec.bands
         width = self.rec.band_areas[0] / (b[0][1] - b[0][0])
-        return es.overburden(pk.xz[m], pk.r[m], unit, 0.0, width, b)
+        self._overburden = es.overburden(pk.xz[m], pk.r[m], unit, 0.0, width, b)
+        return self._overburden
 
     def summarise(self, status, received):
         cp, sc = self.cp, self.scene
