@@ -132,6 +132,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     import numpy as np
 
     from engines.compiled import kernels
+    from engines.compiled.params import WATER_PRM
     from engines.yade import yade_io, yadebulk
     from engines.yade.coupling import YadeCoupling
 
@@ -196,7 +197,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
             part("rate"), part("out_i"), part("out_j"))
     wa = dict(zip(kernels.WATER.names, water_args))
     update = (wm.water.W, wa["h"], part("out_i"), part("out_j"), part("q_s"), part("q_d"), part("q_in"),
-              part("balance"), part("void"), wm.wp[0], part("U"))
+              part("balance"), part("void"), wm.wp[WATER_PRM.E_w], part("U"))
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)

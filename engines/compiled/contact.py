@@ -3,6 +3,7 @@ NumPy arithmetic kernels.contact_forces repeats (tests/compiled/test_kernels.py)
 import numpy as np
 
 from engines.compiled import kernels
+from engines.compiled.params import CONTACT_PRM
 from engines.model import contact
 
 
@@ -25,7 +26,7 @@ class ContactLaw(contact.ContactLaw):
     def kernel_args(self, dt):
         """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
         of dt [s]."""
-        if self._prm[-1] != dt:
+        if self._prm[CONTACT_PRM.dt] != dt:
             self._prm = kernels.contact_params(self.s, dt)
             self._args = None
         if self._args is None:

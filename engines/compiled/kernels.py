@@ -67,6 +67,7 @@ from numba.extending import intrinsic
 from numba.np.arrayobj import populate_array
 
 from engines.compiled.layout import Layout
+from engines.compiled.params import BALANCE, CONTACT_PRM, LAM, TIE_PRM, WATER_PRM
 from engines.model.contact import E_N, E_S, F_N, TOUCHING, U_N, VN_COLL  # the state columns, numba constants
 
 jit = nb.njit(cache=True, nogil=True)
@@ -90,18 +91,19 @@ def _beyond(d2, s):
 
 
 def contact_params(s, dt):
-    """The float parameters of ``contact_forces`` from ContactSettings ``s`` and dt [s]."""
-    return np.array([s.kn, s.eta_n, s.ks, s.eta_s, s.mu, s.f_max, s.eps_m, dt])
+    """The float parameters of ``contact_forces`` (CONTACT_PRM) from ContactSettings ``s`` and dt [s]."""
+    return CONTACT_PRM.vector(s, dt=dt)
 
 
 @jit
 def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost):
     """Forces F (N, 2) and moments M (N,) of all pairs (pi, pj); updates ``state`` (m, 6) in place.
 
-    prm = (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); spring = SPRING_CODE; acc_j (N, 3) is scratch.
+    prm: CONTACT_PRM (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); spring = SPRING_CODE; acc_j (N, 3) is scratch.
     Writes the indices of the pairs that stopped touching into ``lost``; returns their number.
     """
-    kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7]
+    kn, eta_n, ks, eta_s = prm[CONTACT_PRM.kn], prm[CONTACT_PRM.eta_n], prm[CONTACT_PRM.ks], prm[CONTACT_PRM.eta_s]
+    mu, f_max, eps_m, dt = prm[CONTACT_PRM.mu], prm[CONTACT_PRM.f_max], prm[CONTACT_PRM.eps_m], prm[CONTACT_PRM.dt]
     F[:] = 0.0
     M[:] = 0.0
     acc_j[:] = 0.0
@@ -359,7 +361,7 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     sums of q over the throats of each pore as their first (out_i) and second (out_j) pore, in
     throat order (``darcy_update``'s, as PoreWater._step's np.bincount).
 
-    wp = (E_w, k1, k2, k3, inflow rate), q_in = rate x bottom (PoreWater.inflow_weights: q_w and 1
+    wp: WATER_PRM (E_w, k1, k2, k3, inflow rate), q_in = rate x bottom (PoreWater.inflow_weights: q_w and 1
     per inflow pore, or inflow_velocity and each pore's inflow length). Pores with A <= a_min
     exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
@@ -368,7 +370,8 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     to round-off: 1 / W once per pore (for U and 1 / c_p = E_w A / W^2), and 1 / E_w once per call
     (for W / E_w and g = (k / E_w) A_ij).
     """
-    E_w, k1, k2, k3, q_w = wp[0], wp[1], wp[2], wp[3], wp[4]
+    E_w, k1, k2, k3 = wp[WATER_PRM.E_w], wp[WATER_PRM.k1], wp[WATER_PRM.k2], wp[WATER_PRM.k3]
+    q_w = wp[WATER_PRM.inflow]
     per_E = 1.0 / E_w
     for p in range(len(W)):
         per_W = 1.0 / W[p]
@@ -416,8 +419,8 @@ def throat_sums(ti, tj, q, out_i, out_j):
 @jit
 def darcy_update(W, h, out_i, out_j, q_s, q_d, q_in, balance, A, E_w, U):
     """W <- W - ((out_i - out_j) + q_s + q_d - q_in) h (eq 42), out_i, out_j the throat flows'
-    sums (``throat_sums``), and U = E_w (W - A) / W [N/m] at the new W (eq 32); balance +=
-    (inflow, surface, side) volumes [m^2]. Returns the first pore whose W would fall to <= 0
+    sums (``throat_sums``), and U = E_w (W - A) / W [N/m] at the new W (eq 32); balance (BALANCE)
+    += the inflow, surface and side outflow volumes [m^2]. Returns the first pore whose W would fall to <= 0
     (nothing changed), or -1."""
     for p in range(len(W)):
         if W[p] - ((out_i[p] - out_j[p]) + q_s[p] + q_d[p] - q_in[p]) * h <= 0:
@@ -429,9 +432,9 @@ def darcy_update(W, h, out_i, out_j, q_s, q_d, q_in, balance, A, E_w, U):
         s_in += q_in[p]
         s_s += q_s[p]
         s_d += q_d[p]
-    balance[0] += s_in * h
-    balance[1] += s_s * h
-    balance[2] += s_d * h
+    balance[BALANCE.inflow] += s_in * h
+    balance[BALANCE.surface_outflow] += s_s * h
+    balance[BALANCE.side_outflow] += s_d * h
     return -1
 
 
@@ -603,15 +606,15 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
             A_prev[p] = 0.5 * (A_prev[p] + net.void[p])
         A = A_prev
     lam = net.lam
-    lam[0] = lam[1] = _flows(W, A, net)
-    n_sub = substep_count(h, gershgorin_limit(lam[0]))
+    lam[LAM.first] = lam[LAM.last] = _flows(W, A, net)
+    n_sub = substep_count(h, gershgorin_limit(lam[LAM.first]))
     if n_sub > 1 and not substep:
         return 0
     q = net.q
     net.balance[:] = 0.0
     for sub in range(n_sub):
         if sub > 0:
-            lam[1] = _flows(W, A, net)
+            lam[LAM.last] = _flows(W, A, net)
         if smoothing:  # eq 46: the flows' sums are those of the smoothed flows
             running = net.has_q_prev[0] != 0.0
             for t in range(len(q)):
@@ -621,7 +624,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
             net.has_q_prev[0] = 1.0
             throat_sums(net.throat_i, net.throat_j, q, net.out_i, net.out_j)
         bad = darcy_update(W, h / n_sub, net.out_i, net.out_j, net.q_s, net.q_d, net.q_in, net.balance, A,
-                           net.wp[0], net.U)  # U at the area used (eq 45)
+                           net.wp[WATER_PRM.E_w], net.U)  # U at the area used (eq 45)
         if bad >= 0:
             return -1 - bad
     pressure_forces(net.links, net.link_pores, net.r, net.U, net.length, net.vec, F_water, net.Fj)
@@ -648,9 +651,9 @@ LIST_STALE = -1  # law_step's answer when the pair list must be rebuilt first
 def tie_forces(xz, du, dt, tie_pairs, tie_rest, tie_prm, T):
     """x-forces T[0] (N,) [N] of the side-wall ties (engines.model.side_walls) at centres xz (N, 2) with
     velocities du / dt: tie t pulls its upper disc tie_pairs[t, 1] by f = -k's [(x_u - x_l) - tie_rest[t]]
-    - eta's (v_u - v_l) and its lower disc tie_pairs[t, 0] by -f; tie_prm = (k's, eta's); T (2, N),
+    - eta's (v_u - v_l) and its lower disc tie_pairs[t, 0] by -f; tie_prm: TIE_PRM (k's, eta's); T (2, N),
     T[1] is scratch."""
-    ks, eta = tie_prm[0], tie_prm[1]
+    ks, eta = tie_prm[TIE_PRM.ks_wall], tie_prm[TIE_PRM.eta_s_wall]
     T[:] = 0.0
     for t in range(len(tie_rest)):
         lo, up = tie_pairs[t, 0], tie_pairs[t, 1]
@@ -993,7 +996,7 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
                               r, pi, pj, state, prm, spring, F, M, acc_j, lost)
             if n_lost != LIST_STALE or attempt == 1:
                 break
-            pi, pj, state = near_pairs(xz, r, mobile, prm[6], skin, pi, pj, state)  # prm[6]: eps_m
+            pi, pj, state = near_pairs(xz, r, mobile, prm[CONTACT_PRM.eps_m], skin, pi, pj, state)
             lost = np.zeros(len(pi), np.int64)
             xz_list[:] = xz
             builds += 1
@@ -1060,8 +1063,15 @@ def dry_water_args():
 
 def no_tie_args():
     """The arguments of dem_drive_bulk_io from tie_pairs on (TIES) for a scene without side-wall ties."""
-    return TIES.values(tie_pairs=np.zeros((0, 2), np.int64), tie_rest=np.zeros(0), tie_prm=np.zeros(2),
-                       T=np.zeros((2, 0)))
+    return TIES.values(tie_pairs=np.zeros((0, 2), np.int64), tie_rest=np.zeros(0),
+                       tie_prm=np.zeros(len(TIE_PRM.names)), T=np.zeros((2, 0)))
+
+
+def tie_args(ties):
+    """The arguments of tie_forces after (xz, du, dt) (TIES) of engines.model.side_walls.SideWallTies
+    ``ties``: (lower, upper) pairs (M, 2), rest (M,), TIE_PRM and the (2, N) force buffer."""
+    return TIES.values(tie_pairs=np.stack([ties.lower, ties.upper], axis=1), tie_rest=ties.rest,
+                       tie_prm=TIE_PRM.vector(ks_wall=ties.ks, eta_s_wall=ties.eta), T=np.zeros((2, ties.n)))
 
 
 @jit

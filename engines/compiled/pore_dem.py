@@ -6,6 +6,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled.paper_law import PaperLaw
+from engines.compiled.params import BALANCE, balance_of, book_balance
 from engines.compiled.water_model import WaterModel
 from engines.model import pore_dem
 from engines.model.ground_motion import Cosine, Sampled
@@ -23,7 +24,7 @@ class PoreDEM(pore_dem.PoreDEM):
 
     def __init__(self, settings, packing, flat_walls=()):
         super().__init__(settings, packing, flat_walls)
-        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
+        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.tie_args(self.ties)
 
     def pores_due(self):
         """Is step k one that ``kernel_drive_args`` leaves to the general path only for its pore
@@ -66,10 +67,11 @@ class PoreDEM(pore_dem.PoreDEM):
         s, skin = law.settings, law.contact.skin  # no flat walls here: no pair filter
         steps = min(n, sch.steps_to_event(self.k))
         if wm is None:
-            return steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin, np.zeros(3), motion, record, args
+            return (steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin, np.zeros(len(BALANCE.names)),
+                    motion, record, args)
         b = wm.water.balance
         return (steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
-                law.mass, skin, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, record, args)
+                law.mass, skin, balance_of(b), motion, record, args)
 
     def finish_kernel_drive(self, made, totals, motion):
         """Book the ``made`` steps a kernels.dem_drive_bulk_io call made with the totals and motion
@@ -77,13 +79,12 @@ class PoreDEM(pore_dem.PoreDEM):
         a last water step that needed sub-steps: ``finish_substeps``)."""
         k, self.k = self.k, self.k + made
         if len(motion):
-            base = self.base
-            base.acc, base.vel, base.disp, self.wall_velocity = motion[kernels.MOTION.acc:].tolist()
+            base, M = self.base, kernels.MOTION
+            base.acc, base.vel, base.disp, self.wall_velocity = motion[[M.acc, M.vel, M.disp, M.wall_velocity]].tolist()
             base.k += made
         wm = self.water_model
         if wm is not None and self.schedule.water_among(k, self.k):
-            b = wm.water.balance
-            b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+            book_balance(wm.water.balance, totals)
             wm.after_kernel_steps()
 
     def finish_substeps(self, n_sub):

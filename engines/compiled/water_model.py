@@ -6,6 +6,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled import pores as cp
+from engines.compiled.params import BALANCE, LAM, WATER_PRM, book_balance
 from engines.model import limits, water_model
 from engines.model import pores as pg
 from engines.model.limits import DarcyStabilityError
@@ -25,8 +26,8 @@ class WaterModel(water_model.WaterModel):
                  log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
         super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
                          rebuild_distance, flat_walls)
-        # the kernels' inflow q_in = wp[4] x bottom: rate and weights of PoreWater.inflow_weights
-        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, self.water.inflow[0]])
+        # the kernels' inflow q_in = inflow x bottom: rate and weights of PoreWater.inflow_weights
+        self.wp = WATER_PRM.vector(settings, inflow=self.water.inflow[0])
         self._buffers()
 
     def _buffers(self):
@@ -45,7 +46,7 @@ class WaterModel(water_model.WaterModel):
                   "a_min": net.a_min,
                   "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "right": np.zeros((n_p, 2)),
                   "Fj": np.zeros((n, 2)),
-                  "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
+                  "balance": np.zeros(len(BALANCE.names)), "lam": np.zeros(len(LAM.names)), "has_q_prev": 0.0,
                   "check_areas": float(self.schedule.by_displacement),
                   "wall_position": self.wall_vertices.faces() if walls else [],
                   "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
@@ -141,12 +142,8 @@ class WaterModel(water_model.WaterModel):
             if n_sub < 0:
                 raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of "
                                           f"{h / n:.3e} s; {limits.DRY_HINT}")
-            self.last_limit = limits.gershgorin_limit(lam[1])  # at the last sub-step, as PoreWater reports it
-        inflow, surface, side = self._balance.tolist()
-        b = w.balance
-        b.inflow += inflow
-        b.surface_outflow += surface
-        b.side_outflow += side
+            self.last_limit = limits.gershgorin_limit(lam[LAM.last])  # at the last sub-step, as PoreWater reports it
+        book_balance(w.balance, self._balance, add=True)
         if self.watch is not None:
             self.watch(self._part("void"), self._part("U"), self.settings.E_w, w.net.a_min, h)
 
@@ -158,7 +155,7 @@ class WaterModel(water_model.WaterModel):
             self.watch.rebuilt()
         if self.settings.smoothing:
             self.water.q_prev = self._args[kernels.WATER.q_prev]
-        self.last_limit = limits.gershgorin_limit(self._lam[0])
+        self.last_limit = limits.gershgorin_limit(self._lam[LAM.first])
 
     def _substeps(self, h):
         """The sub-steps a water step of h [s] needs (engines.model.limits.substeps: refused without

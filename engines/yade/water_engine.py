@@ -34,7 +34,7 @@ import time
 
 import numpy as np
 
-from engines.compiled import kernels
+from engines.compiled import kernels, params
 from engines.compiled import water_model as compiled_water_model
 from engines.model import limits, pore_water
 from engines.model import pores as pg
@@ -258,12 +258,12 @@ class WaterEngine:
         h = sch.water_interval * m.dt
         args = m.kernel_args(h)
         b = m.water.balance
-        totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
+        totals = params.balance_of(b)
         k = O.iter
         done, n_water, n_sub, rc = yade_io.drive_water(n, True, sch.steps_to_water(k), sch.water_interval, totals,
                                                        m.xz_built, sch.moved2, self.io, self._xz, self.forced,
                                                        self._F_out, self._forces_step_args(args))
-        b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+        params.book_balance(b, totals)
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
             m.after_kernel_steps(unwatched=True)

@@ -270,7 +270,7 @@ def test_tie_forces_compiled_equals_numpy():
     ties = SideWallTies(xz, group, 1.5e5, 0.6)
     rng = np.random.default_rng(7)
     dt = 1e-6
-    args = kernels.TIES.values(**ties.kernel_args())
+    args = kernels.tie_args(ties)
     T = args[kernels.TIES.T]
     for _ in range(5):
         x = xz + 1e-5 * rng.standard_normal(xz.shape)
