@@ -52,6 +52,11 @@ measure of the positions by the water model (WaterModel.void_area); the contact 
 without taking it (ContactLaw.touching_at: the bottom wall's normal force); the pores as a network
 in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py.
 Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
+Parameter vectors by name (contact, water, ties, balance, Gershgorin bound): compiled/params.py,
+Layouts of the settings' field lists less the fields no kernel reads. No function takes more than
+12 parameters but the entry points of ENTRY_POINTS (tests/test_parameters.py): the two compiled
+drives, whose argument lists are their parts' layouts checked at import (DEM_DRIVE,
+WATER_FORCES_STEP), and WaterEngine.__init__, whose keywords are public (README, docs/ENGINE.md).
 What a checkpoint stores of each object (its CHECKPOINT_FIELDS, and CHECKPOINT_DERIVED with reasons):
 model/state.py; the file (data only, no pickle): yade/checkpoint.py; a WaterEngine's state in
 YADE's own O.save/O.load (O.tags, the same format): yade/scene_save.py.
@@ -82,3 +87,6 @@ import os
 
 __version__ = "0.2.0.dev0"  # the one version: pyproject.toml reads it, every summary.json records it
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's folder
+# the functions of more than 12 parameters (tests/test_parameters.py), "path:function"
+ENTRY_POINTS = ("engines/compiled/kernels.py:dem_drive_bulk_io", "engines/compiled/kernels.py:water_drive_bulk_io",
+                "engines/yade/water_engine.py:__init__")

@@ -24,15 +24,15 @@ class ContactLaw(contact.ContactLaw):
         self._args = None
 
     def kernel_args(self, dt):
-        """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
-        of dt [s]."""
+        """The argument of kernels.contact_forces after (xz, du, dpsi) (kernels.ContactArgs) for a
+        step of dt [s]."""
         if self._prm[CONTACT_PRM.dt] != dt:
             self._prm = kernels.contact_params(self.s, dt)
             self._args = None
         if self._args is None:
-            self._args = kernels.CONTACT.values(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
-                                                spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
-                                                lost=self._lost)
+            self._args = kernels.ContactArgs(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
+                                             spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
+                                             lost=self._lost)
         return self._args
 
     def _pairs_near(self, xz):
@@ -60,21 +60,22 @@ class ContactLaw(contact.ContactLaw):
         self._lost = np.zeros(len(self.i), np.int64)
         self._args = None
 
-    def take_list(self, builds, i, j, state, lost):
+    def take_list(self, builds, contact):
         """The pair list that a kernel rebuilt ``builds`` times (kernels.dem_drive_bulk_io:
-        near_pairs, with xz_list overwritten in place), and its ``lost`` buffer."""
-        self.i, self.j, self.state, self._lost = i, j, state, lost
+        near_pairs, with xz_list overwritten in place) and its ``lost`` buffer, those of the
+        kernels.ContactArgs ``contact``."""
+        self.i, self.j, self.state, self._lost = contact.pi, contact.pj, contact.state, contact.lost
         self.list_builds += builds
         self._args = None
 
     def forces(self, xz, du, dpsi, dt):
         self._update_list(xz)
-        n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
+        n_lost = kernels.contact_forces(xz, du, dpsi, self.kernel_args(dt))
         return self._F, self._M, self._separations(xz, self._lost[:n_lost])
 
     def _stepped_state(self, xz, du, dpsi, dt, i, j, state):
         new, n = state.copy(), self.n
-        kernels.contact_forces(xz, du, dpsi, *kernels.CONTACT.values(
+        kernels.contact_forces(xz, du, dpsi, kernels.ContactArgs(
             r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
             F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
         return new

@@ -95,13 +95,29 @@ def contact_params(s, dt):
     return CONTACT_PRM.vector(s, dt=dt)
 
 
-@jit
-def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost):
-    """Forces F (N, 2) and moments M (N,) of all pairs (pi, pj); updates ``state`` (m, 6) in place.
+# The arguments of contact_forces after (xz, du, dpsi), one tuple by name: the radii r (N,), the pair
+# list (pi, pj, its state (m, 6), lost (m,)), the parameters prm (CONTACT_PRM), spring (SPRING_CODE),
+# the forces F (N, 2), moments M (N,) and scratch acc_j (N, 3)
+ContactArgs = namedtuple("ContactArgs", ("r", "pi", "pj", "state", "prm", "spring", "F", "M", "acc_j", "lost"))
+CONTACT = Layout("CONTACT", ContactArgs._fields)
 
-    prm: CONTACT_PRM (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); spring = SPRING_CODE; acc_j (N, 3) is scratch.
-    Writes the indices of the pairs that stopped touching into ``lost``; returns their number.
+
+@jit
+def with_pairs(c, pi, pj, state, lost):
+    """The ContactArgs c on another pair list (pi, pj, state, lost)."""
+    return ContactArgs(c.r, pi, pj, state, c.prm, c.spring, c.F, c.M, c.acc_j, lost)
+
+
+@jit
+def contact_forces(xz, du, dpsi, c):
+    """Forces c.F (N, 2) and moments c.M (N,) of all pairs (c.pi, c.pj) of the ContactArgs c;
+    updates c.state (m, 6) in place.
+
+    c.prm: CONTACT_PRM (kn, eta_n, ks, eta_s, mu, f_max, eps_m, dt); c.spring = SPRING_CODE; c.acc_j
+    (N, 3) is scratch. Writes the indices of the pairs that stopped touching into c.lost; returns
+    their number.
     """
+    r, pi, pj, state, prm, spring, F, M, acc_j, lost = c.r, c.pi, c.pj, c.state, c.prm, c.spring, c.F, c.M, c.acc_j, c.lost
     kn, eta_n, ks, eta_s = prm[CONTACT_PRM.kn], prm[CONTACT_PRM.eta_n], prm[CONTACT_PRM.ks], prm[CONTACT_PRM.eta_s]
     mu, f_max, eps_m, dt = prm[CONTACT_PRM.mu], prm[CONTACT_PRM.f_max], prm[CONTACT_PRM.eps_m], prm[CONTACT_PRM.dt]
     F[:] = 0.0
@@ -167,9 +183,6 @@ def contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, los
     return n_lost
 
 
-CONTACT = Layout.of(contact_forces, 3)  # the arguments of contact_forces after (xz, du, dpsi)
-
-
 @jit
 def max_sq_displacement(xz, xz_ref):
     """max_a |xz_a - xz_ref_a|^2 [m^2] (the Verlet-list check)."""
@@ -189,10 +202,9 @@ def spin_update(omega, M, inertia, mobile, dt):
 
 
 @jit
-def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
-             r, pi, pj, state, prm, spring, F, M, acc_j, lost):
+def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact):
     """One step of PaperLaw: du = xz - xz_prev (eq 17), dpsi = omega dt, the contact forces F, M
-    (``contact_forces``, its arguments from r on), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
+    (``contact_forces`` of the ContactArgs ``contact``), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
     Returns the number of pairs that stopped touching (indices in ``lost``), or -1, having changed
     nothing, when a disc has moved by half the skin since the pair list was built at xz_list."""
     if max_sq_displacement(xz, xz_list) >= half_skin2:
@@ -202,14 +214,14 @@ def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
         du[a, 0], du[a, 1] = x - xz_prev[a, 0], z - xz_prev[a, 1]
         xz_prev[a, 0], xz_prev[a, 1] = x, z
         dpsi[a] = omega[a] * dt
-    n_lost = contact_forces(xz, du, dpsi, r, pi, pj, state, prm, spring, F, M, acc_j, lost)
-    spin_update(omega, M, inertia, mobile, dt)
+    n_lost = contact_forces(xz, du, dpsi, contact)
+    spin_update(omega, contact.M, inertia, mobile, dt)
     return n_lost
 
 
-LAW = Layout.of(law_step, 1)  # the arguments of law_step after xz: LAW_OWN, then CONTACT
-LAW_OWN = Layout("LAW_OWN", LAW.names[:-len(CONTACT.names)])
-LAW.check(LAW_OWN, CONTACT)
+LAW = Layout.of(law_step, 1)  # the arguments of law_step after xz: LAW_OWN, then the ContactArgs
+LAW_OWN = Layout("LAW_OWN", LAW.names[:-1])
+LAW.check(LAW_OWN, ("contact",))
 
 
 @jit
@@ -320,15 +332,35 @@ def turn(s, c):
     return math.atan2(s, c)
 
 
+# The network's links as ``measure`` reads them (PoreNetwork: links (L, 2), link_pores (L, 2),
+# link_vec0 (L, 2), link_turn_weight (L,), sector_area0 (Np,)), and the measures it writes (Np,)
+# and (L,) (``contact`` a bool or 0/1 array; right (Np, 2) scratch)
+LinkGeometry = namedtuple("LinkGeometry", ("links", "link_pores", "vec0", "turn_weight", "sector0"))
+Measures = namedtuple("Measures", ("poly", "sect", "void", "length", "contact", "vec", "right"))
+
+
+def link_geometry(net):
+    """The LinkGeometry of the PoreNetwork ``net``."""
+    return LinkGeometry(net.links, net.link_pores, net.link_vec0, net.link_turn_weight, net.sector_area0)
+
+
+def new_measures(n_pores, n_links):
+    """Measures of zeros for n_pores pores and n_links links (``contact`` bool)."""
+    return Measures(np.zeros(n_pores), np.zeros(n_pores), np.zeros(n_pores), np.zeros(n_links),
+                    np.zeros(n_links, bool), np.zeros((n_links, 2)), np.zeros((n_pores, 2)))
+
+
 @jit
-def measure(xz, r, links, link_pores, vec0, turn_weight, sector0, eps_m, poly, sect, void, length, contact, vec,
-            right):
-    """Pore areas and link states at xz (eq 29, 43b); outputs as in engines.model.pores.PoreMeasures
-    (no corner angles): one pass over the links, each adding its shoelace term and its turn since
-    the build (vec0 (L, 2): PoreNetwork.link_vec0) times turn_weight to the pore on its left
-    (link_pores[l, 0]) and taking them from the pore on its right; sector0: PoreNetwork.sector_area0.
-    ``contact`` is a bool array. right (Np, 2) is scratch: the sums of the right sides, kept apart
-    as NumPy's (the same sums to the bit where the turns are)."""
+def measure(xz, r, eps_m, geometry, out):
+    """Pore areas and link states at xz of discs (and wall vertices) of radii r (eq 29, 43b) into
+    the Measures ``out``, as engines.model.pores.PoreMeasures (no corner angles): one pass over the
+    links of the LinkGeometry ``geometry``, each adding its shoelace term and its turn since the
+    build (vec0) times turn_weight to the pore on its left (link_pores[l, 0]) and taking them from
+    the pore on its right; sector0: PoreNetwork.sector_area0. out.right (Np, 2) is scratch: the
+    sums of the right sides, kept apart as NumPy's (the same sums to the bit where the turns are)."""
+    links, link_pores, vec0, turn_weight, sector0 = (geometry.links, geometry.link_pores, geometry.vec0,
+                                                     geometry.turn_weight, geometry.sector0)
+    poly, sect, void, length, contact, vec, right = out.poly, out.sect, out.void, out.length, out.contact, out.vec, out.right
     for p in range(len(poly)):
         poly[p] = sect[p] = right[p, 0] = right[p, 1] = 0.0
     for l in range(len(links)):
@@ -354,10 +386,11 @@ def measure(xz, r, links, link_pores, vec0, turn_weight, sector0, eps_m, poly, s
 
 
 @jit
-def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bottom, wp,
-                q, q_s, q_d, q_in, g, g_b, U, acc_i, acc_j, rate, out_i, out_j):
-    """Throat flows q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and inflow
-    q_in [m^2/s] (eq 32, 38-43, §5.1); conductances g, g_b and pressures U are filled too, and the
+def darcy_flows(W, A, net):
+    """Throat flows net.q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and
+    inflow q_in [m^2/s] (eq 32, 38-43, §5.1) at water W and areas A (Np,) [m^2] of the WaterNet
+    ``net`` (its throats throat_i, throat_j, throat_link, link states ``contact``, boundary weights
+    surface, drained, bottom, a_min); conductances g, g_b and pressures U are filled too, and the
     sums of q over the throats of each pore as their first (out_i) and second (out_j) pore, in
     throat order (``darcy_update``'s, as PoreWater._step's np.bincount).
 
@@ -370,6 +403,10 @@ def darcy_flows(W, A, link_contact, ti, tj, t_link, a_min, surface, drained, bot
     to round-off: 1 / W once per pore (for U and 1 / c_p = E_w A / W^2), and 1 / E_w once per call
     (for W / E_w and g = (k / E_w) A_ij).
     """
+    link_contact, ti, tj, t_link, a_min = net.contact, net.throat_i, net.throat_j, net.throat_link, net.a_min
+    surface, drained, bottom, wp = net.surface, net.drained, net.bottom, net.wp
+    q, q_s, q_d, q_in, g, g_b, U = net.q, net.q_s, net.q_d, net.q_in, net.g, net.g_b, net.U
+    acc_i, acc_j, rate, out_i, out_j = net.acc_i, net.acc_j, net.rate, net.out_i, net.out_j
     E_w, k1, k2, k3 = wp[WATER_PRM.E_w], wp[WATER_PRM.k1], wp[WATER_PRM.k2], wp[WATER_PRM.k3]
     q_w = wp[WATER_PRM.inflow]
     per_E = 1.0 / E_w
@@ -596,8 +633,8 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     if len(net.wall_axis):
         place_wall_vertices(xz, net.vertices, net.wall_axis, net.wall_position)
         points = net.vertices
-    measure(points, net.r, net.links, net.link_pores, net.vec0, net.turn_weight, net.sector0, net.eps_m,
-            net.poly, net.sect, net.void, net.length, net.contact, net.vec, net.right)
+    measure(points, net.r, net.eps_m, LinkGeometry(net.links, net.link_pores, net.vec0, net.turn_weight, net.sector0),
+            Measures(net.poly, net.sect, net.void, net.length, net.contact, net.vec, net.right))
     if net.check_areas != 0.0 and not areas_in_range(net.void, net.poly):
         return AREAS_OUT_OF_RANGE
     A = net.void
@@ -606,7 +643,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
             A_prev[p] = 0.5 * (A_prev[p] + net.void[p])
         A = A_prev
     lam = net.lam
-    lam[LAM.first] = lam[LAM.last] = _flows(W, A, net)
+    lam[LAM.first] = lam[LAM.last] = darcy_flows(W, A, net)
     n_sub = substep_count(h, gershgorin_limit(lam[LAM.first]))
     if n_sub > 1 and not substep:
         return 0
@@ -614,7 +651,7 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     net.balance[:] = 0.0
     for sub in range(n_sub):
         if sub > 0:
-            lam[LAM.last] = _flows(W, A, net)
+            lam[LAM.last] = darcy_flows(W, A, net)
         if smoothing:  # eq 46: the flows' sums are those of the smoothed flows
             running = net.has_q_prev[0] != 0.0
             for t in range(len(q)):
@@ -631,14 +668,6 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     if len(net.wall_axis):
         flat_wall_forces(net.wall_edge, net.wall_edge_wall, net.link_pores, net.U, net.length, net.F_walls)
     return n_sub
-
-
-@jit
-def _flows(W, A, net):
-    """``darcy_flows`` at the areas A of the WaterNet ``net``; its Gershgorin bound."""
-    return darcy_flows(W, A, net.contact, net.throat_i, net.throat_j, net.throat_link, net.a_min, net.surface,
-                       net.drained, net.bottom, net.wp, net.q, net.q_s, net.q_d, net.q_in, net.g, net.g_b, net.U,
-                       net.acc_i, net.acc_j, net.rate, net.out_i, net.out_j)
 
 
 WATER = Layout.of(water_step, 1)  # the arguments of water_step after xz
@@ -687,25 +716,25 @@ def forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_re
 
 
 @jit
-def water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at,
-                      floats, f_at):
-    """``water_step`` (WATER: its arguments from h on), then F_out = held + F_water[rows] (n, 2)
-    [N], the forces to write (WaterEngine). Returns (n, n) with water_step's answer n, or (-1, n)
-    when it failed."""
-    n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
+def water_forces_step(xz, F_out, rows, held, water):
+    """``water_step`` (``water``: the tuple of its arguments after xz, WATER), then F_out = held +
+    F_water[rows] (n, 2) [N], the forces to write (WaterEngine). Returns (n, n) with water_step's
+    answer n, or (-1, n) when it failed."""
+    n_sub = water_step(xz, *water)
+    F_water = water[WATER.F_water]
     for k in range(len(rows)):
         F_out[k, 0] = held[k, 0] + F_water[rows[k], 0]
         F_out[k, 1] = held[k, 1] + F_water[rows[k], 1]
     return (n_sub if n_sub > 0 else -1), n_sub
 
 
-WATER_FORCES_STEP = Layout.of(water_forces_step, 2).check(("rows", "held"), WATER)
+WATER_FORCES_STEP = Layout.of(water_forces_step, 2).check(("rows", "held", "water"))
 
 
 def water_forces_step_args(rows, held, water):
     """The arguments of water_forces_step after (xz, F_out) (WATER_FORCES_STEP): the forces to
     write F_water[rows] + held, then the tuple WATER."""
-    return (rows, held) + water
+    return WATER_FORCES_STEP.values(rows=rows, held=held, water=water)
 
 # The addresses of the C functions of engines.yade.yadebulk a kernel calls: the position read, the
 # force write (set_perm_force_xz, or add_force_unsynced_xz in a scene that resets the forces after
@@ -738,12 +767,12 @@ def _write_forces(status, write, ids, F):
 
 @jit
 def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, xz_built, moved2, ids_in, xz, ids_out,
-                        F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at):
+                        F_out, rows, held, water):
     """WaterEngine's step without Python (engines.model.water_model.WaterModel.step in YADE): n DEM
     steps (one water step of the PyRunner is n = 1, water_in = 0, not ``step_last``), the water
     steps among them (step water_in of the call, then every water_interval:
-    engines.model.schedule.Schedule) each get_pos(ids_in -> xz), ``water_forces_step`` (WATER: the
-    arguments from h on) and write_forces(ids_out <- F_out), each step made by bridge's steps()
+    engines.model.schedule.Schedule) each get_pos(ids_in -> xz), ``water_forces_step`` (``water``:
+    the tuple WATER) and write_forces(ids_out <- F_out), each step made by bridge's steps()
     (YADE's O.step()) but for the last when not ``step_last``. totals (3,) [m^2] gets the water
     balance (inflow, surface, side) of every water step that needed no sub-steps. Stops before
     stepping after a water step that did not answer 1 (sub-steps or a failure: its bookkeeping is
@@ -752,7 +781,7 @@ def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, 
     of range (water_step's AREAS_OUT_OF_RANGE): a rebuild is due, that water step is the
     caller's, nothing done of it. Returns (DEM steps done, water steps done, the last water step's
     answer or 1, the bridge's error code)."""
-    balance = _part(floats, f_at, WATER_FLOATS.balance)
+    balance = _part(water[WATER.floats], water[WATER.f_at], WATER_FLOATS.balance)
     n_water, next_water = 0, water_in
     for s in range(n):
         if s == next_water:  # the rebuild triggers, then the water and the forces to write
@@ -762,8 +791,7 @@ def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, 
                 return s, n_water, 1, rc
             if moved2 > 0.0 and max_sq_displacement(xz, xz_built) > moved2:
                 return s, n_water, 1, 0  # a rebuild is due: that water step is the caller's
-            status, n_sub = water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep,
-                                              F_water, ints, i_at, floats, f_at)
+            status, n_sub = water_forces_step(xz, F_out, rows, held, water)
             if n_sub == AREAS_OUT_OF_RANGE:
                 return s, n_water, 1, 0
             rc = _write_forces(status, bridge[BRIDGE.write_forces], ids_out, F_out)
@@ -956,15 +984,14 @@ def base_step(motion, t_s, a_s, k):
 @jit
 def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, t_s,
                       a_s, wall_ids, wall_vel, ids_in, xz, ids_out, F_out, rows, held,
-                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, r, pi, pj, state, prm, spring,
-                      F, M, acc_j, lost,
+                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                       tie_pairs, tie_rest, tie_prm, T):
     """PoreDEM's step (engines.model.pore_dem.PoreDEM.step, its order a-f) in YADE without Python,
     up to n steps from step index k (one step is n = 1), each: get_pos(ids_in -> xz); a ``law_step``
-    (LAW: the arguments from xz_prev to lost; a stale pair list rebuilt at the step's centres by
-    ``near_pairs`` with the list's skin [m]: pi, pj, state and lost become new arrays, xz_list is
-    overwritten); ``water_step`` (WATER: from h to f_at) at step water_in of the call, then every
+    (LAW: the arguments from xz_prev to the ContactArgs ``contact``; a stale pair list rebuilt at
+    the step's centres by ``near_pairs`` with the list's skin [m]: its pi, pj, state and lost
+    become new arrays, xz_list is overwritten); ``water_step`` (WATER: from h to f_at) at step water_in of the call, then every
     water_interval (engines.model.schedule.Schedule), when the scene is wet; ``forces_to_write``
     (the side-wall ties, TIES: from tie_pairs on); write_forces(ids_out <- F_out); with ``adjust``
     (the eq 18-24 velocity adjustment, restitution e, the discs' masses ``mass`` (N,) [kg/m]) the
@@ -973,13 +1000,13 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
     that needed sub-steps: its books are the caller's); the base motion advanced (``base_step``
     when motion is not empty: MOTION and the record t_s, a_s) and the walls wall_ids given its wall
     velocity (v, 0) by set_vel (wall_vel (m, 2) is scratch); then bridge's steps() (O.step()),
-    but for the last step when not ``step_last``. Each part's arguments are spelled out: numba
-    leaves a reference count of each array around a call of more than 30 arrays, two atomic adds
-    each. It stops after a step whose water answered other than 1 (sub-steps or a failure) before
+    but for the last step when not ``step_last``. Each part's arguments are spelled out but the
+    contact's (a tuple): numba leaves a reference count of each array around a call of more than
+    30 arrays, two atomic adds each. It stops after a step whose water answered other than 1 (sub-steps or a failure) before
     its O.step(), at the start of a step whose list is still stale once rebuilt (skin 0: nothing
     done of it), or at an error code.
     Returns (steps made, of them stepped by O.step(), the list was stale, the last water step's
-    answer or 1, the error code, the pair lists built, pi, pj, state, lost)."""
+    answer or 1, the error code, the pair lists built, the ContactArgs on the last pair list)."""
     wet = len(W) > 0
     V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
@@ -987,35 +1014,36 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
-            return s, s, False, 1, rc, builds, pi, pj, state, lost
+            return s, s, False, 1, rc, builds, contact
         water_due = wet and s == next_water
         if s == next_water:
             next_water += water_interval
         for attempt in range(2):  # a stale list rebuilt once
-            n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
-                              r, pi, pj, state, prm, spring, F, M, acc_j, lost)
+            n_lost = law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact)
             if n_lost != LIST_STALE or attempt == 1:
                 break
-            pi, pj, state = near_pairs(xz, r, mobile, prm[CONTACT_PRM.eps_m], skin, pi, pj, state)
-            lost = np.zeros(len(pi), np.int64)
+            pi, pj, state = near_pairs(xz, contact.r, mobile, contact.prm[CONTACT_PRM.eps_m], skin, contact.pi,
+                                       contact.pj, contact.state)
+            contact = with_pairs(contact, pi, pj, state, np.zeros(len(pi), np.int64))
             xz_list[:] = xz
             builds += 1
         if n_lost == LIST_STALE:
-            return s, s, True, 1, 0, builds, pi, pj, state, lost
+            return s, s, True, 1, 0, builds, contact
         n_sub = 1
         if water_due:
             n_sub = water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
-        forces_to_write(xz, F_out, rows, held, du, dt, F, F_water, tie_pairs, tie_rest, tie_prm, T)
+        forces_to_write(xz, F_out, rows, held, du, dt, contact.F, F_water, tie_pairs, tie_rest, tie_prm, T)
         rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
         if rc != 0:
-            return s, s, False, n_sub, rc, builds, pi, pj, state, lost
+            return s, s, False, n_sub, rc, builds, contact
         if adjust and n_lost > 0:
+            lost, pi, pj, state = contact.lost, contact.pi, contact.pj, contact.state
             free = free_discs(lost, n_lost, pi, pj, state, mobile)
             if free.any():
                 separation_velocities(lost, n_lost, pi, pj, state, xz, du, dt, mass, free, e, V)
                 rc = _write_step_velocities(bridge[BRIDGE.set_vel], ids_in, free, V)
                 if rc != 0:
-                    return s, s, False, n_sub, rc, builds, pi, pj, state, lost
+                    return s, s, False, n_sub, rc, builds, contact
         if water_due and n_sub == 1:
             for a in range(3):
                 totals[a] += balance[a]
@@ -1025,13 +1053,13 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
                 wall_vel[b, 0], wall_vel[b, 1] = motion[MOTION.wall_velocity], 0.0
             rc = _c_bulk_call(bridge[BRIDGE.set_vel], wall_ids.ctypes.data, wall_ids.size, wall_vel.ctypes.data)
             if rc != 0:
-                return s + 1, s, False, n_sub, rc, builds, pi, pj, state, lost
+                return s + 1, s, False, n_sub, rc, builds, contact
         if n_sub != 1 or (s == n - 1 and not step_last):
-            return s + 1, s, False, n_sub, 0, builds, pi, pj, state, lost
+            return s + 1, s, False, n_sub, 0, builds, contact
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
-            return s + 1, s, False, 1, rc, builds, pi, pj, state, lost
-    return n, n, False, 1, 0, builds, pi, pj, state, lost
+            return s + 1, s, False, 1, rc, builds, contact
+    return n, n, False, 1, 0, builds, contact
 
 
 DEM_DRIVE = Layout.of(dem_drive_bulk_io, 20).check(("rows", "held"), LAW, WATER, TIES)

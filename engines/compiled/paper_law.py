@@ -35,11 +35,11 @@ class PaperLaw(paper_law.PaperLaw):
 
     def kernel_args(self):
         """The arguments of kernels.law_step after xz (kernels.LAW: LAW_OWN, then the contact's
-        CONTACT; after the first step)."""
+        kernels.ContactArgs; after the first step)."""
         c = self.contact
         return kernels.LAW_OWN.values(xz_prev=self.xz_prev, xz_list=c.xz_list, half_skin2=c.half_skin2,
                                       omega=self.omega, dpsi=self._dpsi, du=self.du, inertia=self.inertia,
-                                      mobile=self.mobile, dt=self.dt) + c.kernel_args(self.dt)
+                                      mobile=self.mobile, dt=self.dt) + (c.kernel_args(self.dt),)
 
     def finish_kernel_step(self, xz, n_lost):
         """The SeparationEvents of a law_step at xz that returned n_lost."""

@@ -2,6 +2,8 @@
 compiled law (engines.compiled.paper_law) and water (engines.compiled.water_model), and its steps
 in YADE as calls of kernels.dem_drive_bulk_io (law_step, tie_forces, water_step when due, the
 velocity adjustment, the base motion of every input: base_motion_args). No YADE."""
+from collections import namedtuple
+
 import numpy as np
 
 from engines.compiled import kernels
@@ -12,6 +14,9 @@ from engines.model import pore_dem
 from engines.model.ground_motion import Cosine, Sampled
 
 NO_RECORD = np.zeros(0)  # the record of a Cosine input (kernels.base_step)
+# what kernel_drive_args gives a kernels.dem_drive_bulk_io call (engines.yade.yade_io.drive_dem)
+Drive = namedtuple("Drive", ("steps", "water_in", "water_interval", "adjust", "e", "mass", "skin", "totals", "motion",
+                             "record", "args"))
 
 
 class PoreDEM(pore_dem.PoreDEM):
@@ -44,8 +49,8 @@ class PoreDEM(pore_dem.PoreDEM):
         self.water_model.rebuild(xz, self.k)
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args) for
-        kernels.dem_drive_bulk_io: up to n steps from step k to the schedule's next event
+        """The Drive (steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record,
+        args) of a kernels.dem_drive_bulk_io call: up to n steps from step k to the schedule's next event
         (Schedule.steps_to_event: none of them a pore rebuild), the water steps among them (the
         first water_in steps from k, then every water_interval; dry: none), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
@@ -67,11 +72,11 @@ class PoreDEM(pore_dem.PoreDEM):
         s, skin = law.settings, law.contact.skin  # no flat walls here: no pair filter
         steps = min(n, sch.steps_to_event(self.k))
         if wm is None:
-            return (steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin, np.zeros(len(BALANCE.names)),
-                    motion, record, args)
+            return Drive(steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin,
+                         np.zeros(len(BALANCE.names)), motion, record, args)
         b = wm.water.balance
-        return (steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
-                law.mass, skin, balance_of(b), motion, record, args)
+        return Drive(steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
+                     law.mass, skin, balance_of(b), motion, record, args)
 
     def finish_kernel_drive(self, made, totals, motion):
         """Book the ``made`` steps a kernels.dem_drive_bulk_io call made with the totals and motion

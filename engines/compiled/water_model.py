@@ -22,10 +22,8 @@ class WaterModel(water_model.WaterModel):
         **{name: "the kernels' buffers, packed from the network (checkpoint_restored)" for name in
            ("_ints", "_i_at", "_floats", "_f_at", "_q_prev", "_lam", "_balance", "_has_q_prev", "_args", "_args_key")}}
 
-    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
-        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
-                         rebuild_distance, flat_walls)
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, schedule=None, log=print, flat_walls=()):
+        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, schedule, log, flat_walls)
         # the kernels' inflow q_in = inflow x bottom: rate and weights of PoreWater.inflow_weights
         self.wp = WATER_PRM.vector(settings, inflow=self.water.inflow[0])
         self._buffers()
@@ -99,13 +97,10 @@ class WaterModel(water_model.WaterModel):
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
-        n_p, n_l = net.n_pores, len(net.links)
-        void = np.empty(n_p)
-        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), net.links, net.link_pores,
-                        net.link_vec0, net.link_turn_weight, net.sector_area0, self.eps_m, np.empty(n_p),
-                        np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty((n_l, 2)),
-                        np.empty((n_p, 2)))
-        return void
+        out = kernels.new_measures(net.n_pores, len(net.links))
+        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), self.eps_m,
+                        kernels.link_geometry(net), out)
+        return out.void
 
     def advance(self, h, xz, k=None):
         """As engines.model.water_model.WaterModel.advance, by kernels.water_step."""

@@ -38,6 +38,7 @@ from engines.compiled import kernels, params
 from engines.compiled import water_model as compiled_water_model
 from engines.model import limits, pore_water
 from engines.model import pores as pg
+from engines.model.schedule import Schedule
 from engines.model.water_model import WaterModel
 from engines.yade import contract
 
@@ -126,8 +127,8 @@ class WaterEngine:
         model = compiled_water_model.WaterModel if compiled else WaterModel
         if rebuild_distance is None:
             rebuild_distance = REBUILD_FRACTION * l_m
-        self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
-                           water_interval, k0=O.iter, rebuild_distance=rebuild_distance, flat_walls=walls_xz)
+        self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
+                           Schedule(water_interval, rebuild_interval, rebuild_distance, O.iter), flat_walls=walls_xz)
         contract.check_pores(self.model.water.net, settings, len(ids), l_m)
         self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])

@@ -138,11 +138,9 @@ def test_a_pair_exactly_at_the_lists_reach_is_listed(law):
 
 
 def _kernel_measure(net, xz, r):
-    n_p, n_l = net.n_pores, len(net.links)
-    out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool), np.zeros((n_l, 2)))
-    kernels.measure(xz, r, net.links, net.link_pores, net.link_vec0, net.link_turn_weight, net.sector_area0,
-                    net.eps_m, *out, np.zeros((n_p, 2)))
-    return out
+    out = kernels.new_measures(net.n_pores, len(net.links))
+    kernels.measure(xz, r, net.eps_m, kernels.link_geometry(net), out)
+    return out[:-1]
 
 
 @pytest.mark.parametrize("layout", ["random", "hex", "moved"])

@@ -15,6 +15,7 @@ from engines.compiled.pore_dem import PoreDEM
 from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from tests.model.test_pore_dem import R, fused_step, moving_positions, wet_box, wet_scene
 
 BUFFERS = ("WATER_INTS", "WATER_FLOATS")
@@ -80,7 +81,7 @@ def water_engine_steps(n=10):
     rng = np.random.default_rng(4)
     pk = wet_box(jitter=0.05)
     m = WaterModel(WaterSettings(E_w=240.0, k1=2e6, k2=2e4, q_w=1e-4, smoothing=True, substep=True), pk.r, pk.group,
-                   pk.xz, 0.0, 0.1 * R, 1e-6, rebuild_interval=4, log=lambda message: None)
+                   pk.xz, 0.0, 0.1 * R, 1e-6, Schedule(rebuild_interval=4), log=lambda message: None)
     rows = np.flatnonzero(pk.mobile)
     held = rng.standard_normal((len(rows), 2))
     F_out, xz, out = np.zeros_like(held), pk.xz, []
