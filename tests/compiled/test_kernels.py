@@ -14,6 +14,7 @@ from engines.model import pores as pg
 from engines.model import water_model as model_water_model
 from engines.model.contact import ContactSettings
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from engines.model.side_walls import SideWallTies
 from engines.yade.deposition import wall_box
 from packing.layouts import hex_lattice, random_discs
@@ -232,7 +233,7 @@ def test_water_model_compiled_equals_numpy(case):
     pressure_forces over moving discs, rebuilds included; one pore pinched for a while."""
     xz, r, walls, rng = _column(n=250, gap=0.0)
     s = SETTINGS[case]
-    models = [model(s, r, walls, xz, 0.0, 0.3, 1e-4, rebuild_interval=7, log=lambda m: None)
+    models = [model(s, r, walls, xz, 0.0, 0.3, 1e-4, Schedule(rebuild_interval=7), log=lambda m: None)
               for model in (model_water_model.WaterModel, water_model.WaterModel)]
     pinched = int(np.flatnonzero(~models[0].water.net.pore_surface)[0])
     x = xz.copy()
