@@ -22,7 +22,7 @@ reference/), postproc/ (reads run files, draws figures; after studies/, never im
 run/), yade_scripts/ (thin command-line scripts, scenes/ presets), tests/ (mirrors this tree).
 
 One step k of the model (model/pore_dem.py, PoreDEM.step, the readable NumPy one; in YADE the one
-compiled step, compiled/kernels.py dem_drive_bulk_io, calls the same parts in the same order, n
+compiled step, compiled/kernels/drives.py dem_drive_bulk_io, calls the same parts in the same order, n
 steps a call, the bridge and the base motion of every input as its arguments (compiled/pore_dem.py
 kernel_drive_args); the engines choose their path in one place, yade/paper_law_engine.py
 step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
@@ -36,7 +36,7 @@ step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
-     its twin for every input (cosine, sampled record) compiled/kernels.py base_step
+     its twin for every input (cosine, sampled record) compiled/kernels/base_motion.py
 What happens at step k (water due, pore rebuild due by interval, displacement or areas, output due,
 steps to the next event, counted from the model's start k0): model/schedule.py (Schedule), asked
 by the NumPy step, the compiled drives (given its steps to the water and to the next event),
@@ -51,7 +51,9 @@ Observables: the window porosity and block means (model/observe.py); block press
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
 without taking it (ContactLaw.touching_at: the bottom wall's normal force); the pores as a network
 in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py.
-Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
+Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in the modules of
+compiled/kernels/, one concept each: law, pair_grid, measure, darcy, water_step, ties, separation,
+base_motion, drives).
 Parameter vectors by name (contact, water, ties, balance, Gershgorin bound): compiled/params.py,
 Layouts of the settings' field lists less the fields no kernel reads. No function takes more than
 12 parameters but the entry points of ENTRY_POINTS (tests/test_parameters.py): the two compiled
@@ -88,5 +90,6 @@ import os
 __version__ = "0.2.0.dev0"  # the one version: pyproject.toml reads it, every summary.json records it
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's folder
 # the functions of more than 12 parameters (tests/test_parameters.py), "path:function"
-ENTRY_POINTS = ("engines/compiled/kernels.py:dem_drive_bulk_io", "engines/compiled/kernels.py:water_drive_bulk_io",
+ENTRY_POINTS = ("engines/compiled/kernels/drives.py:dem_drive_bulk_io",
+                "engines/compiled/kernels/drives.py:water_drive_bulk_io",
                 "engines/yade/water_engine.py:__init__")
