@@ -64,9 +64,12 @@ model/state.py; the file (data only, no pickle): yade/checkpoint.py; a WaterEngi
 YADE's own O.save/O.load (O.tags, the same format): yade/scene_save.py.
 
 Where to add ...
-  a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
-    a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WATER_FIELDS
-    (model/pore_water.py: WaterSettings and the scene's [water] table are made from them).
+  a permeability law (eq 43: k1 across a gap, k2 across a contact; k1 at the free surface, k3
+    through drained walls): 3 places, the function ``permeability`` of each implementation
+    (model/pore_water.py, compiled/kernels/darcy.py, reference/model.py; tests/model/test_permeability.py
+    puts a toy law in the NumPy one's place). A new constant adds 4: WATER_FIELDS
+    (model/pore_water.py: WaterSettings, the scene's [water] table and the kernels' WATER_PRM are
+    made from it) and, in reference/model.py, its Settings field, read_settings and Water.__init__.
   a wall type: the group codes of model/groups.py (WALL_*, the one table; packing files store
     them), which link discs to walls in build_pores (model/pores.py); boundary flows in
     PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).

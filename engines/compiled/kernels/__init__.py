@@ -7,7 +7,7 @@ chain them. No YADE. One module a concept, each naming its equations:
   pair_grid     near_pairs (the pair list) on a grid of cells (``_grid``, ``_groups``: engines.compiled.pores
                 and engines.compiled.regular use them too)
   measure       measure (eq 29, 43b; LinkGeometry, Measures), turn, areas_in_range, place_wall_vertices
-  darcy         darcy_flows (eq 32, 38-43, boundaries, stability), darcy_update (eq 42),
+  darcy         permeability (eq 43), darcy_flows (eq 32, 38-43, boundaries, stability), darcy_update (eq 42),
                 gershgorin_limit, substep_count
   water_step    water_step (measure, eq 45, flows, update, eq 46, sub-steps, eq 33), pressure_forces,
                 flat_wall_forces; the network's buffers WATER_INTS, WATER_FLOATS read as a WaterNet
@@ -76,7 +76,7 @@ from engines.compiled.kernels.law import (CONTACT, contact_forces, contact_param
 from engines.compiled.kernels.pair_grid import (_grid, _groups, _grown, near_pairs, _within)
 from engines.compiled.kernels.measure import (areas_in_range, link_geometry, LinkGeometry, measure, Measures,
     new_measures, place_wall_vertices, SMALL_TURN, turn)
-from engines.compiled.kernels.darcy import (darcy_flows, darcy_update, gershgorin_limit, substep_count,
+from engines.compiled.kernels.darcy import (darcy_flows, darcy_update, gershgorin_limit, permeability, substep_count,
     throat_sums)
 from engines.compiled.kernels.water_step import (AREAS_OUT_OF_RANGE, flat_wall_forces, _part, pressure_forces, WATER,
     WATER_FLOATS, WATER_INTS, water_net, water_step, WaterNet)

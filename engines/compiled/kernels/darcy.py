@@ -12,6 +12,15 @@ from engines.compiled.params import BALANCE, WATER_PRM
 
 
 @jit
+def permeability(contact, wp):
+    """Twin of engines.model.pore_water.permeability, the permeability law [1/s] (eq 43, §5.1,
+    §6.1): (k of a link across a contact (``contact`` true): k2, else across a gap: k1; k of a
+    free-surface edge: k1; k of a drained wall: k3), from WATER_PRM ``wp``. ``darcy_flows`` asks
+    it once for a gap and once for a contact."""
+    return (wp[WATER_PRM.k2] if contact else wp[WATER_PRM.k1]), wp[WATER_PRM.k1], wp[WATER_PRM.k3]
+
+
+@jit
 def darcy_flows(W, A, net):
     """Throat flows net.q (Nt,) and per pore outflow to the surface q_s, to drained sides q_d and
     inflow q_in [m^2/s] (eq 32, 38-43, §5.1) at water W and areas A (Np,) [m^2] of the WaterNet
@@ -20,7 +29,7 @@ def darcy_flows(W, A, net):
     sums of q over the throats of each pore as their first (out_i) and second (out_j) pore, in
     throat order (``darcy_update``'s, as PoreWater._step's np.bincount).
 
-    wp: WATER_PRM (E_w, k1, k2, k3, inflow rate), q_in = rate x bottom (PoreWater.inflow_weights: q_w and 1
+    wp: WATER_PRM (E_w, the permeabilities of ``permeability``, inflow rate), q_in = rate x bottom (PoreWater.inflow_weights: q_w and 1
     per inflow pore, or inflow_velocity and each pore's inflow length). Pores with A <= a_min
     exchange nothing. Returns the Gershgorin
     bound lambda = max_p (2 sum_j g_pj + g_b,p) / c_p, c_p = W^2 / (E_w A) [1/s] of the linearised
@@ -33,26 +42,27 @@ def darcy_flows(W, A, net):
     surface, drained, bottom, wp = net.surface, net.drained, net.bottom, net.wp
     q, q_s, q_d, q_in, g, g_b, U = net.q, net.q_s, net.q_d, net.q_in, net.g, net.g_b, net.U
     acc_i, acc_j, rate, out_i, out_j = net.acc_i, net.acc_j, net.rate, net.out_i, net.out_j
-    E_w, k1, k2, k3 = wp[WATER_PRM.E_w], wp[WATER_PRM.k1], wp[WATER_PRM.k2], wp[WATER_PRM.k3]
-    q_w = wp[WATER_PRM.inflow]
+    E_w, q_w = wp[WATER_PRM.E_w], wp[WATER_PRM.inflow]
+    k_gap, k_surface, k_drained = permeability(False, wp)  # eq 43
+    k_contact = permeability(True, wp)[0]
     per_E = 1.0 / E_w
     for p in range(len(W)):
         per_W = 1.0 / W[p]
         U[p] = E_w * (W[p] - A[p]) * per_W                      # eq 32
         per_k = W[p] * per_E if A[p] > a_min else 0.0           # outside at U = 0: A_ij -> W_i
-        g_s = k1 * surface[p] * per_k
-        g_d = k3 * drained[p] * per_k
+        g_s = k_surface * surface[p] * per_k
+        g_d = k_drained * drained[p] * per_k
         q_s[p] = g_s * U[p]
         q_d[p] = g_d * U[p]
         q_in[p] = q_w * bottom[p]
         g_b[p] = g_s + g_d
         rate[p] = E_w * A[p] * per_W * per_W
         acc_i[p] = acc_j[p] = out_i[p] = out_j[p] = 0.0
-    k1_E, k2_E = k1 * per_E, k2 * per_E
+    k_gap_E, k_contact_E = k_gap * per_E, k_contact * per_E
     for t in range(len(ti)):
         i, j = _at(ti[t]), _at(tj[t])
         if A[i] > a_min and A[j] > a_min:
-            k_E = k2_E if link_contact[_at(t_link[t])] else k1_E  # eq 43, over E_w
+            k_E = k_contact_E if link_contact[_at(t_link[t])] else k_gap_E  # eq 43, over E_w
             g[t] = k_E * (W[i] * W[j] / (A[i] + A[j]))            # eq 40
         else:
             g[t] = 0.0
