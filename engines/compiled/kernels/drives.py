@@ -80,7 +80,7 @@ def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, 
     engines.model.schedule.Schedule) each get_pos(ids_in -> xz), ``water_forces_step`` (``water``:
     the tuple WATER) and write_forces(ids_out <- F_out), each step made by bridge's steps()
     (YADE's O.step()) but for the last when not ``step_last``. totals (3,) [m^2] gets the water
-    balance (inflow, surface, side) of every water step that needed no sub-steps. Stops before
+    balance (BALANCE) of every water step that needed no sub-steps. Stops before
     stepping after a water step that did not answer 1 (sub-steps or a failure: its bookkeeping is
     the caller's) or at an error code; with moved2 > 0 [m^2], also before a water step at which a
     disc is farther than sqrt(moved2) from its centre in xz_built (N, 2) [m] or a void area is out
@@ -106,8 +106,7 @@ def water_drive_bulk_io(bridge, n, step_last, water_in, water_interval, totals, 
             n_water += 1
             if n_sub != 1:
                 return s, n_water, n_sub, 0
-            for a in range(3):
-                totals[a] += balance[a]
+            totals += balance
         if s == n - 1 and not step_last:
             return s, n_water, 1, 0
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
