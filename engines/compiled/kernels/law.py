@@ -3,8 +3,8 @@ PaperLaw.step): ``contact_forces`` (eq 1-13: overlap, normal and tangential spri
 Coulomb's cap eq 11; eq 25-27: the force range eps_m and the capped springs c, d) and ``law_step``
 (eq 17 increments, the forces, the spin eq 14c, 16c). The parameters by name: ContactArgs, and its
 vector prm (engines.compiled.params.CONTACT_PRM). No YADE."""
-from collections import namedtuple
 import math
+from collections import namedtuple
 
 from engines.compiled.kernels.common import _at, _beyond, jit
 from engines.compiled.layout import Layout
@@ -24,8 +24,6 @@ def contact_params(s, dt):
 # list (pi, pj, its state (m, 6), lost (m,)), the parameters prm (CONTACT_PRM), spring (SPRING_CODE),
 # the forces F (N, 2), moments M (N,) and scratch acc_j (N, 3)
 ContactArgs = namedtuple("ContactArgs", ("r", "pi", "pj", "state", "prm", "spring", "F", "M", "acc_j", "lost"))
-
-
 CONTACT = Layout("CONTACT", ContactArgs._fields)
 
 

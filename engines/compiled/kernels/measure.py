@@ -3,8 +3,8 @@
 turns by ``turn`` (a series for small turns, else atan2); the range check of the areas
 (engines.model.schedule.areas_in_range) and the flat walls' vertices
 (engines.model.flat_walls.WallVertices). No YADE."""
-from collections import namedtuple
 import math
+from collections import namedtuple
 
 import numpy as np
 
