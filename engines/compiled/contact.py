@@ -60,11 +60,10 @@ class ContactLaw(contact.ContactLaw):
         self._lost = np.zeros(len(self.i), np.int64)
         self._args = None
 
-    def take_list(self, builds, contact):
+    def take_list(self, builds, i, j, state, lost):
         """The pair list that a kernel rebuilt ``builds`` times (kernels.dem_drive_bulk_io:
-        near_pairs, with xz_list overwritten in place) and its ``lost`` buffer, those of the
-        kernels.ContactArgs ``contact``."""
-        self.i, self.j, self.state, self._lost = contact.pi, contact.pj, contact.state, contact.lost
+        near_pairs, with xz_list overwritten in place), and its ``lost`` buffer."""
+        self.i, self.j, self.state, self._lost = i, j, state, lost
         self.list_builds += builds
         self._args = None
 

@@ -67,7 +67,7 @@ class PoreDEM(pore_dem.PoreDEM):
         if wm is not None and (sch.by_displacement or sch.interval_due(self.k)):
             return None
         water = kernels.dry_water_args() if wm is None else wm.kernel_args(sch.water_interval * self.dt)
-        args = (rows, held) + law.kernel_args() + water + self._tie_args  # DEM_DRIVE
+        args = (rows, held) + law.kernel_args(flat=True) + water + self._tie_args  # DEM_DRIVE
         motion, *record = base_motion_args(self.base, self.wall_velocity)
         s, skin = law.settings, law.contact.skin  # no flat walls here: no pair filter
         steps = min(n, sch.steps_to_event(self.k))

@@ -147,11 +147,11 @@ class PaperLawEngine:
                 if not self._rebuild_pores():
                     return 0
                 continue
-            made, stepped, stale, n_sub, rc, builds, contact = self._drive_dem(
+            made, stepped, stale, n_sub, rc, builds, *pairs = self._drive_dem(
                 core.k, not self.hooks, drive, self.walls, self._wall_vel, self.io, self._xz, self.forced,
                 self._F_out, self._reset_last)
             if builds:
-                core.law.contact.take_list(builds, contact)
+                core.law.contact.take_list(builds, *pairs)
             core.finish_kernel_drive(made, drive.totals, drive.motion)
             self._check(rc)
             if stepped < made:  # its water's books, hooks and O.step() here

@@ -180,7 +180,7 @@ def drive_dem(k, step_last, drive, walls, wall_vel, reader, xz, writer, out, res
     driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base motion drive.motion
     and its record (t_s, a_s) (kernels.base_step), drive.args those of dem_drive_bulk_io after
     F_out. Returns its (steps made, of them stepped, list stale, water answer, error code, pair
-    lists built, the kernels.ContactArgs of the last pair list)."""
+    lists built, pi, pj, state, lost)."""
     d = drive
     t_s, a_s = d.record
     return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, d.steps, k, step_last, d.water_in,

@@ -385,12 +385,12 @@ def fused_step(core, xz):
     bridge = PythonBridge()
     bridge.xz, bridge.F = xz, np.zeros_like(xz)
     steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args = drive
-    made, stepped, stale, n_sub, rc, builds, contact = kernels.dem_drive_bulk_io(
+    made, stepped, stale, n_sub, rc, builds, *pairs = kernels.dem_drive_bulk_io(
         bridge.addresses, steps, core.k, False, water_in, water_interval, adjust, e, mass, skin, totals, motion,
         *record, np.zeros(0, np.int64), np.zeros((0, 2)), ids, np.zeros_like(xz), ids, np.zeros_like(xz), *args)
     assert rc == 0 and made == 1 and stepped == 0 and not stale and bridge.steps == 0
     if builds:
-        core.law.contact.take_list(builds, contact)
+        core.law.contact.take_list(builds, *pairs)
     core.finish_kernel_drive(made, totals, motion)
     if n_sub != 1:
         core.finish_substeps(n_sub)

@@ -11,7 +11,8 @@ from numba.extending import intrinsic
 
 from engines.compiled.kernels.base_motion import base_step, MOTION
 from engines.compiled.kernels.common import jit
-from engines.compiled.kernels.law import LAW, law_step, LIST_STALE, max_sq_displacement, with_pairs
+from engines.compiled.kernels.law import (CONTACT, ContactArgs, law_step, LAW_OWN, LIST_STALE, max_sq_displacement,
+                                          with_pairs)
 from engines.compiled.kernels.pair_grid import near_pairs
 from engines.compiled.kernels.separation import free_discs, separation_velocities
 from engines.compiled.kernels.ties import forces_to_write, TIES
@@ -133,12 +134,13 @@ def _write_step_velocities(set_vel, ids, discs, V):
 @jit
 def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, t_s,
                       a_s, wall_ids, wall_vel, ids_in, xz, ids_out, F_out, rows, held,
-                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact,
+                      xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt,
+                      r, pi, pj, state, prm, spring, F, M, acc_j, lost,
                       h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at,
                       tie_pairs, tie_rest, tie_prm, T):
     """PoreDEM's step (engines.model.pore_dem.PoreDEM.step, its order a-f) in YADE without Python,
     up to n steps from step index k (one step is n = 1), each: get_pos(ids_in -> xz); a law step
-    (LAW: from xz_prev to the ContactArgs ``contact``; a stale pair list rebuilt once by
+    (LAW_OWN, then CONTACT from r to lost: the ContactArgs ``contact``; a stale pair list rebuilt once by
     ``_law_step_listed``); ``water_step`` (WATER: from h to f_at) at step water_in of the call,
     then every water_interval (engines.model.schedule.Schedule), when the scene is wet;
     ``forces_to_write`` (the side-wall ties, TIES: from tie_pairs on); write_forces(ids_out <-
@@ -146,13 +148,13 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
     e, the discs' masses ``mass`` (N,) [kg/m]); the water's balance of the step added to totals
     (BALANCE) [m^2] (not that of a step that needed sub-steps: its books are the caller's); the
     base motion and the walls wall_ids (``_drive_walls``, when motion is not empty); then bridge's
-    steps() (O.step()), but for the last step when not ``step_last``. The parts' arguments are
-    spelled out but the contact's (a tuple): numba leaves a reference count of each array around
-    a call of more than 30 arrays, two atomic adds each. It stops after a step whose water
+    steps() (O.step()), but for the last step when not ``step_last``. The arguments are spelled
+    out (a tuple costs ~3 us more to unbox from Python). It stops after a step whose water
     answered other than 1 (sub-steps or a failure) before its O.step(), at the start of a step
     whose list is still stale once rebuilt (skin 0: nothing done of it), or at an error code.
     Returns (steps made, of them stepped by O.step(), the list was stale, the last water step's
-    answer or 1, the error code, the pair lists built, the ContactArgs on the last pair list)."""
+    answer or 1, the error code, the pair lists built, pi, pj, state, lost)."""
+    contact = ContactArgs(r, pi, pj, state, prm, spring, F, M, acc_j, lost)
     wet = len(W) > 0
     V = np.empty_like(du) if adjust else du  # the adjusted velocities [m/s]
     balance = _part(floats, f_at, WATER_FLOATS.balance) if wet else totals  # a dry scene has no buffer: not read
@@ -160,39 +162,39 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
     for s in range(n):
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
-            return s, s, False, 1, rc, builds, contact
+            return s, s, False, 1, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
         water_due = wet and s == next_water
         next_water += water_interval if s == next_water else 0
         n_lost, contact, built = _law_step_listed(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
                                                   dt, contact, skin)
         builds += built
         if n_lost == LIST_STALE:
-            return s, s, True, 1, 0, builds, contact
+            return s, s, True, 1, 0, builds, contact.pi, contact.pj, contact.state, contact.lost
         n_sub = (water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at, floats, f_at)
                  if water_due else 1)
         forces_to_write(xz, F_out, rows, held, du, dt, contact.F, F_water, tie_pairs, tie_rest, tie_prm, T)
         rc = _write_forces(0, bridge[BRIDGE.write_forces], ids_out, F_out)
         if rc != 0:
-            return s, s, False, n_sub, rc, builds, contact
+            return s, s, False, n_sub, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
         if adjust and n_lost > 0:
             rc = _adjust_separations(bridge[BRIDGE.set_vel], ids_in, contact, n_lost, xz, du, dt, mass, mobile, e, V)
             if rc != 0:
-                return s, s, False, n_sub, rc, builds, contact
+                return s, s, False, n_sub, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
         if water_due and n_sub == 1:
             totals += balance
         if len(motion):
             rc = _drive_walls(bridge[BRIDGE.set_vel], motion, t_s, a_s, k + s, wall_ids, wall_vel)
             if rc != 0:
-                return s + 1, s, False, n_sub, rc, builds, contact
+                return s + 1, s, False, n_sub, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
         if n_sub != 1 or (s == n - 1 and not step_last):
-            return s + 1, s, False, n_sub, 0, builds, contact
+            return s + 1, s, False, n_sub, 0, builds, contact.pi, contact.pj, contact.state, contact.lost
         rc = _c_bulk_call(bridge[BRIDGE.steps], 0, 1, 0)
         if rc != 0:
-            return s + 1, s, False, 1, rc, builds, contact
-    return n, n, False, 1, 0, builds, contact
+            return s + 1, s, False, 1, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
+    return n, n, False, 1, 0, builds, contact.pi, contact.pj, contact.state, contact.lost
 
 
-DEM_DRIVE = Layout.of(dem_drive_bulk_io, 20).check(("rows", "held"), LAW, WATER, TIES)
+DEM_DRIVE = Layout.of(dem_drive_bulk_io, 20).check(("rows", "held"), LAW_OWN, CONTACT, WATER, TIES)
 
 
 @jit
