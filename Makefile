@@ -6,10 +6,15 @@ OUT     ?= out
 DEBS    := yade python3-pytest python3-numpy python3-scipy python3-matplotlib python3-numba python3-vtk9 gcc g++ libc6-dev \
            python3-distributed python3-venv python3-pip python3-setuptools
 EXT_SO  := engines/yade/yadebulk/_yadebulk.so
+# SHORT=1: a study target's short form (one case, one start, SHORT_S of simulated time), which
+# `make check` runs (tests/test_documented_commands.py, where the targets without one are listed
+# with the reason); its numbers mean nothing. Use it with OUT=<a scratch folder>.
+SHORT_S := 0.002
+SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability mutants clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels resistance clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -50,6 +55,12 @@ demo: deps
 demo-numbers: deps
 	$(PY) yade_scripts/demo_numbers.py --out $(OUT)/demo-numbers
 
+# The effective-stress reading judged on the quick sand (docs/READINGS.md E1-E7): the bottom band's r_u at
+# the heave from 8 perturbed starts of case 1 (a few minutes) -> docs/readings/quicksand_ru.json.
+readings: deps
+	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --out $(OUT)/readings-quicksand
+	$(PY) -m postproc.readings $(OUT)/readings-quicksand docs/readings/quicksand_ru.json
+
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
 # batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests
 # instead of skipping).
@@ -83,6 +94,16 @@ $(MUTANT_VENV)/bin/mutmut:
 mutants: deps $(MUTANT_VENV)/bin/mutmut
 	$(MUTANT_VENV)/bin/python tests/mutants.py --out $(OUT)/mutants
 
+# Mutation testing of the numba kernels (mutmut skips decorated functions): a seeded sample of N mutants of
+# the @jit bodies of engines/compiled, each killed by tests/compiled + the tests naming it, then the cross-check,
+# with a fresh numba cache each (minutes of CPU per mutant): $(OUT)/mutants-kernels/summary.json, survivors.txt.
+# Resumable: the same command skips the mutants done. JOBS mutants at once (a work copy each). Not part of `make test`.
+N    ?= 200
+SEED ?= 1
+JOBS ?= 1
+mutants-kernels: deps
+	$(PY) tests/kernel_mutants.py --n $(N) --seed $(SEED) --jobs $(JOBS) --out $(OUT)/mutants-kernels
+
 # Cost studies (tens of minutes): pore core sizes, our engines against YADE alone at 240-10,000
 # bodies, water sub-cycling; the seismic-size scene at the paper's settings (180,000 steps).
 bench: deps
@@ -112,21 +133,24 @@ bench-before-after: deps
 	-$(MAKE) --no-print-directory -C $(OLD_TREE) ext 2>/dev/null
 	$(YADE) -n -x benchmarks/before_after.py --old-tree $(OLD_TREE) --json $(OUT)/bench-before-after-$(OLD).json
 
-# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes);
+# Redeposit the preset packings into $(OUT)/ (the 1089-disc deposit of Fig. 14-15 takes a few minutes;
+# SHORT=1 leaves it out);
 # `deposit.py --scene quicksand_case1 --replace` would overwrite the tracked preset file instead.
 packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene yade_scripts/scenes/quicksand_case1_flat.toml \
 	  --from $(OUT)/packings/quicksand-case1.csv --out $(OUT)/packings/quicksand-case1-flat.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
-	$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv
+	$(if $(SHORT),,$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv)
 
 # Seed 003 (about 85 CPU minutes, niced, resumable: finished jobs are kept): biaxial tests of the
 # paper's specimen, φ*(φe), E50, eq 4-6 and their sensitivity, through the sweep runner
 # (docs/BIAXIAL.md). `biaxial_study.py --estimate` prints what is left to run and its predicted
 # cost. SCHEDULER=tcp://host:8786 runs the jobs on a Dask cluster instead of the local cores.
+# SHORT=1: the main grid's 3 jobs on one packing, biaxial_study.py --quick's specimen.
 biaxial: deps
-	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+	nice -n 10 $(PY) yade_scripts/biaxial_study.py --out $(OUT)/biaxial $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
+	  $(if $(SHORT),--quick --parts main --seeds 1)
 
 # Seismic liquefaction (seed 000 §6): the seven cases over 0.18 s, each an ensemble of LIQ_STARTS
 # starts perturbed by 1e-7 m, with the fast numerics where the validation passed for the case (its
@@ -136,16 +160,16 @@ biaxial: deps
 # its 95 % interval and verdict), Fig. 40, 41, 46. LIQ_JOBS starts run at a time (LIQ_JOBS=2 uses
 # both cores of a machine of your own); LIQ_CASES="1 2" runs a subset, the study uses what is there;
 # LIQ_STARTS=1 runs single runs (which decide no trend).
-LIQ_CASES ?= 1 2 3 4 5 6 7
-LIQ_CONSERVING ?= 1 3
-LIQ_STARTS ?= 8
+LIQ_CASES ?= $(if $(SHORT),1,1 2 3 4 5 6 7)
+LIQ_CONSERVING ?= $(if $(SHORT),,1 3)
+LIQ_STARTS ?= $(if $(SHORT),1,8)
 LIQ_JOBS ?= 2
 LIQ_RUN := $(YADE) -n -x yade_scripts/liquefaction.py
 LIQ_SCENE = $$(f=yade_scripts/scenes/liquefaction_case$${n}_fast.toml; if [ -f $$f ]; then echo --scene $$f; else echo --case $$n; fi)
 LIQ_ENSEMBLE = $(if $(filter 1,$(LIQ_STARTS)),,--starts $(LIQ_STARTS) --jobs $(LIQ_JOBS))
 liquefaction: deps
-	@for n in $(LIQ_CASES); do $(LIQ_RUN) $(LIQ_SCENE) $(LIQ_ENSEMBLE) --overwrite --out $(OUT)/liquefaction/case$$n || exit 1; done
-	@for n in $(LIQ_CONSERVING); do $(LIQ_RUN) $(LIQ_SCENE) --transfer conserving $(LIQ_ENSEMBLE) --overwrite \
+	@for n in $(LIQ_CASES); do $(LIQ_RUN) $(LIQ_SCENE) $(LIQ_ENSEMBLE) $(SHORT_RUN) --overwrite --out $(OUT)/liquefaction/case$$n || exit 1; done
+	@for n in $(LIQ_CONSERVING); do $(LIQ_RUN) $(LIQ_SCENE) --transfer conserving $(LIQ_ENSEMBLE) $(SHORT_RUN) --overwrite \
 	   --out $(OUT)/liquefaction/case$$n-conserving || exit 1; done
 	$(PY) yade_scripts/liquefaction_drainage.py --json $(OUT)/liquefaction/drainage.json
 	$(PY) -m postproc.liquefaction --study $(OUT)/liquefaction
@@ -154,7 +178,7 @@ liquefaction: deps
 # snapshots and depth.png (pore pressure and porosity by depth over time) in $(OUT)/ground/run
 # (about 11 minutes of one core).
 ground: deps
-	$(LIQ_RUN) --scene yade_scripts/scenes/ground_10000.toml --overwrite --out $(OUT)/ground/run
+	$(LIQ_RUN) --scene yade_scripts/scenes/ground_10000.toml $(SHORT_RUN) --overwrite --out $(OUT)/ground/run
 
 # The seismic study's reconstruction (docs/LIQUEFACTION.md, "Reconstruction"): the paper's unknowns
 # (case 3's permeabilities x3/x10/x30, E_w x3/x10, the box wider and narrower with the same discs, a
@@ -166,6 +190,17 @@ LIQ_BASELINE ?= $(OUT)/liquefaction
 reconstruction: deps
 	nice -n 10 $(PY) yade_scripts/liquefaction_reconstruction.py --out $(OUT)/reconstruction \
 	   --baseline $(LIQ_BASELINE) --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
+
+# The liquefaction resistance curve (issue 42 item 3; engines/studies/resistance.py): seismic case 1's
+# box under its 50 Hz cosine at 5 amplitudes (1500 gal x sqrt(2)^k, k = 0..4), ensembles of
+# RES_STARTS starts over 30 cycles, loose (the preset's) and dense (deposited with mu = 0) packings,
+# through the sweep runner (resumable: finished ensembles are kept; SCHEDULER as below) ->
+# $(OUT)/resistance/ and docs/resistance/{resistance.json,resistance.png}. SHORT=1: milliseconds
+# runs into $(OUT)/resistance-short/ (the pipeline only; the check test runs it).
+RES_STARTS ?= 8
+resistance: deps
+	nice -n 10 $(PY) yade_scripts/resistance.py --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
+	   $(if $(SHORT),--short --out $(OUT)/resistance-short,--starts $(RES_STARTS) --out $(OUT)/resistance --docs docs/resistance)
 
 # Speed against accuracy (docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
 # and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows
@@ -188,7 +223,11 @@ validation: deps
 # The stability map: ~40 short runs at the extremes of dt, E_w, k1, k2, eps_m, f_max
 # (a few CPU-minutes) -> $(OUT)/stability/{map.json,map.png}.
 stability: deps
-	nice -n 10 $(YADE) -n -j 1 -x yade_scripts/stability.py --out $(OUT)/stability
+	nice -n 10 $(YADE) -n -j 1 -x yade_scripts/stability.py --out $(OUT)/stability $(if $(SHORT),--window 0.0002)
+
+# The re-meshing transfers on the four examples, 8 starts each (docs/ENGINE.md: the rule); resumable
+remesh-transfer: deps
+	nice -n 10 $(YADE) -n -x benchmarks/remesh_transfer.py --json docs/engine/remesh_transfer.json
 
 clean:
 	rm -rf $(OUT) .pytest_cache

@@ -13,7 +13,9 @@ The packages, each importing only those before it (tests/test_layers.py checks i
   seeds/      the companion models: particle_potential (seed 002), biaxial (003), sand_layer (004)
   studies/    the speed-accuracy and stability studies (their points and analysis, no YADE); the
               perturbed starts of an ensemble and its statistics (ensemble.py); seed 003's judged
-              points and their intervals (biaxial_judged.py)
+              points and their intervals (biaxial_judged.py); every study's verdicts
+              (tradeoffs_judged.py, liquefaction.py: the paper's trends, reconstruction.py); never
+              imports yade/
   run/        a run as a user starts it: scene files, preflight, command line, runner, provenance,
               sweeps, ensembles (--starts); the cross-check's cases; the studies' runs
 
@@ -29,7 +31,8 @@ step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
   a. displacement increments du = x_t - x_{t-dt}      model/paper_law.py        eq 1
   b. contact forces, springs a-d, eps_m               model/contact.py          eq 1-13, 25-27
   c. velocity adjustment at separation                model/contact.py          eq 18-24
-  d. pores: build, measure, re-mesh rules a-d         model/pores.py, model/pore_water.py  eq 28-31
+  d. pores: build, measure, re-mesh rules a-d         model/pores/ (build, links, faces, measure, overlaps),
+                                                      model/pore_water.py  eq 28-31
      the regular triangulation without Qhull          compiled/regular.py
      flat walls as pore boundaries (SPEC §2.6)        model/flat_walls.py
      water: pressure, Darcy flows, update, forces    model/pore_water.py, model/water_model.py
@@ -50,7 +53,10 @@ where dt_auto_factor was validated: studies/tradeoffs.py (VALIDATED_ON).
 Observables: the window porosity and block means (model/observe.py); block pressures from one
 measure of the positions by the water model (WaterModel.void_area); the contact forces a step gives
 without taking it (ContactLaw.touching_at: the bottom wall's normal force); the pores as a network
-in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py.
+in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py. The effective stress
+of the contacts (Love-Weber) by band of the bed, per disc, and the pore-pressure ratio r_u (SPEC
+§2.8): model/effective_stress.py, from the contacts the step gives (PaperLaw.stress_contacts,
+YadeCoupling.stress_contacts).
 Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in the modules of
 compiled/kernels/, one concept each: law, pair_grid, measure, darcy, water_step, ties, separation,
 base_motion, drives).
@@ -70,9 +76,17 @@ Where to add ...
     puts a toy law in the NumPy one's place). A new constant adds 4: WATER_FIELDS
     (model/pore_water.py: WaterSettings, the scene's [water] table and the kernels' WATER_PRM are
     made from it) and, in reference/model.py, its Settings field, read_settings and Water.__init__.
-  a wall type: the group codes of model/groups.py (WALL_*, the one table; packing files store
-    them), which link discs to walls in build_pores (model/pores.py); boundary flows in
-    PoreWater.flows; the YADE side in yade/water_engine.py (WaterEngine's ``walls``).
+  a wall type (a boundary kind): one row of BOUNDARY_KINDS in model/groups.py (name; a disc group
+    code, which packing files store, or a flat-wall word; what it does to a pore's water: surface,
+    drained, inflow, undrained; a disc group's face). The pores' wall codes, the water's masks
+    (pore_water.boundary_masks) and inflow lengths, the compiled twins (they take those masks), the
+    scene's flat walls and [water] sides, packing faces, WaterEngine's ``walls``/``flat_walls`` and
+    its contract read it: 1 place (tests/compiled/test_boundary_kinds.py adds a toy word and a toy
+    group there and nowhere else). Besides: the independent reference (reference/model.py, its own
+    codes and words: 1 file, 3-4 places) for the cross-check; a disc group the deposition should
+    build, yade/deposition.py (1 place). A new action on the water (e.g. a fixed pressure) is a
+    physics change: WATER and the table, PoreWater.flows, its twins (compiled/kernels/darcy.py
+    darcy_flows and compiled/water_model.py) and the balance, and the reference: 5 files.
   an output column: history_columns and Recorder.row in run/runner.py (only for the scenes that
     produce it), from what the coupling (yade/coupling.py) measured at the step; its unit in
     run/history.py (UNITS) and docs/OUTPUTS.md.

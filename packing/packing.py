@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 
 from engines import files
 from engines.files.inputs import MB, check_input_file
-from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_LEFT, WALL_NONE, WALL_RIGHT
+from engines.model.groups import GROUP_NAMES, WALL_BOTTOM, WALL_NONE, disc_groups, kind
 from engines.model.pores import check_discs
 
 COLUMNS = ("x", "z", "r", "group", "density_factor")
@@ -82,20 +82,21 @@ class Packing:
     def inner_faces(self):
         """The walls' inner faces [m] by wall code, of the walls present: the left wall discs'
         max(x + r), the right's min(x - r), the bottom's max(z + r)."""
-        x, z, r, g = self.xz[:, 0], self.xz[:, 1], self.r, self.group
-        faces = {WALL_LEFT: lambda w: (x + r)[w].max(), WALL_RIGHT: lambda w: (x - r)[w].min(),
-                 WALL_BOTTOM: lambda w: (z + r)[w].max()}
-        return {code: float(face(g == code)) for code, face in faces.items() if (g == code).any()}
+        faces = {}
+        for k in disc_groups():  # the face of each wall group (engines.model.groups): inward x its discs' edge
+            w = self.group == k.group
+            if w.any():
+                axis, inward = k.face
+                faces[k.group] = inward * float((inward * self.xz[w, axis] + self.r[w]).max())
+        return faces
 
     def outside_box(self):
         """Indices of the particles whose centre is not strictly inside the walls' box: between the
         side walls' inner faces and above the bottom's (``inner_faces``; open at the top)."""
-        faces = self.inner_faces()
-        x, z = self.xz[:, 0], self.xz[:, 1]
         out = np.zeros(len(self.r), bool)
-        out |= x <= faces.get(WALL_LEFT, -np.inf)
-        out |= x >= faces.get(WALL_RIGHT, np.inf)
-        out |= z <= faces.get(WALL_BOTTOM, -np.inf)
+        for code, face in self.inner_faces().items():
+            axis, inward = kind(GROUP_NAMES[code]).face
+            out |= inward * self.xz[:, axis] <= inward * face
         return np.flatnonzero(out & self.mobile)
 
     def check_fit(self, max_overlap, tolerance="the tolerance", wall_discs=True):
@@ -106,7 +107,7 @@ class Packing:
         out = self.outside_box() if wall_discs else []
         if len(out):
             i = out[0]
-            faces = ", ".join(f"{GROUP_NAMES[c]} {'z' if c == WALL_BOTTOM else 'x'} = {f:.6g}"
+            faces = ", ".join(f"{GROUP_NAMES[c]} {'xz'[kind(GROUP_NAMES[c]).face[0]]} = {f:.6g}"
                               for c, f in self.inner_faces().items())
             raise ValueError(f"{self.source}, {self.row_name(i)}: particle centre (x, z) = ({self.xz[i, 0]:.6g}, "
                              f"{self.xz[i, 1]:.6g}) m is outside the walls' box (inner faces {faces} m)")

@@ -165,7 +165,8 @@ def ensemble_dir(path):
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dirs", nargs="+", type=ensemble_dir, help="ensemble folders (holding ensemble.json)")
     ap.add_argument("--compare", action="store_true", help="their spreads side by side (needs --figure)")
     ap.add_argument("--figure", help="the comparison's figure")

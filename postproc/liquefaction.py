@@ -11,10 +11,11 @@ porosity change, mean and peak U per block, wall time, re-meshing water change; 
 times of yade_scripts/liquefaction_drainage.py when ROOT/drainage.json exists), the figures
 Fig. 40, 41, 46 (porosity of the cases compared, with the block pressures of the wet ones), the
 transfer comparison and ROOT/trends.md (the paper's trends against our numbers, each criterion's
-quantity with its 95 % interval over the starts and a verdict holds / fails / undecided: ``trends``).
+quantity with its 95 % interval over the starts and a verdict holds / fails / undecided:
+engines.studies.liquefaction.trends).
 ``run_figures`` also draws ``depth.png`` (``depth_figure``: pore pressure and porosity by depth over
-time); ``reconstruction(out, baseline)`` the trends on each variant of the reconstruction
-(engines.studies.reconstruction: reconstruction.json, .md, .png).
+time); ``reconstruction(out, baseline)`` writes the trends on each variant of the reconstruction
+(engines.studies.reconstruction.judged: reconstruction.json, .md, .png).
 
     /usr/bin/python3 -m postproc.liquefaction RUN_DIR [RUN_DIR ...]     # one run's figures
     /usr/bin/python3 -m postproc.liquefaction --study ROOT              # the study
@@ -27,15 +28,15 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy import stats  # noqa: E402
 from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.patches import Circle  # noqa: E402
 
 from engines import files  # noqa: E402
 from engines.model.groups import WALL_LEFT, WALL_RIGHT  # noqa: E402
 from engines.model.observe import Window, porosity  # noqa: E402
-from engines.studies.ensemble import CONFIDENCE, t_half_width  # noqa: E402
-from engines.studies.reconstruction import VARIANTS, ensemble_path  # noqa: E402
+from engines.studies.ensemble import CONFIDENCE  # noqa: E402
+from engines.studies.liquefaction import PERIOD, TRENDS, holds_if, trends  # noqa: E402
+from engines.studies.reconstruction import VARIANTS, ensemble_path, judged  # noqa: E402
 from packing.packing import Packing  # noqa: E402
 from postproc.plots import GROUP_COLOURS, block_label  # noqa: E402
 from postproc.run_files import (  # noqa: E402
@@ -48,7 +49,6 @@ from postproc.run_files import (  # noqa: E402
     snapshot_files,
 )
 
-PERIOD = 0.02        # the cosine's period [s] (50 Hz): the averaging window of the end values
 LOW_BLOCKS = 4       # blocks 1-4: below the two surface blocks, whose U drains to the surface (§6.2)
 CASES = {  # SPEC §2.5
     1: "saturated, undrained, spring d, cosine",
@@ -145,10 +145,12 @@ def band_porosity(snap, bounds, top):
                      for z0, z1 in bounds])
 
 
-def depth_figure(history, snaps, bounds, title):
+def depth_figure(history, snaps, bounds, title, band_bounds=None):
     """Pore pressure and porosity by depth over time: the block-mean U (history) and the porosity
     change of the same bands since t = 0 (the snapshots ``snaps``) as colour over time and height,
-    both centred on 0, and the porosity profile at t = 0. ``bounds``: the blocks' [z0, z1] [m]."""
+    both centred on 0, and the porosity profile at t = 0. ``bounds``: the blocks' [z0, z1] [m].
+    With the bands' r_u in the history (ru_band*) and their ``band_bounds`` [m], a fourth panel:
+    r_u by height over time (``draw_ru_by_depth``)."""
     s0 = snaps[0]
     mobile = s0["group"] == 0
     top = max(float(np.max(s0["xz"][mobile, 1] + s0["r"][mobile])), bounds[-1][0] + 1e-9)  # the bed's top at t = 0
@@ -157,8 +159,9 @@ def depth_figure(history, snaps, bounds, title):
     n = np.array([band_porosity(s, bounds, top) for s in snaps])
     ts = np.array([float(s["t"]) for s in snaps]) * 1e3
     t_edges = np.r_[ts[0], 0.5 * (ts[1:] + ts[:-1]), ts[-1]] if len(ts) > 1 else np.r_[ts, ts + 1]
-    fig, axes = plt.subplots(1, 3, figsize=(14, 5.6), sharey=True, layout="constrained",
-                             gridspec_kw={"width_ratios": (1.4, 1.4, 0.7)})
+    ru = band_bounds is not None and "ru_band1" in history
+    fig, axes = plt.subplots(1, 4 if ru else 3, figsize=(19 if ru else 14, 5.6), sharey=True, layout="constrained",
+                             gridspec_kw={"width_ratios": (1.4, 1.4, 0.7) + ((1.4,) if ru else ())})
     t_end = float(history["t"][-1]) * 1e3
     lim = max(float(np.nanpercentile(np.abs(U), 99)), 1e-9)  # the surface block's rare spikes saturate
     im = axes[0].pcolormesh(history["t"] * 1e3, edges, U[:-1].T if len(U) > 1 else U.T, cmap="RdBu_r",
@@ -180,10 +183,41 @@ def depth_figure(history, snaps, bounds, title):
         ax.set_xlim(0.0, max(t_end, t_edges[-1]))  # both panels over the run's whole time
         ax.set_title(f"{what} by height", fontsize=9)
     axes[0].set_ylabel("z [mm]")
+    if ru:
+        draw_ru_by_depth(fig, axes[3], history, band_bounds)
+        axes[3].set_xlim(0.0, max(t_end, t_edges[-1]))
     for ax in axes:
         ax.grid(alpha=0.3)
     fig.suptitle(f"{title}: pore pressure and porosity by depth over time")
     return fig
+
+
+RU_CMAP = "viridis"  # sequential: dark r_u <= 0, bright r_u >= 1 (the contacts carry nothing)
+RU_RANGE = (-0.2, 1.2)  # the colour scale of r_u: 0 and 1 inside it, beyond it the end colours
+
+
+def draw_ru_by_depth(fig, ax, history, band_bounds):
+    """The bands' pore-pressure ratio r_u (history.csv's ru_band*, engines.model.effective_stress) as
+    colour over time and height on ``ax`` on the scale RU_RANGE with 0 and 1 marked on the colour
+    bar and the contour r_u = 1 drawn (a black line: where the contacts carry nothing)."""
+    cols = sorted((c for c in history if c.startswith("ru_band")), key=lambda c: int(c[len("ru_band"):]))
+    ru = np.column_stack([history[c] for c in cols])
+    t = history["t"] * 1e3
+    edges = 1e3 * np.array([b[0] for b in band_bounds] + [band_bounds[-1][1]])
+    finite = ru[np.isfinite(ru)]
+    low, top = RU_RANGE
+    im = ax.pcolormesh(t, edges, ru[:-1].T if len(ru) > 1 else ru.T, cmap=RU_CMAP, vmin=low, vmax=top, shading="flat")
+    mids = 0.5 * (edges[1:] + edges[:-1])
+    if finite.size and np.nanmax(ru) >= 1.0 and len(t) > 1 and len(mids) > 1:
+        ax.contour(t, mids, np.where(np.isfinite(ru), ru, 0.0).T, levels=[1.0], colors="k", linewidths=1.0)
+    bar = fig.colorbar(im, ax=ax, extend="both", location="bottom", shrink=0.9,
+                       label=f"pore-pressure ratio r_u = U / σ'_v0 [-], black line: r_u = 1\n(range {finite.min():.2f} "
+                             f"to {finite.max():.2f}; beyond {low:g}, {top:g}: the end colours)"
+                       if finite.size else "pore-pressure ratio r_u [-] (no pore in any band)")
+    for level, colour in ((0.0, "white"), (1.0, "red")):
+        bar.ax.axvline(level, color=colour, lw=2.0)
+    ax.set_xlabel("t [ms]")
+    ax.set_title("pore-pressure ratio by height (bands of the bed)", fontsize=9)
 
 
 def run_figures(run_dir):
@@ -202,7 +236,8 @@ def run_figures(run_dir):
     plt.close(fig)
     bounds = summary.get("block_bounds_m")
     if len(snap_files) > 1 and bounds:
-        fig = depth_figure(history, [read_snapshot(f) for f in snap_files], bounds, summary.get("scene", run_dir))
+        fig = depth_figure(history, [read_snapshot(f) for f in snap_files], bounds, summary.get("scene", run_dir),
+                           summary.get("band_bounds_m"))
         paths.append(os.path.join(run_dir, "depth.png"))
         files.save_figure(fig, paths[-1], dpi=110)
         plt.close(fig)
@@ -283,118 +318,6 @@ def case_summary(run_dir):
                    side_outflow=wb["side_outflow"], surface_outflow=wb["surface_outflow"],
                    water_balance_error=summary["water_balance_error"], n_rebuilds=summary["n_rebuilds"])
     return out
-
-
-def _holds_if(low, high):
-    return f"> {low:g}" if high == np.inf else f"< {high:g}" if low == -np.inf else f"in ({low:g}, {high:g})"
-
-
-# The paper's trends (SPEC §2.5) with the study's criteria, fixed before the runs: per trend its
-# cases and its conditions (name, a quantity of the cases' means over their starts {case: {key:
-# mean}}, low, high); the trend holds where every quantity lies in (low, high).
-TRENDS = tuple(
-    [(f"dry settles more than saturated-undrained ({label}: case {dry} vs {wet})",
-      "undrained ≈ constant volume; dry porosity falls with time (Fig. 40/46)", (wet, dry),
-      [(f"-Δn(case {dry}) / |Δn(case {wet})|",
-        lambda m, w=wet, d=dry: -m[d]["porosity_change"] / abs(m[w]["porosity_change"]), 2.0, np.inf)])
-     for wet, dry, label in ((1, 2, "cosine"), (6, 7, "El Centro"))]
-    + [("drained sides with high k keep |U| small (case 3 vs 1)", "U hardly rises in any block, stays near 0 (Fig. 39)",
-        (1, 3), [("time-mean |U| of blocks 1-4, case 3 / case 1",
-                  lambda m: m[3]["U_low_abs_mean"] / m[1]["U_low_abs_mean"], -np.inf, 0.5)]),
-       ("drained case lies between undrained and dry in porosity (case 3)", "intermediate (Fig. 40)", (1, 2, 3),
-        [("(Δn3 - Δn1) / (Δn2 - Δn1)", lambda m: (m[3]["porosity_change"] - m[1]["porosity_change"])
-          / (m[2]["porosity_change"] - m[1]["porosity_change"]), 0.0, 1.0)]),
-       ("elastic springs keep porosity nearly constant (cases 4, 5 vs 2)",
-        "porosity hardly changes, saturated or dry (Fig. 41)", (2, 4, 5),
-        [("max(|Δn4|, |Δn5|) / |Δn2|", lambda m: max(abs(m[4]["porosity_change"]), abs(m[5]["porosity_change"]))
-          / abs(m[2]["porosity_change"]), -np.inf, 0.5)]),
-       ("elastic springs: U oscillates about 0 (case 4)",
-        "U oscillates near 0 in every block, with suction; no build-up (Fig. 42)", (1, 4),
-        [("|mean U| / std U of blocks 1-4, case 4", lambda m: abs(m[4]["U_low_mean"]) / m[4]["U_low_std"], -np.inf, 1.0),
-         ("|mean U| of blocks 1-4, case 4 / case 1", lambda m: abs(m[4]["U_low_mean"]) / abs(m[1]["U_low_mean"]),
-          -np.inf, 0.5)]),
-       ("hysteretic springs: U builds up with the input period (case 1)",
-        "U rises through the first cycle (0.02 s), then oscillates at the input period about a plateau (Fig. 37)", (1,),
-        [("rise of U (blocks 1-4) in the first 20 ms / std U",
-          lambda m: m[1]["U_low_rise_first_period"] / m[1]["U_low_std"], 0.0, np.inf),
-         ("U over the last 20 ms / std U", lambda m: m[1]["U_low_end"] / m[1]["U_low_std"], 0.5, np.inf),
-         ("dominant period of U / 20 ms", lambda m: m[1]["U_low_dominant_period"] / PERIOD, 0.75, 1.25)])])
-N_BOOT = 2000  # bootstrap resamples of the starts of each case for a quantity's interval
-
-
-def small_sample_factor(n):
-    """The factor that widens a percentile bootstrap interval of means of n starts about its
-    estimate to a Student-t one: t(q, n - 1) / z(q) x sqrt(n / (n - 1)), q = (1 + CONFIDENCE) / 2 (the
-    bootstrap's spread of a mean is sqrt((n - 1) / n) of its standard error; 1.29 at n = 8)."""
-    q = 0.5 + CONFIDENCE / 2
-    return float(t_half_width(1.0, n) / stats.norm.ppf(q) * np.sqrt(n / (n - 1))) if n > 1 else np.nan
-
-
-def _means(cases, keys, pick=None):
-    """{case: {key: mean over the starts (those of ``pick`` {case: indices}, default all)}}."""
-    return {k: {key: float(np.mean([runs[i][key] for i in (pick[k] if pick else range(len(runs)))]))
-                for key in keys} for k, runs in cases.items()}
-
-
-def _verdict(lo, hi, low, high):
-    """holds: the interval (lo, hi) inside (low, high); fails: outside; undecided: it straddles a
-    threshold (or is unknown)."""
-    if np.isnan(lo) or np.isnan(hi):
-        return "undecided"
-    if low < lo and hi < high:
-        return "holds"
-    if hi <= low or lo >= high:
-        return "fails"
-    return "undecided"
-
-
-def trends(cases, drainage=None, seed=0):
-    """The paper's trends (TRENDS) on our runs: a list of rows {trend, paper, cases, starts,
-    conditions: [{quantity, estimate, ci95, holds_if, verdict}], verdict}; rows whose cases are
-    missing are left out. ``cases``: {case: [summary of each start (``case_summary``)]} (a dict for
-    one run). Each quantity: its value on the means over the starts, its 95 % interval the
-    percentile interval over N_BOOT bootstrap resamples of each case's starts (numpy Generator(seed))
-    widened by ``small_sample_factor`` of the fewest starts,
-    its verdict holds (the interval inside the criterion's range), fails (outside) or undecided
-    (straddling a threshold, or a case with one start); the trend fails where a condition fails,
-    holds where all hold. ``drainage``: drainage.json (yade_scripts/liquefaction_drainage.py), quoted
-    in the drained row."""
-    cases = {k: v if isinstance(v, list) else [v] for k, v in cases.items()}
-    keys = ("porosity_change", "U_low_abs_mean", "U_low_mean", "U_low_std", "U_low_rise_first_period", "U_low_end",
-            "U_low_dominant_period")
-    rng = np.random.default_rng(seed)
-    rows = []
-    for trend, paper, need, conditions in TRENDS:
-        if not all(k in cases for k in need):
-            continue
-        sub = {k: cases[k] for k in need}
-        have = [key for key in keys if all(key in r for runs in sub.values() for r in runs)]
-        mean = _means(sub, have)
-        boot = [_means(sub, have, {k: rng.integers(0, len(runs), len(runs)) for k, runs in sub.items()})
-                for _ in range(N_BOOT)]
-        one = min(len(runs) for runs in sub.values()) < 2
-        out = []
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for name, f, low, high in conditions:
-                est = float(f(mean))
-                values = np.array([f(b) for b in boot], float)
-                tails = [50 * (1 - CONFIDENCE), 50 * (1 + CONFIDENCE)]  # percent
-                lo, hi = (np.nanpercentile(values, tails) if not one and np.isfinite(values).any()
-                          else (np.nan, np.nan))
-                widen = small_sample_factor(min(len(runs) for runs in sub.values()))
-                lo, hi = est - widen * (est - lo), est + widen * (hi - est)
-                out.append({"quantity": name, "estimate": est, "ci95": [float(lo), float(hi)],
-                            "holds_if": _holds_if(low, high),
-                            "verdict": "undecided" if one else _verdict(lo, hi, low, high)})
-        verdicts = {c["verdict"] for c in out}
-        row = {"trend": trend, "paper": paper, "cases": list(need), "starts": {k: len(sub[k]) for k in need},
-               "conditions": out,
-               "verdict": "fails" if "fails" in verdicts else "holds" if verdicts == {"holds"} else "undecided"}
-        tau = (drainage or {}).get("case3", {}).get("1", {}).get("tau")
-        if 3 in need and "U_low_abs_mean" in have and tau:
-            row["note"] = f"slowest drainage time constant of case 3 {1e3 * tau[0]:.0f} ms vs the 20-ms input period"
-        rows.append(row)
-    return rows
 
 
 def _wet(runs):
@@ -547,39 +470,18 @@ def _cases_of(summary):
     return {int(k[len("case"):]): v for k, v in summary["cases"].items()}
 
 
-def variant_cases(base, changed, runs):
-    """The cases a variant's trends are evaluated on: ``runs`` {case: [start summaries]} of the
-    ``changed`` cases that completed, the baseline's ``base`` for the cases the variant does not
-    change; a changed case not in ``runs`` is left out (never taken from the baseline)."""
-    return {**{k: r for k, r in base.items() if k not in changed}, **runs}
-
-
 def reconstruction(out, baseline, packings=None):
-    """The trends on each variant of engines.studies.reconstruction: its cases' ensembles (under
-    OUT/runs) with the study's own (BASELINE/summary.json; those of the variant it is ``on``) for
-    the cases it does not change; a case it changes that has not completed drops the trends that
-    need it. ``packings``: {variant: facts of its deposit} (engines.run.reconstruction.packing_facts).
-    Writes OUT/reconstruction.json, reconstruction.md and reconstruction.png; returns the JSON's dict."""
+    """The trends on each variant of engines.studies.reconstruction (its ``judged``): its cases'
+    ensembles under OUT/runs, the study's own from BASELINE/summary.json. ``packings``: {variant:
+    facts of its deposit} (engines.run.reconstruction.packing_facts). Writes OUT/reconstruction.json,
+    reconstruction.md and reconstruction.png; returns the JSON's dict."""
     with open(os.path.join(baseline, "summary.json")) as f:
         base = _cases_of(json.load(f))
-    doc = {"baseline": os.path.abspath(baseline), "confidence": CONFIDENCE, "reference": trends(base), "variants": {}}
-    evaluated = {}  # the cases each variant's trends were evaluated on, for the variants built on it
+    runs = {}
     for name, v in VARIANTS.items():
         got = {k: _case_runs(ensemble_path(os.path.join(out, "runs"), name, k)) for k in v.cases}
-        done = [k for k in v.cases if got[k] is not None]
-        if not done or (v.on and v.on not in evaluated):
-            continue
-        cases = variant_cases(evaluated[v.on] if v.on else base, v.cases, {k: got[k][0] for k in done})
-        evaluated[name] = cases
-        changed = sorted(set(done) | set(doc["variants"][v.on]["changed"] if v.on else ()))  # against the presets
-        doc["variants"][name] = {
-            "unknown": v.unknown, "reason": v.reason, "cases": list(v.cases), "done": done, "on": v.on,
-            "changed": changed,
-            "starts": {k: len(cases[k]) for k in done}, "packing": (packings or {}).get(name),
-            "case_means": {k: {key: float(np.mean([r[key] for r in cases[k]]))
-                               for key in ("porosity_initial", "porosity_change", "U_low_mean") if key in cases[k][0]}
-                           for k in done},
-            "trends": trends(cases)}
+        runs[name] = {k: None if g is None else g[0] for k, g in got.items()}
+    doc = {"baseline": os.path.abspath(baseline), **judged(base, runs, packings)}
     files.write_json(os.path.join(out, "reconstruction.json"), doc, indent=1)
     files.write_text(os.path.join(out, "reconstruction.md"), reconstruction_markdown(doc))
     fig = reconstruction_figure(doc)
@@ -620,7 +522,7 @@ def reconstruction_markdown(doc):
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     lines += ["", "Trends (each quantity's criterion in brackets):", ""]
     for i, (trend, _, _, conditions) in enumerate(TRENDS):
-        lines.append(f"- T{i + 1}: {trend}: " + "; ".join(f"{q} ({_holds_if(lo, hi)})" for q, _, lo, hi in conditions))
+        lines.append(f"- T{i + 1}: {trend}: " + "; ".join(f"{q} ({holds_if(lo, hi)})" for q, _, lo, hi in conditions))
     lines += ["", "| variant | unknown | why a candidate | cases run (starts) | packing | "
               "case means: porosity at t = 0, Δn, U_low mean [N/m] |", "|---|---|---|---|---|---|"]
     for name, v in doc["variants"].items():
@@ -675,8 +577,8 @@ def reconstruction_figure(doc):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.liquefaction",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.liquefaction",
                                  description="Redraw seismic runs' blocks.png and depth.png, or (--study ROOT) the "
                                              "study of `make liquefaction`'s ensembles: summary.json, trends.md, "
                                              "Fig. 40, 41, 46.")

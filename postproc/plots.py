@@ -197,30 +197,10 @@ def snapshot_figure(snaps, title, blocks=None):
     n = len(snaps)
     cols = min(n, min(SNAPSHOT_COLUMNS, key=lambda c: -n % c))
     rows = -(-n // cols)
-    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
-    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
-    window = ""
-    n_discs = len(snaps[0]["r"])
-    if n_discs > WINDOW_DISCS:  # a large scene: the panels show its middle, about WINDOW_DISCS discs wide
-        mid, half = (lo[0] + hi[0]) / 2, (hi[0] - lo[0]) * WINDOW_DISCS / n_discs / 2
-        window = (f" (x = {mid - half:.0f} to {mid + half:.0f} mm of {lo[0]:.0f} to {hi[0]:.0f} mm; "
-                  f"the titles' maxima of the whole scene)")
-        lo[0], hi[0] = mid - half, mid + half
+    lo, hi, window = _snapshot_bounds(snaps)
     aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])  # panel height / width of the scene
     f_max = max([s["f_n"].max() for s in snaps if len(s["f_n"])] or [1.0])
-    dense = max(s["density_factor"].max() for s in snaps)
-    key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
-    if dense > 1:
-        key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
-                         label=f"dense top particle (density x {dense:g})"))
-    if any((s["group"] != 0).any() for s in snaps):
-        key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
-    if any("flat_walls" in s for s in snaps):
-        key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
-    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N/m")
-            for f in (f_max / 4, f_max)]
-    if blocks:
-        key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
+    key = _snapshot_key(snaps, f_max, blocks)
     width = max(4.3 * cols + 1.2, 8.6)
     key_cols = max(1, int(KEY_SHARE * width / KEY_ENTRY_WIDTH))
     key_height = 0.22 * -(-len(key) // key_cols) + 0.2  # [in]: the key's rows
@@ -232,23 +212,11 @@ def snapshot_figure(snaps, title, blocks=None):
     key_ax.axis("off")
     Us = [s["U"] for s in snaps if "U" in s and len(s["U"])]
     u_max = max((np.abs(u).max() for u in Us), default=0.0) or 1.0
-    norm = Normalize(-u_max, u_max)
     speed = [np.hypot(*s["vel"][s["group"] == 0].T) for s in snaps]
     moving = max(v.max(initial=0.0) for v in speed) > 0
     v_max = max(v.max(initial=0.0) for v in speed) if moving else 1.0
     v_key = _nice(v_max / 2)
-    colour_source = quiver = None
-    for ax, s, v in zip(axes, snaps, speed):
-        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
-        colour_source = colour_source or polys
-        quiver = quiver or q
-        lines = [f"max |v| = {v.max(initial=0.0):.3g} m/s, max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
-        if "U" in s and len(s["U"]):
-            lines.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
-        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + "\n".join(lines), fontsize=8.5)
-        if blocks:
-            for k, (z0, z1) in enumerate(blocks):
-                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    colour_source, quiver = _snapshot_panels(axes, snaps, speed, Normalize(-u_max, u_max), v_max, f_max, blocks)
     pad = 0.3
     for k, ax in enumerate(axes):
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
@@ -271,6 +239,96 @@ def snapshot_figure(snaps, title, blocks=None):
     return fig
 
 
+def _snapshot_bounds(snaps):
+    """(lower left, upper right) [mm] of the panels and the title's note of the window: a scene of
+    more than WINDOW_DISCS discs is drawn in a window of its middle about WINDOW_DISCS discs wide."""
+    lo = np.min([s["xz"] - s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    hi = np.max([s["xz"] + s["r"][:, None] for s in snaps], axis=(0, 1)) * 1e3
+    window = ""
+    n_discs = len(snaps[0]["r"])
+    if n_discs > WINDOW_DISCS:
+        mid, half = (lo[0] + hi[0]) / 2, (hi[0] - lo[0]) * WINDOW_DISCS / n_discs / 2
+        window = (f" (x = {mid - half:.0f} to {mid + half:.0f} mm of {lo[0]:.0f} to {hi[0]:.0f} mm; "
+                  f"the titles' maxima of the whole scene)")
+        lo[0], hi[0] = mid - half, mid + half
+    return lo, hi, window
+
+
+def _snapshot_key(snaps, f_max, blocks):
+    """The key's handles: the kinds of discs and walls drawn, two force widths, the blocks."""
+    dense = max(s["density_factor"].max() for s in snaps)
+    key = [Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=0.4, label="particle")]
+    if dense > 1:
+        key.append(Patch(facecolor=GROUP_COLOURS[0], edgecolor="k", linewidth=1.6,
+                         label=f"dense top particle (density x {dense:g})"))
+    if any((s["group"] != 0).any() for s in snaps):
+        key.append(Patch(facecolor=GROUP_COLOURS[1], edgecolor="k", linewidth=0.4, label="wall disc"))
+    if any("flat_walls" in s for s in snaps):
+        key.append(Line2D([], [], color=FLAT_WALL_COLOUR, lw=3, label="flat wall"))
+    key += [Line2D([], [], color=FORCE_COLOUR, lw=force_width(f, f_max), label=f"normal force {f:.2g} N/m")
+            for f in (f_max / 4, f_max)]
+    if blocks:
+        key += [Patch(color=f"C{k}", label=f"z range of block {k + 1}") for k in range(len(blocks))]
+    return key
+
+
+def _snapshot_panels(axes, snaps, speed, norm, v_max, f_max, blocks):
+    """Draw each snapshot on its panel on the shared scales, titled with its own maxima (``speed``:
+    each snapshot's particle speeds [m/s]); returns (the first pore collection, the first quiver)."""
+    colour_source = quiver = None
+    for ax, s, v in zip(axes, snaps, speed):
+        polys, q = draw_snapshot(ax, s, norm, v_max, f_max)
+        colour_source = colour_source or polys
+        quiver = quiver or q
+        lines = [f"max |v| = {v.max(initial=0.0):.3g} m/s, max f_n = {s['f_n'].max(initial=0.0):.3g} N"]
+        if "U" in s and len(s["U"]):
+            lines.append(f"U in [{s['U'].min():.0f}, {s['U'].max():.0f}] N/m")
+        ax.set_title(f"t = {float(s['t']) * 1e3:.0f} ms\n" + "\n".join(lines), fontsize=8.5)
+        if blocks:
+            for k, (z0, z1) in enumerate(blocks):
+                ax.axhspan(z0 * 1e3, z1 * 1e3, xmin=0.985, xmax=1.0, color=f"C{k}", alpha=0.8, zorder=5)
+    return colour_source, quiver
+
+
+def stress_path_figure(history, title, band_bounds=None):
+    """The p'-q stress path of each band of the bed (history.csv's p_band*, q_band* [Pa]:
+    engines.model.effective_stress, q the radius of Mohr's circle), one panel per band from the
+    surface down, coloured by time, its start and end marked; each panel's scale its own (a band
+    near the surface carries far less). ``band_bounds``: the bands' [z0, z1] [m] for the titles."""
+    n = sum(c.startswith("p_band") for c in history)
+    cols = min(n, 4)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(3.3 * cols, 3.0 * rows + 0.8), squeeze=False, layout="constrained")
+    t_ms = history["t"] * 1e3
+    norm = Normalize(t_ms[0], t_ms[-1])
+    for k, ax in zip(range(n, 0, -1), axes.ravel()):
+        p, q = history[f"p_band{k}"], history[f"q_band{k}"]
+        pts = np.column_stack([p, q])
+        lines = LineCollection(np.stack([pts[:-1], pts[1:]], axis=1), cmap="viridis", norm=norm, linewidths=1.0)
+        lines.set_array(0.5 * (t_ms[:-1] + t_ms[1:]))
+        ax.add_collection(lines)
+        ax.plot(p[0], q[0], "o", color="k", ms=4, label="start")
+        ax.plot(p[-1], q[-1], "s", color="C3", ms=4, label="end")
+        hi = max(float(np.nanmax(np.r_[p, q, 1e-9])), 1e-9)
+        ax.plot([0, hi], [0, hi], color="0.6", lw=0.6, ls="--")  # q = p': a band's stress without tension
+        ax.set_xlim(min(0.0, float(np.nanmin(p))) - 0.05 * hi, 1.05 * hi)
+        ax.set_ylim(0.0, 1.05 * hi)
+        where = f"z {1e3 * band_bounds[k - 1][0]:.1f}–{1e3 * band_bounds[k - 1][1]:.1f} mm" if band_bounds else ""
+        ax.set_title(f"band {k}" + (" (bottom)" if k == 1 else " (surface)" if k == n else "") +
+                     (f"\n{where}" if where else ""), fontsize=8.5)
+        ax.set_xlabel("p' [Pa]", fontsize=8)
+        ax.set_ylabel("q [Pa]", fontsize=8)
+        ax.tick_params(labelsize=7.5)
+        ax.grid(alpha=0.3)
+    for ax in axes.ravel()[n:]:
+        ax.set_visible(False)
+    axes[0, 0].legend(fontsize=7, loc="upper left")
+    fig.colorbar(plt.cm.ScalarMappable(norm, "viridis"), ax=axes, label="t [ms]", shrink=0.8)
+    fig.suptitle(f"{title}: stress paths of the bed's bands (p' = (σ'_xx + σ'_zz)/2, q = Mohr's radius; "
+                 "dashed: q = p')", fontsize=10)
+    return fig
+
+
 def figures_of_run(run_dir):
     """Redraw a run's figures from its files (history.csv, snapshot_*.npz, summary.json)."""
     summary = read_summary(run_dir)
@@ -285,6 +343,11 @@ def figures_of_run(run_dir):
                                  f"{title}: block-mean excess pore pressure", summary.get("block_bounds_m"))
         written.append(os.path.join(run_dir, "history_panels.png"))
         plot_history_panels(history, written[-1], title)
+        if "p_band1" in history:
+            written.append(os.path.join(run_dir, "stress_paths.png"))
+            fig = stress_path_figure(history, title, summary.get("band_bounds_m"))
+            files.save_figure(fig, written[-1], dpi=110)
+            plt.close(fig)
     snaps = [read_snapshot(f) for f in snapshot_files(run_dir)]
     if snaps:
         written.append(os.path.join(run_dir, "snapshots.png"))
@@ -319,8 +382,8 @@ def plot_packing(packing, path, title, flat_walls=()):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.plots",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.plots",
                                  description="Redraw the figures of runs from their files (history.csv, snapshots, "
                                              "summary.json): pressure_blocks.png, history_panels.png, snapshots.png.")
     ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")

@@ -77,7 +77,8 @@ def headline_results(history, heave_rise):
     per pressure block the peak of its mean excess pore pressure U [N/m] and when; the heave time:
     the first row whose bed top (highest particle top) lies ``heave_rise`` [m] or more above that
     of the first row (None if it never does); the porosity of the last row and its change from the
-    first (a seismic run's compaction < 0, a heave's dilation > 0). {} without rows."""
+    first (a seismic run's compaction < 0, a heave's dilation > 0); the bands' effective stress and
+    r_u (``band_results``). {} without rows."""
     t = history.get("t", np.zeros(0))
     if not len(t):
         return {}
@@ -89,11 +90,37 @@ def headline_results(history, heave_rise):
         peaks[name] = None if k is None else {"U_max_N_per_m": float(u[k]), "t_s": float(t[k])}
     bed = history["bed_top"]
     risen = np.flatnonzero(bed - bed[0] >= heave_rise)
-    return {"peak_block_pressures": peaks,
+    bands = band_results(history, risen[0] if len(risen) else None)
+    return {"peak_block_pressures": peaks, **({"bands": bands} if bands else {}),
             "heave_rise_m": heave_rise, "bed_top_initial_m": float(bed[0]), "bed_top_max_m": float(bed.max()),
             "heave_time_s": float(t[risen[0]]) if len(risen) else None,
             "porosity_last_row": float(history["porosity"][-1]), "t_last_row_s": float(t[-1]),
             "porosity_change": float(history["porosity"][-1] - history["porosity"][0])}
+
+
+RU_LIQUEFIED = 0.9  # r_u at which a band counts as liquefied (the first time it is reached)
+
+
+def band_results(history, heave_row=None):
+    """Per band of the bed (history.csv's sv_band*, p_band*, ru_band* columns; engines.model.effective_stress)
+    {band<k>: results}: the least p'/p'_0 over the run (p'_0 the first row's; None where p'_0 <= 0)
+    and, with water, the largest r_u, the first time r_u >= RU_LIQUEFIED (None if never) and r_u at
+    the heave's row ``heave_row`` (the quick sand); {} without the columns."""
+    t = history["t"]
+    out = {}
+    for k in range(1, 1 + sum(c.startswith("p_band") for c in history)):
+        p = history[f"p_band{k}"]
+        res = {"p_ratio_min": float(np.nanmin(p / p[0])) if p[0] > 0 and np.isfinite(p).any() else None}
+        ru = history.get(f"ru_band{k}")
+        if ru is not None:
+            ok = np.isfinite(ru)
+            hit = np.flatnonzero(ok & (ru >= RU_LIQUEFIED))
+            res.update(ru_max=float(np.max(ru[ok])) if ok.any() else None,
+                       t_ru_0p9_s=float(t[hit[0]]) if len(hit) else None)
+            if heave_row is not None:
+                res["ru_at_heave"] = float(ru[heave_row]) if ok[heave_row] else None
+        out[f"band{k}"] = res
+    return out
 
 
 NETWORK_PREFIXES = ("pore.", "throat.", "polygon.", "balance.")  # engines.model.network_view's keys

@@ -1,24 +1,20 @@
 """The speed/accuracy study's tables and figures (engines.run.tradeoffs runs it; docs/TRADEOFFS.md).
 
-``analyse(out, jobs, meta)`` reads OUT/runs/<job>/result.json, computes each setting's errors
-against its case's reference (engines.studies.tradeoffs: ensemble means over the starts, chaos floors),
-and writes OUT/tradeoffs.json, OUT/table.md and OUT/tradeoffs_<case>.png (error against cost,
-log axes, the Pareto front marked). Cost is CPU seconds per start (the machine is shared, so
-CPU time is steadier than wall time; both are kept); the speed-up is against the case's run at
-the paper's settings (dt = 1e-6 s, water every step, rebuilds every 1000 steps).
+``analyse(out, jobs, meta)`` reads OUT/runs/<job>/result.json, has each setting's errors, speed-up
+and judgement computed (engines.studies.tradeoffs_judged.assess), and writes OUT/tradeoffs.json,
+OUT/table.md and OUT/tradeoffs_<case>.png (error against cost, log axes, the Pareto front marked).
+Cost is CPU seconds per start (the machine is shared, so CPU time is steadier than wall time; both
+are kept).
 
 Each row carries the raw metrics (``error``) and the noise-corrected estimate of the systematic
 error (``systematic``: per metric the measured value, its floor between the run's and the
 reference's ensembles, the estimate sqrt(max(0, measured^2 - floor^2)) and its bootstrap sigma;
-engines.studies.tradeoffs.systematic). The judgement against the 5 % target (``within_target``) is on the
-estimate, the raw metric being the estimate plus the chaos of finite ensembles; ``resolved`` says
-whether the estimate plus 2 sigma is within 5 % too. ``within_target_raw`` is kept for comparison.
+engines.studies.tradeoffs.systematic), and the judgement against the 5 % target
+(engines.studies.tradeoffs_judged.judge).
 
-``validate(out, jobs, meta)`` judges the validation's runs (the fast setting against the paper's
-numerics on every preset over its whole duration, engines.studies.tradeoffs.VALIDATION): per scene
-every metric of ``systematic`` with the blocks' time-mean pressures, and the verdict (``verdict``:
-"pass" when every judged metric's estimate + 2 sigma is within 5 %) of the fast setting and of the
-candidate settings tried -> OUT/validation.json and validation.md.
+``validate(out, jobs, meta)`` writes the validation of the runs (engines.studies.tradeoffs_judged.validation:
+per scene every metric and the verdict of the fast setting and of the candidate settings tried)
+-> OUT/validation.json and validation.md.
 """
 import json
 import os
@@ -27,110 +23,18 @@ import numpy as np
 
 from engines import files
 from engines.studies import tradeoffs as tr
+from engines.studies.tradeoffs_judged import METRICS, TARGET, assess, load, validation
 
-METRICS = ("pressure_rms", "porosity_change", "settlement")  # judged; pressure_rms_below_surface: a diagnostic
 LABELS = {"pressure_rms": "block pressure RMS", "porosity_change": "porosity change", "settlement": "settlement"}
 DIAGNOSTIC = "pressure_rms_below_surface"
-TARGET = 0.05          # every metric's systematic error (noise-corrected estimate) of the defaults
-SPEEDUP_TARGET = 10.0  # the defaults' CPU speed-up over the paper's settings
-
-
-def load(path):
-    """A result.json as arrays over its ok starts: t, U (starts, times, blocks), porosity, height,
-    kinetic_energy (starts, times); None when no start ran to the end."""
-    try:
-        with open(path) as f:
-            res = json.load(f)
-    except (OSError, ValueError):
-        return None
-    ok = [s for s in res["starts"] if s["status"] == "ok"]
-    res["n_ok"] = len(ok)
-    rec = [s["cpu_record_s"] for s in ok if "cpu_record_s" in s]
-    res["cpu_record_s"] = float(np.mean(rec)) if rec and len(rec) == len(ok) else None
-    res["messages"] = sorted({s.get("message", "") for s in res["starts"] if s["status"] != "ok"})
-    if not ok or len({len(s["t"]) for s in ok}) != 1:
-        res["data"] = None
-        return res
-    res["data"] = {"t": np.array(ok[0]["t"]), **{k: np.array([s[k] for s in ok], float)
-                                                  for k in ("U", "porosity", "height", "kinetic_energy")}}
-    return res
-
-
-def record_cost(results, meta):
-    """Runs written before the recording was timed on its own (no cpu_record_s) have it in their
-    cpu_s: take out the median recording cost of the same case's other runs (the same window and
-    samples), and mark them ("record_cost_estimated")."""
-    for case in {c for c, _, _ in meta.values()}:
-        named = [n for n, (c, _, _) in meta.items() if c == case and results.get(n)]
-        known = [results[n]["cpu_record_s"] for n in named if results[n]["cpu_record_s"] is not None]
-        if not known:
-            continue
-        for n in named:
-            res = results[n]
-            if res["cpu_record_s"] is None and res.get("data") is not None:
-                res["cpu_s"] -= float(np.median(known))
-                res["record_cost_estimated"] = True
-
-
-def is_paper(knob, value):
-    return knob == "dt" and value == tr.PAPER_DT
 
 
 def analyse(out, jobs, meta, log=print):
-    """Errors, speed-ups, the table and the figures of the study in ``out`` (module docstring).
-    ``meta``: job name -> (case, knob, value). Returns the tradeoffs.json dict."""
+    """The table and the figures of the study in ``out`` (module docstring). ``meta``: job name ->
+    (case, knob, value). Returns the tradeoffs.json dict."""
     log = log or (lambda *a: None)
     results = {j.name: load(os.path.join(out, "runs", j.name, "result.json")) for j in jobs}
-    record_cost(results, meta)
-    cases = sorted({c for c, _, _ in meta.values()}, key=[c for c, _, _ in meta.values()].index)
-    doc = {"reference": {}, "runs": [], "defaults": None, "alternatives": {},
-           "notes": "error: ensemble means over the starts against the reference's (engines.studies.tradeoffs), as fractions; "
-                    "floor: the same metric between two sets of starts at the reference settings (chaos); "
-                    "speedup: CPU seconds per start at the paper's settings of the case over the run's"}
-    for case in cases:
-        names = [n for n, (c, _, _) in meta.items() if c == case]
-        ref = next((results[n] for n in names if meta[n][1] == "reference"), None)
-        paper = next((results[n] for n in names if is_paper(*meta[n][1:])), None)
-        if ref is None or ref.get("data") is None:
-            log(f"{case}: no reference yet")
-            continue
-        floor = tr.floors(ref["data"])
-        if paper is None and ref["dt"] == tr.PAPER_DT:  # a case whose reference is the paper's settings
-            paper = ref
-        paper_cpu = paper["cpu_s"] if paper and paper.get("data") is not None else None
-        doc["reference"][case] = {"settings": ref["overrides"], "dt": ref["dt"], "window_s": ref["window"],
-                                  "starts": ref["n_ok"], "cpu_s": ref["cpu_s"], "wall_s": ref["wall_s"], "floor": floor,
-                                  "paper_cpu_s": paper_cpu}
-        for n in names:
-            _, knob, value = meta[n]
-            res = results[n]
-            if knob == "reference" or res is None:
-                continue
-            row = {"case": case, "knob": knob, "value": value, "settings": res["overrides"], "dt": res["dt"],
-                   "starts_ok": res["n_ok"], "starts": len(res["starts"]), "wall_s": res["wall_s"], "cpu_s": res["cpu_s"],
-                   "program": res.get("program", "yade"), "messages": res["messages"]}
-            if res["data"] is not None:
-                row["speedup"] = paper_cpu / res["cpu_s"] if paper_cpu else None
-                row["systematic"] = tr.systematic(res["data"], ref["data"])
-                row["error"] = {m: v["measured"] for m, v in row["systematic"].items()}
-                row["substeps_max"] = max(s.get("substeps_max", 0) for s in res["starts"])
-                row["kinetic_energy_max"] = float(np.max(res["data"]["kinetic_energy"]))
-            else:
-                row["speedup"], row["error"], row["systematic"] = None, None, None
-            if knob == "defaults":
-                key = value.get("name", "defaults") if isinstance(value, dict) else "defaults"
-                doc["alternatives"][f"{case}:{key}"] = row
-            doc["runs"].append(row)
-        judge([r for r in doc["runs"] if r["case"] == case])
-    fast = doc["alternatives"].get("liquefaction_case1:fast")
-    if fast is not None:
-        doc["defaults"] = {"settings": fast["settings"], "speedup": fast["speedup"], "error": fast["error"],
-                           "systematic": fast["systematic"], "within_target": fast["within_target"],
-                           "resolved": fast["resolved"], "starts": fast["starts_ok"],
-                           "target": {"error": TARGET, "speedup": SPEEDUP_TARGET},
-                           "target_met": bool(fast["within_target"] and (fast["speedup"] or 0) >= SPEEDUP_TARGET),
-                           "floor": doc["reference"]["liquefaction_case1"]["floor"], "case": "liquefaction_case1",
-                           "window_s": doc["reference"]["liquefaction_case1"]["window_s"]}
+    doc = assess(results, meta, log)
     speed = os.path.join(out, "speed", "speed.json")  # engines.run.tradeoffs.measure_speed: interleaved in one process
     if os.path.exists(speed):
         with open(speed) as f:
@@ -183,20 +87,6 @@ def histories_figure(series, path, title, n_blocks=4):
     files.save_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
-
-
-def judge(rows):
-    """Mark each row: ``within_target`` (the noise-corrected estimate of every metric <= 5 %),
-    ``resolved`` (also the estimate + 2 sigma <= 5 %), ``within_target_raw`` (every raw metric
-    <= 5 %) and ``within_paper`` (every estimate <= max(5 %, the paper settings' estimate on it))."""
-    paper = next((r for r in rows if is_paper(r["knob"], r["value"]) and r["error"]), None)
-    for r in rows:
-        err, sys_ = r["error"], r["systematic"]
-        r["within_target_raw"] = bool(err) and all(err[m] <= TARGET for m in METRICS)
-        r["within_target"] = bool(sys_) and all(sys_[m]["systematic"] <= TARGET for m in METRICS)
-        r["resolved"] = bool(sys_) and all(sys_[m]["systematic"] + 2 * sys_[m]["sigma"] <= TARGET for m in METRICS)
-        r["within_paper"] = bool(sys_) and paper is not None and \
-            all(sys_[m]["systematic"] <= max(TARGET, paper["systematic"][m]["systematic"]) for m in METRICS)
 
 
 def worst(err):
@@ -311,63 +201,16 @@ def figure(doc, case, path):
     return path
 
 
-def judged_metrics(systematic):
-    """The metrics a validation judges, of those ``systematic`` gave: METRICS and the blocks' time means."""
-    return [m for m in systematic if m in METRICS or m.startswith("block_mean_")]
-
-
-def verdict(systematic):
-    """"pass" when every judged metric's estimate + 2 sigma is within TARGET; "fail" when an estimate
-    is above it; else "not resolved" (every estimate within, not every estimate + 2 sigma)."""
-    judged = [systematic[m] for m in judged_metrics(systematic)]
-    if all(m["systematic"] + 2 * m["sigma"] <= TARGET for m in judged):
-        return "pass"
-    return "fail" if any(m["systematic"] > TARGET for m in judged) else "not resolved"
-
-
 def validate(out, jobs, meta, log=print):
-    """The validation table (module docstring) of the runs in OUT/runs; ``meta``: job name -> (case,
-    knob, value) of the validation's cases. Writes OUT/validation.json and OUT/validation.md;
-    returns the validation.json dict."""
+    """The validation (module docstring) of the runs in OUT/runs; ``meta``: job name -> (case, knob,
+    value) of the validation's cases. Writes OUT/validation.json and OUT/validation.md; returns the
+    validation.json dict."""
     log = log or (lambda *a: None)
     results = {j.name: load(os.path.join(out, "runs", j.name, "result.json")) for j in jobs}
-    doc = {"target": TARGET, "criterion": "pass: every judged metric's noise-corrected estimate + 2 sigma <= target; "
-                                          "fail: an estimate > target; not resolved: otherwise",
-           "paper": {k: v for k, v in tr.ACCURATE.items() if k != "name"},
-           "fast": {k: v for k, v in tr.FAST.items() if k != "name"}, "scenes": {},
-           "notes": "systematic: the noise-corrected estimate of the metric (engines.studies.tradeoffs.systematic, as "
-                    "fractions), sigma its bootstrap standard deviation; block_mean_<b>: the error of block b's "
-                    "time-mean pressure over the RMS of the paper's ensemble-mean pressures; dry scenes have no "
-                    "pressure metrics; cpu_s: CPU seconds per start"}
-    for case in dict.fromkeys(c for c, _, _ in meta.values()):
-        scene = tr.CASES[case].get("preset", case)
-        ref = next((results[n] for n, (c, k, _) in meta.items() if c == case and k == "reference"), None)
-        runs = {v["name"]: results[n] for n, (c, k, v) in meta.items() if c == case and k in ("defaults", "candidate")}
-        entry = {"case": case, "perturbation_m": tr.CASES[case]["perturbation_size"], "verdict": "not run"}
-        for name, run in runs.items():
-            row = _validated(ref, run) if ref is not None and run is not None else {"verdict": "not run"}
-            if name == tr.FAST["name"]:
-                entry.update(row)
-            else:
-                entry.setdefault("candidates", {})[name] = {
-                    "settings": next(v for v in tr.CASES[case]["candidate"] if v["name"] == name), **row}
-        doc["scenes"][scene] = entry
-        log(f"{scene}: {entry['verdict']}" + "".join(f"; {n}: {c['verdict']}" for n, c in entry.get("candidates", {}).items()))
+    doc = validation(results, meta, log)
     files.write_json(os.path.join(out, "validation.json"), doc, indent=1, default=float)
     files.write_text(os.path.join(out, "validation.md"), validation_table(doc))
     return doc
-
-
-def _validated(ref, run):
-    """The validation of one setting's run against the paper's (results of ``load``): its cost,
-    metrics (``systematic`` with the blocks) and verdict."""
-    row = {"window_s": ref["window"], "dt_fast": run["dt"], "starts": {"paper": ref["n_ok"], "fast": run["n_ok"]},
-           "cpu_s": {"paper": ref["cpu_s"], "fast": run["cpu_s"]}, "messages": ref["messages"] + run["messages"]}
-    if ref["data"] is None or run["data"] is None:
-        return {**row, "verdict": "failed"}
-    sys_ = tr.systematic(run["data"], ref["data"], blocks=True)
-    return {**row, "speedup": ref["cpu_s"] / run["cpu_s"], "floor": tr.floors(ref["data"]), "metrics": sys_,
-            "judged": judged_metrics(sys_), "verdict": verdict(sys_)}
 
 
 def validation_table(doc):

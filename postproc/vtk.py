@@ -32,6 +32,7 @@ from vtkmodules.vtkCommonMisc import vtkErrorCode
 from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
 
 from engines import files
+from engines.model.effective_stress import invariants
 from postproc.run_files import read_snapshot, run_dir, snapshot_files
 
 RULES = ("build", "a", "b", "c", "d")  # rule codes 0..4 of the pores' 'rule' array
@@ -40,6 +41,9 @@ THROATS = "throats"  # the series of the network's throats (runs whose snapshots
 # the arrays' names in the files, each with its unit (forces per metre of thickness, areas per metre too)
 ARRAYS = {"radius": "radius [m]", "velocity": "velocity [m/s]", "normal_force": "normal_force [N/m]",
           "shear_force": "shear_force [N/m]", "U": "U [N/m]", "W": "W [m^2]", "A": "A [m^2]"}
+
+
+STRESS_ARRAYS = ("stress_xx [Pa]", "stress_zz [Pa]", "stress_xz [Pa]", "p' [Pa]", "q [Pa]")  # a disc's effective stress
 
 
 def _points(xz):
@@ -87,8 +91,10 @@ def _write(poly, path):
             raise OSError(f"VTK's writer failed ({vtkErrorCode.GetStringFromErrorCode(code)})")
 
 
-def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
-    """Discs as points with radius [m], velocity [m/s], density factor and group arrays."""
+def write_discs(path, xz, r, vel=None, density_factor=None, group=None, stress=None):
+    """Discs as points with radius [m], velocity [m/s], density factor and group arrays and, given
+    ``stress`` (N, 3): xx, zz, xz [Pa] (engines.model.effective_stress.disc_stress), each disc's
+    effective stress, its p' and q [Pa] (STRESS_ARRAYS)."""
     n = len(xz)
     poly = vtkPolyData()
     poly.SetPoints(_points(xz))
@@ -101,6 +107,11 @@ def write_discs(path, xz, r, vel=None, density_factor=None, group=None):
         _add(pd, "density_factor", np.asarray(density_factor, float))
     if group is not None:
         _add(pd, "group", np.asarray(group, np.int32))
+    if stress is not None:
+        stress = np.asarray(stress, float)
+        _, _, p, q = invariants(stress)
+        for name, values in zip(STRESS_ARRAYS, (stress[:, 0], stress[:, 1], stress[:, 2], p, q)):
+            _add(pd, name, values)
     _write(poly, path)
 
 
@@ -264,7 +275,8 @@ def signed_area(xz, polygon):
 def snapshot_frame(snap):
     """write keyword dicts (discs, forces, pores) of one snapshot .npz (engines.run.runner.Recorder)."""
     xz = snap["xz"]
-    discs = dict(xz=xz, r=snap["r"], vel=snap["vel"], density_factor=snap["density_factor"], group=snap["group"])
+    discs = dict(xz=xz, r=snap["r"], vel=snap["vel"], density_factor=snap["density_factor"], group=snap["group"],
+                 stress=snap.get("stress"))
     forces = dict(pairs=snap["pairs"], f_n=snap["f_n"], f_s=snap["f_s"] if "f_s" in snap else None)
     pores = None
     if "polygon.ptr" in snap:  # the network's outlines (engines.model.network_view) and its pore.* arrays
@@ -314,8 +326,8 @@ def convert_run(run_dir, out_dir=None):
 
 
 if __name__ == "__main__":
-    import argparse
-    ap = argparse.ArgumentParser(prog="python3 -m postproc.vtk",
+    from engines.files.inputs import ArgumentParser
+    ap = ArgumentParser(prog="python3 -m postproc.vtk",
                                  description="Write a ParaView series of runs' snapshots into RUN_DIR/vtk/*.pvd.")
     ap.add_argument("runs", nargs="+", type=run_dir, metavar="RUN_DIR", help="a run's --out folder")
     for run in ap.parse_args().runs:

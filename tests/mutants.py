@@ -2,7 +2,7 @@
 
     out/venv-mutants/bin/python tests/mutants.py [--out out/mutants] [--max-children 2] [--again]
 
-Copies the project into OUT/work, configures mutmut (setup.cfg) to mutate MODULES (the four core
+Copies the project into OUT/work, configures mutmut (setup.cfg) to mutate MODULES (the core
 modules, judged, and EXTRA, reported) and to run the fast tests of TESTS (no YADE, no cross-check:
 mutmut collects which tests reach each function and runs, per mutant, only those, stopping at the
 first failure), runs it niced, and writes OUT/summary.json:
@@ -32,7 +32,8 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MODULES = ["engines/model/pore_water.py", "engines/model/pores.py", "engines/model/contact.py", "engines/model/pore_dem.py"]
+PORES = [f"engines/model/pores/{m}.py" for m in ("build", "checks", "faces", "links", "measure", "network", "overlaps", "triangulation")]
+MODULES = ["engines/model/pore_water.py", *PORES, "engines/model/contact.py", "engines/model/pore_dem.py"]
 EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/model/flat_walls.py",
          "engines/model/limits.py", "engines/model/fields.py", "engines/compiled/contact.py",
          "engines/compiled/paper_law.py", "engines/compiled/water_model.py", "engines/compiled/pore_dem.py"]

@@ -2,13 +2,14 @@
 import numpy as np
 
 from engines.model import pores as pg
+from engines.model.pores import faces
 from engines.model.ground_motion import BaseMotion
 
 
 # -- pores (engines.model.pores) ----------------------------------------------------------------------
 def void_area_by_triangles(net, xz, r):
     """Void area per pore from its triangles, an independent route to ``pores.measure`` (eq 29)."""
-    area, sectors = pg._triangle_void(xz, r, net.tri)
+    area, sectors = faces._triangle_void(xz, r, net.tri)
     return np.bincount(net.tri_pore, area - sectors, minlength=net.n_pores)
 
 

@@ -51,6 +51,95 @@ def imports(path):
     return out
 
 
+def module_imports(name, path, known):
+    """The project modules (keys of ``known``) the module ``name`` in ``path`` imports anywhere in it
+    (function-level and relative imports too): ``from a import b`` gives a.b when that is a module,
+    else a."""
+    tree = ast.parse(open(path, encoding="utf-8").read())
+    here = name if path.endswith("__init__.py") else name.rpartition(".")[0]
+    targets = []
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Import):
+            targets += [a.name for a in n.names]
+        elif isinstance(n, ast.ImportFrom):
+            base = n.module or ""
+            if n.level:
+                up = here.split(".")[:len(here.split(".")) - (n.level - 1)]
+                base = ".".join(up + ([base] if base else []))
+            targets += [f"{base}.{a.name}" for a in n.names]
+    out = set()
+    for t in targets:
+        while t and t not in known:
+            t = t.rpartition(".")[0]
+        if t and t != name:
+            out.add(t)
+    return out
+
+
+def module_graph():
+    """{module: the project modules it imports} over the library (engines, packing, postproc)."""
+    mods = modules(*LIBRARY)
+    return {name: module_imports(name, path, mods) for name, path in mods.items()}
+
+
+def cycles(graph):
+    """The cycles of ``graph`` {node: successors}: one per strongly connected component of more than
+    one node (Tarjan's algorithm), each as the path [a, b, ..., a] through it."""
+    index, low, stack, found = {}, {}, [], []
+
+    def connect(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                connect(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            part = stack[stack.index(v):]
+            del stack[stack.index(v):]
+            if len(part) > 1:
+                found.append(_loop(graph, sorted(part)))
+    for v in sorted(graph):
+        if v not in index:
+            connect(v)
+    return found
+
+
+def _loop(graph, part):
+    """A path from part[0] back to it inside the strongly connected ``part`` (breadth first)."""
+    inside, start = set(part), part[0]
+    came = {start: None}
+    todo = [start]
+    while todo:
+        v = todo.pop(0)
+        for w in sorted(graph[v]):
+            if w == start:
+                path = [v]
+                while came[path[-1]] is not None:
+                    path.append(came[path[-1]])
+                return [start] + path[::-1][1:] + [start] if len(path) > 1 else [start, v, start]
+            if w in inside and w not in came:
+                came[w] = v
+                todo.append(w)
+    raise AssertionError(f"no loop through {part}")
+
+
+def reachable(graph, start):
+    """{module reached from ``start``: the module that imports it on the first path found}, the
+    packages holding each module included (importing a.b.c runs a/__init__.py and a/b/__init__.py)."""
+    came, todo = {start: None}, [start]
+    while todo:
+        v = todo.pop()
+        parents = [".".join(v.split(".")[:k]) for k in range(1, v.count(".") + 1)]
+        for w in sorted(graph.get(v, set()) | {p for p in parents if p in graph}):
+            if w not in came:
+                came[w] = v
+                todo.append(w)
+    return came
+
+
 def package(dotted):
     """The layer a dotted name belongs to: engines.<sub>, packing, postproc, yade, or None."""
     parts = dotted.split(".")
@@ -104,6 +193,51 @@ def test_no_cycle_between_packages():
         state[n] = 2
     for n in graph:
         visit(n, [])
+
+
+# cycles another helper breaks now, in a package outside this change's scope (engines/yade: the water
+# engine's saved state); the developer empties this list at merge
+CYCLES_BEING_BROKEN = []
+
+
+def test_cycles_finds_a_cycle_and_names_it():
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"e2"}, "e2": {"e"}}
+    assert cycles(graph) == [["a", "b", "c", "a"], ["e", "e2", "e"]]
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": set()}) == []
+
+
+def test_module_graph_sees_imports_inside_functions_and_relative_ones():
+    graph = module_graph()
+    assert "engines.yade.checkpoint" in graph["engines.run.preflight"]  # inside a function (check_resume)
+    assert "engines.yade.yadebulk.probe" in graph["engines.yade.yadebulk"]  # from . import probe
+
+
+def test_no_cycle_between_modules():
+    """No module imports, through others, a module that imports it: imports inside functions count
+    (a cycle there is the same knot, only found later)."""
+    found = cycles(module_graph())
+    assert [c for c in found if c not in CYCLES_BEING_BROKEN] == [], \
+        "module cycles: " + "; ".join(" -> ".join(c) for c in found if c not in CYCLES_BEING_BROKEN)
+    assert [c for c in CYCLES_BEING_BROKEN if c not in found] == [], "broken: remove from CYCLES_BEING_BROKEN"
+
+
+def test_studies_and_postproc_reach_neither_yade_glue_nor_runs():
+    """engines/studies and postproc/ import nothing of engines.yade, postproc nothing of engines.run
+    either, through any chain of imports (functions' imports too): their verdicts and figures
+    work on a machine without YADE."""
+    graph = module_graph()
+    wrong = []
+    for name in graph:
+        if package(name) not in ("engines.studies", "postproc"):
+            continue
+        came = reachable(graph, name)
+        banned = ("engines.yade",) + (("engines.run",) if package(name) == "postproc" else ())
+        for hit in sorted(m for m in came if package(m) in banned):
+            path = [hit]
+            while came[path[-1]] is not None:
+                path.append(came[path[-1]])
+            wrong.append(" -> ".join(path[::-1]))
+    assert wrong == []
 
 
 def test_the_reference_imports_nothing_of_the_fast_code():

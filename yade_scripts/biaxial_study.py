@@ -44,12 +44,12 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0] i
 
 import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server YADE opened, engines/yade/listeners.py)
 from engines.run.biaxial_study import run_study
-from engines.run.preflight import announce_output, output_dir
+from engines.run.preflight import ArgumentParser, announce_output, output_dir
 from engines.seeds.biaxial.study import DEFAULT_PARTS, PARTS
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
+    ap = ArgumentParser(description=__doc__.split("\n\n")[0], epilog=__doc__.split("\n\n", 1)[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=output_dir, required=True, help="output directory (runs in OUT/runs)")
     ap.add_argument("--workers", type=int, default=2, help="local processes (default 2)")
@@ -67,6 +67,9 @@ def main(argv=None):
     if unknown:
         ap.error(f"--parts: unknown {', '.join(sorted(unknown))}")
     seeds = [int(s) for s in a.seeds.split(",")]
+    runs = os.path.join(a.out, "runs")
+    if a.analyse_only and not (os.path.isdir(runs) and os.listdir(runs)):
+        ap.error(f"--analyse-only: {runs} holds no job to analyse; run the study without --analyse-only first")
     announce_output(a.out)
     table = run_study(a.out, parts, seeds, workers=a.workers, scheduler=a.scheduler, estimate_only=a.estimate,
                       analyse_only=a.analyse_only, quick=a.quick)

@@ -4,8 +4,8 @@
                      [--fit out/biaxial_judged/judged_fit.json] [--seeds 1,2,3]
                      [--workers 2] [--scheduler ADDR] [--no-verify]
 
-From the curves a study fitted (judged_fit.json of `biaxial_study.py --parts judged`, or fit.json
-of `make biaxial`: φ*(φe), A(φe), m(φe) at kn = 1e8 Pa/m, ks/kn = 0.25), eq 5 gives φe for the
+From the curves a study fitted (judged_fit.json of `biaxial_study.py --parts judged`, shipped as
+docs/biaxial/judged_fit.json, or fit.json of `make biaxial`: φ*(φe), A(φe), m(φe) at kn = 1e8 Pa/m, ks/kn = 0.25), eq 5 gives φe for the
 target φ* and eq 6 the kn for the target E50 at σ3. It prints both, and, when the fit carries the
 scatter between packings (judged_fit.json), how well the --seeds packings can verify E50 and
 how well E50 fixes kn (engines.studies.biaxial_judged.conditioning); then runs the biaxial test with them on the --seeds packings at σ3 = 100 and
@@ -43,7 +43,9 @@ def main(argv=None):
     ap.add_argument("--no-verify", action="store_true", help="only print φe and kn")
     a = ap.parse_args(argv)
     if not os.path.exists(a.fit):
-        ap.error(f"--fit {a.fit}: not found (run yade_scripts/biaxial_study.py --parts judged first)")
+        ap.error(f"--fit {a.fit}: not found: run `/usr/bin/python3 yade_scripts/biaxial_study.py --parts judged "
+                 f"--out out/biaxial_judged` first (hours), or give --fit docs/biaxial/judged_fit.json (its fit of "
+                 f"docs/biaxial/judged.json)")
     announce_output(a.out)
     try:
         cal = Calibration.load(a.fit)

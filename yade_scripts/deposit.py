@@ -44,7 +44,7 @@ def main(argv):
     args = ap.parse_args(argv)
     try:
         over = overrides_of(args)
-        sc = scenes.load(args.scene, over) if args.scene.endswith(".toml") else scenes.preset(args.scene, over)
+        sc = scenes.load(args.scene, over)
         if args.replace and (not sc.packing.file or over):
             raise InputError("--replace: the scene names no [packing] file" if not sc.packing.file else
                              "--replace with --set: a changed scene does not replace the preset's packing; use --out")

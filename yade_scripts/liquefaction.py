@@ -47,7 +47,7 @@ def parser():
     ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     which = ap.add_mutually_exclusive_group()
     which.add_argument("--case", type=int, choices=CASES, help="case of SPEC §2.5 (1-7)")
-    which.add_argument("--scene", help="a scene file instead of a case preset")
+    which.add_argument("--scene", help="a preset name or a scene file instead of a case preset")
     ap.add_argument("--transfer", choices=("paper", "conserving"),
                     help="water at re-meshing (default: the scene's [water] transfer)")
     add_run_arguments(ap, SEISMIC_PERTURBATION)

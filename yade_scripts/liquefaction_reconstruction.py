@@ -8,7 +8,7 @@
 Each variant (engines/studies/reconstruction.py: case 3's permeabilities x3, x10, x30; E_w x3, x10;
 the box wider and narrower with the same 192 discs; a denser packing) runs the cases it touches as
 ensembles of 8 starts (a packing variant on its own deposit, OUT/runs/<variant>_packing/); the
-trends of the paper (postproc.liquefaction.TRENDS) are then evaluated on the variant's cases with
+trends of the paper (engines.studies.liquefaction.TRENDS) are then evaluated on the variant's cases with
 the study's own ensembles (BASELINE/summary.json, make liquefaction) for the others, and written to
 OUT/reconstruction.json and OUT/reconstruction.md: per variant each trend's quantities with their
 95 % intervals and verdicts, the packing's porosity and whether its contacts carry its dense top.

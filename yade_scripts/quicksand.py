@@ -40,7 +40,7 @@ def parser():
     ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     which = ap.add_mutually_exclusive_group()
     which.add_argument("--case", type=int, choices=(1, 2), help="Table 1 or Table 2 (default 1)")
-    which.add_argument("--scene", help="a scene file instead of the case preset")
+    which.add_argument("--scene", help="a preset name or a scene file instead of the case preset")
     add_run_arguments(ap, QUICKSAND_PERTURBATION)
     return ap
 

@@ -25,15 +25,17 @@ import engines.yade  # noqa: F401  (first: closes the console and XML-RPC server
 
 
 def main(argv):
-    from engines.run.preflight import announce_output, output_dir
+    from engines.run.preflight import ArgumentParser, announce_output, number, output_dir
     from engines.run.stability import run_map
     from postproc.stability import replot
 
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=output_dir, required=True)
-    ap.add_argument("--window", type=float, default=0.003, help="simulated seconds per point (dt points: 0.01)")
+    ap.add_argument("--window", type=number(lo=0, lo_open=True, unit="s"), default=0.003, help="simulated seconds per point (dt points: 0.01)")
     ap.add_argument("--plot-only", action="store_true", help="redraw OUT/map.png from OUT/map.json")
     a = ap.parse_args(argv)
+    if a.plot_only and not os.path.isfile(os.path.join(a.out, "map.json")):
+        ap.error(f"--plot-only: {os.path.join(a.out, 'map.json')} not found; run the map without --plot-only first")
     announce_output(a.out)
     os.makedirs(a.out, exist_ok=True)
     if a.plot_only:

@@ -91,6 +91,9 @@ def study_main(argv):
     ap.add_argument("--validation", action="store_true",
                     help="the fast setting against the paper's numerics on every preset (cases <scene>_full)")
     a = ap.parse_args(argv)
+    runs = os.path.join(a.out, "runs")
+    if a.analyse_only and not (os.path.isdir(runs) and os.listdir(runs)):
+        ap.error(f"--analyse-only: {runs} holds no job to analyse; run the study without --analyse-only first")
     announce_output(a.out)
     run_study(a.out, workers=a.workers, scheduler=a.scheduler, cases=a.cases, knobs=a.knobs,
               analyse_only=a.analyse_only, validation=a.validation)
@@ -103,6 +106,9 @@ def main(argv):
         return study_main(argv[1:])
     if argv and argv[0] == "speed":
         return speed_main(argv[1:])
+    if argv and argv[0] in ("-h", "--help"):
+        print(__doc__.strip() + "\n\n`tradeoffs.py run|study|speed --help` lists each command's options.")
+        return
     sys.exit("usage: tradeoffs.py run ... | study ... | speed ... (see the docstring)")
 
 

@@ -207,33 +207,17 @@ def _restore(x, z, w, tv, tn, stack, top, apex):
 
 @jit
 def _regular_from(x, z, w, order):
-    """The triangulation of the discs in ``order`` (answer, tv, tn, n_triangles, hidden mask)."""
+    """The triangulation of the discs in ``order`` (answer, tv, tn, n_triangles, hidden mask): the
+    first triangle, then each disc inserted where it lies (``_split_inside``, ``_split_beyond``,
+    ``_split_on_hull``) and the triangulation restored to regular by flips (``_restore``)."""
     n = len(x)
     cap = 3 * n + 8
     tv = np.empty((cap, 3), np.int64)
     tn = np.empty((cap, 3), np.int64)
     hidden = np.zeros(n, np.bool_)
-    a, b = order[0], order[1]
-    if x[a] == x[b] and z[a] == z[b]:
-        return UNSURE, tv, tn, 0, hidden
-    first = -1
-    for s in range(2, len(order)):
-        turn, mag = _orient(x, z, a, b, order[s])
-        if turn != 0:
-            if not _sure(turn, mag):
-                return UNSURE, tv, tn, 0, hidden
-            first = s
-            break
-    if first < 0:
-        return COLLINEAR, tv, tn, 0, hidden
-    c = order[first]
-    if _orient(x, z, a, b, c)[0] < 0:
-        b, c = c, b
-    # the first triangle (a, b, c) and its three ghosts (b, a, G), (c, b, G), (a, c, G)
-    _set(tv, tn, 0, a, b, c, 2, 3, 1)
-    _set(tv, tn, 1, b, a, GHOST, 3, 2, 0)
-    _set(tv, tn, 2, c, b, GHOST, 1, 3, 0)
-    _set(tv, tn, 3, a, c, GHOST, 2, 1, 0)
+    answer, first = _first_triangle(x, z, order, tv, tn)
+    if answer != DONE:
+        return answer, tv, tn, 0, hidden
     m = 4
     stack = np.empty((4 * n + 16, 2), np.int64)
     last = 0
@@ -244,69 +228,125 @@ def _regular_from(x, z, w, order):
         t, where = _locate(x, z, tv, tn, q, last, 4 * n + 16)
         if where < 0:
             return UNSURE, tv, tn, m, hidden
-        if where == 3:  # inside a real triangle: hidden, or three triangles around q
-            p0, p1, p2 = tv[t, 0], tv[t, 1], tv[t, 2]
-            det, mag = _power(x, z, w, p0, p1, p2, q)
-            if not _sure(det, mag):
-                return UNSURE, tv, tn, m, hidden
-            if det < 0:
-                hidden[q] = True
-                continue
-            n0, n1, n2 = tn[t, 0], tn[t, 1], tn[t, 2]
-            _set(tv, tn, t, q, p1, p2, n0, m, m + 1)
-            _set(tv, tn, m, q, p2, p0, n1, m + 1, t)
-            _set(tv, tn, m + 1, q, p0, p1, n2, t, m)
-            _point_back(tn, n1, t, m)
-            _point_back(tn, n2, t, m + 1)
-            for e, tri in enumerate((t, m, m + 1)):
-                stack[e, 0], stack[e, 1] = tri, 0
-            top, m = 3, m + 2
-        elif where == 4:  # outside the hull, beyond the edge (p1, p2) of the ghost triangle t
-            g = _ghost_at(tv, t)
-            p1, p2 = tv[t, (g + 1) % 3], tv[t, (g + 2) % 3]
-            real, n_after, n_before = tn[t, g], tn[t, (g + 1) % 3], tn[t, (g + 2) % 3]
-            _set(tv, tn, t, q, p1, p2, real, m, m + 1)      # the real triangle (q, p1, p2)
-            _set(tv, tn, m, q, p2, GHOST, n_after, m + 1, t)  # hull edge q -> p2
-            _set(tv, tn, m + 1, q, GHOST, p1, n_before, t, m)  # hull edge p1 -> q
-            _point_back(tn, n_after, t, m)
-            _point_back(tn, n_before, t, m + 1)
-            stack[0, 0], stack[0, 1] = t, 0
-            stack[1, 0], stack[1, 1] = m, 0
-            stack[2, 0], stack[2, 1] = m + 1, 0
-            top, m = 3, m + 2
+        if where == 3:  # inside a real triangle
+            top = _split_inside(x, z, w, tv, tn, stack, t, q, m)
+        elif where == 4:  # outside the hull, beyond the edge of the ghost triangle t
+            top = _split_beyond(tv, tn, stack, t, q, m)
         else:  # on an edge: of the hull only (where 5: of ghost t; k: of real t, whose neighbour is a ghost)
             if where != 5:
                 if _ghost_at(tv, tn[t, where]) < 0:
                     return UNSURE, tv, tn, m, hidden  # on an inner edge
                 t = tn[t, where]
-            g = _ghost_at(tv, t)
-            p1, p2 = tv[t, (g + 1) % 3], tv[t, (g + 2) % 3]  # the ghost (G, p1, p2) beyond the hull edge p1 -> p2
-            d, dm = _above_chord(x, z, w, p1, q, p2)
-            if not _sure(d, dm):
-                return UNSURE, tv, tn, m, hidden
-            if d > 0:
-                hidden[q] = True
-                continue
-            real = tn[t, g]  # (p2, p1, c)
-            r0 = 0
-            while tn[real, r0] != t:
-                r0 += 1
-            c = tv[real, r0]
-            n_c1, n_c2 = tn[real, (r0 + 1) % 3], tn[real, (r0 + 2) % 3]  # across (p1, c) and (c, p2)
-            n_after, n_before = tn[t, (g + 1) % 3], tn[t, (g + 2) % 3]  # across (p2, G) and (G, p1)
-            _set(tv, tn, real, q, c, p2, n_c2, t, m)         # (q, c, p2)
-            _set(tv, tn, m, q, p1, c, n_c1, real, m + 1)     # (q, p1, c)
-            _set(tv, tn, t, q, p2, GHOST, n_after, m + 1, real)  # hull edge q -> p2
-            _set(tv, tn, m + 1, q, GHOST, p1, n_before, m, t)    # hull edge p1 -> q
-            _point_back(tn, n_c1, real, m)
-            _point_back(tn, n_before, t, m + 1)
-            for e, tri in enumerate((real, m, t, m + 1)):
-                stack[e, 0], stack[e, 1] = tri, 0
-            top, m = 4, m + 2
+            top = _split_on_hull(x, z, w, tv, tn, stack, t, q, m)
+        if top < 0:
+            return UNSURE, tv, tn, m, hidden
+        if top == 0:
+            hidden[q] = True
+            continue
+        m += 2
         if not _restore(x, z, w, tv, tn, stack, top, q):
             return UNSURE, tv, tn, m, hidden
         last = t
     return DONE, tv, tn, m, hidden
+
+
+@jit
+def _first_triangle(x, z, order, tv, tn):
+    """(answer, s): the first triangle (a, b, c) counter-clockwise, c = order[s] the first disc off
+    the line of the first two, and its three ghosts (b, a, G), (c, b, G), (a, c, G), set as
+    triangles 0-3 of tv, tn; answer UNSURE or COLLINEAR when there is none."""
+    a, b = order[0], order[1]
+    if x[a] == x[b] and z[a] == z[b]:
+        return UNSURE, -1
+    first = -1
+    for s in range(2, len(order)):
+        turn, mag = _orient(x, z, a, b, order[s])
+        if turn != 0:
+            if not _sure(turn, mag):
+                return UNSURE, -1
+            first = s
+            break
+    if first < 0:
+        return COLLINEAR, -1
+    c = order[first]
+    if _orient(x, z, a, b, c)[0] < 0:
+        b, c = c, b
+    _set(tv, tn, 0, a, b, c, 2, 3, 1)
+    _set(tv, tn, 1, b, a, GHOST, 3, 2, 0)
+    _set(tv, tn, 2, c, b, GHOST, 1, 3, 0)
+    _set(tv, tn, 3, a, c, GHOST, 2, 1, 0)
+    return DONE, first
+
+
+@jit
+def _split_inside(x, z, w, tv, tn, stack, t, q, m):
+    """Disc q inside the real triangle t (p0, p1, p2): hidden when its lifted point lies above the
+    triangle's plane (returns 0), else three triangles around q, t and the new m, m + 1, put on
+    ``stack`` (returns 3); -1: unsure."""
+    p0, p1, p2 = tv[t, 0], tv[t, 1], tv[t, 2]
+    det, mag = _power(x, z, w, p0, p1, p2, q)
+    if not _sure(det, mag):
+        return -1
+    if det < 0:
+        return 0
+    n0, n1, n2 = tn[t, 0], tn[t, 1], tn[t, 2]
+    _set(tv, tn, t, q, p1, p2, n0, m, m + 1)
+    _set(tv, tn, m, q, p2, p0, n1, m + 1, t)
+    _set(tv, tn, m + 1, q, p0, p1, n2, t, m)
+    _point_back(tn, n1, t, m)
+    _point_back(tn, n2, t, m + 1)
+    for e, tri in enumerate((t, m, m + 1)):
+        stack[e, 0], stack[e, 1] = tri, 0
+    return 3
+
+
+@jit
+def _split_beyond(tv, tn, stack, t, q, m):
+    """Disc q outside the hull, beyond the edge (p1, p2) of the ghost triangle t: the real triangle
+    (q, p1, p2) in t and two ghosts m, m + 1 of the hull edges q -> p2, p1 -> q, put on ``stack``
+    (returns 3)."""
+    g = _ghost_at(tv, t)
+    p1, p2 = tv[t, (g + 1) % 3], tv[t, (g + 2) % 3]
+    real, n_after, n_before = tn[t, g], tn[t, (g + 1) % 3], tn[t, (g + 2) % 3]
+    _set(tv, tn, t, q, p1, p2, real, m, m + 1)      # the real triangle (q, p1, p2)
+    _set(tv, tn, m, q, p2, GHOST, n_after, m + 1, t)  # hull edge q -> p2
+    _set(tv, tn, m + 1, q, GHOST, p1, n_before, t, m)  # hull edge p1 -> q
+    _point_back(tn, n_after, t, m)
+    _point_back(tn, n_before, t, m + 1)
+    stack[0, 0], stack[0, 1] = t, 0
+    stack[1, 0], stack[1, 1] = m, 0
+    stack[2, 0], stack[2, 1] = m + 1, 0
+    return 3
+
+
+@jit
+def _split_on_hull(x, z, w, tv, tn, stack, t, q, m):
+    """Disc q on the hull edge p1 -> p2 of the ghost triangle t (G, p1, p2): hidden when it lies above
+    the chord of the lifted heights (returns 0), else the real triangle (p2, p1, c) beyond the edge
+    split in two at q and two ghosts, put on ``stack`` (returns 4); -1: unsure."""
+    g = _ghost_at(tv, t)
+    p1, p2 = tv[t, (g + 1) % 3], tv[t, (g + 2) % 3]  # the ghost (G, p1, p2) beyond the hull edge p1 -> p2
+    d, dm = _above_chord(x, z, w, p1, q, p2)
+    if not _sure(d, dm):
+        return -1
+    if d > 0:
+        return 0
+    real = tn[t, g]  # (p2, p1, c)
+    r0 = 0
+    while tn[real, r0] != t:
+        r0 += 1
+    c = tv[real, r0]
+    n_c1, n_c2 = tn[real, (r0 + 1) % 3], tn[real, (r0 + 2) % 3]  # across (p1, c) and (c, p2)
+    n_after, n_before = tn[t, (g + 1) % 3], tn[t, (g + 2) % 3]  # across (p2, G) and (G, p1)
+    _set(tv, tn, real, q, c, p2, n_c2, t, m)         # (q, c, p2)
+    _set(tv, tn, m, q, p1, c, n_c1, real, m + 1)     # (q, p1, c)
+    _set(tv, tn, t, q, p2, GHOST, n_after, m + 1, real)  # hull edge q -> p2
+    _set(tv, tn, m + 1, q, GHOST, p1, n_before, m, t)    # hull edge p1 -> q
+    _point_back(tn, n_c1, real, m)
+    _point_back(tn, n_before, t, m + 1)
+    for e, tri in enumerate((real, m, t, m + 1)):
+        stack[e, 0], stack[e, 1] = tri, 0
+    return 4
 
 
 @jit

@@ -48,7 +48,7 @@ class WaterModel(water_model.WaterModel):
                   "check_areas": float(self.schedule.by_displacement),
                   "wall_position": self.wall_vertices.faces() if walls else [],
                   "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
-                  "F_walls": np.zeros(len(walls))}
+                  "F_walls": np.zeros(len(walls)), "A_watch": np.zeros(n_p), "watch": np.zeros(3)}
         # the rest: outputs and scratch of the kernels, by length
         for names, size in (("poly sect void", n_p), ("length contact", n_l), ("q g", n_t),
                             ("q_s q_d q_in g_b U acc_i acc_j rate out_i out_j", n_p)):
@@ -139,15 +139,21 @@ class WaterModel(water_model.WaterModel):
                                           f"{h / n:.3e} s; {limits.DRY_HINT}")
             self.last_limit = limits.gershgorin_limit(lam[LAM.last])  # at the last sub-step, as PoreWater reports it
         book_balance(w.balance, self._balance, add=True)
-        if self.watch is not None:
-            self.watch(self._part("void"), self._part("U"), self.settings.E_w, w.net.a_min, h)
+        self.report_watch(h)
 
-    def after_kernel_steps(self, unwatched=False):
+    def report_watch(self, h):
+        """Hand the accuracy watch (``watch``, AccuracyWatch.seen) what the kernels' water steps of h
+        [s] since the last report saw (kernels.watch_areas: each compared with the one before on the
+        same pores), and start the next report."""
+        w = self._part("watch")
+        ratio, low = w[1], w[2]
+        w[1] = w[2] = 0.0
+        if self.watch is not None:
+            self.watch.seen(ratio, low, h)
+
+    def after_kernel_steps(self):
         """After water steps run by kernels with the arguments of ``kernel_args``: the eq 46 state
-        they hold and the Darcy limit of the last one. ``unwatched``: water steps the accuracy
-        watch did not see (a compiled drive's): its next comparison starts again."""
-        if unwatched and self.watch is not None:
-            self.watch.rebuilt()
+        they hold and the Darcy limit of the last one."""
         if self.settings.smoothing:
             self.water.q_prev = self._args[kernels.WATER.q_prev]
         self.last_limit = limits.gershgorin_limit(self._lam[LAM.first])

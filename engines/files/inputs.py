@@ -6,12 +6,21 @@ directory, a device or pipe ("/dev/zero is not a regular file"), a file above th
 empty one, before a byte of it is read. ``check_name(name, where)`` accepts a name that becomes one
 file or folder inside a folder the user named (a sweep job, a scene's name, an ensemble's start)
 and refuses one holding a path separator, ``..``, a leading dot or a control character, so that
-no write leaves that folder.
+no write leaves that folder. ``ArgumentParser`` is argparse with the one-line refusal the
+command lines give (engines.run.preflight's scripts, postproc's).
 """
+import argparse
 import os
 import stat
 
 MB = 1 << 20
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with a one-line error (``prog: error: ...``, no usage block), exit status 2."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def size_text(n):

@@ -263,19 +263,44 @@ def separation_adjustment(events, touch_count, vel, mass, mobile, e):
         by_disc.setdefault(ev.j, []).append(ev)
     free = {k for k in by_disc if mobile[k] and touch_count[k] == 0}
     v = {k: np.asarray(vel[k], float).copy() for k in by_disc}
-    done = set()
-
-    def normal_parts(ev, a):
-        """(Vn_a, Vn_b, n from a to b) for disc a of the event, eq 20."""
-        b, n = (ev.j, ev.normal) if ev.i == a else (ev.i, -ev.normal)
-        return float(v[a][0] * n[0] + v[a][1] * n[1]), float(-(v[b][0] * n[0] + v[b][1] * n[1])), b, n
-
     # (d) isolated pairs first, then (a)/(b) against discs that are not free, then (c)
+    done = _isolated_pairs(by_disc, free, v, mass, e)
+    pending = sorted(free - done)
+    for a in pending:  # (a), (b): every partner is a wall or still touches others
+        if all(_partner(ev, a) not in free for ev in by_disc[a]):
+            _adjust_against(v, a, by_disc[a], e)
+            done.add(a)
+    for a in sorted(free - done):  # (c) first the partner j, against the discs that are not free
+        fixed = [ev for ev in by_disc[a] if _partner(ev, a) not in free]
+        if fixed:
+            _adjust_against(v, a, fixed, e)
+            done.add(a)
+    for a in sorted(free - done):  # (c) then i, against the adjusted j
+        _adjust_against(v, a, by_disc[a], e)
+        done.add(a)
+    return {k: v[k] for k in done if mobile[k]}
+
+
+def _normal_parts(v, ev, a):
+    """(Vn_a, Vn_b, b, n from a to b) for disc a of the event at velocities v, eq 20."""
+    b, n = (ev.j, ev.normal) if ev.i == a else (ev.i, -ev.normal)
+    return float(v[a][0] * n[0] + v[a][1] * n[1]), float(-(v[b][0] * n[0] + v[b][1] * n[1])), b, n
+
+
+def _partner(ev, a):
+    """The other element of the event than disc a."""
+    return ev.j if ev.i == a else ev.i
+
+
+def _isolated_pairs(by_disc, free, v, mass, e):
+    """Pattern (d) of separation_adjustment: free discs a, b that touched only each other, both
+    adjusted conserving their normal momentum (eq 24), v in place. Returns the discs settled."""
+    done = set()
     for a in sorted(free):
         evs = by_disc[a]
         if a in done or len(evs) != 1:
             continue
-        vn_a, vn_b, b, n = normal_parts(evs[0], a)
+        vn_a, vn_b, b, n = _normal_parts(v, evs[0], a)
         if b in free and len(by_disc[b]) == 1:
             target = -e * evs[0].vn_collision
             if -(vn_a + vn_b) > e * evs[0].vn_collision > 0:
@@ -285,31 +310,19 @@ def separation_adjustment(events, touch_count, vel, mass, mobile, e):
                 v[a] -= (vn_a - new_a) * n
                 v[b] += (vn_b - new_b) * n
             done |= {a, b}
-    def adjust(a, evs):  # eq 22-23 against the given separations; (b): the smallest Rk_a
-        best = None
-        for ev in evs:
-            vn_a, vn_b, b, n = normal_parts(ev, a)
-            if vn_a == 0 or not -(vn_a + vn_b) > e * ev.vn_collision > 0:
-                continue
-            rk = (-e * ev.vn_collision - vn_b) / vn_a  # eq 22
-            if best is None or rk < best[0]:
-                best = (rk, vn_a, n)
-        if best is not None:
-            rk, vn_a, n = best
-            v[a] -= (1 - rk) * vn_a * n  # eq 23
-        done.add(a)
+    return done
 
-    def partner(ev, a):
-        return ev.j if ev.i == a else ev.i
 
-    pending = sorted(free - done)
-    for a in pending:  # (a), (b): every partner is a wall or still touches others
-        if all(partner(ev, a) not in free for ev in by_disc[a]):
-            adjust(a, by_disc[a])
-    for a in sorted(free - done):  # (c) first the partner j, against the discs that are not free
-        fixed = [ev for ev in by_disc[a] if partner(ev, a) not in free]
-        if fixed:
-            adjust(a, fixed)
-    for a in sorted(free - done):  # (c) then i, against the adjusted j
-        adjust(a, by_disc[a])
-    return {k: v[k] for k in done if mobile[k]}
+def _adjust_against(v, a, evs, e):
+    """Eq 22-23 for disc a against the separations ``evs`` (pattern (b): the smallest Rk_a), v in place."""
+    best = None
+    for ev in evs:
+        vn_a, vn_b, b, n = _normal_parts(v, ev, a)
+        if vn_a == 0 or not -(vn_a + vn_b) > e * ev.vn_collision > 0:
+            continue
+        rk = (-e * ev.vn_collision - vn_b) / vn_a  # eq 22
+        if best is None or rk < best[0]:
+            best = (rk, vn_a, n)
+    if best is not None:
+        rk, vn_a, n = best
+        v[a] -= (1 - rk) * vn_a * n  # eq 23

@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-BOUNDARIES = ("undrained", "drained", "inflow")
-
+from engines.model.groups import words
 
 @dataclass(frozen=True)
 class FlatWall:
@@ -48,8 +47,8 @@ class FlatWall:
             raise ValueError(f"FlatWall: inward must be +1 or -1, got {self.inward!r}")
         if not np.isfinite(self.position):
             raise ValueError(f"FlatWall: position must be finite [m], got {self.position!r}")
-        if self.boundary not in BOUNDARIES:
-            raise ValueError(f"FlatWall: boundary must be one of {BOUNDARIES}, got {self.boundary!r}")
+        if self.boundary not in words():
+            raise ValueError(f"FlatWall: boundary must be one of {words()}, got {self.boundary!r}")
 
     def gap(self, xz, r):
         """Gaps (N,) [m] of discs at xz (N, 2) with radii r (N,) to the face (< 0: overlap)."""

@@ -141,6 +141,12 @@ class AccuracyError(ValueError):
     """A water step too long for the discs' motion (the accuracy watch)."""
 
 
+def area_change(A_prev, A, a_min):
+    """max |A - A_prev| / A_prev over the pores open (> a_min [m^2]) in both void areas (Np,) [m^2]; 0 when none."""
+    open_ = (A_prev > a_min) & (A > a_min)
+    return float(np.max(np.abs(A[open_] - A_prev[open_]) / A_prev[open_])) if open_.any() else 0.0
+
+
 class AccuracyWatch:
     """The accuracy of the water steps (docs/ENGINE.md): at each water step, max |dA| / A of the
     open pores since the last water step on the same pores, and min U / E_w. Warns once (``log``)
@@ -165,13 +171,14 @@ class AccuracyWatch:
     def __call__(self, A, U, E_w, a_min, h):
         """Watch the water step of h [s] that ended at void areas A (Np,) [m^2], pressures U (Np,) [N/m]."""
         A = np.array(A, float)
-        ratio = 0.0
-        if self._A is not None and len(self._A) == len(A):
-            open_ = (self._A > a_min) & (A > a_min)
-            if open_.any():
-                ratio = float(np.max(np.abs(A[open_] - self._A[open_]) / self._A[open_]))
+        ratio = area_change(self._A, A, a_min) if self._A is not None and len(self._A) == len(A) else 0.0
         self._A = A
-        low = float(np.min(U)) / E_w if len(U) else 0.0
+        self.seen(ratio, float(np.min(U)) / E_w if len(U) else 0.0, h)
+
+    def seen(self, ratio, low, h):
+        """Water steps of h [s] whose largest max |dA| / A was ``ratio`` and lowest U / E_w ``low``
+        (one water step, or those of a compiled drive's call: kernels.watch_areas)."""
+        ratio, low = float(ratio), float(low)
         self.worst, self.lowest = max(self.worst, ratio), min(self.lowest, low)
         cause = (f"a pore's void area changed by {ratio:.0%} in one water step of {h:.3g} s" if ratio > self.warn else
                  f"a pore's suction reached U = {low:.2f} E_w" if low < -1 else None)

@@ -30,6 +30,7 @@ import dataclasses
 
 import numpy as np
 
+from engines.model import pore_water
 from engines.model import pores as pg
 
 OPENPNM_PREFIXES = ("pore.", "throat.")
@@ -80,13 +81,10 @@ def pore_network(water, xz=None):
     m = pg.measure(net, xz, model.r)
     A = m.void_area
     fl = pw.flows(A, m.link_contact)
-    surface, drained, inflow = pw._boundary_masks()
-    touches = {name: np.asarray(net.pore_touches[name], bool) for name in ("bottom", "left", "right")}
+    masks = pore_water.boundary_masks(net, pw.settings.sides)
+    surface, drained, inflow, undrained = (masks[w] for w in ("surface", "drained", "inflow", "undrained"))
+    touches = {name: np.asarray(net.pore_touches[name], bool) for name in pg.WALL_NAMES.values()}
     walls = {f"pore.flat_wall_{w}": np.asarray(net.pore_walls[w], bool) for w in range(len(net.flat_walls))}
-    sides = touches["left"] | touches["right"]
-    undrained = sides & (pw.settings.sides == "undrained")
-    if net.flat_walls:
-        undrained = undrained | net.flat_wall_pores("undrained")
     c = pg.pore_centroids(net, xz)
     ptr, idx = polygon_csr(net, xz)
     out = {"pore.coords": np.column_stack([c[:, 0], np.zeros(len(c)), c[:, 1]]),

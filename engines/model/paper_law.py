@@ -17,6 +17,7 @@ free (pattern (a)) moving at its velocity.
 import numpy as np
 
 from engines.model.contact import ContactLaw, separation_adjustment
+from engines.model.effective_stress import pair_contacts
 from engines.model.flat_walls import WallVertices
 
 
@@ -136,6 +137,18 @@ class PaperLaw:
             return sel
         # the feet's increments do not matter: only pairs of two discs are evaluated
         return self.contact.touching_at(*self._on_vertices(xz, du, self.wall_du), self.dt, discs)
+
+    def stress_contacts(self, xz):
+        """The contacts of the particles at centres xz as this law's step at xz would find them
+        (``contact_pairs``, its state left as it is), with the flat walls' feet: Contacts of
+        engines.model.effective_stress (a contact with a wall disc or a foot counts for its particle)."""
+        du = np.zeros_like(xz) if self.xz_prev is None else xz - self.xz_prev
+        if self.walls is None:
+            at = (xz, du, self.omega * self.dt)
+        else:
+            at = self._on_vertices(xz, du, self.wall_du)
+        pairs, f_n, f_s = self.contact.touching_at(*at, self.dt)
+        return pair_contacts(at[0], self.contact.r, pairs, f_n, f_s, self.contact.mobile)
 
     def wall_forces(self):
         """Normal force (W,) [N per m thickness] of the particles' contacts on each flat wall at the

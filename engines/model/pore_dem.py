@@ -31,7 +31,7 @@ constant and applied by the caller (YADE: NewtonIntegrator gravity and permanent
 """
 import numpy as np
 
-from engines.model import ground_motion, limits
+from engines.model import groups, ground_motion, limits
 from engines.model import pores as pg
 from engines.model.contact import ContactLaw, ContactSettings
 from engines.model.flat_walls import FlatWall
@@ -91,7 +91,7 @@ def moving_walls(settings, packing):
     """(N,) bool: the wall discs that follow the input acceleration ([loading] moves)."""
     if settings.loading.type == "none":
         return np.zeros(len(packing.r), bool)
-    groups = {"bottom": [pg.WALL_BOTTOM], "box": [pg.WALL_BOTTOM, pg.WALL_LEFT, pg.WALL_RIGHT]}[settings.loading.moves]
+    groups = {"bottom": [pg.WALL_BOTTOM], "box": list(pg.WALL_NAMES)}[settings.loading.moves]
     return np.isin(packing.group, groups)
 
 
@@ -115,14 +115,12 @@ def scene_flat_walls(settings, packing):
     if settings.walls.kind != "flat":
         return {}
     w = settings.water
-    side = "drained" if w.sides == "drained" else "undrained"
-    # (axis, inward, boundary): the bottom a face z = const below the discs, the left and right x = const
-    bottom = "inflow" if w.q_w > 0 or w.inflow_velocity > 0 else "undrained"
-    kinds = {pg.WALL_BOTTOM: (1, 1, bottom), pg.WALL_LEFT: (0, 1, side), pg.WALL_RIGHT: (0, -1, side)}
+    inflow = w.q_w > 0 or w.inflow_velocity > 0
     m = packing.mobile
     walls = {}
     for code, face in sorted(packing.inner_faces().items()):
-        axis, inward, boundary = kinds[code]
+        name = pg.WALL_NAMES[code]  # its face and its word: engines.model.groups
+        (axis, inward), boundary = groups.kind(name).face, groups.flat_word(name, w.sides, inflow)
         reach = float(np.min(inward * packing.xz[m, axis] - packing.r[m]))  # the outermost particle, inward * its edge
         walls[code] = FlatWall(axis, inward * min(inward * face, reach), inward, boundary)
     return walls

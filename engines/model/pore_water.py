@@ -45,7 +45,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from engines.model import limits
+from engines.model import groups, limits
 from engines.model import pores as pg
 from engines.model.fields import NONNEG, POS, Field, settings_class
 from engines.model.limits import DarcyStabilityError
@@ -58,12 +58,12 @@ WATER_FIELDS = {  # the scene file's [water] table holds these and the engine's 
     "k3": Field(float, 0.0, NONNEG, "permeability of drained side walls [1/s]"),
     "q_w": Field(float, 0.0, NONNEG, "inflow into every pore with a bottom-wall disc or an inflow flat wall as a "
                  "vertex [m^2/s per inflow pore] (§5.1, the paper's: the total grows with the number of such pores)"),
-    "sides": Field(str, "undrained", ("undrained", "drained"), "side-wall drainage"),
+    "sides": Field(str, "undrained", groups.SIDE_WORDS, "side-wall drainage"),
     "smoothing": Field(bool, False, None, "eq 45-46"),
     "substep": Field(bool, True, None, "sub-step the water where a water step exceeds the explicit Darcy limit (the "
                      "engine prints the count and its cost); false: refuse such a step (preflight at the start, the "
                      "engine mid-run)"),
-    "transfer": Field(str, "paper", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
+    "transfer": Field(str, "conserving", ("paper", "conserving"), "water at re-meshing: paper = W from the inherited U "
                       "(§3.4(2)); conserving = excess water W - A of the old pores split over the new ones by overlap "
                       "(engines.model.pore_water.conserving_water)"),
     "inflow_velocity": Field(float, 0.0, NONNEG, "inflow as a Darcy flux per unit width [m/s] (SPEC §2.7): each link "
@@ -193,13 +193,8 @@ class PoreWater:
 
     # -- flows -------------------------------------------------------------------------------------
     def _boundary_masks(self):
-        net, s = self.net, self.settings
-        side = net.pore_touches["left"] | net.pore_touches["right"]
-        drained = side if s.sides == "drained" else np.zeros_like(side)
-        inflow = net.pore_touches["bottom"]
-        if net.flat_walls:
-            drained, inflow = drained | net.flat_wall_pores("drained"), inflow | net.flat_wall_pores("inflow")
-        return net.pore_surface, drained, inflow
+        m = boundary_masks(self.net, self.settings.sides)
+        return m["surface"], m["drained"], m["inflow"]
 
     def flows(self, A, link_contact):
         """Throat and boundary flows [m^2/s] for void areas A and link states (eq 38-43)."""
@@ -318,9 +313,26 @@ class PoreWater:
         return counts
 
 
+def boundary_masks(net, sides):
+    """{water: (Np,) bool} for each of engines.model.groups.WATER: the pores of network ``net`` on
+    which a boundary kind does that to the water (groups.BOUNDARY_KINDS): the open top's pores,
+    those with a disc of a wall group as a vertex, those with a flat wall of a word as a vertex;
+    [water] sides = ``sides``."""
+    masks = {water: np.zeros(net.n_pores, bool) for water in groups.WATER}
+    for k in groups.BOUNDARY_KINDS:
+        if k.group:
+            masks[groups.water_of(k.name, sides)] |= net.pore_touches[k.name]
+        elif k.word:
+            if net.flat_walls:
+                masks[k.water] |= net.flat_wall_pores(k.name)
+        else:  # the network's open top
+            masks[k.water] |= net.pore_surface
+    return masks
+
+
 def inflow_lengths(net, walls):
     """(Np,) [m]: each pore's length of inflow boundary at the build (SPEC §2.7): every link between
-    two bottom-wall discs (codes ``walls`` (N,), engines.model.pores) counts its length centre to
+    two discs of an inflow wall group (the bottom, engines.model.groups; codes ``walls`` (N,), engines.model.pores) counts its length centre to
     centre for the pore above it, every edge of an inflow flat wall its length for the pore on the
     wall's inward side; a pore on the row at a vertex only gets none, the outer face none."""
     n_p = net.n_pores
@@ -330,11 +342,14 @@ def inflow_lengths(net, walls):
     links, vec = net.links, net.link_vec0
     v = len(codes) if net.wall_vertices is None else net.wall_vertices.n_vertices
     codes = np.concatenate([codes, np.full(v - len(codes), -1)])
-    row = (codes[links[:, 0]] == pg.WALL_BOTTOM) & (codes[links[:, 1]] == pg.WALL_BOTTOM)
-    inward = np.zeros((len(links), 2))
-    inward[row] = (0.0, 1.0)  # the bottom row's inner side is up
+    row, inward = np.zeros(len(links), bool), np.zeros((len(links), 2))
+    for k in groups.disc_groups():
+        if k.water == "inflow":  # a link between two discs of an inflow group; its inner side: the face's normal
+            on = (codes[links[:, 0]] == k.group) & (codes[links[:, 1]] == k.group)
+            row |= on
+            inward[on, k.face[0]] = k.face[1]
     edge, wall = pg.wall_edges(net)
-    inflow = np.array([w.boundary == "inflow" for w in net.flat_walls], bool)
+    inflow = np.array([groups.kind(w.boundary).water == "inflow" for w in net.flat_walls], bool)
     if len(edge):
         edge, wall = edge[inflow[wall]], wall[inflow[wall]]
         inward[edge] = [net.flat_walls[w].normal() for w in wall]

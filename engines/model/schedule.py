@@ -9,7 +9,10 @@ One convention: steps are counted from the schedule's start k0, the step at whic
 made (0 for a scene's run; O.iter at a WaterEngine's creation).
 
 - Water (seed 000 §3.4(1)): due at k0 + j water_interval (j >= 0); each water step advances the
-  water by water_interval dt.
+  water by water_interval dt. A new water_interval (``set_water_interval``, a WaterEngine's
+  settable ``water_interval``) takes effect at the next water step n of the old one: the water
+  then steps at n + j water_interval (``k_water`` = n), so each water step still covers the
+  water_interval dt that follow it.
 - Pore rebuild (§3.4(2), SPEC §2.6): by interval, at the first step asked at or after each
   k0 + n rebuild_interval (n >= 1) since the last build (asked at every step, the paper's law: exactly
   there; asked at water steps only, the YADE law's engine: at the first water step at or after it);
@@ -50,11 +53,12 @@ class Schedule:
     """The events of one model from its start step k0 (module docstring): water_interval [steps],
     rebuild_interval [steps] (None: no pores, a dry scene's schedule), rebuild_distance [m] (> 0:
     also by displacement and areas; 0: off).
-    ``k_built`` is the step of the last pore build (``built``); the output events are set by
+    ``k_built`` is the step of the last pore build (``built``), ``k_water`` a water step from which
+    the water steps are counted (k0 until ``set_water_interval``); the output events are set by
     ``set_output`` (none until then)."""
 
     # what a checkpoint stores (engines.model.state)
-    CHECKPOINT_FIELDS = ("k0", "k_built")
+    CHECKPOINT_FIELDS = ("k0", "k_built", "k_water")
     CHECKPOINT_DERIVED = {
         **{name: "the scene's [numerics] (a WaterEngine's arguments)" for name in
            ("water_interval", "rebuild_interval", "rebuild_distance")},
@@ -69,7 +73,7 @@ class Schedule:
         self.rebuild_distance = float(rebuild_distance)
         if not self.rebuild_distance >= 0:
             raise ValueError(f"rebuild_distance must be >= 0 [m], got {rebuild_distance}")
-        self.k0 = self.k_built = int(k0)
+        self.k0 = self.k_built = self.k_water = int(k0)
         self.output_interval, self.output_steps = 0, frozenset()
 
     # -- water ------------------------------------------------------------------------------------
@@ -79,7 +83,7 @@ class Schedule:
 
     def _phase(self, k):
         """Steps from the last water step at or before step k to k (0: k is a water step)."""
-        return (k - self.k0) % self.water_interval
+        return (k - self.k_water) % self.water_interval
 
     def steps_to_water(self, k):
         """Steps from step k to the first water step at or after it."""
@@ -89,6 +93,16 @@ class Schedule:
     def last_water(self, k):
         """The last water step at or before step k (k >= k0)."""
         return k - self._phase(k)
+
+    def set_water_interval(self, water_interval, k):
+        """Water every ``water_interval`` steps from the first water step at or after step k (that
+        of the old interval, whose water step before it covers the steps up to it); returns that step."""
+        water_interval = int(water_interval)
+        if water_interval < 1:
+            raise ValueError(f"water_interval must be >= 1, got {water_interval}")
+        self.k_water = int(k) + self.steps_to_water(k)
+        self.water_interval = water_interval
+        return self.k_water
 
     def water_among(self, k, end):
         """Is one of the steps k, ..., end - 1 a water step?"""
@@ -133,8 +147,8 @@ class Schedule:
         every step or, with ``water_steps_only``, at the water steps only (inf: no pores)."""
         if self.rebuild_interval is None:
             return math.inf
-        calls = self.water_interval if water_steps_only else 1
-        return steps_to_rebuild(k, self.k_built, self.k0, self.rebuild_interval, calls)
+        due = k + steps_to_rebuild(k, self.k_built, self.k0, self.rebuild_interval, 1)
+        return due - k + (self.steps_to_water(due) if water_steps_only else 0)
 
     # -- output -----------------------------------------------------------------------------------
     def set_output(self, interval, steps=()):

@@ -289,31 +289,7 @@ def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
     for i, lst in left.items():
         for j, _, _ in lst:
             Vnew.setdefault(j, np.array(V[j]))
-    settled, out = set(), {}
-
-    def gate(Vn_i, Vn_j, Vn_ij):
-        return -(Vn_i + Vn_j) > e * Vn_ij > 0                                  # eq 18-19
-
-    for i in sorted(free):                                                     # (d)
-        if len(left[i]) != 1 or i in settled:
-            continue
-        j, n, Vn_ij = left[i][0]
-        if j not in free or len(left[j]) != 1:
-            continue
-        settled |= {i, j}
-        Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
-        if not gate(Vn_i, Vn_j, Vn_ij):
-            continue
-        target = -e * Vn_ij                                                    # eq 19: Vn''_ij
-        momentum = mass[i] * Vn_i - mass[j] * Vn_j                             # eq 24b, left side
-        X = (momentum + mass[j] * target) / (mass[i] + mass[j])                # Rk_i Vn'_i
-        Y = target - X                                                         # eq 24a: Rk_j Vn'_j
-        Vnew[i] = Vnew[i] - (Vn_i - X) * n                                     # eq 23
-        Vnew[j] = Vnew[j] + (Vn_j - Y) * n
-        out[i], out[j] = Vnew[i], Vnew[j]
-        if counts is not None:
-            counts["d"] = counts.get("d", 0) + 2
-
+    settled, out = _adjust_free_pairs(left, free, Vnew, mass, e, counts)          # (d)
     pending = set(free) - settled                                              # (a), (b), (c)
     while pending:
         ready = [i for i in sorted(pending) if any(j not in pending for j, _, _ in left[i])]
@@ -321,16 +297,7 @@ def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
             break                                 # a free cluster with no settled element: left as is
         new = {}
         for i in ready:
-            best = None
-            for j, n, Vn_ij in left[i]:
-                if j in pending:
-                    continue
-                Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
-                if Vn_i == 0 or not gate(Vn_i, Vn_j, Vn_ij):
-                    continue
-                Rk_i = (-e * Vn_ij - Vn_j) / Vn_i                              # eq 22
-                if best is None or Rk_i < best[0]:
-                    best = (Rk_i, Vn_i, n)
+            best = _slowest_separation(left[i], pending, Vnew, Vnew[i], e)
             if best is not None:
                 Rk_i, Vn_i, n = best
                 new[i] = Vnew[i] - (1 - Rk_i) * Vn_i * n                       # eq 23
@@ -341,6 +308,55 @@ def adjust_free_particles(left, n_contacts, V, mass, e, counts=None):
         out.update(new)
         pending -= set(ready)
     return out
+
+
+def _too_fast(Vn_i, Vn_j, Vn_ij, e):
+    """The separation is faster than eq 19 allows (eq 18-19)."""
+    return -(Vn_i + Vn_j) > e * Vn_ij > 0
+
+
+def _adjust_free_pairs(left, free, Vnew, mass, e, counts):
+    """Pattern (d) of adjust_free_particles: i and j both free, each left only the other: eq 24a
+    with the pair's normal momentum kept (eq 24b), eq 23 for both; Vnew updated in place. Returns
+    (the particles settled, {i: V''_i} of those adjusted)."""
+    settled, out = set(), {}
+    for i in sorted(free):
+        if len(left[i]) != 1 or i in settled:
+            continue
+        j, n, Vn_ij = left[i][0]
+        if j not in free or len(left[j]) != 1:
+            continue
+        settled |= {i, j}
+        Vn_i, Vn_j = Vnew[i] @ n, -(Vnew[j] @ n)
+        if not _too_fast(Vn_i, Vn_j, Vn_ij, e):
+            continue
+        target = -e * Vn_ij                                                    # eq 19: Vn''_ij
+        momentum = mass[i] * Vn_i - mass[j] * Vn_j                             # eq 24b, left side
+        X = (momentum + mass[j] * target) / (mass[i] + mass[j])                # Rk_i Vn'_i
+        Y = target - X                                                         # eq 24a: Rk_j Vn'_j
+        Vnew[i] = Vnew[i] - (Vn_i - X) * n                                     # eq 23
+        Vnew[j] = Vnew[j] + (Vn_j - Y) * n
+        out[i], out[j] = Vnew[i], Vnew[j]
+        if counts is not None:
+            counts["d"] = counts.get("d", 0) + 2
+    return settled, out
+
+
+def _slowest_separation(left_i, pending, Vnew, V_i, e):
+    """Patterns (a)-(c): of the elements j a particle of velocity V_i left (``left_i``) that are not
+    pending and separate too fast, the one of the smallest Rk_i (eq 22), as (Rk_i, Vn'_i, n_ij);
+    None: none."""
+    best = None
+    for j, n, Vn_ij in left_i:
+        if j in pending:
+            continue
+        Vn_i, Vn_j = V_i @ n, -(Vnew[j] @ n)
+        if Vn_i == 0 or not _too_fast(Vn_i, Vn_j, Vn_ij, e):
+            continue
+        Rk_i = (-e * Vn_ij - Vn_j) / Vn_i                                      # eq 22
+        if best is None or Rk_i < best[0]:
+            best = (Rk_i, Vn_i, n)
+    return best
 
 
 # ------------------------------------------------------------------------------------------------
@@ -566,6 +582,53 @@ def build_pores(x, r, group, eps_m, l_m, walls=()):
     if len(r) < 3:
         return Pores(a_min=a_min, walls=walls)
     on_walls = [{int(w)} for w in frame.foot_wall] + [set(map(int, c)) for c in frame.corner_wall]
+    is_link = _link_rule(x, r, n, frame, walls, on_walls, eps_m, l_m)
+    extra = [(float(walls[w].distance(x_disc[[d]])[0] - r[d]), int(d), n + f)
+             for f, (d, w) in enumerate(zip(frame.foot_disc, frame.foot_wall))]
+    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link, n, extra)
+    if not tris:
+        return Pores(a_min=a_min, walls=walls)
+    links, face_of, face_left = _link_faces(tris, is_link)
+    outer = face_of[len(tris)]
+    cycles_of_face = _paper_walk(x, links, face_left, len(r))
+    rattlers_of_face = _rattlers(x, n, tris, links, face_of)
+    bounded = sorted((f for f in cycles_of_face if f != outer), key=lambda f: min(min(c) for c in cycles_of_face[f]))
+    open_faces = [f for f in bounded if _void_area(x, r, cycles_of_face[f], rattlers_of_face.get(f, [])) > a_min]
+    pore_of = {f: p for p, f in enumerate(open_faces)}
+    n_p = len(open_faces)
+    b = _pore_boundaries(open_faces, cycles_of_face, rattlers_of_face, on_walls, n)
+    wall = np.r_[np.asarray(group) != PARTICLE, np.ones(len(r) - n, bool)]   # virtual vertices are wall
+    throats, throat_link, surface, neighbours = _throats_and_surface(links, face_left, pore_of, outer, wall, n_p)
+    g = np.asarray(group)
+    arr = lambda v: np.array(v, int)
+    he_pore, he_wall, vertex_sets = arr(b["he_pore"]), arr(b["he_wall"]), b["vertex_sets"]
+    return Pores(
+        n_pores=n_p, he_pore=he_pore, he_a=arr(b["he_a"]), he_b=arr(b["he_b"]),
+        corner_pore=arr(b["c_pore"]), corner_disc=arr(b["c_disc"]), corner_prev=arr(b["c_prev"]),
+        corner_next=arr(b["c_next"]), rattler_pore=arr(b["r_pore"]), rattler_disc=arr(b["r_disc"]),
+        links=np.array(links, int).reshape(-1, 2),
+        throats=arr(throats).reshape(-1, 2), throat_link=arr(throat_link), surface=surface,
+        bottom=np.array([any(v >= 0 and g[v] == BOTTOM for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        side=np.array([any(v >= 0 and g[v] in (LEFT, RIGHT) for v in vs) for vs in vertex_sets], bool).reshape(-1),
+        vertex_sets=vertex_sets, neighbours=neighbours, a_min=a_min,
+        walls=walls, foot_disc=frame.foot_disc, foot_wall=frame.foot_wall, corner_wall=frame.corner_wall,
+        he_wall=he_wall, wall_drained=_on_wall_edge(he_pore, he_wall, walls, n_p, "drained"),
+        wall_inflow=_on_wall_edge(he_pore, he_wall, walls, n_p, "inflow"),
+    )
+
+
+def _on_wall_edge(he_pore, he_wall, walls, n_p, boundary):
+    """(n_p,) bool: the pores with a half-edge on a flat wall of this boundary ("drained", "inflow")."""
+    hit = np.zeros(n_p, bool)
+    for p, w in zip(he_pore, he_wall):
+        hit[p] |= w >= 0 and walls[w].boundary == boundary
+    return hit
+
+
+def _link_rule(x, r, n, frame, walls, on_walls, eps_m, l_m):
+    """is_link(a, b) of the vertices (n discs, then the walls' virtual vertices on the walls
+    ``on_walls``): two discs by eq 28; a disc and its own foot point; two virtual vertices
+    consecutive along a face (a wall edge) (READINGS F1-F3)."""
     foot_of = {n + f: int(d) for f, d in enumerate(frame.foot_disc)}
     chain = set()                                 # wall edges: consecutive virtual vertices along a face
     for w, wall in enumerate(walls):
@@ -579,19 +642,20 @@ def build_pores(x, r, group, eps_m, l_m, walls=()):
             return foot_of.get(max(a, b)) == min(a, b)
         return (min(a, b), max(a, b)) in chain
 
-    extra = [(float(walls[w].distance(x_disc[[d]])[0] - r[d]), int(d), n + f)
-             for f, (d, w) in enumerate(zip(frame.foot_disc, frame.foot_wall))]
-    tris, _ = insert_hidden_links(x, r, regular_triangles(x, r), eps_m + l_m, is_link, n, extra)
-    if not tris:
-        return Pores(a_min=a_min, walls=walls)
+    return is_link
+
+
+def _link_faces(tris, is_link):
+    """The links (i < j, sorted) among the edges of the triangles ``tris`` and the faces of the link
+    graph: triangles joined across non-link edges, OUT (= len(tris)) outside the hull. Returns
+    (links, face_of (len(tris) + 1,) the face of each triangle and of OUT, face_left(a, b): the face
+    on the left of the directed edge a -> b)."""
     edge_tri = {}                                 # directed edge -> triangle on its left
     for k, (a, b, c) in enumerate(tris):
         for e in ((a, b), (b, c), (c, a)):
             edge_tri[e] = k
     links = sorted({(min(e), max(e)) for e in edge_tri if is_link(*e)})
     link_set = set(links)
-
-    # Faces: triangles joined across non-link edges; OUT (= len(tris)) is outside the hull.
     out = len(tris)
     parent = list(range(out + 1))
 
@@ -604,18 +668,29 @@ def build_pores(x, r, group, eps_m, l_m, walls=()):
     for (a, b), k in edge_tri.items():
         if (min(a, b), max(a, b)) not in link_set:
             parent[find(k)] = find(edge_tri.get((b, a), out))
-    outer = find(out)
+    face_of = [find(k) for k in range(out + 1)]
 
     def face_left(a, b):
-        return find(edge_tri[(a, b)]) if (a, b) in edge_tri else outer
+        return face_of[edge_tri[(a, b)]] if (a, b) in edge_tri else face_of[out]
 
-    # The paper's walk: from a -> b, go on to the neighbour of b next clockwise from a.
-    around = {d: [] for d in range(len(r))}
+    return links, face_of, face_left
+
+
+def _neighbours_around(x, links, n_vertices):
+    """The vertices linked to each vertex, sorted by the angle of the link."""
+    around = {d: [] for d in range(n_vertices)}
     for a, b in links:
         around[a].append(b)
         around[b].append(a)
     for d, nb in around.items():
         nb.sort(key=lambda b: np.arctan2(x[b, 1] - x[d, 1], x[b, 0] - x[d, 0]))
+    return around
+
+
+def _paper_walk(x, links, face_left, n_vertices):
+    """The boundary cycles of the half-edges of every face, by the paper's walk: from a -> b, go on
+    to the neighbour of b next clockwise from a. Returns {face: [cycle of half-edges, ...]}."""
+    around = _neighbours_around(x, links, n_vertices)
 
     def next_half_edge(a, b):
         nb = around[b]
@@ -636,57 +711,69 @@ def build_pores(x, r, group, eps_m, l_m, walls=()):
             if len(faces) != 1:
                 raise RuntimeError(f"walk from {h0} crosses faces {faces}: links are not planar")
             cycles_of_face.setdefault(faces.pop(), []).append(cycle)
-    rattlers_of_face = {}     # unlinked discs: in the face of a triangle they are a corner of, or
-    for d in range(n):        # (empty power cell) of the first triangle that contains their centre
-        if not around[d]:
+    return cycles_of_face
+
+
+def _rattlers(x, n, tris, links, face_of):
+    """{face: [unlinked discs]}: an unlinked disc is in the face of a triangle it is a corner of, or
+    (empty power cell) of the first triangle that contains its centre."""
+    linked = {v for link in links for v in link}
+    rattlers_of_face = {}
+    for d in range(n):
+        if d not in linked:
             k = next((k for k, t in enumerate(tris) if d in t), None)
             if k is None:
                 k = next((k for k, (a, b, c) in enumerate(tris) if min(
                     _turn(x[a], x[b], x[d]), _turn(x[b], x[c], x[d]), _turn(x[c], x[a], x[d])) >= 0), None)
             if k is not None:
-                rattlers_of_face.setdefault(find(k), []).append(d)
+                rattlers_of_face.setdefault(face_of[k], []).append(d)
+    return rattlers_of_face
 
-    # Void area at build (eq 29) to close degenerate faces; then number the pores.
-    def void_area(face):
-        cycles = cycles_of_face[face]
-        he = np.array([h for c in cycles for h in c])
-        poly = 0.5 * np.sum(x[he[:, 0], 0] * x[he[:, 1], 1] - x[he[:, 1], 0] * x[he[:, 0], 1])
-        cd, cp, cn = _corners(cycles)
-        sectors = 0.5 * np.sum(corner_angles(x, cd, cp, cn) * r[cd] ** 2)
-        rat = rattlers_of_face.get(face, [])
-        return poly - sectors - np.pi * np.sum(r[rat] ** 2)
 
-    bounded = sorted((f for f in cycles_of_face if f != outer), key=lambda f: min(min(c) for c in cycles_of_face[f]))
-    open_faces = [f for f in bounded if void_area(f) > a_min]
-    pore_of = {f: p for p, f in enumerate(open_faces)}
-    n_p = len(open_faces)
+def _void_area(x, r, cycles, rattlers):
+    """Void area (eq 29) of a face with boundary ``cycles`` and unlinked discs ``rattlers`` at the
+    build: the polygon (shoelace) less the sectors at its corners less the rattlers whole."""
+    he = np.array([h for c in cycles for h in c])
+    poly = 0.5 * np.sum(x[he[:, 0], 0] * x[he[:, 1], 1] - x[he[:, 1], 0] * x[he[:, 0], 1])
+    cd, cp, cn = _corners(cycles)
+    sectors = 0.5 * np.sum(corner_angles(x, cd, cp, cn) * r[cd] ** 2)
+    return poly - sectors - np.pi * np.sum(r[rattlers] ** 2)
 
-    def tokens(a):                                # a disc is itself; a wall is the vertex -1 - w (F4)
+
+def _pore_boundaries(open_faces, cycles_of_face, rattlers_of_face, on_walls, n):
+    """The pores (the open faces, in order): their half-edges (he_pore, he_a, he_b, he_wall: the
+    wall the edge lies on, -1: none), corners (c_pore, c_disc, c_prev, c_next), rattlers (r_pore,
+    r_disc) and vertex sets (a disc is itself, a wall the vertex -1 - w: READINGS F4), by name."""
+    def tokens(a):
         return (a,) if a < n else tuple(-1 - w for w in sorted(on_walls[a - n]))
 
-    he_pore, he_a, he_b, c_pore, c_disc, c_prev, c_next, r_pore, r_disc = ([] for _ in range(9))
-    he_wall, vertex_sets = [], []
+    out = {k: [] for k in ("he_pore", "he_a", "he_b", "he_wall", "c_pore", "c_disc", "c_prev", "c_next",
+                           "r_pore", "r_disc", "vertex_sets")}
     for p, f in enumerate(open_faces):
         cycles = cycles_of_face[f]
         for c in cycles:
             for a, b in c:
-                he_pore.append(p), he_a.append(a), he_b.append(b)
-                he_wall.append(min(on_walls[a - n] & on_walls[b - n]) if a >= n and b >= n else -1)
+                out["he_pore"].append(p), out["he_a"].append(a), out["he_b"].append(b)
+                out["he_wall"].append(min(on_walls[a - n] & on_walls[b - n]) if a >= n and b >= n else -1)
         cd, cp, cn = _corners(cycles)
-        c_pore += [p] * len(cd)
-        c_disc += cd.tolist()
-        c_prev += cp.tolist()
-        c_next += cn.tolist()
+        out["c_pore"] += [p] * len(cd)
+        out["c_disc"] += cd.tolist()
+        out["c_prev"] += cp.tolist()
+        out["c_next"] += cn.tolist()
         rat = rattlers_of_face.get(f, [])
-        r_pore += [p] * len(rat)
-        r_disc += rat
-        vertex_sets.append(frozenset(int(t) for c in cycles for a, _ in c for t in tokens(a)) | frozenset(rat))
+        out["r_pore"] += [p] * len(rat)
+        out["r_disc"] += rat
+        out["vertex_sets"].append(frozenset(int(t) for c in cycles for a, _ in c for t in tokens(a)) | frozenset(rat))
+    return out
 
-    link_arr = np.array(links, int).reshape(-1, 2)
+
+def _throats_and_surface(links, face_left, pore_of, outer, wall, n_p):
+    """Throats (pore pairs across a link, and the link), the free surface (n_p,) bool: a pore
+    beside the outer face across a link that is not wall-wall (a wall element), and each pore's
+    neighbours across throats."""
     sides = [(pore_of.get(face_left(a, b), -1), pore_of.get(face_left(b, a), -1)) for a, b in links]
     throats, throat_link = [], []
     surface = np.zeros(n_p, bool)
-    wall = np.r_[np.asarray(group) != PARTICLE, np.ones(len(r) - n, bool)]   # virtual vertices are wall
     for l, ((a, b), (pl, pr)) in enumerate(zip(links, sides)):
         if pl >= 0 and pr >= 0 and pl != pr:
             throats.append((pl, pr))
@@ -701,27 +788,7 @@ def build_pores(x, r, group, eps_m, l_m, walls=()):
     for p, q in throats:
         neighbours[p].add(q)
         neighbours[q].add(p)
-    g = np.asarray(group)
-    arr = lambda v: np.array(v, int)
-    he_pore, he_wall = arr(he_pore), arr(he_wall)
-
-    def on_wall_edge(boundary):                   # pores with an edge on a wall of this boundary
-        hit = np.zeros(n_p, bool)
-        for p, w in zip(he_pore, he_wall):
-            hit[p] |= w >= 0 and walls[w].boundary == boundary
-        return hit
-
-    return Pores(
-        n_pores=n_p, he_pore=he_pore, he_a=arr(he_a), he_b=arr(he_b),
-        corner_pore=arr(c_pore), corner_disc=arr(c_disc), corner_prev=arr(c_prev), corner_next=arr(c_next),
-        rattler_pore=arr(r_pore), rattler_disc=arr(r_disc), links=link_arr,
-        throats=arr(throats).reshape(-1, 2), throat_link=arr(throat_link), surface=surface,
-        bottom=np.array([any(v >= 0 and g[v] == BOTTOM for v in vs) for vs in vertex_sets], bool).reshape(-1),
-        side=np.array([any(v >= 0 and g[v] in (LEFT, RIGHT) for v in vs) for vs in vertex_sets], bool).reshape(-1),
-        vertex_sets=vertex_sets, neighbours=neighbours, a_min=a_min,
-        walls=walls, foot_disc=frame.foot_disc, foot_wall=frame.foot_wall, corner_wall=frame.corner_wall,
-        he_wall=he_wall, wall_drained=on_wall_edge("drained"), wall_inflow=on_wall_edge("inflow"),
-    )
+    return throats, throat_link, surface, neighbours
 
 
 def _corners(cycles):

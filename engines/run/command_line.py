@@ -27,8 +27,7 @@ import tomllib
 
 from engines.files.inputs import check_name
 from engines.run import ensemble, guard, history, manifest, talk
-from engines.run.preflight import (ENSEMBLE, InputError, announce_output, check_fresh_output, check_output_dir, number,
-                                   output_dir, preflight)
+from engines.run.preflight import ENSEMBLE, announce_output, check_fresh_output, check_resume, number, output_dir, preflight
 from engines.run.sweep import JOB_DIR, check_scheduler
 from engines.run.table import BATCH, DESCRIPTION, batch_line
 from engines.run.talk import say
@@ -190,6 +189,32 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
     (they conflict with --resume); ``check(scene)``: the script's own refusals (raise ValueError);
     ``figures(out_dir)``: the script's own figures of a completed run (paths returned)."""
     ensemble.check_options(ap, args)
+    _check_resume_options(ap, args, scene_given)
+    many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
+    out = args.resume or args.out
+    try:  # bad scenes, packings, limits, a folder in use: one clear line, nothing written
+        ready = _checked(ap, args, load_scene, check, many)
+    except ValueError as e:
+        sys.exit(f"error: {e}")
+    try:
+        with guard.hold(out):
+            announce_output(out)
+            summary = _run(ap, args, many, ready)
+    except (OSError, guard.FolderLocked, history.HistoryMismatch, CheckpointError) as e:
+        sys.exit(f"error: {e}")  # a full disk (WriteError), a folder taken meanwhile, a history not this run's
+    if summary["status"] == "interrupted":
+        _exit_interrupted(summary, out)
+    from engines.run import runner
+    drawn = list(summary.get("figures", []))
+    if figures is not None:
+        drawn += figures(out)
+        manifest.claim(out, [os.path.basename(path) for path in drawn])
+    print(runner.done_line(summary, drawn), flush=True)
+
+
+def _check_resume_options(ap, args, scene_given):
+    """--resume with an option that sets a run up (or the script's scene options), or neither
+    --resume nor --out: the parser's one-line error."""
     if args.resume:
         setup = ("out", "overwrite", "dt", "set", "vtk", "force", "starts", "start", "perturbation")
         given = [f"--{k}" for k in setup if getattr(args, k) != ap.get_default(k)] + (["the scene"] if scene_given else [])
@@ -197,73 +222,74 @@ def run_script(ap, args, load_scene, scene_given=False, check=None, figures=None
             ap.error(f"--resume continues the run as it was set up: {', '.join(given)} cannot be given with it")
     elif not args.out:
         ap.error("--out is required (or --resume DIR)")
-    many = args.starts is not None or bool(args.resume) and ensemble.is_ensemble(args.resume)
-    out = args.resume or args.out
-    try:  # bad scenes, packings, limits, a folder in use: one clear line, nothing written
-        guard.check_free(out)
-        if args.resume and many:
-            jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
-            if args.scheduler:
-                check_scheduler(args.scheduler)
-        elif args.resume:
-            check_resume(args.resume, args.duration)
-        else:
-            if not (args.overwrite or sweep_job_dir(args.out)):
-                check_fresh_output(args.out, resumable=True)
-            sc = load_scene(overrides_of(args))
-            if check is not None:
-                check(sc)
-            from engines.model.start import Start
-            from engines.yade.deposition import scene_packing
-            packing = scene_packing(sc)
-            say_compile()  # the checks below build the pores: the first compiled kernels
-            if many and args.scheduler:
-                check_scheduler(args.scheduler)
-            if many:
-                notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args),
-                                              args.force)
-            else:
-                if args.start is not None:
-                    packing = perturbed(packing, args.start, ensemble.size_of(args))
-                prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
-                notes = preflight(sc, packing, args.out, prepared, args.force)
-            for note in notes:
-                say(note)
-    except ValueError as e:
-        sys.exit(f"error: {e}")
-    try:
-        with guard.hold(out):
-            announce_output(out)
-            if many and args.resume:
-                sys.exit(ensemble.run_starts(jobs, args.resume, plan, args))
-            if many:
-                sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), sc))
-            from engines.run import runner
-            if args.resume:
-                say_compile()
-                summary = runner.resume_run(args.resume, args.duration)
-            else:
-                start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
-                summary = runner.run_scene(sc, packing, args.out, start=start, prepared=prepared)
-    except (OSError, guard.FolderLocked, history.HistoryMismatch, CheckpointError) as e:
-        sys.exit(f"error: {e}")  # a full disk (WriteError), a folder taken meanwhile, a history not this run's
-    if summary["status"] == "interrupted":
-        stop = summary.get("interrupt", {})
-        print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "
-              f"(t = {summary['t_end']:.6g} s): history, checkpoint and summary are in {out}; continue with\n"
-              f"    yade -n -x {sys.argv[0]} --resume {out}", flush=True)
-        import signal
-        sys.stdout.flush()
-        sys.stderr.flush()
-        # everything is written and closed: skip the interpreter's and YADE's teardown (about 1 s
-        # on a busy 2-core machine), so that the process ends within a fraction of a second
-        guard.release_all()
-        os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
-    drawn = list(summary.get("figures", []))
-    if figures is not None:
-        drawn += figures(out)
-        manifest.claim(out, [os.path.basename(path) for path in drawn])
-    print(runner.done_line(summary, drawn), flush=True)
+
+
+def _checked(ap, args, load_scene, check, many):
+    """The checks before anything is written (run_script); raises ValueError (one line). Returns
+    what the run goes on with: {jobs, plan} of an ensemble's resume, else {scene, packing, prepared}
+    (the scene and packing only, for an ensemble's start)."""
+    guard.check_free(args.resume or args.out)
+    if args.resume and many:
+        jobs, plan = ensemble.resume_jobs(ap, args.resume, args.duration, os.path.abspath(sys.argv[0]))
+        if args.scheduler:
+            check_scheduler(args.scheduler)
+        return {"jobs": jobs, "plan": plan}
+    if args.resume:
+        check_resume(args.resume, args.duration)
+        return {}
+    if not (args.overwrite or sweep_job_dir(args.out)):
+        check_fresh_output(args.out, resumable=True)
+    sc = load_scene(overrides_of(args))
+    if check is not None:
+        check(sc)
+    from engines.model.start import Start
+    from engines.yade.deposition import scene_packing
+    packing = scene_packing(sc)
+    say_compile()  # the checks below build the pores: the first compiled kernels
+    if many and args.scheduler:
+        check_scheduler(args.scheduler)
+    prepared = None
+    if many:
+        notes = ensemble.check_starts(sc, packing, args.out, range(args.starts), ensemble.size_of(args), args.force)
+    else:
+        if args.start is not None:
+            packing = perturbed(packing, args.start, ensemble.size_of(args))
+        prepared = Start(sc.settings, packing)  # the one start: preflight checks what the run runs on
+        notes = preflight(sc, packing, args.out, prepared, args.force)
+    for note in notes:
+        say(note)
+    return {"scene": sc, "packing": packing, "prepared": prepared}
+
+
+def _run(ap, args, many, ready):
+    """Run, resume or run the ensemble (``ready``: what ``_checked`` returned); returns the run's
+    summary (an ensemble exits with its status)."""
+    if many and args.resume:
+        sys.exit(ensemble.run_starts(ready["jobs"], args.resume, ready["plan"], args))
+    if many:
+        sys.exit(ensemble.start(ap, args, os.path.abspath(sys.argv[0]), ready["scene"]))
+    from engines.run import runner
+    if args.resume:
+        say_compile()
+        return runner.resume_run(args.resume, args.duration)
+    start = None if args.start is None else {"seed": args.start, "perturbation_m": ensemble.size_of(args)}
+    return runner.run_scene(ready["scene"], ready["packing"], args.out, start=start, prepared=ready["prepared"])
+
+
+def _exit_interrupted(summary, out):
+    """Say where an interrupted run's files are and how to continue it, then end the process with
+    128 + the signal's number."""
+    import signal
+    stop = summary.get("interrupt", {})
+    print(f"interrupted{' by ' + stop['signal'] if stop else ''} at step {summary['steps']} "
+          f"(t = {summary['t_end']:.6g} s): history, checkpoint and summary are in {out}; continue with\n"
+          f"    yade -n -x {sys.argv[0]} --resume {out}", flush=True)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # everything is written and closed: skip the interpreter's and YADE's teardown (about 1 s
+    # on a busy 2-core machine), so that the process ends within a fraction of a second
+    guard.release_all()
+    os._exit(128 + (signal.Signals[stop["signal"]].value if stop else signal.SIGINT.value))
 
 
 def say_compile():
@@ -276,17 +302,3 @@ def say_compile():
         say(f"numba kernels: {os.environ.get('NUMBA_CACHE_DIR')}; provenance: {provenance()}", talk.VERBOSE)
         if cache.compile_note():
             say(cache.compile_note())
-
-
-def check_resume(run_dir, duration):
-    """A resume that can go on: writable, not held by another run, not complete unless a later
-    --duration is given, its history.csv holding the rows its checkpoint recorded (engines.run.history)."""
-    from engines.yade.checkpoint import NAME, read_info, resume_end
-    check_output_dir(run_dir, "--resume")
-    guard.check_free(run_dir)
-    info = read_info(os.path.join(run_dir, NAME))
-    try:
-        resume_end(info["step"], info["n_steps"], info["dt"], duration)
-    except ValueError as e:
-        raise InputError(f"--resume {run_dir}: {e}") from None
-    history.kept(run_dir, info)

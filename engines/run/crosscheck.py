@@ -297,7 +297,7 @@ def settling_box(seed=3, nx=8, nz=8, spacing=2.2 * R):
 def settling_build(**overrides):
     def build():
         raw = {"scene": {"name": "settling_box"}, "material": {"g": 1000.0},
-               "water": {"enabled": True, "q_w": 0.0, "k1": 200.0, "k2": 2.0, "E_w": 240.0},
+               "water": {"enabled": True, "q_w": 0.0, "k1": 200.0, "k2": 2.0, "E_w": 240.0, "transfer": "paper"},
                "numerics": {"dt": 1e-6, "rebuild_interval": 100}}
         for table, fields in overrides.items():
             raw.setdefault(table, {}).update(fields)

@@ -29,7 +29,7 @@ import re
 import time
 
 from engines.run import manifest
-from engines.run.preflight import ENSEMBLE, InputError, check_scale, number, preflight
+from engines.run.preflight import ENSEMBLE, InputError, check_resume, check_scale, number, preflight
 from engines.run.sweep import YADE, Job, run_sweep, yade_environment
 from engines.run.talk import interval_lines, say
 from engines.studies.ensemble import CONFIDENCE, ensemble_statistics, perturbed
@@ -247,7 +247,6 @@ def resume_jobs(ap, out, duration, script):
     cannot go on, before anything runs. The jobs run ``script``, the scene script this resume was
     started with (the plan's script is only compared with it by name, never run), with the
     plan's start_argv only when they are the options of ``ap``, the script's parser."""
-    from engines.run.command_line import check_resume
     from engines.yade.checkpoint import NAME, OLD_NAME
     from postproc.run_files import read_summary
     plan = read_plan(out)

@@ -7,6 +7,7 @@ recorded, after checking that the file holds them: missing, short, another run's
 naming the file and what differs. Rows after the checkpoint (written before a stop or crash) are
 dropped by the resume, which computes them again.
 """
+import csv
 import hashlib
 import os
 
@@ -20,7 +21,7 @@ LAST_LINE = 1 << 16  # bytes kept of the end of what was read (the last row: wel
 UNITS = {"t": "s", "U_block*": "N/m", "porosity": "1", "kinetic_energy": "J/m", "water_balance_error": "1",
          "total_water": "m^2", "n_pores": "1", "fn_bottom_mean": "N/m", "bed_top": "m", "base_acc": "m/s^2",
          "base_vel": "m/s", "base_disp": "m", "side_left_dx": "m", "side_right_dx": "m", "remesh_change": "m^2",
-         "wall_*": "N/m"}
+         "wall_*": "N/m", "sv_band*": "Pa", "p_band*": "Pa", "q_band*": "Pa", "sxz_band*": "Pa", "ru_band*": "1"}
 
 
 def units(columns):
@@ -97,3 +98,17 @@ def _number(text):
         return float(text)
     except (TypeError, ValueError):
         return None
+
+
+def first_loaded_row(run_dir, columns):
+    """{column: value} of history.csv's first row in ``run_dir`` whose ``columns`` sum to more than 0
+    (None when no row does)."""
+    try:
+        with open(os.path.join(run_dir, NAME), newline="") as f:
+            for row in csv.DictReader(f):
+                values = {name: _number(text) for name, text in row.items()}
+                if all(values.get(c) is not None for c in columns) and sum(values[c] for c in columns) > 0:
+                    return values
+    except OSError:
+        return None
+    return None

@@ -32,7 +32,7 @@ VTK = "vtk"
 # a run's files (engines.run.runner; figures: postproc.plots.figures_of_run, a script's own, e.g.
 # postproc.liquefaction.run_figures, are claimed when drawn)
 RUN_FILES = ("history.csv", "summary.json", CHECKPOINT, OLD_CHECKPOINT, "failure_state.npz", "pressure_blocks.png",
-             "history_panels.png", "snapshots.png", "blocks.png", "depth.png", NAME)
+             "history_panels.png", "snapshots.png", "blocks.png", "depth.png", "stress_paths.png", NAME)
 RUN_PATTERNS = ("snapshot_*ms.npz",)
 VTK_PATTERNS = ("discs_*.vtp", "forces_*.vtp", "pores_*.vtp", "throats_*.vtp", "discs.pvd", "forces.pvd", "pores.pvd",
                 "throats.pvd")  # postproc.vtk

@@ -6,8 +6,9 @@ the water stiffness, the Darcy limit and the sub-step count; ``prepared``, the r
 the engines then run on, so the limits checked are those of the network that runs), the duration, the
 loading record, the packing against the walls' box and the contact law (``check_packing``) and the
 output directory. ``check_fresh_output`` refuses an output directory holding another run's outputs
-or files the project did not write (engines.run.manifest); ``announce_output`` prints the folder a
-script writes into, ``announce_dt`` the choice of dt = "auto".
+or files the project did not write (engines.run.manifest); ``check_resume`` refuses a resume that
+cannot go on; ``announce_output`` prints the folder a script writes into, ``announce_dt`` the
+choice of dt = "auto".
 Each refusal raises InputError with one line naming the field or argument and the limit; the
 scripts print it and exit non-zero before the output directory exists. The engines keep their own
 checks at construction.
@@ -21,7 +22,8 @@ import math
 import os
 import tempfile
 
-from engines.run import manifest
+from engines.files.inputs import ArgumentParser  # noqa: F401  (the scripts import it from here)
+from engines.run import guard, history, manifest
 from engines.run.talk import say
 from engines.run.manifest import ENSEMBLE  # noqa: F401  (an ensemble's statistics, engines.run.ensemble; the scripts import it from here)
 
@@ -31,13 +33,6 @@ class InputError(ValueError):
 
 
 # -- arguments ------------------------------------------------------------------------------------
-class ArgumentParser(argparse.ArgumentParser):
-    """argparse with a one-line error (``prog: error: ...``, no usage block), exit status 2."""
-
-    def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
 def number(kind=float, lo=None, hi=None, lo_open=False, unit=""):
     """argparse type: a finite ``kind`` in [lo, hi] (lo excluded when ``lo_open``); the error
     names the limit, argparse adds the argument's name."""
@@ -96,6 +91,20 @@ def check_fresh_output(path, arg="--out", resumable=False):
         manifest.check_fresh(path, arg, resumable)
     except ValueError as e:
         raise InputError(str(e)) from None
+
+
+def check_resume(run_dir, duration):
+    """A resume that can go on: writable, not held by another run, not complete unless a later
+    --duration is given, its history.csv holding the rows its checkpoint recorded (engines.run.history)."""
+    from engines.yade.checkpoint import NAME, read_info, resume_end
+    check_output_dir(run_dir, "--resume")
+    guard.check_free(run_dir)
+    info = read_info(os.path.join(run_dir, NAME))
+    try:
+        resume_end(info["step"], info["n_steps"], info["dt"], duration)
+    except ValueError as e:
+        raise InputError(f"--resume {run_dir}: {e}") from None
+    history.kept(run_dir, info)
 
 
 def announce_output(path):

@@ -47,6 +47,7 @@ import numpy as np
 from yade import O
 
 from engines import files
+from engines.model import effective_stress as es
 from engines.model import pores as pg
 from engines.model.network_view import pore_network
 from engines.model.pore_dem import pore_state
@@ -81,6 +82,8 @@ class Recorder:
     # what a checkpoint stores (engines.model.state)
     CHECKPOINT_FIELDS = ("rows", "last_row", "last_t", "last_vtk", "snapshot_steps", "vtk")
     CHECKPOINT_DERIVED = {
+        "bands": "the packing and the walls (effective_stress.bed_bands)", "band_areas": "with the bands",
+        "sigma_v0": "history.csv's first row whose sv_band columns carry a load, read again by reopen",
         **{name: "the scene's [output] and the coupling's blocks and walls" for name in
            ("dt", "history_interval", "vtk_interval", "snapshot_times", "progress_seconds", "n_blocks", "columns")},
         "n_steps": "schedule(Run.n_steps)", "snap_steps": "schedule(Run.n_steps)", "out": "the folder resumed in",
@@ -96,6 +99,8 @@ class Recorder:
         self.snapshot_times = out.snapshot_times
         self.progress_seconds = out.progress_seconds
         self.n_blocks = len(cp.block_bounds)
+        self.bands, self.band_areas = es.bed_bands(cp.packing, box_faces(cp))
+        self.sigma_v0 = None  # sigma'_v of each band at the first loaded row [Pa]: r_u's reference (stress_row)
         self.columns = history_columns(cp)
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
         self.last_t = None  # the last row's t [s] as written
@@ -159,6 +164,10 @@ class Recorder:
                     new.write(old.read(min(history.CHUNK, size - new.tell())))
         if self.vtk is not None:
             self.vtk.dir = os.path.join(out_dir, "vtk")
+        bands = [f"sv_band{k + 1}" for k in range(len(self.bands))]
+        first = history.first_loaded_row(out_dir, bands)
+        if first is not None:
+            self.sigma_v0 = np.array([first[c] for c in bands])
         self._open("a")
 
     def __call__(self, cp):
@@ -209,10 +218,31 @@ class Recorder:
             v.update(zip(("side_left_dx", "side_right_dx"), cp.side_wall_shift(xz)))
         v.update({f"wall_{name}_{part}": f for name, load in cp.wall_loads().items()
                   for part, f in zip(("contact", "water"), load)})
+        v.update(self.stress_row(cp, xz))
         texts = [f"{v[c]:.9g}" for c in self.columns]
         self._write(",".join(texts) + "\n")
         self.rows += 1
         self.last_row, self.last_t = k, float(texts[0])
+
+    def stress_row(self, cp, xz):
+        """{column: value} of the bands' effective stress at centres xz (engines.model.effective_stress:
+        sigma'_v, p', q and the shear stress sigma'_xz [Pa] from the contacts, eq L1-L2) and, with
+        water, their r_u (L3) against sigma'_v at the first row whose contacts carry a load (the first;
+        with law = "yade" the second, as YADE finds its contacts in the first step; nan before it)."""
+        s = es.region_stress(xz, cp.stress_contacts(xz), -np.inf, np.inf, self.bands, self.band_areas)
+        sv, _, p, q = es.invariants(s)
+        if self.sigma_v0 is None and sv.sum() > 0:  # YADE's law finds its contacts at the first step
+            self.sigma_v0 = np.array([float(f"{x:.9g}") for x in sv])  # as history.csv holds it: reopen reads it
+        v = {}
+        for name, values in (("sv", sv), ("p", p), ("q", q), ("sxz", s[:, 2])):
+            v.update({f"{name}_band{k + 1}": x for k, x in enumerate(values)})
+        state = pore_state(cp.water_model, xz)
+        if state is not None:
+            net, A, U = state
+            u = es.region_pressure(pg.pore_centroids(net, xz)[:, 1], A, U, self.bands)
+            ru = es.pore_pressure_ratio(u, self.sigma_v0) if self.sigma_v0 is not None else np.full(len(u), np.nan)
+            v.update({f"ru_band{k + 1}": x for k, x in enumerate(ru)})
+        return v
 
     def close(self):
         """Close history.csv (every row was flushed when written)."""
@@ -224,26 +254,38 @@ class Recorder:
 def history_columns(cp):
     """The columns of history.csv for the coupling ``cp``: only those its scene produces (the
     water's with water, the base motion's with a driven base, the side-wall shifts with side
-    walls on springs, each flat wall's loads; units: engines.run.history.UNITS)."""
+    walls on springs, each flat wall's loads, the bands' effective stress and, with water, their
+    r_u; units: engines.run.history.UNITS)."""
     water = cp.water is not None
     ties = cp.core is not None and cp.core.ties is not None
+    bands = range(1, es.N_BANDS + 1)
     return (["t"] + ([f"U_block{b + 1}" for b in range(len(cp.block_bounds))] if water else []) +
             ["porosity", "kinetic_energy"] + (["water_balance_error", "total_water", "n_pores"] if water else []) +
             ["fn_bottom_mean", "bed_top"] + (["base_acc", "base_vel", "base_disp"] if cp.base is not None else []) +
             (["side_left_dx", "side_right_dx"] if ties else []) + (["remesh_change"] if water else []) +
-            [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")])
+            [f"wall_{name}_{part}" for name in cp.wall_loads() for part in ("contact", "water")] +
+            [f"{name}_band{k}" for name in ("sv", "p", "q", "sxz") + (("ru",) if water else ()) for k in bands])
+
+
+def box_faces(cp):
+    """{wall code: position [m]} of the box of the coupling ``cp`` at the start: its flat walls',
+    else its wall discs' inner faces (engines.model.start.Start.faces)."""
+    return {code: w.position for code, w in cp.flat_walls.items()} or cp.packing.inner_faces()
 
 
 def snapshot_data(cp, xz, k):
     """The arrays of a snapshot at step k (positions xz): discs, touching pairs with their normal
-    and elastic shear forces and, with water, the pores as triangles with U, W, A and rule (with
+    and elastic shear forces, each disc's effective stress ``stress`` (N, 3): xx, zz, xz [Pa] over
+    pi r^2 / (1 - n), n the window porosity (engines.model.effective_stress.disc_stress; zeros for
+    the wall discs, nan without a porosity window) and, with water, the pores as triangles with U, W, A and rule (with
     flat walls, ``vertices``: the positions tri indexes, and ``flat_walls`` (W, 3): axis, position
     [m] now, inward of each), and the network under OpenPNM's names (engines.model.network_view:
     pore.*, throat.*, polygon.*, balance.*)."""
     pairs, fn, fs = cp.contact_pairs(xz)
     pk = cp.packing
     snap = dict(t=k * cp.scene.numerics.dt, xz=xz.copy(), r=pk.r, group=pk.group, density_factor=pk.density_factor,
-                vel=cp.velocities(), pairs=pairs, f_n=fn, f_s=fs)
+                vel=cp.velocities(), pairs=pairs, f_n=fn, f_s=fs,
+                stress=es.disc_stress(xz, pk.r, cp.stress_contacts(xz), cp.porosity(xz)))
     if cp.flat_walls:
         snap["flat_walls"] = np.array([[w.axis, face, w.inward] for w, face in zip(cp.flat_walls.values(),
                                                                                  cp.flat_wall_faces())])
@@ -486,6 +528,16 @@ class Run:
             summary["figures"] = plots.figures_of_run(self.out)
         return summary
 
+    def band_overburden(self):
+        """The buoyant overburden [Pa] of each band at the start (effective_stress.overburden: the
+        particles' unit weight rho f g, less rho_w g with water), beside sigma'_v0 from the contacts."""
+        pk, m = self.packing, self.packing.mobile
+        mat = self.scene.material
+        unit = (mat.rho * pk.density_factor[m] - (mat.rho_w if self.scene.water.enabled else 0.0)) * mat.g
+        b = self.rec.bands
+        width = self.rec.band_areas[0] / (b[0][1] - b[0][0])
+        return es.overburden(pk.xz[m], pk.r[m], unit, 0.0, width, b)
+
     def summarise(self, status, received):
         cp, sc = self.cp, self.scene
         w, wm = cp.water, cp.water_model
@@ -510,6 +562,9 @@ class Run:
             "remesh_rules_last": w.remesh_counts if w else None,
             "contact_list_builds": cp.core.contact.list_builds if cp.core is not None else None,
             "block_bounds_m": cp.block_bounds,
+            "band_bounds_m": self.rec.bands,
+            "band_sigma_v0_Pa": None if self.rec.sigma_v0 is None else self.rec.sigma_v0.tolist(),
+            "band_overburden_Pa": self.band_overburden().tolist(),
             "history_units": history.units(self.rec.columns),
             "start": self.start,
             "results": results,

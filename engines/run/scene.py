@@ -1,7 +1,8 @@
 """Scene files: a TOML document describing one run of the seed-000 model, validated into settings.
 
 A scene is data, not code. The paper's cases are presets in ``yade_scripts/scenes/*.toml``; a
-preset may ``extends = "other.toml"`` and override any field. Every field, its unit and its
+scene may ``extends = "other.toml"`` (a path) or ``extends = "quicksand_case1"`` (a preset's name,
+``resolve``) and override any field. Every field, its unit and its
 default is listed in SCHEMA below; ``/usr/bin/python3 -m engines.run.scene`` prints it as the table
 in yade_scripts/scenes/README.md. Unknown tables or fields, wrong types and out-of-range values
 raise SceneError naming the field: every number finite (list elements too), ``[scene] name`` one
@@ -214,6 +215,20 @@ def _merge(base, over):
     return out
 
 
+def resolve(name, base=None):
+    """The scene file ``name`` stands for (``--scene`` and ``extends``): a preset's name (no folder
+    separator, no ``.toml``: yade_scripts/scenes/<name>.toml) or a path, relative to the folder
+    ``base`` (default: the working folder)."""
+    if "/" not in name and os.sep not in name and not name.endswith(".toml"):
+        path = os.path.join(SCENE_DIR, name + ".toml")
+        if not os.path.isfile(path):
+            names = sorted(f[:-5] for f in os.listdir(SCENE_DIR) if f.endswith(".toml"))
+            raise SceneError(f"scene {name!r}: no preset of that name (presets: {', '.join(names)}); "
+                             f"a scene file's path ends in .toml")
+        return path
+    return os.path.normpath(os.path.join(base, name)) if base else name
+
+
 def read_raw(path, _chain=None):
     """Parse a scene file, following ``extends`` chains; returns the merged TOML dict.
 
@@ -236,7 +251,10 @@ def read_raw(path, _chain=None):
     if parent is not None:
         if not isinstance(parent, str) or not parent:
             raise SceneError(f"{path}: extends: expected a scene file name, got {parent!r}")
-        parent = os.path.normpath(os.path.join(os.path.dirname(path), parent))
+        try:
+            parent = resolve(parent, os.path.dirname(path))
+        except SceneError as e:
+            raise SceneError(f"{path}: extends: {e}") from None
         if parent in _chain:
             raise SceneError(f"{path}: extends: a loop back to {parent}")
         try:
@@ -247,7 +265,9 @@ def read_raw(path, _chain=None):
 
 
 def load(path, overrides=None):
-    """Read and validate a scene file; ``overrides`` {table: {field: value}} are applied last."""
+    """Read and validate a scene file or preset (``resolve``); ``overrides`` {table: {field: value}}
+    are applied last."""
+    path = resolve(path)
     raw = read_raw(path)
     if overrides:
         raw = _merge(raw, overrides)

@@ -330,11 +330,7 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
     scheduler started with ``--scheduler-file`` wrote. resume: skip jobs already "ok" with the
     same command. ``log``: a print-like function for progress (None = quiet).
     """
-    names = [j.name for j in jobs]
-    if len(set(names)) != len(names):
-        raise ValueError("job names must be unique: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))
-    if not (isinstance(workers, int) and workers >= 1):
-        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+    _check_jobs(jobs, workers)
     os.makedirs(root, exist_ok=True)
     root, cwd = os.path.abspath(root), os.getcwd()
     log = log or (lambda *a: None)
@@ -345,60 +341,13 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
     log(f"sweep {root}: {len(jobs)} jobs, {len(kept)} already ok, {len(todo)} to run "
         f"({'Dask ' + str(cluster) if cluster is not None else f'{workers} local workers'})")
     done = {}
-
-    def finished(job, fut):
-        try:
-            rec = fut.result()
-        except Exception as e:  # the runner itself failed (a lost Dask worker, a full disk): keep the job
-            rec = {"name": job.name, "status": "failed", "returncode": None, "wall_s": 0.0,
-                   "command": job.command(os.path.abspath(os.path.join(root, job.name))), "env": dict(job.env),
-                   "stderr_tail": f"runner error: {type(e).__name__}: {e}"}
-        done[job.name] = rec
-        log(f"[{len(done)}/{len(todo)}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
-
+    finished = _recorder(root, len(todo), done, log)
     stopped_by, running_on_cluster = None, []
     if cluster is None:
-        _stopping.clear()
-        with ThreadPoolExecutor(max_workers=workers) as pool, _Signals() as signals:
-            futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
-            try:
-                for fut in as_completed(futures):
-                    finished(futures[fut], fut)
-            except _Stop as stop:
-                stopped_by = stop.signum
-                _stop_jobs(stop.signum, futures, signals)
-                for fut in futures:
-                    if futures[fut].name not in done and fut.done() and not fut.cancelled():
-                        finished(futures[fut], fut)
+        stopped_by = _run_local(todo, root, cwd, workers, finished, done)
     elif todo:
-        import cloudpickle
-        from distributed import Client
-        from distributed import as_completed as dask_completed
-
-        # the workers get this module's functions by value: they need not import the project
-        cloudpickle.register_pickle_by_value(sys.modules[__name__])
-        client = scheduler if isinstance(scheduler, Client) else \
-            Client(scheduler_file=scheduler_file) if scheduler_file is not None else Client(scheduler)
-        try:
-            with _Signals():
-                futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
-                                         pure=False): j for j in todo}
-                try:
-                    for fut in dask_completed(list(futures)):
-                        finished(futures[fut], fut)
-                except _Stop as stop:  # the jobs not started are cancelled; a task running on a worker cannot be
-                    stopped_by = stop.signum
-                    client.cancel(list(futures))
-                    running_on_cluster = [futures[f].name for f in futures if futures[f].name not in done]
-        finally:
-            if client is not scheduler:
-                client.close()
-    records = []
-    for j in jobs:
-        rec = dict(kept[j.name], kept=True) if j.name in kept else done.get(j.name) or \
-            {"name": j.name, "status": "interrupted", "returncode": None, "wall_s": 0.0,
-             "stderr_tail": "not finished: the sweep was stopped"}
-        records.append(rec)
+        stopped_by, running_on_cluster = _run_on_cluster(todo, root, cwd, scheduler, scheduler_file, finished, done)
+    records = _records(jobs, kept, done)
     failed = [r["name"] for r in records if r["status"] != "ok"]
     summary = {"root": root, "n_jobs": len(jobs), "n_ok": len(jobs) - len(failed), "failed": failed,
                "wall_s": time.time() - t0, "jobs": records}
@@ -410,6 +359,86 @@ def run_sweep(jobs, root, workers=2, scheduler=None, resume=True, log=print, sch
         print(f"sweep {root} stopped by {signal.Signals(stopped_by).name}: its running jobs were stopped and recorded "
               f"\"interrupted\"; run it again to continue them{on_cluster}", file=sys.stderr, flush=True)
         raise SystemExit(128 + stopped_by)
+    return records
+
+
+def _check_jobs(jobs, workers):
+    """Refuse (ValueError) jobs of the same name, or a count of workers that is not an integer >= 1."""
+    names = [j.name for j in jobs]
+    if len(set(names)) != len(names):
+        raise ValueError("job names must be unique: " + ", ".join(sorted({n for n in names if names.count(n) > 1})))
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+
+
+def _recorder(root, n_todo, done, log):
+    """finished(job, future): records a job's end in ``done`` {name: record} and logs it; a runner
+    that failed itself (a lost Dask worker, a full disk) gives a "failed" record."""
+    def finished(job, fut):
+        try:
+            rec = fut.result()
+        except Exception as e:  # the runner itself failed (a lost Dask worker, a full disk): keep the job
+            rec = {"name": job.name, "status": "failed", "returncode": None, "wall_s": 0.0,
+                   "command": job.command(os.path.abspath(os.path.join(root, job.name))), "env": dict(job.env),
+                   "stderr_tail": f"runner error: {type(e).__name__}: {e}"}
+        done[job.name] = rec
+        log(f"[{len(done)}/{n_todo}] {job.name}: {rec['status']} (rc {rec['returncode']}, {rec['wall_s']:.1f} s)")
+    return finished
+
+
+def _run_local(todo, root, cwd, workers, finished, done):
+    """Run ``todo`` in ``workers`` local processes at a time; returns the signal that stopped the
+    sweep (its running jobs stopped and recorded), or None."""
+    _stopping.clear()
+    with ThreadPoolExecutor(max_workers=workers) as pool, _Signals() as signals:
+        futures = {pool.submit(run_job, j, root, cwd): j for j in todo}
+        try:
+            for fut in as_completed(futures):
+                finished(futures[fut], fut)
+        except _Stop as stop:
+            _stop_jobs(stop.signum, futures, signals)
+            for fut in futures:
+                if futures[fut].name not in done and fut.done() and not fut.cancelled():
+                    finished(futures[fut], fut)
+            return stop.signum
+    return None
+
+
+def _run_on_cluster(todo, root, cwd, scheduler, scheduler_file, finished, done):
+    """Run ``todo`` on a Dask cluster (``scheduler``: an address or a Client; or ``scheduler_file``);
+    returns (the signal that stopped the sweep or None, the jobs left running on its workers)."""
+    import cloudpickle
+    from distributed import Client
+    from distributed import as_completed as dask_completed
+
+    # the workers get this module's functions by value: they need not import the project
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    client = scheduler if isinstance(scheduler, Client) else \
+        Client(scheduler_file=scheduler_file) if scheduler_file is not None else Client(scheduler)
+    try:
+        with _Signals():
+            futures = {client.submit(_run_fields, _fields(j), root, cwd, key=f"sweep-{j.name}-{time.time_ns()}",
+                                     pure=False): j for j in todo}
+            try:
+                for fut in dask_completed(list(futures)):
+                    finished(futures[fut], fut)
+            except _Stop as stop:  # the jobs not started are cancelled; a task running on a worker cannot be
+                client.cancel(list(futures))
+                return stop.signum, [futures[f].name for f in futures if futures[f].name not in done]
+    finally:
+        if client is not scheduler:
+            client.close()
+    return None, []
+
+
+def _records(jobs, kept, done):
+    """The records of ``jobs`` in their order: kept (already ok), done, or else "interrupted"."""
+    records = []
+    for j in jobs:
+        rec = dict(kept[j.name], kept=True) if j.name in kept else done.get(j.name) or \
+            {"name": j.name, "status": "interrupted", "returncode": None, "wall_s": 0.0,
+             "stderr_tail": "not finished: the sweep was stopped"}
+        records.append(rec)
     return records
 
 

@@ -72,11 +72,9 @@ def window_of(case):
 def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None):
     """Run one setting from n_starts starts perturbed by ``perturbation`` [m] (default
     PERTURBATION); returns the result dict (yade_scripts/tradeoffs.py, ``run``, lists its fields)."""
-    from yade import O
-
     from engines.model.start import Start
     from engines.run import scene as scenes
-    from engines.run.preflight import InputError, announce_dt, preflight, timed
+    from engines.run.preflight import announce_dt, timed
     from engines.yade.coupling import YadeCoupling
     from engines.yade.deposition import scene_packing
 
@@ -91,48 +89,71 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
     YadeCoupling(sc, packing).run(10)  # loads the compiled kernels (numba's cache) outside the timing
     starts, cpu, wall = [], 0.0, 0.0
     for s in range(n_starts):
-        pk = perturbed(packing, s, PERTURBATION if perturbation is None else perturbation)
-        rec = {"seed": s, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
-        try:
-            prepared = Start(sc.settings, pk)
-            preflight(sc, pk, out_dir, prepared)
-            c0, w0 = time.process_time(), time.time()
-            cp = YadeCoupling(sc, pk, prepared=prepared)
-            mob = pk.mobile
-            k, c_rec, w_rec = 0, 0.0, 0.0  # the recording's own time, left out of the cost
-            while True:
-                r0, q0 = time.process_time(), time.time()
-                xz = cp.positions()
-                rec["t"].append(O.iter * dt)
-                rec["U"].append([float(u) for u in cp.block_pressures(xz)])
-                rec["porosity"].append(float(cp.porosity(xz)))
-                rec["height"].append(float(np.mean(xz[mob, 1])))
-                rec["kinetic_energy"].append(cp.kinetic_energy())
-                c_rec, w_rec = c_rec + time.process_time() - r0, w_rec + time.time() - q0
-                if k >= n_steps or not np.all(np.isfinite(xz)):
-                    break
-                cp.run(min(every, n_steps - k))
-                k += min(every, n_steps - k)
-            cpu_s, wall_s = time.process_time() - c0 - c_rec, time.time() - w0 - w_rec
-            w, wm = cp.water, cp.water_model
-            rec.update(status="ok" if np.all(np.isfinite(xz)) else "nan", cpu_s=cpu_s, wall_s=wall_s, steps=int(O.iter),
-                       cpu_record_s=c_rec,
-                       water_balance_error=w.balance_error() if w else 0.0,
-                       substeps_max=wm.substeps_max if wm else 0, substeps_total=wm.substeps_total if wm else 0,
-                       n_rebuilds=wm.n_rebuilds if wm else 0,
-                       contact_list_builds=cp.core.contact.list_builds if cp.core is not None else None)
-            cpu += cpu_s
-            wall += wall_s
-        except InputError as e:  # refused up front
-            rec.update(status="refused", message=str(e), steps=0)
-        except ValueError as e:  # stopped by an engine (DarcyStabilityError ...)
-            rec.update(status="failed", message=str(e), steps=int(O.iter))
+        rec = _run_start(sc, perturbed(packing, s, PERTURBATION if perturbation is None else perturbation), s,
+                         out_dir, every, n_steps)
+        if "cpu_s" in rec:  # it ran (ok, or nan)
+            cpu += rec["cpu_s"]
+            wall += rec["wall_s"]
         starts.append(rec)
     ok = [r for r in starts if r["status"] == "ok"]
     return {"case": case, "overrides": overrides, "dt": dt, "window": window, "record": record,
             "perturbation": PERTURBATION if perturbation is None else perturbation,
             "n_steps": n_steps, "cpu_s": cpu / max(len(ok), 1), "wall_s": wall / max(len(ok), 1),
             "starts": starts, "program": os.path.basename(sys.argv[0]) if sys.argv else "yade"}
+
+
+def _run_start(sc, pk, seed, out_dir, every, n_steps):
+    """One start of run_setting: the scene ``sc`` from the packing ``pk`` for ``n_steps`` steps,
+    recorded every ``every`` steps; its record {seed, t, U, porosity, height, kinetic_energy,
+    status, ...}: "ok", "nan", "refused" (preflight) or "failed" (stopped by an engine)."""
+    from yade import O
+
+    from engines.model.start import Start
+    from engines.run.preflight import InputError, preflight
+    from engines.yade.coupling import YadeCoupling
+
+    rec = {"seed": seed, "t": [], "U": [], "porosity": [], "height": [], "kinetic_energy": []}
+    try:
+        prepared = Start(sc.settings, pk)
+        preflight(sc, pk, out_dir, prepared)
+        c0, w0 = time.process_time(), time.time()
+        cp = YadeCoupling(sc, pk, prepared=prepared)
+        xz, c_rec, w_rec = _recorded(cp, rec, pk.mobile, sc.numerics.dt, every, n_steps)
+        cpu_s, wall_s = time.process_time() - c0 - c_rec, time.time() - w0 - w_rec
+        w, wm = cp.water, cp.water_model
+        rec.update(status="ok" if np.all(np.isfinite(xz)) else "nan", cpu_s=cpu_s, wall_s=wall_s, steps=int(O.iter),
+                   cpu_record_s=c_rec,
+                   water_balance_error=w.balance_error() if w else 0.0,
+                   substeps_max=wm.substeps_max if wm else 0, substeps_total=wm.substeps_total if wm else 0,
+                   n_rebuilds=wm.n_rebuilds if wm else 0,
+                   contact_list_builds=cp.core.contact.list_builds if cp.core is not None else None)
+    except InputError as e:  # refused up front
+        rec.update(status="refused", message=str(e), steps=0)
+    except ValueError as e:  # stopped by an engine (DarcyStabilityError ...)
+        rec.update(status="failed", message=str(e), steps=int(O.iter))
+    return rec
+
+
+def _recorded(cp, rec, mob, dt, every, n_steps):
+    """Run the coupling ``cp`` for ``n_steps`` steps (or to the first non-finite position), appending
+    to ``rec`` every ``every`` steps; returns (the last positions, the recording's own CPU and wall
+    seconds, left out of the cost)."""
+    from yade import O
+
+    k, c_rec, w_rec = 0, 0.0, 0.0
+    while True:
+        r0, q0 = time.process_time(), time.time()
+        xz = cp.positions()
+        rec["t"].append(O.iter * dt)
+        rec["U"].append([float(u) for u in cp.block_pressures(xz)])
+        rec["porosity"].append(float(cp.porosity(xz)))
+        rec["height"].append(float(np.mean(xz[mob, 1])))
+        rec["kinetic_energy"].append(cp.kinetic_energy())
+        c_rec, w_rec = c_rec + time.process_time() - r0, w_rec + time.time() - q0
+        if k >= n_steps or not np.all(np.isfinite(xz)):
+            return xz, c_rec, w_rec
+        cp.run(min(every, n_steps - k))
+        k += min(every, n_steps - k)
 
 
 def run_point(case, sets, window, record, n_starts, out_dir, perturbation):

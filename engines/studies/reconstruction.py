@@ -5,10 +5,16 @@ touches, the other cases taken from the study's own ensembles (make liquefaction
 A variant scales fields of the case presets (``scale`` {table: {field: factor}}, applied to each
 of its cases' own values; ``on`` another variant whose runs stand for the cases it does not run) or, for the packing's unknowns, a change to the deposition of the seismic box (``deposit``: the
 [packing] fields of a fresh deposit of liquefaction_case1, on which all its cases then run).
+``judged(base, runs)``: the trends (engines.studies.liquefaction) on each variant's cases.
 The runs: engines.run.reconstruction; the table: postproc.liquefaction.reconstruction. No YADE.
 """
 import os
 from dataclasses import dataclass, field
+
+import numpy as np
+
+from engines.studies.ensemble import CONFIDENCE
+from engines.studies.liquefaction import trends
 
 STARTS = 8  # starts per case, as the study's ensembles (make liquefaction)
 WET_CASES = (1, 3, 4, 6)  # the saturated cases of the failing trends
@@ -87,3 +93,37 @@ def packing_path(runs, name):
 def ensemble_path(runs, name, case):
     """The ensemble of ``case`` of variant ``name`` in the study's sweep folder ``runs``."""
     return os.path.join(runs, case_job(name, case), ENSEMBLE)
+
+
+def variant_cases(base, changed, runs):
+    """The cases a variant's trends are evaluated on: ``runs`` {case: [start summaries]} of the
+    ``changed`` cases that completed, the baseline's ``base`` for the cases the variant does not
+    change; a changed case not in ``runs`` is left out (never taken from the baseline)."""
+    return {**{k: r for k, r in base.items() if k not in changed}, **runs}
+
+
+def judged(base, runs, packings=None):
+    """The trends on each variant of VARIANTS: its cases' ensembles ``runs`` {variant: {case:
+    [start summaries], or None where the case has not completed}} with the study's own ``base``
+    {case: [start summaries]} (those of the variant it is ``on``) for the cases it does not change;
+    a case it changes that has not completed drops the trends that need it. ``packings``: {variant:
+    facts of its deposit}. Returns {confidence, reference: the trends on ``base``, variants}."""
+    doc = {"confidence": CONFIDENCE, "reference": trends(base), "variants": {}}
+    evaluated = {}  # the cases each variant's trends were evaluated on, for the variants built on it
+    for name, v in VARIANTS.items():
+        got = runs.get(name, {})
+        done = [k for k in v.cases if got.get(k) is not None]
+        if not done or (v.on and v.on not in evaluated):
+            continue
+        cases = variant_cases(evaluated[v.on] if v.on else base, v.cases, {k: got[k] for k in done})
+        evaluated[name] = cases
+        changed = sorted(set(done) | set(doc["variants"][v.on]["changed"] if v.on else ()))  # against the presets
+        doc["variants"][name] = {
+            "unknown": v.unknown, "reason": v.reason, "cases": list(v.cases), "done": done, "on": v.on,
+            "changed": changed,
+            "starts": {k: len(cases[k]) for k in done}, "packing": (packings or {}).get(name),
+            "case_means": {k: {key: float(np.mean([r[key] for r in cases[k]]))
+                               for key in ("porosity_initial", "porosity_change", "U_low_mean") if key in cases[k][0]}
+                           for k in done},
+            "trends": trends(cases)}
+    return doc

@@ -29,6 +29,9 @@ import math
 
 import numpy as np
 
+from engines.model import groups
+from engines.model.pore_water import boundary_masks
+
 MIN_FACTOR = 0.5  # the smallest accepted m / (rho pi r^2) and I_y / (m r^2 / 2) of a dynamic disc
 
 
@@ -60,7 +63,7 @@ def check_discs(bodies, ids, radii=None):
         shape = type(b.shape).__name__
         if shape in ("Box", "Wall"):
             raise ContractError(f"body {i}: a YADE {shape} in disc_ids, which takes spheres only; give it as a flat "
-                                f"wall: flat_walls={{{i}: 'undrained' | 'drained' | 'inflow'}}")
+                                f"wall: flat_walls={{{i}: {' | '.join(map(repr, groups.words()))}}}")
         if b.isClump or b.isClumpMember:
             check_clump(bodies, i, b)
         if shape != "Sphere":
@@ -159,7 +162,7 @@ def check_pores(net, settings, n_discs, l_m):
         raise ContractError(f"no pores between the {n_discs} discs: the WaterEngine needs discs in the x-z plane that "
                             f"touch or lie within l_m = {l_m:g} m of each other")
     inflow = settings.q_w > 0 or settings.inflow_velocity > 0
-    if inflow and not (net.pore_touches["bottom"] | net.flat_wall_pores("inflow")).any():
+    if inflow and not boundary_masks(net, settings.sides)["inflow"].any():
         given = (f"q_w = {settings.q_w:g} m^2/s per inflow pore" if settings.q_w > 0 else
                  f"inflow_velocity = {settings.inflow_velocity:g} m/s")
         raise ContractError(f"{given} but no pore has a bottom wall disc or an inflow flat wall as "
@@ -169,7 +172,7 @@ def check_pores(net, settings, n_discs, l_m):
 
 def check_flat_boundaries(flat_walls, settings):
     """Refuse a "drained" flat wall with settings.k3 = 0 (it would pass no water)."""
-    drained = [i for i, b in flat_walls.items() if b == "drained"]
+    drained = [i for i, b in flat_walls.items() if b in groups.words() and groups.kind(b).water == "drained"]
     if drained and settings.k3 == 0:
         raise ContractError(f"body {drained[0]}: a drained flat wall with k3 = 0, which passes no water; set "
                             f"WaterSettings k3 > 0 [1/s] (the wall's permeability) or call it 'undrained'")

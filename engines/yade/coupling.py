@@ -21,6 +21,8 @@ With [walls] kind = "flat" (law = "yade" only) the packing's wall discs are left
 boxes of the discs' material stand at their inner faces (``wall_boxes``; Ig2_Box_Sphere_ScGeom):
 the WaterEngine's flat walls (engines.model.pore_dem.scene_flat_walls), whose loads ``wall_loads`` reads.
 The mapping to eq 1-13 and what differs: see ``yade_law_material``.
+Each law's side of the coupling is one class with one interface (PaperLawDrive, YadeLawDrive; LAWS
+by [contact] law), chosen once by YadeCoupling, which never asks the law's name.
 
 Masses and inertias are per unit thickness (SPEC §1), not YADE's 4/3 pi r^3 rho. Runs go in chunks
 of O.step() calls where Python works every step, or of blocking O.run calls of about CHUNK_SECONDS
@@ -50,7 +52,7 @@ from yade.wrapper import (
     ViscElMat,
 )
 
-from engines.model import ground_motion, limits, pore_dem
+from engines.model import effective_stress, ground_motion, limits, pore_dem
 from engines.model import pores as pg
 from engines.compiled import pore_dem as compiled_pore_dem
 from engines.model.pore_dem import PoreDEM, disc_masses
@@ -153,124 +155,162 @@ def wall_boxes(walls, packing, material):
     return ids
 
 
-class YadeCoupling:
-    """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
-    between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
-    or the water engine's model by compiled kernels, else their NumPy classes (engines.model).
-    ``prepared``: the Start of scene on packing (engines.model.start: the walls, the discs to move,
-    their masses; preflight's limits are those of its pores), made here if None."""
+class PaperLawDrive:
+    """[contact] law = 'paper': the core (PoreDEM, compiled or NumPy: the paper's law, spin, the
+    water in the paper's order) driven by the PaperLawEngine before each O.step, between pore
+    rebuilds in compiled runs of steps; NewtonIntegrator then ForceResetter, no collider. The
+    coupling's side of one contact law (YadeLawDrive is the other): the bodies, YADE's engines,
+    the wall motion, the run of n steps and what the law measures."""
 
-    # what a checkpoint stores (engines.model.state); YADE's bodies: engines.yade.checkpoint
-    CHECKPOINT_FIELDS = ("core", "water_engine", "engine", "base", "_hooked_at")
+    name = "paper"
+    wall_engine = None  # the engine moves the walls itself (move_walls)
+    CHECKPOINT_FIELDS = ()  # its parts are the coupling's fields (YadeCoupling.core, engine, base)
     CHECKPOINT_DERIVED = {
-        **{name: "the scene and the packing" for name in ("scene", "flat_walls", "block_bounds", "window", "packing",
-                                                          "wall_ids", "ids", "law", "mass", "inertia", "io", "per_step",
-                                                          "_undamped")},
+        **{name: "its owner's part (YadeCoupling), stored there" for name in ("core", "engine", "water_engine")},
+        **{name: "the scene and the packing" for name in ("ids", "wall_ids")}}
+
+    def __init__(self, scene, prepared, compiled):
+        packing, flat_walls = prepared.packing, tuple(prepared.flat_walls.values())
+        self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene.settings, packing, flat_walls)
+        self.water_engine = None
+        self.wall_ids = {}  # the core's flat walls are no YADE bodies
+        x_only = self.core.ties.moving if self.core.ties is not None else None
+        self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
+        self.engine = PaperLawEngine(self.ids, core=self.core)
+        for i in self.ids[x_only].tolist() if x_only is not None else ():
+            O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
+        if scene.water.enabled:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
+            dyn = self.engine._dynamic
+            self.engine.held[:, 1] = buoyancy(packing.r[dyn], scene.material.rho_w, scene.material.g) * packing.mobile[dyn]
+
+    @property
+    def schedule(self):
+        return self.core.schedule
+
+    @property
+    def water_model(self):
+        return self.core.water_model
+
+    @property
+    def ties(self):
+        """The side-wall ties (engines.model.loading.SideWallTies) or None."""
+        return self.core.ties
+
+    def yade_engines(self, newton, walls):
+        """O.engines: forces reset after the integration, the engine adds the next step's (no sync pass)."""
+        newton.warnNoForceReset = False
+        return [newton, ForceResetter()]
+
+    def base_motion(self, scene):
+        """The base motion of a scene with [loading]: the core's, which moves its own flat walls."""
+        return self.core.base
+
+    def move_walls(self, ids):
+        """The bodies ``ids`` follow the base: the engine sets their velocities before each O.step
+        (PaperLawEngine.drive_walls); no YADE engine."""
+        self.engine.drive_walls(ids)
+        return []
+
+    def per_step(self, base):
+        return True
+
+    def advance(self, n, stop, base):
+        self.engine.drive(n, stop)
+
+    def restore_forces(self):
+        """No permanent forces: the engine adds its forces before each O.step."""
+
+    def spins(self, io):
+        return self.core.omega
+
+    def contact_pairs(self, xz, keep):
+        return self.core.law.contact_pairs(xz, keep)
+
+    def stress_contacts(self, xz, packing):
+        """The paper's law's own contacts, its flat walls' feet included (PaperLaw.stress_contacts)."""
+        return self.core.law.stress_contacts(xz)
+
+    def wall_loads(self, flat_walls):
+        """{wall name: (contact, water)}: the law's own contacts and water on its flat walls."""
+        if not flat_walls:
+            return {}
+        wm = self.core.water_model
+        water = wm.F_walls if wm is not None else np.zeros(len(flat_walls))
+        return {pg.WALL_NAMES[code]: (float(c), float(u))
+                for code, c, u in zip(flat_walls, self.core.law.wall_forces(), water)}
+
+
+class YadeLawDrive:
+    """[contact] law = 'yade' (springs a, b only): YADE's InsertionSortCollider and InteractionLoop
+    with ViscElMat / Law2_ScGeom_ViscElPhys_Basic (``yade_law_material``), flat walls as fixed
+    boxes (``wall_boxes``), the walls that follow the input on a TranslationEngine, the
+    WaterEngine called before O.step on its steps (a dry scene without a moving base runs no
+    Python: blocking O.run chunks). The interface of PaperLawDrive."""
+
+    name = "yade"
+    CHECKPOINT_FIELDS = ()  # its parts are the coupling's fields (YadeCoupling.water_engine, base)
+    CHECKPOINT_DERIVED = {
+        **{name: "its owner's part (YadeCoupling), stored there" for name in ("core", "engine", "water_engine", "base")},
+        **{name: "the scene and the packing" for name in ("ids", "wall_ids")},
         "wall_engine": "YADE's TranslationEngine, built from the scene; its velocity is set before each step",
-        "hooks": "set by the run (engines.run.runner.Run)",
-        "schedule": "the core's (PoreDEM.schedule: its water model's, stored there) or the water engine's model's",
         "_chunk": "the steps of the next blocking O.run, adapted to the wall time: how steps are grouped, not what "
                   "they compute"}
 
-    def __init__(self, scene, packing, newton_damping=0.0, compiled=True, prepared=None):
-        self.scene = scene
-        prepared = Start(scene.settings, packing) if prepared is None else prepared
-        self.flat_walls = prepared.flat_walls  # {wall code: FlatWall}, {} with wall discs
-        # the blocks and the porosity window in the box of the flat walls, else of the wall discs' inner faces
-        faces = prepared.faces
-        self.block_bounds = packing.block_bounds(scene.output.block_z, faces.get(pg.WALL_BOTTOM))
-        self.window = pore_dem.porosity_window(scene.settings, packing, faces)
-        self.packing = packing = prepared.packing
-        self.wall_ids = {}  # {wall code: YADE body id} of the flat walls
-        self.law = scene.contact.law
-        self.mass, self.inertia = prepared.mass, prepared.inertia
-        g = scene.material.g
-        wet = scene.water.enabled
-        self.core = self.water_engine = None
-        if self.law == "paper":
-            self.core = (compiled_pore_dem.PoreDEM if compiled else PoreDEM)(scene.settings, packing,
-                                                                             tuple(self.flat_walls.values()))
-            ties = self.core.ties
-            x_only = ties.moving if ties is not None else None
-            self.ids = build_bodies(scene, packing, FrictMat(density=scene.material.rho, label="discs"), x_only=x_only)
-            self.engine = PaperLawEngine(self.ids, core=self.core)
-            for i in self.ids[x_only].tolist() if x_only is not None else ():
-                O.bodies[i].state.blockedDOFs = X_ONLY  # the engine set 'yXYZ' on every dynamic body
-            if wet:  # buoyancy: the buoyant weight of eq 34b, held with the law's forces (particles only)
-                dyn = self.engine._dynamic
-                self.engine.held[:, 1] = buoyancy(packing.r[dyn], scene.material.rho_w, g) * packing.mobile[dyn]
-            loop = []  # the law runs before each O.step (PaperLawEngine.drive), not as a PyRunner
-        else:
-            limits.check_contact(scene.numerics.dt, scene.numerics.dt_safety, self.mass[packing.mobile],
-                                 scene.contact.kn)
-            material = yade_law_material(scene)
-            self.ids = build_bodies(scene, packing, material, 0.5 * scene.contact.eps_m, spin=True)
-            self.wall_ids = wall_boxes(self.flat_walls, packing, material)
-            boxes = bool(self.wall_ids)
-            loop = [InsertionSortCollider([Bo1_Sphere_Aabb()] + ([Bo1_Box_Aabb()] if boxes else [])),
-                    InteractionLoop([Ig2_Sphere_Sphere_ScGeom()] + ([Ig2_Box_Sphere_ScGeom()] if boxes else []),
-                                    [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()])]
-            if wet:  # called before O.step on its steps (see _advance), not as a PyRunner
-                num = scene.numerics
-                walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
-                self.water_engine = WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m,
-                                                scene.contact.eps_m, packing.r, num.rebuild_interval,
-                                                num.water_interval, True, scene.material.rho_w, g, compiled,
-                                                rebuild_distance=num.rebuild_distance,
-                                                flat_walls={i: self.flat_walls[code].boundary
-                                                            for code, i in self.wall_ids.items()})
-        self.io = yade_io.Bodies(self.ids)
-        self.per_step = self.law == "paper" or self.water_engine is not None
-        walls = self._wall_motion()
-        newton = NewtonIntegrator(gravity=(0, 0, -g), damping=newton_damping)
-        undamped(newton)
-        self._undamped = newton.damping == 0  # the bodies' damping pass is off (checked by run)
-        if self.law == "paper":  # forces reset after the integration: the engine adds the next step's (no sync pass)
-            newton.warnNoForceReset = False
-            O.engines = [newton, ForceResetter()]
-        else:
-            O.engines = [ForceResetter()] + loop + walls + [newton]
-        self.hooks = []
-        # what happens at step k (engines.model.schedule): the water's schedule, whose output
-        # events (``set_output``) are when ``run`` calls the hooks; a dry scene's has output only
-        self.schedule = (self.core.schedule if self.core is not None else self.water_engine.model.schedule
-                         if self.water_engine is not None else Schedule(rebuild_interval=None))
-        self._hooked_at = None
+    def __init__(self, scene, prepared, compiled):
+        packing = prepared.packing
+        limits.check_contact(scene.numerics.dt, scene.numerics.dt_safety, prepared.mass[packing.mobile], scene.contact.kn)
+        material = yade_law_material(scene)
+        self.ids = build_bodies(scene, packing, material, 0.5 * scene.contact.eps_m, spin=True)
+        self.wall_ids = wall_boxes(prepared.flat_walls, packing, material)  # {wall code: YADE body id}
+        self.core = self.engine = self.base = self.wall_engine = None
+        self.water_engine = self._water_engine(scene, prepared, compiled) if scene.water.enabled else None
         self._chunk = PER_STEP_CHUNK  # steps of the next blocking O.run, adapted to CHUNK_SECONDS
-        if yade_io.BACKEND == "python":
-            yade_io.freeze_gc()
 
-    def _wall_motion(self):
-        """The walls that follow the input ([loading] moves) move at the velocity of the base motion
-        for each step (engines.model.ground_motion.BaseMotion, the one input path): with the paper's
-        law the PaperLawEngine sets their velocities to the core's (PoreDEM) before each O.step
-        (``drive_walls``; no engine), with law = 'yade' a TranslationEngine whose velocity is set
-        before each O.step. Returns the engines to add ([] or the TranslationEngine)."""
-        self.wall_engine = self.base = None
-        if self.scene.loading.type == "none":
-            return []
-        if self.law == "paper":  # the core moves its own flat walls (PoreDEM)
-            self.base = self.core.base
-        else:
-            self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(self.scene.settings), self.scene.numerics.dt)
-            self.per_step = True  # Python sets the velocity before each O.step
-        flat = pore_dem.moving_flat_walls(self.scene.settings, tuple(self.flat_walls.values()))
-        ids = (self.ids[pore_dem.moving_walls(self.scene.settings, self.packing)].tolist()
-               + [self.wall_ids[code] for code, m in zip(self.flat_walls, flat) if m and code in self.wall_ids])
-        if not ids:
-            return []
-        if self.law == "paper":
-            self.engine.drive_walls(ids)
-            return []
+    def _water_engine(self, scene, prepared, compiled):
+        """The WaterEngine of the discs and the flat walls' boxes, called before O.step on its steps
+        (see ``advance``), not as a PyRunner."""
+        num, packing = scene.numerics, prepared.packing
+        walls = {name: self.ids[packing.group == code].tolist() for code, name in pg.WALL_NAMES.items()}
+        return WaterEngine(self.ids, walls, scene.water_settings(), scene.water.l_m, scene.contact.eps_m, packing.r,
+                           num.rebuild_interval, num.water_interval, True, scene.material.rho_w, scene.material.g,
+                           compiled, rebuild_distance=num.rebuild_distance,
+                           flat_walls={i: prepared.flat_walls[code].boundary for code, i in self.wall_ids.items()})
+
+    @property
+    def schedule(self):
+        """The water engine's model's; a dry scene's has output only."""
+        return self.water_engine.model.schedule if self.water_engine is not None else Schedule(rebuild_interval=None)
+
+    @property
+    def water_model(self):
+        return self.water_engine.model if self.water_engine else None
+
+    ties = None  # the side-wall ties run in the paper's law engine only (engines.run.scene)
+
+    def yade_engines(self, newton, walls):
+        boxes = bool(self.wall_ids)
+        loop = [InsertionSortCollider([Bo1_Sphere_Aabb()] + ([Bo1_Box_Aabb()] if boxes else [])),
+                InteractionLoop([Ig2_Sphere_Sphere_ScGeom()] + ([Ig2_Box_Sphere_ScGeom()] if boxes else []),
+                                [Ip2_ViscElMat_ViscElMat_ViscElPhys()], [Law2_ScGeom_ViscElPhys_Basic()])]
+        return [ForceResetter()] + loop + walls + [newton]
+
+    def base_motion(self, scene):
+        """The base motion, its velocity set on the TranslationEngine before each O.step."""
+        self.base = ground_motion.BaseMotion(ground_motion.input_acceleration(scene.settings), scene.numerics.dt)
+        return self.base
+
+    def move_walls(self, ids):
+        """A TranslationEngine of the bodies ``ids``, its velocity set before each O.step."""
         self.wall_engine = TranslationEngine(ids=ids, translationAxis=(1, 0, 0), velocity=0.0)
         return [self.wall_engine]
 
-    # -- running ------------------------------------------------------------------------------------
-    def _advance(self, n, stop):
-        errors = yade_io.ERRORS
-        if self.law == "paper":
-            self.engine.drive(n, stop)
-        elif not self.per_step and n > PER_STEP_CHUNK:
+    def per_step(self, base):
+        """Does Python work every step (the water engine, the base velocity)?"""
+        return self.water_engine is not None or base is not None
+
+    def advance(self, n, stop, base):
+        water, errors = self.water_engine, yade_io.ERRORS
+        if not self.per_step(base) and n > PER_STEP_CHUNK:
             done = 0
             while done < n and not stop():  # blocking chunks: YADE is idle whenever Python looks
                 m = min(int(n) - done, self._chunk)
@@ -279,10 +319,9 @@ class YadeCoupling:
                 done += m
                 if m == self._chunk:
                     self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), PER_STEP_CHUNK), 1e6))
-        elif self.base is None and self.water_engine is not None:  # law = 'yade', wet: water before O.step on its steps
-            self.water_engine.drive(n, None if stop is _never else stop)
-        else:  # law = 'yade': the base velocity of each step, the water engine on its steps
-            water, base = self.water_engine, self.base
+        elif base is None and water is not None:  # wet: water before O.step on its steps
+            water.drive(n, None if stop is _never else stop)
+        else:  # the base velocity of each step, the water engine on its steps
             for _ in range(int(n)):
                 if water is not None and water.due(O.iter):
                     water()
@@ -291,6 +330,145 @@ class YadeCoupling:
                 O.step()
                 if errors or stop():
                     break
+
+    def restore_forces(self):
+        """After a checkpoint's O.load: the water engine's permanent forces, which O.save does not keep."""
+        if self.water_engine is not None:
+            self.water_engine.write_forces()
+
+    def spins(self, io):
+        return io.spins()
+
+    def contact_pairs(self, xz, keep):
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        pairs, fn, fs = [], [], []
+        for inter in O.interactions:
+            if inter.isReal and inter.id1 in index and inter.id2 in index:
+                i, j = index[inter.id1], index[inter.id2]
+                pairs.append((i, j))
+                fn.append(inter.phys.normalForce.norm())
+                d = xz[j] - xz[i]
+                t = np.array([-d[1], d[0]]) / np.hypot(*d)  # (-sin a, cos a)
+                s = inter.phys.shearForce  # YADE's force on id2; eq 13 puts -f_s t on i, so +f_s t on j
+                fs.append(s[0] * t[0] + s[2] * t[1])
+        pairs, fn, fs = np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
+        if keep is None:
+            return pairs, fn, fs
+        sel = keep(pairs[:, 0], pairs[:, 1])
+        return pairs[sel], fn[sel], fs[sel]
+
+    def stress_contacts(self, xz, packing):
+        """With YADE's law: the pairs of ``contact_pairs`` (wall discs counted for their particle) and
+        the contacts with the flat walls' boxes at YADE's contact point, with the force YADE puts on
+        the disc (normalForce + shearForce on id2)."""
+        c = effective_stress.pair_contacts(xz, packing.r, *self.contact_pairs(xz, None), packing.mobile)
+        index = {i: k for k, i in enumerate(self.ids.tolist())}
+        disc, point, force = [], [], []
+        for box in self.wall_ids.values():
+            for inter in O.interactions.withBody(box):
+                if inter.isReal:
+                    other = inter.id2 if inter.id1 == box else inter.id1
+                    f = (inter.phys.normalForce + inter.phys.shearForce) * (1.0 if inter.id2 == other else -1.0)
+                    disc.append(index[other])
+                    point.append((inter.geom.contactPoint[0], inter.geom.contactPoint[2]))
+                    force.append((f[0], f[2]))
+        if not disc:
+            return c
+        return c + effective_stress.Contacts(np.array(disc, np.int64), np.array(point, float), np.array(force, float))
+
+    def wall_loads(self, flat_walls):
+        """{wall name: (contact, water)}: YADE's contacts on each box and the water engine's push."""
+        pushed = self.water_engine.wall_forces() if self.water_engine is not None else {}
+        loads = {}
+        for code, i in self.wall_ids.items():
+            contact = sum(inter.phys.normalForce.norm() for inter in O.interactions.withBody(i) if inter.isReal)
+            water = float(np.dot(pushed[i], -flat_walls[code].normal())) if i in pushed else 0.0
+            loads[pg.WALL_NAMES[code]] = (float(contact), water)
+        return loads
+
+
+LAWS = {drive.name: drive for drive in (PaperLawDrive, YadeLawDrive)}  # [contact] law -> its drive
+
+
+class YadeCoupling:
+    """One scene in YADE. ``run(n)`` advances n steps; ``hooks`` are called as hook(coupling)
+    between chunks of steps (see ``run``). ``compiled``: the core (engines.compiled.pore_dem.PoreDEM)
+    or the water engine's model by compiled kernels, else their NumPy classes (engines.model).
+    ``prepared``: the Start of scene on packing (engines.model.start: the walls, the discs to move,
+    their masses; preflight's limits are those of its pores), made here if None. ``law``: the
+    scene's contact law's drive (LAWS: PaperLawDrive or YadeLawDrive), chosen once here; the
+    coupling asks it and never the law's name."""
+
+    # what a checkpoint stores (engines.model.state); YADE's bodies: engines.yade.checkpoint
+    CHECKPOINT_FIELDS = ("core", "water_engine", "engine", "base", "_hooked_at")
+    CHECKPOINT_DERIVED = {
+        **{name: "the scene and the packing" for name in ("scene", "flat_walls", "block_bounds", "window", "packing",
+                                                          "wall_ids", "ids", "mass", "inertia", "io", "per_step",
+                                                          "_undamped")},
+        "law": "the scene's contact law's drive (LAWS), built from the scene; its parts are the fields above",
+        "wall_engine": "YADE's TranslationEngine, built from the scene; its velocity is set before each step",
+        "hooks": "set by the run (engines.run.runner.Run)",
+        "schedule": "the core's (PoreDEM.schedule: its water model's, stored there) or the water engine's model's"}
+
+    def __init__(self, scene, packing, newton_damping=0.0, compiled=True, prepared=None):
+        self.scene = scene
+        prepared = Start(scene.settings, packing) if prepared is None else prepared
+        self._measures(prepared, packing)
+        self.packing = prepared.packing
+        self.mass, self.inertia = prepared.mass, prepared.inertia
+        self.law = LAWS[scene.contact.law](scene, prepared, compiled)
+        self.core, self.engine, self.water_engine = self.law.core, self.law.engine, self.law.water_engine
+        self.ids, self.wall_ids = self.law.ids, self.law.wall_ids  # wall_ids: {wall code: YADE body id} of the flat walls
+        self.io = yade_io.Bodies(self.ids)
+        self._engines(newton_damping)
+        self.hooks = []
+        # what happens at step k (engines.model.schedule): the water's schedule, whose output
+        # events (``set_output``) are when ``run`` calls the hooks; a dry scene's has output only
+        self.schedule = self.law.schedule
+        self._hooked_at = None
+        if yade_io.BACKEND == "python":
+            yade_io.freeze_gc()
+
+    def _measures(self, prepared, packing):
+        """The flat walls, and the blocks and the porosity window in the box of the flat walls, else
+        of the wall discs' inner faces."""
+        self.flat_walls = prepared.flat_walls  # {wall code: FlatWall}, {} with wall discs
+        faces = prepared.faces
+        self.block_bounds = packing.block_bounds(self.scene.output.block_z, faces.get(pg.WALL_BOTTOM))
+        self.window = pore_dem.porosity_window(self.scene.settings, packing, faces)
+
+    def _engines(self, newton_damping):
+        """O.engines of the law, the wall motion and NewtonIntegrator (its damping pass off at 0)."""
+        walls = self._wall_motion()
+        self.per_step = self.law.per_step(self.base)
+        newton = NewtonIntegrator(gravity=(0, 0, -self.scene.material.g), damping=newton_damping)
+        undamped(newton)
+        self._undamped = newton.damping == 0  # the bodies' damping pass is off (checked by run)
+        O.engines = self.law.yade_engines(newton, walls)
+
+    def _wall_motion(self):
+        """The walls that follow the input ([loading] moves) move at the velocity of the base motion
+        for each step (engines.model.ground_motion.BaseMotion, the one input path): with the paper's
+        law the PaperLawEngine sets their velocities to the core's (PoreDEM) before each O.step
+        (``drive_walls``; no engine), with law = 'yade' a TranslationEngine whose velocity is set
+        before each O.step (the law's ``move_walls``). Returns the engines to add ([] or the
+        TranslationEngine)."""
+        self.wall_engine = self.base = None
+        if self.scene.loading.type == "none":
+            return []
+        self.base = self.law.base_motion(self.scene)
+        flat = pore_dem.moving_flat_walls(self.scene.settings, tuple(self.flat_walls.values()))
+        ids = (self.ids[pore_dem.moving_walls(self.scene.settings, self.packing)].tolist()
+               + [self.wall_ids[code] for code, m in zip(self.flat_walls, flat) if m and code in self.wall_ids])
+        if not ids:
+            return []
+        walls = self.law.move_walls(ids)
+        self.wall_engine = self.law.wall_engine
+        return walls
+
+    # -- running ------------------------------------------------------------------------------------
+    def _advance(self, n, stop):
+        self.law.advance(n, stop, self.base)
         yade_io.raise_pending()
 
     def run(self, n_steps, stop=None):
@@ -321,8 +499,7 @@ class YadeCoupling:
 
     def restore_forces(self):
         """After a checkpoint's O.load: YADE's permanent forces, which O.save does not keep."""
-        if self.water_engine is not None:
-            self.water_engine.write_forces()
+        self.law.restore_forces()
         if yade_io.BACKEND == "python":
             yade_io.freeze_gc()
 
@@ -334,13 +511,12 @@ class YadeCoupling:
     @property
     def water(self):
         """The PoreWater state, or None for a dry scene."""
-        if self.core is not None:
-            return self.core.water
-        return self.water_engine.model.water if self.water_engine else None
+        wm = self.law.water_model
+        return wm.water if wm is not None else None
 
     @property
     def water_model(self):
-        return self.core.water_model if self.core is not None else (self.water_engine.model if self.water_engine else None)
+        return self.law.water_model
 
     def positions(self):
         """Disc centres (N, 2) [m], read in bulk."""
@@ -374,7 +550,7 @@ class YadeCoupling:
     def side_wall_shift(self, xz):
         """Mean x displacement [m] of the left and the right side-wall column relative to the base
         (the discs on springs; nan when the side walls are fixed)."""
-        ties = self.core.ties if self.core is not None else None
+        ties = self.law.ties
         if ties is None:
             return np.nan, np.nan
         d = xz[:, 0] - self.packing.xz[:, 0] - self.base_motion()[2]
@@ -382,8 +558,8 @@ class YadeCoupling:
 
     def kinetic_energy(self):
         """Translational + rotational kinetic energy of the particles [J per m]."""
-        omega = self.core.omega if self.core is not None else self.io.spins()
-        return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(), omega)
+        return pore_dem.kinetic_energy(self.mass, self.inertia, self.packing.mobile, self.velocities(),
+                                       self.law.spins(self.io))
 
     def contact_pairs(self, xz, keep=None):
         """(pairs (K, 2) disc indices, normal force (K,), elastic shear force (K,) [N]) of the pairs
@@ -391,42 +567,22 @@ class YadeCoupling:
         i, j) to report (default all). The shear force is signed along t of eq 3b (counter-clockwise
         about i), without its dashpot part, as YADE's phys.shearForce. The paper's law evaluates its
         pairs at xz without advancing its state (PaperLaw.contact_pairs)."""
-        if self.core is not None:
-            return self.core.law.contact_pairs(xz, keep)
-        index = {i: k for k, i in enumerate(self.ids.tolist())}
-        pairs, fn, fs = [], [], []
-        for inter in O.interactions:
-            if inter.isReal and inter.id1 in index and inter.id2 in index:
-                i, j = index[inter.id1], index[inter.id2]
-                pairs.append((i, j))
-                fn.append(inter.phys.normalForce.norm())
-                d = xz[j] - xz[i]
-                t = np.array([-d[1], d[0]]) / np.hypot(*d)  # (-sin a, cos a)
-                s = inter.phys.shearForce  # YADE's force on id2; eq 13 puts -f_s t on i, so +f_s t on j
-                fs.append(s[0] * t[0] + s[2] * t[1])
-        pairs, fn, fs = np.array(pairs, np.int64).reshape(-1, 2), np.array(fn), np.array(fs)
-        if keep is None:
-            return pairs, fn, fs
-        sel = keep(pairs[:, 0], pairs[:, 1])
-        return pairs[sel], fn[sel], fs[sel]
+        return self.law.contact_pairs(xz, keep)
+
+    def stress_contacts(self, xz):
+        """The particles' contacts at centres xz for the effective stress (Contacts of
+        engines.model.effective_stress): the paper's law's own, its flat walls' feet included
+        (PaperLaw.stress_contacts); with law = 'yade' the pairs of ``contact_pairs`` (wall discs
+        counted for their particle) and the contacts with the flat walls' boxes at YADE's contact
+        point, with the force YADE puts on the disc (normalForce + shearForce on id2)."""
+        return self.law.stress_contacts(xz, self.packing)
 
     def wall_loads(self):
         """{wall name: (contact, water)} of the flat walls [N per m thickness]: the sum of the normal
         forces of YADE's contacts on each (as contact_pairs reads them; a box contact's normal is the
         face's) and the pore water's push on it (WaterEngine.wall_forces), both positive when they
         push the wall away from the discs; {} with wall discs."""
-        if self.core is not None and self.flat_walls:  # the paper's law: its own contacts and water
-            wm = self.core.water_model
-            water = wm.F_walls if wm is not None else np.zeros(len(self.flat_walls))
-            return {pg.WALL_NAMES[code]: (float(c), float(u))
-                    for code, c, u in zip(self.flat_walls, self.core.law.wall_forces(), water)}
-        pushed = self.water_engine.wall_forces() if self.water_engine is not None else {}
-        loads = {}
-        for code, i in self.wall_ids.items():
-            contact = sum(inter.phys.normalForce.norm() for inter in O.interactions.withBody(i) if inter.isReal)
-            water = float(np.dot(pushed[i], -self.flat_walls[code].normal())) if i in pushed else 0.0
-            loads[pg.WALL_NAMES[code]] = (float(contact), water)
-        return loads
+        return self.law.wall_loads(self.flat_walls)
 
     def bottom_normal_force(self, xz):
         """Mean normal force [N] of the touching pairs whose midpoint lies in the first block (0 if none)."""

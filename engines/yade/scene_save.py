@@ -13,8 +13,9 @@ Nothing in it is executed or unpickled.
   raised by the load), the others when they are called.
 * YADE saves no permanent force: the runners are saved due at the next step, where the
   restored engine sets its forces again and puts its runner back on its schedule.
-* The runner's command imports this module and calls ``call(key)``: the engine of that key (this
-  process), or one made again from the tag's recipe (a new process: ``O.load`` then ``O.run``).
+* The runner's command imports engines.yade.water_engine (RUNNER_MODULE, which gives this module
+  its class, ENGINE_CLASS) and calls ``call(key)``: the engine of that key (this process), or one
+  made again from the tag's recipe (a new process: ``O.load`` then ``O.run``).
   Its water is restored from the tag (saved at step k, valid up to the engine's next water step:
   O.iter in k ... k + water_interval); no tag, or a tag of another step, stops the run in one line
   naming what to do. An engine called at a step before its last water step (the scene
@@ -41,6 +42,10 @@ _STALE = set()  # keys whose water is to be restored from O.tags at the next cal
 _LOADED = set()  # keys restored from O.tags whose runner has not been called since
 
 
+RUNNER_MODULE = "engines.yade.water_engine"  # the runners' command imports it; it re-exports ``call``
+ENGINE_CLASS = None  # WaterEngine, set by RUNNER_MODULE at its import (this module does not import it)
+
+
 class RestoreError(RuntimeError):
     """A saved scene whose water cannot be restored; the message names what to do, in one line."""
 
@@ -58,7 +63,7 @@ def runner(engine, label):
               "(engines.yade.scene_save.engine(label) gives its engine)", file=sys.stderr, flush=True)
     key = yade_io.new_key(label)
     ENGINES[key] = engine
-    return PyRunner(command=yade_io.runner_command(__name__, key), iterPeriod=int(engine.model.schedule.water_interval),
+    return PyRunner(command=yade_io.runner_command(RUNNER_MODULE, key), iterPeriod=int(engine.model.schedule.water_interval),
                     initRun=True, label=label)
 
 
@@ -82,6 +87,13 @@ def _step(key):
     water()
 
 
+def set_period(water, period, first):
+    """The runners of the engine ``water`` call it every ``period`` steps from step ``first`` on."""
+    for key in [k for k, e in ENGINES.items() if e is water]:
+        for r in _runners(key):
+            r.iterPeriod, r.iterLast = int(period), int(first) - int(period)
+
+
 def _runners(key):
     """The PyRunners of ``key`` among O.engines."""
     from yade import O
@@ -99,7 +111,7 @@ def engine(label="water"):
     scene was loaded (in a new process: made again from O.tags)."""
     from yade import O
     from yade.wrapper import PyRunner
-    runners = [e for e in O.engines if isinstance(e, PyRunner) and e.label == label and f"{__name__} " in e.command]
+    runners = [e for e in O.engines if isinstance(e, PyRunner) and e.label == label and f"{RUNNER_MODULE} " in e.command]
     if len(runners) != 1:
         raise RestoreError(f"{len(runners)} WaterEngine runners labelled {label!r} in O.engines; give the label of one")
     key = runners[0].command.rsplit("call(", 1)[1].rstrip(")").strip("'\"")
@@ -166,8 +178,6 @@ def restore(key):
     """The engine ``key`` with its water from O.tags (this process's engine, set in place, or one
     made again from the tag's recipe); RestoreError in one line naming what to do."""
     from yade import O
-
-    from engines.yade.water_engine import WaterEngine
     where = f"O.tags[{TAG + key!r}]"
     remedy = ("make the WaterEngine again and put its runner() in O.engines in place of this PyRunner (its water "
               "starts afresh), or load a scene saved with the engine's runner in O.engines")
@@ -183,7 +193,7 @@ def restore(key):
                            f"back or forward without O.load): {remedy}")
     water = ENGINES.get(key)
     if water is None:
-        water = WaterEngine(**arguments(ck.recipe))
+        water = ENGINE_CLASS(**arguments(ck.recipe))
     try:
         named_state.restore_all(water, ck.state)
     except named_state.StateError as e:

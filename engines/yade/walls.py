@@ -8,14 +8,15 @@ side, a wall that spins or has turned. A wall may translate (a TranslationEngine
 """
 import numpy as np
 
-from engines.model.flat_walls import BOUNDARIES, FlatWall
+from engines.model.flat_walls import FlatWall
+from engines.model.groups import words
 from engines.yade.contract import ContractError
 
 PLANE_AXES = (0, 2)  # YADE's x and z: FlatWall axes 0 and 1
 
 
 def flat_walls(bodies, boundaries, xz):
-    """The FlatWalls of the YADE bodies {id: boundary} (boundary one of BOUNDARIES) of O.bodies
+    """The FlatWalls of the YADE bodies {id: boundary} (boundary a word of engines.model.groups) of O.bodies
     ``bodies``, for discs with centres xz (N, 2) [m] (x, z); in the order of ``boundaries``."""
     return [flat_wall(bodies, int(i), boundary, np.asarray(xz, float)) for i, boundary in boundaries.items()]
 
@@ -26,8 +27,8 @@ def flat_wall(bodies, i, boundary, xz):
     if b is None:
         raise ContractError(f"body {i}: not in O.bodies (flat_walls must be existing Box or Wall bodies)")
     shape = type(b.shape).__name__
-    if boundary not in BOUNDARIES:
-        raise ContractError(f"body {i}: boundary {boundary!r} in flat_walls; one of {', '.join(BOUNDARIES)}")
+    if boundary not in words():
+        raise ContractError(f"body {i}: boundary {boundary!r} in flat_walls; one of {', '.join(words())}")
     _check_not_turning(i, b)
     if shape == "Wall":
         return _wall(i, b, boundary, xz)

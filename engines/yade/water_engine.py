@@ -40,7 +40,8 @@ from engines.model import limits, pore_water
 from engines.model import pores as pg
 from engines.model.schedule import Schedule
 from engines.model.water_model import WaterModel
-from engines.yade import contract
+from engines.yade import contract, scene_save
+from engines.yade.scene_save import RestoreError, call  # noqa: F401  (call: the runners' command, scene_save.RUNNER_MODULE)
 
 CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (signals wait that long)
 # The default rebuild_distance, a fraction of l_m. Links join discs closer than l_m beyond touching
@@ -49,6 +50,11 @@ CHUNK_SECONDS = 0.1  # wall time of one compiled call of WaterEngine.drive (sign
 # the built links stay those the discs would be given now to within half the link range, and the
 # measured areas stay close to the true ones (frictmat_box: every U <= E_w).
 REBUILD_FRACTION = 0.25
+# A disc farther than this fraction of its radius (plus twice what its velocity covers in the steps
+# between) from its centre at the engine's last water step, with no water step missed in between,
+# was put there by something else than the steps: a scene loaded or its bodies moved by hand
+# (``check_same_scene``).
+JUMP_FRACTION = 0.5
 
 
 class WaterEngine:
@@ -73,10 +79,11 @@ class WaterEngine:
     0: off); rebuild_interval [steps] bounds the time between rebuilds. A script may change O.dt
     between steps: the model follows it at the next water step (engines.yade.contract.follow_dt).
     The water step water_interval x O.dt is checked (``check_limits``) at construction, after each
-    rebuild and each change of O.dt: above the water-stiffness limit it is refused, naming the
+    rebuild, each change of O.dt and of the settable ``water_interval``: above the water-stiffness limit it is refused, naming the
     largest stable water_interval; above the Darcy limit it is sub-stepped (refused without
     settings.substep). The accuracy watch (engines.model.limits.AccuracyWatch, ``model.watch``)
-    compares the void areas of each water step made from Python with the last one: above
+    compares the void areas of every water step with the last one (on every path; the compiled
+    drive's, kernels.watch_areas, reported at the end of each call): above
     WATCH_WARN it warns once, above WATCH_STOP it stops the run unless ``accept_inaccurate``.
     """
 
@@ -88,6 +95,7 @@ class WaterEngine:
         **{name: "the bodies and the caller's arguments" for name in ("_mass", "_lift", "_newton")},
         "g": "the NewtonIntegrator's gravity, read at each water step (or the caller's)",
         "_xz": "scratch of each water step", "_F_out": "scratch of each water step",
+        "_seen": "(O.iter, centres) at the last water step or drive's end: a restored engine starts afresh",
         "arguments": "the constructor's arguments: the recipe of a saved scene's tag (engines.yade.scene_save)",
         "_chunk": "the steps of drive's next compiled call, adapted to the wall time: how steps are grouped, not "
                   "what they compute"}
@@ -149,17 +157,72 @@ class WaterEngine:
         self.model.watch = limits.AccuracyWatch(accept=accept_inaccurate)
         self.check_limits("at construction")
         self.model.on_change = self.check_limits  # at each rebuild and change of dt
+        self._seen = (O.iter, self.io.positions())
 
-    def check_limits(self, when=None):
-        """Refuse the water step h = water_interval x O.dt above the water-stiffness limit of the
-        pores now (no sub-steps: the message names the largest stable water_interval), or above
-        the Darcy limit without settings.substep (engines.model.limits); at construction, after each
-        pore rebuild and each change of O.dt."""
+    def checkpoint_restored(self):
+        """Restored with its scene (engines.model.state): the next water step starts the comparison
+        of ``check_same_scene`` afresh."""
+        self._seen = None
+
+    def check_same_scene(self, xz):
+        """Stop (scene_save.RestoreError, one line naming what to do) when the scene is not the one
+        the water belongs to: O.iter before that of the engine's last water step (an earlier scene
+        loaded without the engine's saved water), or, no water step missed since, a disc farther than
+        JUMP_FRACTION of its radius plus twice its velocity x the steps' time from its centre then
+        (a scene loaded, bodies moved by hand); xz (N, 2) [m] the centres now."""
+        from yade import O
+        if self._seen is None:
+            return
+        k, seen = self._seen
+        remedy = ("the engine's water is not this scene's: restore it with the scene (water.runner() in O.engines "
+                  "when O.save/O.saveTmp is called: O.load/O.loadTmp then restore it, engines.yade.scene_save), or "
+                  "make the WaterEngine again after the load (its water starts afresh)")
+        if O.iter < k:
+            raise RestoreError(f"the scene went back from step {k} to step {O.iter} (O.load or O.loadTmp of an earlier "
+                               f"scene?): {remedy}")
+        if O.iter > k + self.water_interval:
+            return
+        d = np.hypot(*(np.asarray(xz) - seen).T)
+        r = self.model.r
+        far = np.flatnonzero(d > JUMP_FRACTION * r)
+        if len(far):
+            v = np.array([O.bodies[int(self.io.ids[i])].state.vel.norm() for i in far.tolist()])
+            far = far[d[far] > JUMP_FRACTION * r[far] + 2 * v * (O.iter - k) * O.dt]
+        if len(far):
+            i = int(far[np.argmax(d[far] / r[far])])
+            raise RestoreError(f"body {int(self.io.ids[i])}: moved {d[i]:.3g} m ({d[i] / r[i]:.2g} of its radius) since "
+                               f"the water step at step {k} in {O.iter - k} steps, more than its velocity allows (a "
+                               f"scene loaded, or bodies moved by hand): {remedy}")
+
+    @property
+    def water_interval(self):
+        """Steps between water steps (settable between steps: ``water.water_interval = M`` is checked
+        like a change of O.dt, ``check_limits``, and takes effect at the next water step,
+        engines.model.schedule.Schedule.set_water_interval; the runner follows)."""
+        return self.model.schedule.water_interval
+
+    @water_interval.setter
+    def water_interval(self, value):
+        from yade import O
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"water_interval = {value!r}: the steps between water steps, an integer >= 1")
+        value = int(value)
+        self.check_limits(f"when water_interval was set at step {O.iter}", value)
+        first = self.model.schedule.set_water_interval(value, O.iter)
+        self.arguments["water_interval"] = value  # a saved scene's engine is made again with it
+        scene_save.set_period(self, value, first)
+
+    def check_limits(self, when=None, water_interval=None):
+        """Refuse the water step h = water_interval x O.dt (default the schedule's water_interval)
+        above the water-stiffness limit of the pores now (no sub-steps: the message names the
+        largest stable water_interval), or above the Darcy limit without settings.substep
+        (engines.model.limits); at construction, after each pore rebuild, each change of O.dt and
+        of ``water_interval``."""
         from yade import O
         m, s = self.model, self.model.settings
         xz = self.io.positions()
         meas = pg.measure(m.water.net, xz, m.r)
-        M = m.schedule.water_interval
+        M = water_interval or m.schedule.water_interval
         when = when or f"at step {O.iter} (the pores rebuilt or O.dt changed)"
         stiff = limits.water_stiffness_limit(m.water.net, meas.void_area, m.r, s.E_w, self._mass, self._mobile())
         limits.check_water_stiffness(m.dt, stiff, s.E_w, M, limits.ENGINE_NAMES, when)
@@ -190,7 +253,6 @@ class WaterEngine:
         PyRunner adds its dispatch to every call (``drive`` does not pay it). O.save and O.saveTmp
         save the engine's water with the scene, O.load and O.loadTmp restore it, in a new process
         too (engines.yade.scene_save)."""
-        from engines.yade import scene_save
         return scene_save.runner(self, label)
 
     def drive(self, n, stop=None):
@@ -205,6 +267,7 @@ class WaterEngine:
         from yade.wrapper import PyRunner
 
         from engines.yade import yade_io
+        self.check_same_scene(self.io.positions())
         n, done = int(n), 0
         alone = stop is None and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
         fast = alone and water_path(self.compiled, yade_io.BACKEND == "yadebulk") == "drive"
@@ -228,6 +291,7 @@ class WaterEngine:
             done += 1
             if errors or (stop is not None and stop()):
                 break
+        self._seen = (O.iter, self.io.positions())
 
     def _walls_may_move(self):
         """Can a flat wall move in the next steps: its body has a velocity, or a kinematic engine
@@ -267,7 +331,8 @@ class WaterEngine:
         params.book_balance(b, totals)
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
-            m.after_kernel_steps(unwatched=True)
+            m.after_kernel_steps()
+            m.report_watch(h)  # every water step of the call watched (kernels.watch_areas)
         yade_io.check(rc, self.io.ids)  # an error code names the disc read (positions first)
         if n_sub != 1:  # that water step's sub-steps or failure, then its DEM step
             m.finish_kernel_step(h, n_sub)
@@ -284,6 +349,9 @@ class WaterEngine:
 
         from engines.yade import yade_io
         m = self.model
+        xz = self.io.positions()
+        self.check_same_scene(xz)
+        self._seen = (O.iter, xz)
         self.k = O.iter
         contract.follow_dt(m)
         self._follow_gravity()
@@ -291,7 +359,6 @@ class WaterEngine:
         h = sch.water_interval * m.dt
         self._follow_walls()
         path = water_path(self.compiled, yade_io.BACKEND == "yadebulk")
-        xz = None
         if path == "drive" and not sch.interval_due(self.k):  # read, triggers, water, write: one call
             _, n_water, n_sub, rc = yade_io.drive_water(1, False, 0, sch.water_interval, np.zeros(3), m.xz_built,
                                                         sch.moved2, self.io, self._xz, self.forced, self._F_out,
@@ -302,10 +369,8 @@ class WaterEngine:
                 return
             rebuild = True  # due by displacement or areas: nothing done, rebuilt and made below
         else:
-            xz = self.io.positions() if sch.by_displacement else None
-            rebuild = m.rebuild_due(self.k, xz)
+            rebuild = m.rebuild_due(self.k, xz if sch.by_displacement else None)
         if path == "kernel" and not rebuild:  # the positions read, water, write
-            xz = self.io.positions() if xz is None else xz
             n_sub = kernels.water_step(xz, *m.kernel_args(h))
             if n_sub > 0:
                 self.write_forces()
@@ -313,8 +378,6 @@ class WaterEngine:
                 m.finish_kernel_step(h, n_sub)
                 return
             rebuild = True  # nothing done: rebuilt and made below
-        if xz is None:
-            xz = self.io.positions()
         if rebuild:
             contract.check_added(O.bodies, self._n_bodies)
             m.rebuild(xz, self.k)
@@ -356,3 +419,6 @@ def water_path(compiled, bridge=False):
     if not compiled:
         return "python"
     return "drive" if bridge else "kernel"
+
+
+scene_save.ENGINE_CLASS = WaterEngine  # the class a saved scene's recipe makes again (scene_save.restore)

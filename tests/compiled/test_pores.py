@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from engines.compiled import pores as kp
+from engines.compiled.pores.overlaps import _clip_area
 from engines.model import pores as pg
+from engines.model.pores import links, overlaps, triangulation
 from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import PoreWater, WaterSettings, pressure, pressures_by_rule
 from packing.layouts import hex_lattice, random_discs
@@ -177,7 +179,7 @@ def test_the_packings_exercise_every_branch():
 def test_the_lifted_points_are_bit_for_bit_those_of_numpy(name):
     """The hull of the same points: qhull makes the same choices, even between cocircular discs."""
     xz, r = PACKINGS[name]()[:2]
-    want = pg._lifted_points(xz, r)
+    want = triangulation._lifted_points(xz, r)
     got = kp.lifted_points(xz, r, xz.mean(axis=0))
     assert (got is None and want is None) or np.array_equal(got, want)
 
@@ -245,11 +247,11 @@ def test_compiled_clip_areas_of_triangles_in_all_positions():
     rng = np.random.default_rng(7)
     subj, clip = rng.random((2000, 3, 2)), rng.random((2000, 3, 2))
     for t in (subj, clip):
-        cw = pg._signed_area(t) < 0
+        cw = triangulation._signed_area(t) < 0
         t[cw] = t[cw][:, [0, 2, 1]]
     scratch = np.empty((9, 2)), np.empty((9, 2))
-    assert_same([kp._clip_area(P, Q, *scratch) for P, Q in zip(subj, clip)], pg._clip_areas(subj, clip), "areas")
-    assert_same([kp._clip_area(P, P, *scratch) for P in subj], np.abs(pg._signed_area(subj)), "a triangle with itself")
+    assert_same([_clip_area(P, Q, *scratch) for P, Q in zip(subj, clip)], overlaps._clip_areas(subj, clip), "areas")
+    assert_same([_clip_area(P, P, *scratch) for P in subj], np.abs(triangulation._signed_area(subj)), "a triangle with itself")
 
 
 @pytest.mark.parametrize("flat", [False, True])
@@ -293,7 +295,7 @@ def test_the_flat_wall_packings_exercise_every_branch():
     net, reach = nets["box-reach"], eps_m + l_m
     w, i = np.nonzero([(wall.gap(xz, r) > reach) & (wall.gap(xz, r) < 2 * reach) for wall in walls])
     assert len(i) > 5 and not np.isin(net.wall_vertices.foot(w, i), net.tri).any()
-    net, missing = nets["box-long-lm"], _missing_with_flat_walls("box-long-lm", pg._missing_pairs)[1]
+    net, missing = nets["box-long-lm"], _missing_with_flat_walls("box-long-lm", links._missing_pairs)[1]
     feet = missing[missing[:, 1] >= net.n_discs]  # a disc and its own foot, not in the regular triangulation
     m = net.wall_vertices.n_vertices
     assert len(feet) and np.isin(feet @ [m, 1], net.links @ [m, 1]).any()
@@ -306,7 +308,7 @@ def _missing_with_flat_walls(name, missing_pairs):
     wv, reach = WallVertices(walls, len(r)), eps_m + l_m
     points, radii, active = wv.positions(xz), wv.radii(r), wv.active(xz, r, reach)
     tri = active[pg.regular_triangulation(points[active], radii[active])]
-    return missing_pairs(points, radii, reach, tri, wv), pg._missing_pairs(points, radii, reach, tri, wv)
+    return missing_pairs(points, radii, reach, tri, wv), links._missing_pairs(points, radii, reach, tri, wv)
 
 
 @pytest.mark.parametrize("name", ["box-reach", "box-long-lm"])

@@ -6,6 +6,7 @@ import pytest
 from engines.compiled import pores as kp
 from engines.compiled import regular
 from engines.model import pores as pg
+from engines.model.pores import build
 from engines.model.flat_walls import WallVertices
 from packing.layouts import hex_lattice, random_discs
 from packing.packing import Packing
@@ -102,8 +103,8 @@ def test_the_power_test_and_the_chord():
 def test_the_compiled_build_skips_the_hull_in_a_run(monkeypatch):
     """The seismic box rebuilt as it shakes: every build certain, none left to the hull."""
     calls = []
-    hull = pg.ConvexHull
-    monkeypatch.setattr(pg, "ConvexHull", lambda *a, **k: calls.append(1) or hull(*a, **k))
+    hull = build.ConvexHull
+    monkeypatch.setattr(build, "ConvexHull", lambda *a, **k: calls.append(1) or hull(*a, **k))
     for moved in (0.0, 2e-5, 5e-5):
         xz, r = seismic_packing(moved, seed=3)
         net = pg.build_pores(xz, r, 2e-4, 3.5e-4, steps=kp.BUILD)

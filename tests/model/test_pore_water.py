@@ -109,7 +109,7 @@ def test_pinched_pore_exchanges_nothing():
 def test_remesh_rule_a_same_network_keeps_pressures():
     xz, r, net = _random_network()
     m = pg.measure(net, xz, r)
-    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0),
+    w = PoreWater(net, m.void_area, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, transfer="paper"),
                   W=m.void_area * (1 + 0.1 * np.random.default_rng(1).random(net.n_pores)))
     U0 = w.pressure(m.void_area)
     net2 = pg.build_pores(xz, r, l_m=0.7 * r.mean())
@@ -255,7 +255,7 @@ def test_remesh_recomputes_water_from_eq32_and_books_the_change():
     _, _, two = _two_pores(diagonal_linked=True)
     A1 = pg.measure(one, xz, r).void_area
     m2 = pg.measure(two, xz, r)
-    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, smoothing=True)
+    s = WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, smoothing=True, transfer="paper")
     w = PoreWater(one, A1, s, W=A1 * 1.2)
     w.advance(1e-3, A1 * 0.9, np.zeros(len(one.links), bool))
     U = w.pressure(A1)
@@ -373,7 +373,7 @@ def test_two_rebuilds_add_up_in_the_budget():
     xz, r, one = _two_pores(diagonal_linked=False)
     _, _, two = _two_pores(diagonal_linked=True)
     A1, A2 = pg.measure(one, xz, r).void_area, pg.measure(two, xz, r).void_area
-    w = PoreWater(one, A1, WaterSettings(E_w=1000.0, k1=50.0, k2=0.5), W=A1 * 1.2)
+    w = PoreWater(one, A1, WaterSettings(E_w=1000.0, k1=50.0, k2=0.5, transfer="paper"), W=A1 * 1.2)
     w.remesh(two, A2, A1)
     w.remesh(one, A1, A2)
     assert w.balance.remesh_change == pytest.approx(w.W.sum() - 1.2 * A1.sum(), rel=1e-12)

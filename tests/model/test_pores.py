@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from engines.model import pores as pg
+from engines.model.pores import faces, links, triangulation
 from engines.reference import model as ref
 from packing.layouts import hex_lattice, random_discs
 from tests.layouts import square_lattice
@@ -311,7 +312,7 @@ def test_pore_signatures_identify_vertex_sets():
     assert len(set(sets)) == len(sets) == len(set(sig))
     again = pg.build_pores(xz + 1e-9, r, l_m=0.7 * r.mean())
     assert {frozenset(again.vertices_of(p).tolist()): s for p, s in enumerate(again.pore_signature.tolist())} == dict(zip(sets, sig))
-    keys = pg._mix64(np.arange(100000))
+    keys = faces._mix64(np.arange(100000))
     assert len(np.unique(keys)) == 100000
 
 
@@ -358,7 +359,7 @@ def test_locate_points_in_triangles_edges_count_as_inside():
                        [-1.0, 1.0], [1.5, -0.1]]) * 1e-3
     # inside 0, inside 1, outside, on 0's edges ab and ca, on the shared diagonal (first: 0), on 1's
     # edge ab, outside beside edge ca of 0 (two of its three sides positive), below edge ab
-    np.testing.assert_array_equal(pg._locate(xz, tri, points), [0, 1, -1, 0, 0, 0, 1, -1, -1])
+    np.testing.assert_array_equal(triangulation._locate(xz, tri, points), [0, 1, -1, 0, 0, 0, 1, -1, -1])
 
 
 def test_three_touching_discs_make_one_pore():
@@ -382,16 +383,16 @@ def test_edge_insertion_by_flips_keeps_a_triangulation(seed):
     rng = np.random.default_rng(seed)
     xz = rng.random((60, 2))
     from scipy.spatial import Delaunay
-    tri = pg._ccw(xz, Delaunay(xz).simplices)
+    tri = triangulation._ccw(xz, Delaunay(xz).simplices)
     k, l = int(np.argmin(xz.sum(axis=1))), int(np.argmax(xz.sum(axis=1)))   # opposite corners
-    ft = pg._FlipTriangulation(xz, tri)
+    ft = links._FlipTriangulation(xz, tri)
     edges = ft.crossed_edges(k, l)
     assert edges is not None and len(edges) >= 6
     ft.insert(k, l, edges)
     new = ft.triangles()
     assert (k, l) in ft.third or (l, k) in ft.third
-    assert len(new) == len(tri) and np.all(pg._signed_area(xz[new]) > 0)
-    assert pg._signed_area(xz[new]).sum() == pytest.approx(pg._signed_area(xz[tri]).sum(), rel=1e-12)
+    assert len(new) == len(tri) and np.all(triangulation._signed_area(xz[new]) > 0)
+    assert triangulation._signed_area(xz[new]).sum() == pytest.approx(triangulation._signed_area(xz[tri]).sum(), rel=1e-12)
     count = {}
     for t in new.tolist():
         for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0])):
@@ -412,8 +413,8 @@ def test_edge_insertion_that_cannot_converge_stops_naming_the_link():
     stops after its budget (a safety stop: a real insertion always has a flippable edge) with an
     error naming the link."""
     xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 1.0], [1.0, 0.2]])    # 3 inside triangle 0, 1, 2
-    tri = pg._ccw(xz, np.array([[0, 1, 3], [1, 2, 3], [2, 0, 3]]))
-    ft = pg._FlipTriangulation(xz, tri)
+    tri = triangulation._ccw(xz, np.array([[0, 1, 3], [1, 2, 3], [2, 0, 3]]))
+    ft = links._FlipTriangulation(xz, tri)
     # edge 1-3 lies between triangles (0, 1, 3) and (1, 2, 3): their quadrilateral is not convex at 3
     with pytest.raises(RuntimeError, match="link 0-2 did not converge"):
         ft.insert(0, 2, [(1, 3)])
@@ -422,7 +423,7 @@ def test_edge_insertion_that_cannot_converge_stops_naming_the_link():
 def _proper_crossings(xz, tri, k, l):
     """The triangulation edges that the segment k-l crosses at an interior point of both (written
     out from orientations, independently of _FlipTriangulation's walk)."""
-    o = pg._orient
+    o = links._orient
     p = [tuple(v) for v in xz.tolist()]
     out = set()
     for a, b in _edges_of(tri):
@@ -438,9 +439,9 @@ def test_crossed_edges_are_those_the_segment_crosses_in_order(seed):
     """The walk from k to l returns exactly the edges the segment crosses, in order along it."""
     from scipy.spatial import Delaunay
     xz = np.random.default_rng(10 + seed).random((40, 2))
-    tri = pg._ccw(xz, Delaunay(xz).simplices)
+    tri = triangulation._ccw(xz, Delaunay(xz).simplices)
     k, l = int(np.argmin(xz[:, 0])), int(np.argmax(xz[:, 0]))
-    edges = pg._FlipTriangulation(xz, tri).crossed_edges(k, l)
+    edges = links._FlipTriangulation(xz, tri).crossed_edges(k, l)
     assert {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l) and len(edges) >= 3
     d = xz[l] - xz[k]
     t = [np.linalg.solve(np.column_stack([d, xz[a] - xz[b]]), xz[a] - xz[k])[0] for a, b in edges]
@@ -454,9 +455,9 @@ def test_crossed_edges_through_a_vertex_and_past_one_behind():
     xz = np.array([[0.0, 0.0], [2.0, 4.0], [1.5, 1.8], [0.5, 2.2], [-2.0, 0.0], [1.0, -2.0],
                    [-2.0, -4.0], [-3.0, -3.0], [-1.0, -2.0]])
     k, l, F, B = 0, 1, 6, 8          # B last: k's other neighbours are looked at first
-    tri = pg._ccw(xz, Delaunay(xz).simplices)
+    tri = triangulation._ccw(xz, Delaunay(xz).simplices)
     assert (k, B) in _edges_of(tri) and (k, l) not in _edges_of(tri)
-    ft = pg._FlipTriangulation(xz, tri)
+    ft = links._FlipTriangulation(xz, tri)
     assert ft.crossed_edges(k, F) is None
     edges = ft.crossed_edges(k, l)
     assert edges is not None and {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from engines.model import pores as pg
+from engines.model.pores import overlaps, triangulation
 from engines.model.pore_water import PoreWater, WaterSettings, pressure, water_from_pressure
 from packing.layouts import random_discs
 from packing.psd import sample_diameters
@@ -130,9 +131,9 @@ def test_clip_areas_star_of_david():
     t1 = np.array([[[0.0, 1.0], [-np.sqrt(3) / 2, -0.5], [np.sqrt(3) / 2, -0.5]]])
     t2 = -t1  # also counter-clockwise
     area = 3 * np.sqrt(3) / 4
-    np.testing.assert_allclose(pg._clip_areas(t1, t2), [2 / 3 * area], rtol=1e-14)
-    np.testing.assert_allclose(pg._clip_areas(t1, t1), [area], rtol=1e-14)
-    assert pg._clip_areas(t1, t1 + 10.0)[0] == 0.0
+    np.testing.assert_allclose(overlaps._clip_areas(t1, t2), [2 / 3 * area], rtol=1e-14)
+    np.testing.assert_allclose(overlaps._clip_areas(t1, t1), [area], rtol=1e-14)
+    assert overlaps._clip_areas(t1, t1 + 10.0)[0] == 0.0
 
 
 def test_pore_overlaps_partition_the_old_pores():
@@ -201,8 +202,8 @@ def test_clip_areas_of_a_batch_with_different_vertex_counts():
     # hexagon 2/3 of the triangle; a half-size copy inside; the corner triangle (0.5, 0)-(1, 0)-(0.5, 0.5);
     # nothing; the unit triangle cut by x <= 0.5: a trapezoid of area 0.5 - 0.125
     expected = [2 / 3 * 3 * np.sqrt(3) / 4, 0.125, 0.125, 0.0, 0.375]
-    np.testing.assert_allclose(pg._clip_areas(subj, clip), expected, rtol=1e-13, atol=1e-15)
-    assert pg._clip_areas(np.zeros((0, 3, 2)), np.zeros((0, 3, 2))).shape == (0,)
+    np.testing.assert_allclose(overlaps._clip_areas(subj, clip), expected, rtol=1e-13, atol=1e-15)
+    assert overlaps._clip_areas(np.zeros((0, 3, 2)), np.zeros((0, 3, 2))).shape == (0,)
 
 
 def _tri_area(a, b, c):
@@ -288,7 +289,7 @@ def test_pore_overlaps_of_an_old_triangle_turned_over():
     old = pg.build_pores(np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 3.0], [20.0, 20.0]]), r, l_m=3.0)
     xz = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, -3.0], [2.0, -1.0]])
     new = pg.build_pores(xz, r, l_m=3.0)
-    assert old.n_pores == 1 and new.n_pores == 3 and pg._signed_area(xz[old.tri])[0] < 0
+    assert old.n_pores == 1 and new.n_pores == 3 and triangulation._signed_area(xz[old.tri])[0] < 0
     p, q, o = pg.pore_overlaps(old, new, xz)
     np.testing.assert_array_equal(p, [0, 0, 0])
     np.testing.assert_array_equal(q, [0, 1, 2])

@@ -24,6 +24,16 @@ def test_water_steps_are_counted_from_the_start():
                 assert s.water_among(k, end) == any(s.water_due(j) for j in range(k, end))
 
 
+def test_a_new_water_interval_starts_at_the_next_water_step():
+    s = Schedule(water_interval=3, rebuild_interval=10, k0=2)
+    assert s.set_water_interval(5, 6) == 8  # the old water steps 2, 5, 8: the next is 8
+    assert [k for k in range(6, 30) if s.water_due(k)] == [8, 13, 18, 23, 28]
+    assert s.steps_to_rebuild(9, water_steps_only=True) == 13 - 9  # due at 12, asked at 13
+    assert s.set_water_interval(2, 13) == 13 and s.last_water(16) == 15
+    with pytest.raises(ValueError, match="water_interval must be >= 1"):
+        s.set_water_interval(0, 13)
+
+
 def test_rebuilds_by_interval_displacement_and_areas():
     s = Schedule(water_interval=3, rebuild_interval=10, rebuild_distance=0.0)
     assert [k for k in range(35) if s.interval_due(k)] == list(range(10, 35))  # never built since 0

@@ -171,17 +171,32 @@ def test_figures_of_a_run_from_its_files(snaps, tmp_path):
     t = np.linspace(0, 0.04, 5)
     with open(tmp_path / "history.csv", "w") as f:
         f.write("t,U_block1,U_block2,porosity,kinetic_energy,water_balance_error,total_water,n_pores,"
-                "fn_bottom_mean,bed_top\n")
+                "fn_bottom_mean,bed_top,p_band1,q_band1\n")
         for k, tk in enumerate(t):
-            f.write(f"{tk},{10 * k if k != 2 else 'nan'},{k},0.2,0,0,1e-5,60,0.1,0.004\n")
+            f.write(f"{tk},{10 * k if k != 2 else 'nan'},{k},0.2,0,0,1e-5,60,0.1,0.004,{50 - k},{k}\n")
     for s in snaps:
         np.savez(tmp_path / f"snapshot_{float(s['t']) * 1e3:06.2f}ms.npz", **s)
     json.dump({"scene": "test", "parameters": {"water": {"enabled": True, "E_w": 240.0}},
                "block_bounds_m": [[0.0, 1e-3], [2e-3, 1e-2]]}, open(tmp_path / "summary.json", "w"))
     written = plots.figures_of_run(str(tmp_path))
-    assert [os.path.basename(p) for p in written] == ["pressure_blocks.png", "history_panels.png", "snapshots.png"]
+    assert [os.path.basename(p) for p in written] == ["pressure_blocks.png", "history_panels.png", "stress_paths.png",
+                                                      "snapshots.png"]
     for path in written:
         assert_drawn(path)
+
+
+def test_stress_paths_have_a_panel_per_band_from_the_surface_down(tmp_path):
+    t = np.linspace(0, 0.02, 30)
+    h = {"t": t}
+    for k in range(1, 4):
+        h[f"p_band{k}"] = 100.0 * (4 - k) * (1 - 0.8 * t / t[-1])
+        h[f"q_band{k}"] = 20.0 * (4 - k) * (1 + np.sin(200 * t))
+    fig = plots.stress_path_figure(h, "test", [[0.0, 1e-3], [1e-3, 2e-3], [2e-3, 3e-3]])
+    fig.savefig(tmp_path / "s.png")
+    assert_drawn(str(tmp_path / "s.png"))
+    panels = [ax for ax in fig.axes if ax.get_title().startswith("band")]
+    assert [ax.get_title().split("\n")[0] for ax in panels] == ["band 3 (surface)", "band 2", "band 1 (bottom)"]
+    assert panels[2].get_xlim()[1] >= 300.0 and panels[0].get_xlim()[1] < 150.0  # each band on its own scale
 
 
 def _overlap(a, b):

@@ -189,3 +189,14 @@ def test_every_float_array_is_named_with_its_unit(tmp_path):
         names |= {data.GetArrayName(i) for i in range(data.GetNumberOfArrays())}
     assert names == {"radius [m]", "velocity [m/s]", "normal_force [N/m]", "shear_force [N/m]", "U [N/m]",
                      "W [m^2]", "A [m^2]", "pore"}
+
+
+def test_each_discs_effective_stress_is_written_with_its_invariants(tmp_path):
+    """A disc's stress (xx, zz, xz [Pa]) and its p' and q, each named with its unit."""
+    xz = np.array([[0.0, 0.0], [1.0, 0.0]])
+    stress = np.array([[30.0, 10.0, 0.0], [20.0, 20.0, 5.0]])
+    pv.write_discs(str(tmp_path / "d.vtp"), xz, np.ones(2), stress=stress)
+    pd = read(str(tmp_path / "d.vtp")).GetPointData()
+    assert np.array_equal(array(pd, "stress_xx [Pa]"), stress[:, 0]) and np.array_equal(array(pd, "stress_xz [Pa]"),
+                                                                                         stress[:, 2])
+    assert array(pd, "p' [Pa]").tolist() == [20.0, 20.0] and array(pd, "q [Pa]").tolist() == [10.0, 5.0]

@@ -85,7 +85,8 @@ def test_wall_discs_give_no_boxes_and_no_wall_columns(tmp_path):
     r, max_U = run("discs", tmp_path)
     h = read_history(str(tmp_path / "history.csv"))
     assert r.cp.wall_ids == {} and len(r.cp.ids) == len(r.cp.packing.r) == 76
-    assert not any(c.startswith("wall_") for c in h) and r.rec.columns[-1] == "remesh_change"
+    cols = r.rec.columns
+    assert not any(c.startswith("wall_") for c in h) and cols[cols.index("remesh_change") + 1] == "sv_band1"
     assert np.all(max_U <= r.scene.water.E_w)
 
 
@@ -133,3 +134,24 @@ def test_a_shaken_box_of_flat_walls_moves_its_walls_with_the_base(law, tmp_path)
     np.testing.assert_allclose(wm.wall_vertices.faces(), start + disp * x_walls, rtol=0, atol=1e-15)
     summary = r.summarise("completed", [])
     assert summary["water_balance_error"] <= 1e-12 and np.all(np.array(max_U.seen) <= sc.water.E_w)
+
+
+@pytest.mark.parametrize("law", ["yade", "paper"])
+def test_the_flat_walls_contacts_count_in_the_effective_stress(law, tmp_path):
+    """YadeCoupling.stress_contacts holds each particle's contact with the flat bottom (YADE's box
+    contacts, or the paper's law's feet) at the face, pushing up by the bottom wall's contact load
+    (the same interactions with YADE's law; the paper's law's feet evaluated at the positions now
+    against its last step's forces), and the bands' columns are in the history. After 20 steps,
+    before the inflow lifts the bed off the bottom."""
+    r = Run(quicksand("flat", law), scene_packing(quicksand("flat", law)), str(tmp_path), 20)
+    r.go(figures=False)
+    cp = r.cp
+    c = cp.stress_contacts(cp.positions())
+    face = cp.flat_walls[pg.WALL_BOTTOM].position
+    on_bottom = np.abs(c.point[:, 1] - face) < 0.1 * cp.packing.r.min()
+    assert on_bottom.any() and np.all(np.isin(c.disc, np.flatnonzero(cp.packing.mobile)))
+    assert c.force[on_bottom, 1].sum() == pytest.approx(cp.wall_loads()["bottom"][0], rel=1e-9 if law == "yade" else 0.1)
+    h = read_history(str(tmp_path / "history.csv"))
+    assert h["sv_band1"][-1] > 0 and np.isfinite(h["ru_band1"][1:]).all()
+    if law == "yade":  # YADE finds its contacts in the first step: r_u's reference is the second row
+        assert h["sv_band1"][0] == 0 and np.isnan(h["ru_band1"][0])

@@ -84,7 +84,7 @@ def test_the_same_process_holds_a_folder_once_and_releases_it_at_the_outermost_e
 
 
 def test_a_scene_script_refuses_a_held_folder_in_one_line(tmp_path):
-    from engines.run.command_line import check_resume
+    from engines.run.preflight import check_resume
     from yade_scripts import quicksand
     out = tmp_path / "run"
     with Holder(out) as other:

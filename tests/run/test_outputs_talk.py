@@ -31,9 +31,16 @@ def test_a_quick_sand_history_has_only_its_columns_a_row_and_a_snapshot_at_the_e
     r, summary = run("quicksand_case1", tmp_path)
     h = read_history(str(tmp_path / "history.csv"))
     assert list(h) == ["t", "U_block1", "U_block2", "porosity", "kinetic_energy", "water_balance_error", "total_water",
-                       "n_pores", "fn_bottom_mean", "bed_top", "remesh_change"]  # no base motion, no side springs
-    for name, values in h.items():
-        assert not np.all(np.isnan(values)), name
+                       "n_pores", "fn_bottom_mean", "bed_top", "remesh_change"] + \
+        [f"{q}_band{k}" for q in ("sv", "p", "q", "sxz", "ru") for k in range(1, 9)]  # no base motion, no side springs
+    for name, values in h.items():  # a band above the top pore has no pore and no r_u
+        assert not np.all(np.isnan(values)) or name.startswith("ru_band"), name
+    assert np.isfinite(h["ru_band1"]).all() and h["ru_band1"][0] == 0 and h["sv_band1"][0] > 0
+    bands = summary["results"]["bands"]
+    assert bands["band1"]["ru_max"] == pytest.approx(np.max(h["ru_band1"]), rel=1e-6) and bands["band1"]["p_ratio_min"] > 0
+    assert summary["band_sigma_v0_Pa"] == pytest.approx([h[f"sv_band{k}"][0] for k in range(1, 9)], rel=1e-6)
+    assert summary["history_units"]["sv_band1"] == "Pa" and summary["history_units"]["ru_band8"] == "1"
+    assert summary["history_units"]["sxz_band1"] == "Pa" and np.all(np.abs(h["sxz_band1"]) <= h["q_band1"] * (1 + 1e-6))
     assert h["t"][-1] == pytest.approx(STEPS * r.scene.numerics.dt, rel=1e-9) and len(h["t"]) == STEPS // 100 + 2
     assert [f.rsplit("/", 1)[-1] for f in snapshot_files(str(tmp_path))] == ["snapshot_000.00ms.npz",
                                                                               "snapshot_001.05ms.npz"]

@@ -74,6 +74,21 @@ def test_paths_resolve_against_the_file_that_names_them(tmp_path):
     assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
 
 
+def test_a_preset_name_stands_for_its_file_in_load_and_extends(tmp_path):
+    """--scene and extends take a preset's name (engines.run.scene.resolve) as well as a path."""
+    assert scenes.load("quicksand_case2").as_dict() == scenes.preset("quicksand_case2").as_dict()
+    mine = tmp_path / "mine.toml"
+    mine.write_text('extends = "quicksand_case2"\n[water]\nk2 = 0.5\n')
+    sc = scenes.load(str(mine))
+    assert sc.water.k2 == 0.5 and sc.water.k1 == scenes.preset("quicksand_case2").water.k1
+    assert sc.packing.file == os.path.join(scenes.SCENE_DIR, "quicksand_packing.csv")
+    with pytest.raises(scenes.SceneError, match=r"scene 'quicksand_case9': no preset of that name \(presets: .*quicksand_case1"):
+        scenes.load("quicksand_case9")
+    mine.write_text('extends = "nosuch"\n')
+    with pytest.raises(scenes.SceneError, match=r"mine.toml: extends: scene 'nosuch': no preset"):
+        scenes.load(str(mine))
+
+
 def test_extends_loops_and_bad_extends_are_refused(tmp_path):
     (tmp_path / "a.toml").write_text('extends = "b.toml"\n[scene]\nname = "a"\n')
     (tmp_path / "b.toml").write_text('extends = "a.toml"\n')
@@ -131,3 +146,14 @@ def test_flat_walls_follow_a_loading_but_are_not_on_springs():
         scenes.preset("liquefaction_case1", {"walls": {"kind": "flat"}})
     assert "\n" not in str(e.value)
     assert scenes.preset("quicksand_case1", {"walls": {"kind": "flat"}}).walls.kind == "flat"  # the paper's law too
+
+
+def test_every_preset_states_the_papers_transfer():
+    """The presets keep the paper's re-meshing (the cross-check's reference), whatever the field's
+    default: each base preset states transfer = "paper", the others extend one."""
+    names = sorted(f[:-5] for f in os.listdir(scenes.SCENE_DIR) if f.endswith(".toml"))
+    assert len(names) >= 10
+    for name in names:
+        assert scenes.preset(name).water.transfer == "paper", name
+        raw = open(os.path.join(scenes.SCENE_DIR, name + ".toml")).read()
+        assert "extends = " in raw or 'transfer = "paper"' in raw, name

@@ -156,3 +156,16 @@ def test_the_judged_figure_s_key_covers_no_panel(monkeypatch):
     for ax in fig.axes:
         panel = ax.get_window_extent()
         assert box.y1 <= panel.y0 or box.x1 <= panel.x0 or panel.x1 <= box.x0
+
+
+def test_the_shipped_fit_is_the_calibration_of_the_committed_judged_record():
+    """docs/biaxial/judged_fit.json (calibrate.py --fit on a fresh tree) is what run_judged saves
+    from the runs of docs/biaxial/judged.json: the same rows and eq 4 fits."""
+    import os
+    from dataclasses import asdict
+
+    from engines import ROOT
+    rec = json.load(open(os.path.join(ROOT, "docs", "biaxial", "judged.json")))
+    cal = bj.calibration(rec["rows"], {r["phi_e_deg"]: (r["eq4"]["A"], r["eq4"]["m"]) for r in rec["rows"] if "eq4" in r})
+    shipped = Calibration.load(os.path.join(ROOT, "docs", "biaxial", "judged_fit.json"))
+    assert asdict(shipped) == asdict(cal) and shipped.phi_e == [5.0, 10.0, 15.0]

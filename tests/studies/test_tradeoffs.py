@@ -355,3 +355,14 @@ def test_presets_are_the_study_defaults():
         for key, value in setting.items():
             if key.startswith("numerics."):
                 assert getattr(num, key.split(".", 1)[1]) == value, (setting["name"], key)
+
+
+def test_verdict_passes_resolved_estimates_fails_one_above_the_target_and_ignores_the_diagnostic():
+    from engines.studies.tradeoffs_judged import TARGET, verdict
+
+    def m(estimate, sigma):
+        return {"systematic": estimate, "sigma": sigma}
+    assert verdict({"pressure_rms": m(0.01, 0.01), "block_mean_1": m(TARGET - 0.02, 0.01)}) == "pass"
+    assert verdict({"pressure_rms": m(TARGET - 0.01, 0.01)}) == "not resolved"
+    assert verdict({"settlement": m(TARGET + 0.01, 0.0), "porosity_change": m(0.0, 0.0)}) == "fail"
+    assert verdict({"settlement": m(0.01, 0.0), "pressure_rms_below_surface": m(0.5, 0.1)}) == "pass"

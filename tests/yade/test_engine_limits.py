@@ -23,7 +23,10 @@ def column(settings=STIFF, water_interval=1, **kw):
     O.engines = ex.engines()
     O.dt = 1e-6
     ids = kw.pop("ids", bottom + left + right + grains)
-    return WaterEngine(ids, walls={"bottom": bottom, "left": left, "right": right}, settings=settings,
+    if kw.pop("ids_drop_first", False):
+        ids = ids[1:]
+    walls = {"bottom": bottom, "left": left, "right": right, **kw.pop("walls_extra", {})}
+    return WaterEngine(ids, walls=walls, settings=settings,
                        l_m=kw.pop("l_m", 1.3e-4), water_interval=water_interval, **kw)
 
 
@@ -45,6 +48,40 @@ def test_a_larger_o_dt_is_checked_at_the_next_water_step():
     O.dt = 50 * O.dt
     with pytest.raises(WaterStiffnessError, match=r"O.dt changed.*set WaterEngine water_interval= <= 0|reduce O.dt"):
         water.drive(5, lambda: False)
+
+
+def test_water_interval_set_on_a_live_engine_is_checked_and_the_runner_follows():
+    """water.water_interval = M between steps: above the stiffness limit refused naming the largest
+    stable value (the old interval kept); a stable M takes effect at the next water step, the
+    PyRunner then calls every M steps; not an integer >= 1: refused."""
+    from yade import O
+    water = column(water_interval=1)
+    O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+    O.run(3, True)
+    with pytest.raises(WaterStiffnessError, match=r"when water_interval was set at step 3 .*water_interval= <= "):
+        water.water_interval = 200
+    assert water.water_interval == 1
+    with pytest.raises(WaterStiffnessError) as e:
+        water.water_interval = 200
+    largest = int(str(e.value).split("water_interval= <= ")[1].split()[0])
+    assert largest >= 2
+    water.water_interval = largest
+    assert water.model.schedule.k_water == 3 and water.arguments["water_interval"] == largest
+    calls = []
+    seen = water.__class__.__call__
+
+    def counted(self):
+        calls.append(O.iter)
+        seen(self)
+    water.__class__.__call__ = counted
+    try:
+        O.run(2 * largest + 1, True)
+    finally:
+        water.__class__.__call__ = seen
+    assert calls == [3, 3 + largest, 3 + 2 * largest]
+    for bad in (0, 2.5, True):
+        with pytest.raises(ValueError, match="water_interval = .*integer >= 1"):
+            water.water_interval = bad
 
 
 def test_buoyancy_follows_the_newton_integrators_gravity():
@@ -141,3 +178,58 @@ def test_a_drained_flat_wall_without_k3_is_refused():
     from engines.yade.water_engine import WaterEngine
     with pytest.raises(ContractError, match=f"body {wall}: a drained flat wall with k3 = 0.*k3 > 0.*'undrained'"):
         WaterEngine(grains, walls={}, settings=WaterSettings(), l_m=1.3e-4, flat_walls={wall: "drained"})
+
+
+def _watched(path, monkeypatch, steps=800, water_interval=40):
+    """(worst max |dA| / A, lowest U / E_w) the accuracy watch saw on viscel_column's column driven
+    ``steps`` steps with water every ``water_interval`` steps on one path of WaterEngine."""
+    from engines.yade import water_engine, yade_io
+    if path in ("drive", "chunks") and yade_io.BACKEND != "yadebulk":
+        pytest.skip("the compiled drive needs the bulk bridge (make ext)")
+    if path == "kernel":
+        monkeypatch.setattr(water_engine, "water_path", lambda compiled, bridge=False: "kernel")
+    water = column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=water_interval,
+                   compiled=path != "python", accept_inaccurate=True)
+    water.drive(steps, None if path == "chunks" else (lambda: False))
+    monkeypatch.undo()
+    return water.model.watch.worst, water.model.watch.lowest
+
+
+def test_the_accuracy_watch_sees_every_water_step_on_every_path(monkeypatch):
+    """The NumPy model (Python at each water step), kernels.water_step between Python's reads and
+    writes, the compiled drive one water step a call (a PyRunner's path) and in chunks of many
+    water steps: the watch sees the same largest area change and lowest U (the chunks' water steps
+    compared one with the next inside the kernel, kernels.watch_areas)."""
+    worst, lowest = _watched("python", monkeypatch)
+    assert 1e-4 < worst < 0.5
+    for path in ("kernel", "drive", "chunks"):
+        got = _watched(path, monkeypatch)
+        np.testing.assert_allclose(got, (worst, lowest), rtol=1e-6, atol=1e-12, err_msg=path)
+
+
+def test_the_compiled_drive_stops_at_an_area_change_above_the_stop_threshold():
+    """A water step far too long for the discs' motion, run in the compiled drive's chunks: stopped
+    by the watch (AccuracyError naming water_interval) unless accepted."""
+    from engines.model.limits import AccuracyError
+    from engines.yade import yade_io
+    if yade_io.BACKEND != "yadebulk":
+        pytest.skip("the compiled drive needs the bulk bridge (make ext)")
+    water = column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=10)
+    water.model.watch.warn = water.model.watch.stop = 1e-5
+    with pytest.raises(AccuracyError, match="in one water step of 1e-05 s .*water_interval"):
+        water.drive(400)
+
+
+def test_unknown_wall_groups_walls_outside_disc_ids_and_no_o_dt_are_refused():
+    from yade import O
+    with pytest.raises(ValueError, match=r"walls: unknown group 'top'; known: \['bottom', 'left', 'right'\]"):
+        column(WaterSettings(E_w=240.0), walls_extra={"top": [0]})
+    with pytest.raises(ValueError, match=r"walls\['bottom'\]: ids \[0\] are not among disc_ids"):
+        column(WaterSettings(E_w=240.0), ids_drop_first=True)
+    from engines.yade.water_engine import WaterEngine
+    from yade_scripts.examples import viscel_column as ex
+    bottom, left, right, grains = ex.build_column()
+    O.engines = ex.engines()
+    O.dt = 0.0
+    with pytest.raises(ValueError, match="set O.dt before creating the WaterEngine"):
+        WaterEngine(bottom + grains, walls={"bottom": bottom}, settings=WaterSettings(E_w=240.0), l_m=1.3e-4)

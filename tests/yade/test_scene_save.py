@@ -168,3 +168,54 @@ def test_a_py_runner_calls_its_callback_through_its_module():
     assert calls == [0, 2, 4]
     assert "import engines.yade.yade_io as _pw" in O.engines[0].command
     assert not hasattr(builtins, "_pore_dem_engines")
+
+
+def _driven():
+    """viscel_column's column with a WaterEngine driven from Python (no runner, so no saved water)."""
+    from yade import O
+
+    from engines.model.pore_water import WaterSettings
+    from tests.yade.test_engine_limits import column as limits_column
+    return limits_column(WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=5e-4), water_interval=10), O
+
+
+@pytest.mark.parametrize("stop", [None, lambda: False], ids=["chunks", "python"])
+def test_an_earlier_scene_loaded_without_the_engines_water_stops_drive_in_one_line(stop):
+    """O.saveTmp, drive on, O.loadTmp: the engine (its water of the later step, no runner, no tag)
+    stops at once naming the two ways out, whether drive steps from Python or in compiled chunks."""
+    water, O = _driven()
+    water.drive(50, stop)
+    O.saveTmp("earlier")
+    water.drive(50, stop)
+    O.loadTmp("earlier")
+    with pytest.raises(scene_save.RestoreError, match=r"went back from step 100 to step 50 .*scene_save.*make the "
+                                                      r"WaterEngine again") as e:
+        water.drive(10, stop)
+    assert "\n" not in str(e.value) and O.iter == 50
+
+
+def test_centres_that_jump_between_water_steps_stop_the_engine_but_a_dry_run_does_not():
+    """A grain put 0.8 of its radius away between two water steps (drive, or the PyRunner: the error
+    pauses YADE and raise_pending raises it) is refused naming it; steps run without the engine
+    (more than a water interval) are not a jump."""
+    water, O = _driven()
+    water.drive(20)
+    g = int(water.io.ids[water._dynamic[-1]])
+    r = water.model.r[water._dynamic[-1]]
+    p = O.bodies[g].state.pos
+    O.bodies[g].state.pos = (p[0] + 0.8 * r, p[1], p[2])
+    with pytest.raises(scene_save.RestoreError, match=f"body {g}: moved .* \\(0.8 of its radius\\) since the water "
+                                                      f"step"):
+        water.drive(5)
+    O.bodies[g].state.pos = p
+    water.drive(5)
+    O.engines = O.engines[:-1] + [water.runner(), O.engines[-1]]
+    O.run(15, True)
+    O.bodies[g].state.pos = (p[0], p[1], p[2] + 0.8 * r)
+    O.run(20, True)
+    with pytest.raises(scene_save.RestoreError, match=f"body {g}: moved"):
+        yade_io.raise_pending()
+    O.bodies[g].state.pos = p
+    O.engines = [e for e in O.engines if type(e).__name__ != "PyRunner"]
+    O.run(500, True)  # dry steps: the grains settle on without the water
+    water.drive(10)

@@ -80,7 +80,7 @@ def test_the_engine_with_flat_walls_is_the_same_by_runner_compiled_drive_and_num
     runs = []
     for how, compiled in (("runner", True), ("compiled", True), ("runner", False)):
         bottom, left, right, grains = ex.build_box()
-        water = WaterEngine(grains, {}, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4), l_m=1.3e-4,
+        water = WaterEngine(grains, {}, WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=1e-4, transfer="paper"), l_m=1.3e-4,
                             water_interval=4, compiled=compiled,
                             flat_walls={bottom: "inflow", left: "undrained", right: "undrained"})
         if how == "runner":

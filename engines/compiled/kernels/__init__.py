@@ -79,7 +79,7 @@ from engines.compiled.kernels.measure import (areas_in_range, link_geometry, Lin
 from engines.compiled.kernels.darcy import (darcy_flows, darcy_update, gershgorin_limit, permeability, substep_count,
     throat_sums)
 from engines.compiled.kernels.water_step import (AREAS_OUT_OF_RANGE, flat_wall_forces, _part, pressure_forces, WATER,
-    WATER_FLOATS, WATER_INTS, water_net, water_step, WaterNet)
+    WATER_FLOATS, WATER_INTS, watch_areas, water_net, water_step, WaterNet)
 from engines.compiled.kernels.ties import (forces_to_write, no_tie_args, tie_args, tie_forces, TIES)
 from engines.compiled.kernels.separation import free_discs, separation_velocities
 from engines.compiled.kernels.base_motion import base_step, MOTION, sampled_acceleration

@@ -29,7 +29,8 @@ WATER_FLOATS = Layout("WATER_FLOATS", (
     "poly", "sect", "void", "length", "contact", "vec", "right",                                # measure
     "q", "q_s", "q_d", "q_in", "g", "g_b", "U", "acc_i", "acc_j", "rate", "out_i", "out_j",     # flows
     "balance", "Fj", "lam", "has_q_prev", "check_areas",              # update, forces, eq 46, rebuild trigger
-    "wall_position", "vertices", "F_walls"))                                          # flat walls
+    "wall_position", "vertices", "F_walls",                                           # flat walls
+    "A_watch", "watch"))                                                              # the accuracy watch
 
 
 WaterNet = namedtuple("WaterNet", WATER_INTS.names + WATER_FLOATS.names)
@@ -119,7 +120,8 @@ def water_net(ints, i_at, floats, f_at):
         _part(floats, f_at, WATER_FLOATS.lam), _part(floats, f_at, WATER_FLOATS.has_q_prev),
         floats[f_at[WATER_FLOATS.check_areas]],
         _part(floats, f_at, WATER_FLOATS.wall_position), _part2(floats, f_at, WATER_FLOATS.vertices),
-        _part(floats, f_at, WATER_FLOATS.F_walls))
+        _part(floats, f_at, WATER_FLOATS.F_walls),
+        _part(floats, f_at, WATER_FLOATS.A_watch), _part(floats, f_at, WATER_FLOATS.watch))
 
 
 @jit
@@ -176,7 +178,25 @@ def water_step(xz, h, W, A_prev, q_prev, smoothing, substep, F_water, ints, i_at
     pressure_forces(net.links, net.link_pores, net.r, net.U, net.length, net.vec, F_water, net.Fj)
     if len(net.wall_axis):
         flat_wall_forces(net.wall_edge, net.wall_edge_wall, net.link_pores, net.U, net.length, net.F_walls)
+    watch_areas(net.void, net.U, net.a_min, net.wp[WATER_PRM.E_w], net.A_watch, net.watch)
     return n_sub
+
+
+@jit
+def watch_areas(void, U, a_min, E_w, A_watch, watch):
+    """Twin of engines.model.limits.area_change and AccuracyWatch's lowest U / E_w, at each water
+    step: watch = (1 once A_watch (Np,) [m^2] holds the void areas of the last water step on these
+    pores, the largest max |dA| / A and the lowest U / E_w since the caller last reset them)."""
+    ratio = 0.0
+    if watch[0] != 0.0:
+        for p in range(len(void)):
+            if A_watch[p] > a_min and void[p] > a_min:
+                ratio = max(ratio, abs(void[p] - A_watch[p]) / A_watch[p])
+    for p in range(len(void)):
+        A_watch[p] = void[p]
+        watch[2] = min(watch[2], U[p] / E_w)
+    watch[0] = 1.0
+    watch[1] = max(watch[1], ratio)
 
 
 WATER = Layout.of(water_step, 1)  # the arguments of water_step after xz

@@ -301,14 +301,28 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     RuntimeError if the equilibrium is not reached within settings.max_equilibrium_time."""
     import time
 
-    from yade import O, utils
-    from yade.minieigenHP import Matrix3
+    from yade import O
 
-    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
     from engines.seeds.biaxial.specimen import BiaxialResult, Curve
 
     t0 = time.time()
     s = settings
+    eq, pack = _periodic_rest(block, contact, s, log)
+    a = _periodic_compression(block, contact, s, pack)
+    curve = Curve(s.sigma3, a["strain"], a["sigma1"], a["sigma1"], a["sigma3_applied"], a["lateral_strain"])
+    res = BiaxialResult(curve, s, eq, O.iter, time.time() - t0)
+    if log:
+        log(res.describe())
+    return res
+
+
+def _periodic_rest(block, contact, s, log):
+    """The block rebuilt in its periodic cell and servoed on σ3 in both directions to rest
+    (run_periodic_biaxial); returns (the equilibrium's record, the servo's PackingSettings)."""
+    from yade import O, utils
+
+    from engines.seeds.biaxial.cem_contact import add_discs, check_dt, py_runner, yade_engines
+
     check_dt(s.dt, block.r, contact)
     depth = block.info["depth_m"]
     O.reset()
@@ -317,8 +331,6 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     add_discs(block.xz, block.r, contact, y=depth / 2)
     pack = PackingSettings(dt=s.dt)
     st = {"done": False, "sigma": (0.0, 0.0), "target": s.sigma3}
-    rec = {k: [] for k in ("strain", "sigma1", "sigma3_applied", "lateral_strain")}
-    size = lambda: (float(O.cell.hSize[0, 0]), float(O.cell.hSize[2, 2]))  # noqa: E731
     O.engines = yade_engines([py_runner(rest_servo(servo_rates(block.r, contact, pack), depth, s.tolerance,
                                                    s.unbalanced, st), pack.check_every)])
     O.dt = s.dt
@@ -328,6 +340,20 @@ def run_periodic_biaxial(block, contact, settings, log=None):
           "moves": 0, "steps": O.iter, "time_s": O.time}
     if log:
         log(f"  sigma3 = {s.sigma3:g} Pa: periodic equilibrium sigma_x = {sx:.2f}, sigma_z = {sz:.2f} Pa after {O.iter} steps")
+    return eq, pack
+
+
+def _periodic_compression(block, contact, s, pack):
+    """The test from rest (run_periodic_biaxial): z shrinks at the strain rate (ramped), x servoed
+    on σ3; returns the records {strain, sigma1, sigma3_applied, lateral_strain} as arrays."""
+    from yade import O
+    from yade.minieigenHP import Matrix3
+
+    from engines.seeds.biaxial.cem_contact import py_runner, yade_engines
+
+    depth = block.info["depth_m"]
+    rec = {k: [] for k in ("strain", "sigma1", "sigma3_applied", "lateral_strain")}
+    size = lambda: (float(O.cell.hSize[0, 0]), float(O.cell.hSize[2, 2]))  # noqa: E731
     lx0, lz0 = size()
     t_start = O.time
 
@@ -352,9 +378,4 @@ def run_periodic_biaxial(block, contact, settings, log=None):
     O.engines = yade_engines([py_runner(control, pack.check_every), py_runner(record, every)])
     O.run(int(1.5 * s.max_strain / s.strain_rate / s.dt) + every + int(s.ramp_time / s.dt), True)
     O.cell.velGrad = Matrix3(0, 0, 0, 0, 0, 0, 0, 0, 0)
-    a = {k: np.array(v) for k, v in rec.items()}
-    curve = Curve(s.sigma3, a["strain"], a["sigma1"], a["sigma1"], a["sigma3_applied"], a["lateral_strain"])
-    res = BiaxialResult(curve, s, eq, O.iter, time.time() - t0)
-    if log:
-        log(res.describe())
-    return res
+    return {k: np.array(v) for k, v in rec.items()}
