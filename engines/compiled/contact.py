@@ -73,8 +73,6 @@ class ContactLaw(contact.ContactLaw):
         return self._F, self._M, self._separations(xz, self._lost[:n_lost])
 
     def _stepped_state(self, xz, du, dpsi, dt, i, j, state):
-        new, n = state.copy(), self.n
-        kernels.contact_forces(xz, du, dpsi, kernels.ContactArgs(
-            r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
-            F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
+        new = state.copy()
+        kernels.stepped_state(xz, du, dpsi, self.r, i, j, new, kernels.contact_params(self.s, dt), self._spring)
         return new

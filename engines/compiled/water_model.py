@@ -97,10 +97,8 @@ class WaterModel(water_model.WaterModel):
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
-        out = kernels.new_measures(net.n_pores, len(net.links))
-        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), self.eps_m,
-                        kernels.link_geometry(net), out)
-        return out.void
+        return kernels.void_areas(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), self.eps_m,
+                                  *kernels.link_geometry(net))
 
     def advance(self, h, xz, k=None):
         """As engines.model.water_model.WaterModel.advance, by kernels.water_step."""

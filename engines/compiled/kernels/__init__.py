@@ -72,10 +72,10 @@ written into arrays the caller owns (allocated once per network or contact list)
 first use and caches the machine code (``cache=True``); fastmath is off.
 """
 from engines.compiled.kernels.law import (CONTACT, contact_forces, contact_params, ContactArgs, LAW, LAW_OWN,
-    law_step, LIST_STALE, max_sq_displacement, spin_update, SPRING_CODE, with_pairs)
+    law_step, LIST_STALE, max_sq_displacement, spin_update, SPRING_CODE, stepped_state, with_pairs)
 from engines.compiled.kernels.pair_grid import (_grid, _groups, _grown, near_pairs, _within)
 from engines.compiled.kernels.measure import (areas_in_range, link_geometry, LinkGeometry, measure, Measures,
-    new_measures, place_wall_vertices, SMALL_TURN, turn)
+    new_measures, place_wall_vertices, SMALL_TURN, turn, void_areas)
 from engines.compiled.kernels.darcy import (darcy_flows, darcy_update, gershgorin_limit, permeability, substep_count,
     throat_sums)
 from engines.compiled.kernels.water_step import (AREAS_OUT_OF_RANGE, flat_wall_forces, _part, pressure_forces, WATER,

@@ -163,8 +163,7 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
         rc = _read_positions(bridge[BRIDGE.get_pos], ids_in, xz)
         if rc != 0:
             return s, s, False, 1, rc, builds, contact.pi, contact.pj, contact.state, contact.lost
-        water_due = wet and s == next_water
-        next_water += water_interval if s == next_water else 0
+        water_due, next_water = _water_due(wet, s, next_water, water_interval)
         n_lost, contact, built = _law_step_listed(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile,
                                                   dt, contact, skin)
         builds += built
@@ -195,6 +194,14 @@ def dem_drive_bulk_io(bridge, n, k, step_last, water_in, water_interval, adjust,
 
 
 DEM_DRIVE = Layout.of(dem_drive_bulk_io, 20).check(("rows", "held"), LAW_OWN, CONTACT, WATER, TIES)
+
+
+@jit
+def _water_due(wet, s, next_water, water_interval):
+    """(Is step s of a drive's call a water step of a ``wet`` scene, the step of the water after
+    it): the water at next_water, then every water_interval (engines.model.schedule.Schedule)."""
+    due = s == next_water
+    return wet and due, next_water + water_interval if due else next_water
 
 
 @jit

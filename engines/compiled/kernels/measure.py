@@ -88,6 +88,18 @@ def measure(xz, r, eps_m, geometry, out):
 
 
 @jit
+def void_areas(xz, r, eps_m, links, link_pores, vec0, turn_weight, sector0):
+    """The void areas (Np,) [m^2] of ``measure`` at xz of the LinkGeometry given by its arrays, its
+    Measures made here: from Python, arrays spelled out take numba's fast argument check, where a
+    tuple of arrays is typed in Python at every call (~50 us)."""
+    n_p, n_l = len(sector0), len(links)
+    out = Measures(np.empty(n_p), np.empty(n_p), np.empty(n_p), np.empty(n_l), np.empty(n_l, np.bool_),
+                   np.empty((n_l, 2)), np.empty((n_p, 2)))
+    measure(xz, r, eps_m, LinkGeometry(links, link_pores, vec0, turn_weight, sector0), out)
+    return out.void
+
+
+@jit
 def areas_in_range(void, poly):
     """Twin of engines.model.schedule.areas_in_range: 0 <= A <= polygon area in every pore."""
     for p in range(len(void)):
