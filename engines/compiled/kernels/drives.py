@@ -10,7 +10,7 @@ from llvmlite import ir
 from numba.extending import intrinsic
 
 from engines.compiled.kernels.base_motion import base_step, MOTION
-from engines.compiled.kernels.common import jit
+from engines.compiled.kernels.common import jit, jit_inline
 from engines.compiled.kernels.law import (CONTACT, ContactArgs, law_step, LAW_OWN, LIST_STALE, max_sq_displacement,
                                           with_pairs)
 from engines.compiled.kernels.pair_grid import near_pairs
@@ -204,7 +204,7 @@ def _water_due(wet, s, next_water, water_interval):
     return wet and due, next_water + water_interval if due else next_water
 
 
-@jit
+@jit_inline
 def _law_step_listed(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact, skin):
     """``law_step`` (LAW), its pair list rebuilt once at xz when stale (``near_pairs`` with the
     list's skin [m]; xz_list overwritten). Returns (law_step's answer, the ContactArgs of the
@@ -222,7 +222,7 @@ def _law_step_listed(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia,
     return n_lost, contact, built
 
 
-@jit
+@jit_inline
 def _adjust_separations(set_vel, ids, contact, n_lost, xz, du, dt, mass, mobile, e, V):
     """The eq 18-24 adjustment of a step whose pairs contact.lost[:n_lost] stopped touching: the
     discs set free (``free_discs``) get their ``separation_velocities`` (V (N, 2) [m/s]) by the

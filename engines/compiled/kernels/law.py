@@ -8,7 +8,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from engines.compiled.kernels.common import _at, _beyond, jit
+from engines.compiled.kernels.common import _at, _beyond, jit, jit_inline
 from engines.compiled.layout import Layout
 from engines.compiled.params import CONTACT_PRM
 from engines.model.contact import E_N, E_S, F_N, TOUCHING, U_N, VN_COLL  # the state columns, numba constants
@@ -29,13 +29,13 @@ ContactArgs = namedtuple("ContactArgs", ("r", "pi", "pj", "state", "prm", "sprin
 CONTACT = Layout("CONTACT", ContactArgs._fields)
 
 
-@jit
+@jit_inline
 def with_pairs(c, pi, pj, state, lost):
     """The ContactArgs c on another pair list (pi, pj, state, lost)."""
     return ContactArgs(c.r, pi, pj, state, c.prm, c.spring, c.F, c.M, c.acc_j, lost)
 
 
-@jit
+@jit_inline
 def contact_forces(xz, du, dpsi, c):
     """Forces c.F (N, 2) and moments c.M (N,) of all pairs (c.pi, c.pj) of the ContactArgs c;
     updates c.state (m, 6) in place.
@@ -165,7 +165,7 @@ def spin_update(omega, M, inertia, mobile, dt):
             omega[a] += M[a] / inertia[a] * dt
 
 
-@jit
+@jit_inline
 def law_step(xz, xz_prev, xz_list, half_skin2, omega, dpsi, du, inertia, mobile, dt, contact):
     """One step of PaperLaw: du = xz - xz_prev (eq 17), dpsi = omega dt, the contact forces F, M
     (``contact_forces`` of the ContactArgs ``contact``), omega += M / I dt (eq 14c, 16c), xz_prev <- xz.
