@@ -132,6 +132,7 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     import numpy as np
 
     from engines.compiled import kernels
+    from engines.compiled.params import WATER_PRM
     from engines.yade import yade_io, yadebulk
     from engines.yade.coupling import YadeCoupling
 
@@ -187,16 +188,15 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
     law.contact._update_list(xz)
     law_args, water_args = law.kernel_args(), wm.kernel_args(wm.schedule.water_interval * law.dt)
     part, net = wm._part, wm.water.net
-    geometry = (xz, part("r"), net.links, net.link_pores, part("vec0").reshape(-1, 2), part("turn_weight"),
-                part("sector0"), wm.eps_m, part("poly"), part("sect"), part("void"), part("length"), part("contact"),
-                part("vec").reshape(-1, 2), part("right").reshape(-1, 2))
-    flow = (wm.water.W, part("void"), part("contact"), net.throat_conns[:, 0].copy(), net.throat_conns[:, 1].copy(),
-            net.throat_link, net.a_min, part("surface"), part("drained"), part("bottom"), part("wp"), part("q"),
-            part("q_s"), part("q_d"), part("q_in"), part("g"), part("g_b"), part("U"), part("acc_i"), part("acc_j"),
-            part("rate"), part("out_i"), part("out_j"))
+    geometry = (xz, part("r"), wm.eps_m,
+                kernels.LinkGeometry(net.links, net.link_pores, part("vec0").reshape(-1, 2), part("turn_weight"),
+                                     part("sector0")),
+                kernels.Measures(part("poly"), part("sect"), part("void"), part("length"), part("contact"),
+                                 part("vec").reshape(-1, 2), part("right").reshape(-1, 2)))
     wa = dict(zip(kernels.WATER.names, water_args))
+    flow = (wm.water.W, part("void"), wa["ints"], wa["i_at"], wa["floats"], wa["f_at"])
     update = (wm.water.W, wa["h"], part("out_i"), part("out_j"), part("q_s"), part("q_d"), part("q_in"),
-              part("balance"), part("void"), wm.wp[0], part("U"))
+              part("balance"), part("void"), wm.wp[WATER_PRM.E_w], part("U"))
     forces = (net.links, net.link_pores, part("r"), part("U"), part("length"), part("vec").reshape(-1, 2), wa["F_water"],
               part("Fj").reshape(-1, 2))
     drive_args = core.kernel_drive_args(eng._dynamic, eng.held, 1)
@@ -211,7 +211,8 @@ def breakdown(scene, packing, steps=3000, repeats=5, warmup=1100, calls=2000):
         "side-wall ties (kernels.tie_forces)": (kernels.tie_forces, (xz, law.du, law.dt) + core._tie_args),
         "water (kernels.water_step)": (kernels.water_step, (xz,) + water_args),
         "  of which pore measure (kernels.measure)": (kernels.measure, geometry),
-        "  of which flows (kernels.darcy_flows)": (kernels.darcy_flows, flow),
+        "  of which flows (kernels.darcy_flows)": (numba.njit(lambda W, A, *buffers: kernels.darcy_flows(
+            W, A, kernels.water_net(*buffers))), flow),
         "  of which the update and eq 32 (kernels.darcy_update)": (kernels.darcy_update, update),
         "  of which eq 33 forces (kernels.pressure_forces)": (kernels.pressure_forces, forces),
         "bridge: read positions (get_pos)": (kernels.read_bulk_io, bridge[0]),

@@ -58,8 +58,8 @@ def _loop(n, bridge, junk, read, water, write, steps, ids_in, xz, ids_out, F_out
         if read:
             kernels._read_positions(bridge[kernels.BRIDGE.get_pos], ids_in, xz)
         if water:
-            kernels.water_forces_step(xz, F_out, rows, held, h, W, A_prev, q_prev, smoothing, substep, F_water,
-                                      ints, i_at, floats, f_at)
+            kernels.water_forces_step(xz, F_out, rows, held, (h, W, A_prev, q_prev, smoothing, substep, F_water,
+                                                              ints, i_at, floats, f_at))
         if write:
             kernels._write_forces(0, bridge[kernels.BRIDGE.write_forces], ids_out, F_out)
         if steps:

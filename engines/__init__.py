@@ -24,7 +24,7 @@ reference/), postproc/ (reads run files, draws figures; after studies/, never im
 run/), yade_scripts/ (thin command-line scripts, scenes/ presets), tests/ (mirrors this tree).
 
 One step k of the model (model/pore_dem.py, PoreDEM.step, the readable NumPy one; in YADE the one
-compiled step, compiled/kernels.py dem_drive_bulk_io, calls the same parts in the same order, n
+compiled step, compiled/kernels/drives.py dem_drive_bulk_io, calls the same parts in the same order, n
 steps a call, the bridge and the base motion of every input as its arguments (compiled/pore_dem.py
 kernel_drive_args); the engines choose their path in one place, yade/paper_law_engine.py
 step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
@@ -39,7 +39,7 @@ step_path and yade/water_engine.py water_path; the YADE law skips a-c and e):
                                                                                 eq 32-46
   e. spin                                             model/paper_law.py        eq 14c, 16c
   f. moving walls, side-wall ties                     model/ground_motion.py, model/side_walls.py
-     its twin for every input (cosine, sampled record) compiled/kernels.py base_step
+     its twin for every input (cosine, sampled record) compiled/kernels/base_motion.py
 What happens at step k (water due, pore rebuild due by interval, displacement or areas, output due,
 steps to the next event, counted from the model's start k0): model/schedule.py (Schedule), asked
 by the NumPy step, the compiled drives (given its steps to the water and to the next event),
@@ -57,15 +57,25 @@ in OpenPNM's vocabulary, for users, snapshots and VTK: model/network_view.py. Th
 of the contacts (Love-Weber) by band of the bed, per disc, and the pore-pressure ratio r_u (SPEC
 §2.8): model/effective_stress.py, from the contacts the step gives (PaperLaw.stress_contacts,
 YadeCoupling.stress_contacts).
-Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in compiled/kernels.py).
+Kernel arguments and buffers by name: compiled/layout.py (the lists themselves in the modules of
+compiled/kernels/, one concept each: law, pair_grid, measure, darcy, water_step, ties, separation,
+base_motion, drives).
+Parameter vectors by name (contact, water, ties, balance, Gershgorin bound): compiled/params.py,
+Layouts of the settings' field lists less the fields no kernel reads. No function takes more than
+12 parameters but the entry points of ENTRY_POINTS (tests/test_parameters.py): the two compiled
+drives, whose argument lists are their parts' layouts checked at import (DEM_DRIVE,
+WATER_FORCES_STEP), and WaterEngine.__init__, whose keywords are public (README, docs/ENGINE.md).
 What a checkpoint stores of each object (its CHECKPOINT_FIELDS, and CHECKPOINT_DERIVED with reasons):
 model/state.py; the file (data only, no pickle): yade/checkpoint.py; a WaterEngine's state in
 YADE's own O.save/O.load (O.tags, the same format): yade/scene_save.py.
 
 Where to add ...
-  a permeability law: PoreWater.flows in model/pore_water.py (eq 43: k1 across a gap, k2 across
-    a contact) and its twin darcy_flows in compiled/kernels.py; its constants in WATER_FIELDS
-    (model/pore_water.py: WaterSettings and the scene's [water] table are made from them).
+  a permeability law (eq 43: k1 across a gap, k2 across a contact; k1 at the free surface, k3
+    through drained walls): 3 places, the function ``permeability`` of each implementation
+    (model/pore_water.py, compiled/kernels/darcy.py, reference/model.py; tests/model/test_permeability.py
+    puts a toy law in the NumPy one's place). A new constant adds 4: WATER_FIELDS
+    (model/pore_water.py: WaterSettings, the scene's [water] table and the kernels' WATER_PRM are
+    made from it) and, in reference/model.py, its Settings field, read_settings and Water.__init__.
   a wall type (a boundary kind): one row of BOUNDARY_KINDS in model/groups.py (name; a disc group
     code, which packing files store, or a flat-wall word; what it does to a pore's water: surface,
     drained, inflow, undrained; a disc group's face). The pores' wall codes, the water's masks
@@ -75,8 +85,8 @@ Where to add ...
     group there and nowhere else). Besides: the independent reference (reference/model.py, its own
     codes and words: 1 file, 3-4 places) for the cross-check; a disc group the deposition should
     build, yade/deposition.py (1 place). A new action on the water (e.g. a fixed pressure) is a
-    physics change: WATER and the table, PoreWater.flows, its twins (compiled/kernels.py darcy_flows
-    and compiled/water_model.py) and the balance, and the reference: 5 files.
+    physics change: WATER and the table, PoreWater.flows, its twins (compiled/kernels/darcy.py
+    darcy_flows and compiled/water_model.py) and the balance, and the reference: 5 files.
   an output column: history_columns and Recorder.row in run/runner.py (only for the scenes that
     produce it), from what the coupling (yade/coupling.py) measured at the step; its unit in
     run/history.py (UNITS) and docs/OUTPUTS.md.
@@ -96,3 +106,7 @@ import os
 
 __version__ = "0.2.0.dev0"  # the one version: pyproject.toml reads it, every summary.json records it
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the project's folder
+# the functions of more than 12 parameters (tests/test_parameters.py), "path:function"
+ENTRY_POINTS = ("engines/compiled/kernels/drives.py:dem_drive_bulk_io",
+                "engines/compiled/kernels/drives.py:water_drive_bulk_io",
+                "engines/yade/water_engine.py:__init__")

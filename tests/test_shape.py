@@ -9,10 +9,7 @@ LIMIT = 60
 TOPS = ("engines", "packing", "postproc", "yade_scripts")
 # being split now by other helpers (the pores' and kernels' module split, the contact-law classes,
 # the coupling); the developer empties this list at merge
-BEING_SPLIT = {
-    ("engines/compiled/kernels.py", "dem_drive_bulk_io"),
-    ("engines/compiled/kernels.py", "contact_forces"),
-}
+BEING_SPLIT = set()
 
 
 def functions(tree, prefix=""):

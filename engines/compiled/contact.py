@@ -3,6 +3,7 @@ NumPy arithmetic kernels.contact_forces repeats (tests/compiled/test_kernels.py)
 import numpy as np
 
 from engines.compiled import kernels
+from engines.compiled.params import CONTACT_PRM
 from engines.model import contact
 
 
@@ -23,15 +24,15 @@ class ContactLaw(contact.ContactLaw):
         self._args = None
 
     def kernel_args(self, dt):
-        """The arguments of kernels.contact_forces after (xz, du, dpsi) (kernels.CONTACT) for a step
-        of dt [s]."""
-        if self._prm[-1] != dt:
+        """The argument of kernels.contact_forces after (xz, du, dpsi) (kernels.ContactArgs) for a
+        step of dt [s]."""
+        if self._prm[CONTACT_PRM.dt] != dt:
             self._prm = kernels.contact_params(self.s, dt)
             self._args = None
         if self._args is None:
-            self._args = kernels.CONTACT.values(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
-                                                spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
-                                                lost=self._lost)
+            self._args = kernels.ContactArgs(r=self.r, pi=self.i, pj=self.j, state=self.state, prm=self._prm,
+                                             spring=self._spring, F=self._F, M=self._M, acc_j=self._acc,
+                                             lost=self._lost)
         return self._args
 
     def _pairs_near(self, xz):
@@ -68,12 +69,10 @@ class ContactLaw(contact.ContactLaw):
 
     def forces(self, xz, du, dpsi, dt):
         self._update_list(xz)
-        n_lost = kernels.contact_forces(xz, du, dpsi, *self.kernel_args(dt))
+        n_lost = kernels.contact_forces(xz, du, dpsi, self.kernel_args(dt))
         return self._F, self._M, self._separations(xz, self._lost[:n_lost])
 
     def _stepped_state(self, xz, du, dpsi, dt, i, j, state):
-        new, n = state.copy(), self.n
-        kernels.contact_forces(xz, du, dpsi, *kernels.CONTACT.values(
-            r=self.r, pi=i, pj=j, state=new, prm=kernels.contact_params(self.s, dt), spring=self._spring,
-            F=np.empty((n, 2)), M=np.empty(n), acc_j=np.empty((n, 3)), lost=np.empty(len(i), np.int64)))
+        new = state.copy()
+        kernels.stepped_state(xz, du, dpsi, self.r, i, j, new, kernels.contact_params(self.s, dt), self._spring)
         return new

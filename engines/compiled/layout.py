@@ -19,7 +19,7 @@ class Layout(types.ModuleType):
     def __init__(self, kind, names):
         super().__init__(kind)
         names = tuple(names)
-        taken = {"names", "_get"} | set(dir(type(self))) | set(vars(self))
+        taken = {"names", "_get", "fields", "not_read"} | set(dir(type(self))) | set(vars(self))
         bad = sorted({n for n in names if names.count(n) > 1 or n in taken})
         if bad or len(names) < 2:
             raise ValueError(f"layout {kind}: two or more names, each once, none an attribute of Layout; got {bad or names}")
@@ -33,6 +33,23 @@ class Layout(types.ModuleType):
         """The parameters of the numba kernel ``kernel`` after its first ``skip``: the tuple of
         arguments a caller passes as ``kernel(first, ..., *values)``."""
         return cls(kernel.__name__, list(inspect.signature(kernel.py_func).parameters)[skip:])
+
+    @classmethod
+    def of_fields(cls, kind, fields, not_read, extra=()):
+        """The layout of a parameter vector: the names of ``fields`` (a settings' field list, in its
+        order) but those of ``not_read`` ({name: why no kernel reads it}, each a field), then the
+        names ``extra`` (values that are no field, e.g. dt). Kept as ``fields`` and ``not_read``."""
+        stray = sorted(set(not_read) - set(fields))
+        if stray:
+            raise ValueError(f"layout {kind}: {stray} listed as not read but no field of {sorted(fields)}")
+        layout = cls(kind, [n for n in fields if n not in not_read] + list(extra))
+        layout.fields, layout.not_read = tuple(fields), dict(not_read)
+        return layout
+
+    def vector(self, source=None, **given):
+        """The float vector of this layout: each name's value from ``given``, else the attribute of
+        ``source`` by that name (a settings object)."""
+        return np.array([given[n] if n in given else getattr(source, n) for n in self.names], float)
 
     def check(self, *parts):
         """This layout, checked to be ``parts`` one after the other (layouts, or tuples of names):

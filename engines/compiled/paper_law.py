@@ -33,13 +33,15 @@ class PaperLaw(paper_law.PaperLaw):
                 return self.contact._F, self.finish_kernel_step(xz, n_lost)
             self.contact._update_list(xz)
 
-    def kernel_args(self):
+    def kernel_args(self, flat=False):
         """The arguments of kernels.law_step after xz (kernels.LAW: LAW_OWN, then the contact's
-        CONTACT; after the first step)."""
+        kernels.ContactArgs; after the first step); ``flat``: with the ContactArgs' arrays in its
+        place (LAW_OWN, then CONTACT: those of kernels.dem_drive_bulk_io)."""
         c = self.contact
         return kernels.LAW_OWN.values(xz_prev=self.xz_prev, xz_list=c.xz_list, half_skin2=c.half_skin2,
                                       omega=self.omega, dpsi=self._dpsi, du=self.du, inertia=self.inertia,
-                                      mobile=self.mobile, dt=self.dt) + c.kernel_args(self.dt)
+                                      mobile=self.mobile, dt=self.dt) + (
+            tuple(c.kernel_args(self.dt)) if flat else (c.kernel_args(self.dt),))
 
     def finish_kernel_step(self, xz, n_lost):
         """The SeparationEvents of a law_step at xz that returned n_lost."""

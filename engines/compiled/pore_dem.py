@@ -2,15 +2,21 @@
 compiled law (engines.compiled.paper_law) and water (engines.compiled.water_model), and its steps
 in YADE as calls of kernels.dem_drive_bulk_io (law_step, tie_forces, water_step when due, the
 velocity adjustment, the base motion of every input: base_motion_args). No YADE."""
+from collections import namedtuple
+
 import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled.paper_law import PaperLaw
+from engines.compiled.params import BALANCE, balance_of, book_balance
 from engines.compiled.water_model import WaterModel
 from engines.model import pore_dem
 from engines.model.ground_motion import Cosine, Sampled
 
 NO_RECORD = np.zeros(0)  # the record of a Cosine input (kernels.base_step)
+# what kernel_drive_args gives a kernels.dem_drive_bulk_io call (engines.yade.yade_io.drive_dem)
+Drive = namedtuple("Drive", ("steps", "water_in", "water_interval", "adjust", "e", "mass", "skin", "totals", "motion",
+                             "record", "args"))
 
 
 class PoreDEM(pore_dem.PoreDEM):
@@ -23,7 +29,7 @@ class PoreDEM(pore_dem.PoreDEM):
 
     def __init__(self, settings, packing, flat_walls=()):
         super().__init__(settings, packing, flat_walls)
-        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.TIES.values(**self.ties.kernel_args())
+        self._tie_args = kernels.no_tie_args() if self.ties is None else kernels.tie_args(self.ties)
 
     def pores_due(self):
         """Is step k one that ``kernel_drive_args`` leaves to the general path only for its pore
@@ -43,8 +49,8 @@ class PoreDEM(pore_dem.PoreDEM):
         self.water_model.rebuild(xz, self.k)
 
     def kernel_drive_args(self, rows, held, n):
-        """(steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args) for
-        kernels.dem_drive_bulk_io: up to n steps from step k to the schedule's next event
+        """The Drive (steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record,
+        args) of a kernels.dem_drive_bulk_io call: up to n steps from step k to the schedule's next event
         (Schedule.steps_to_event: none of them a pore rebuild), the water steps among them (the
         first water_in steps from k, then every water_interval; dry: none), whether
         the eq 18-24 adjustment is on, its restitution and the discs' masses, the skin of the pair
@@ -61,15 +67,16 @@ class PoreDEM(pore_dem.PoreDEM):
         if wm is not None and (sch.by_displacement or sch.interval_due(self.k)):
             return None
         water = kernels.dry_water_args() if wm is None else wm.kernel_args(sch.water_interval * self.dt)
-        args = (rows, held) + law.kernel_args() + water + self._tie_args  # DEM_DRIVE
+        args = (rows, held) + law.kernel_args(flat=True) + water + self._tie_args  # DEM_DRIVE
         motion, *record = base_motion_args(self.base, self.wall_velocity)
         s, skin = law.settings, law.contact.skin  # no flat walls here: no pair filter
         steps = min(n, sch.steps_to_event(self.k))
         if wm is None:
-            return steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin, np.zeros(3), motion, record, args
+            return Drive(steps, 0, 1, s.separation_adjustment, s.restitution, law.mass, skin,
+                         np.zeros(len(BALANCE.names)), motion, record, args)
         b = wm.water.balance
-        return (steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
-                law.mass, skin, np.array([b.inflow, b.surface_outflow, b.side_outflow]), motion, record, args)
+        return Drive(steps, sch.steps_to_water(self.k), sch.water_interval, s.separation_adjustment, s.restitution,
+                     law.mass, skin, balance_of(b), motion, record, args)
 
     def finish_kernel_drive(self, made, totals, motion):
         """Book the ``made`` steps a kernels.dem_drive_bulk_io call made with the totals and motion
@@ -77,13 +84,12 @@ class PoreDEM(pore_dem.PoreDEM):
         a last water step that needed sub-steps: ``finish_substeps``)."""
         k, self.k = self.k, self.k + made
         if len(motion):
-            base = self.base
-            base.acc, base.vel, base.disp, self.wall_velocity = motion[kernels.MOTION.acc:].tolist()
+            base, M = self.base, kernels.MOTION
+            base.acc, base.vel, base.disp, self.wall_velocity = motion[[M.acc, M.vel, M.disp, M.wall_velocity]].tolist()
             base.k += made
         wm = self.water_model
         if wm is not None and self.schedule.water_among(k, self.k):
-            b = wm.water.balance
-            b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+            book_balance(wm.water.balance, totals)
             wm.after_kernel_steps()
 
     def finish_substeps(self, n_sub):

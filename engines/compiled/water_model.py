@@ -6,6 +6,7 @@ import numpy as np
 
 from engines.compiled import kernels
 from engines.compiled import pores as cp
+from engines.compiled.params import BALANCE, LAM, WATER_PRM, book_balance
 from engines.model import limits, water_model
 from engines.model import pores as pg
 from engines.model.limits import DarcyStabilityError
@@ -21,12 +22,10 @@ class WaterModel(water_model.WaterModel):
         **{name: "the kernels' buffers, packed from the network (checkpoint_restored)" for name in
            ("_ints", "_i_at", "_floats", "_f_at", "_q_prev", "_lam", "_balance", "_has_q_prev", "_args", "_args_key")}}
 
-    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
-        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval, water_interval, log, k0,
-                         rebuild_distance, flat_walls)
-        # the kernels' inflow q_in = wp[4] x bottom: rate and weights of PoreWater.inflow_weights
-        self.wp = np.array([settings.E_w, settings.k1, settings.k2, settings.k3, self.water.inflow[0]])
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, schedule=None, log=print, flat_walls=()):
+        super().__init__(settings, r, walls, xz, eps_m, l_m, dt, schedule, log, flat_walls)
+        # the kernels' inflow q_in = inflow x bottom: rate and weights of PoreWater.inflow_weights
+        self.wp = WATER_PRM.vector(settings, inflow=self.water.inflow[0])
         self._buffers()
 
     def _buffers(self):
@@ -45,7 +44,7 @@ class WaterModel(water_model.WaterModel):
                   "a_min": net.a_min,
                   "r": pg.vertex_radii(net, self.r), "vec": np.zeros((n_l, 2)), "right": np.zeros((n_p, 2)),
                   "Fj": np.zeros((n, 2)),
-                  "balance": np.zeros(3), "lam": np.zeros(2), "has_q_prev": 0.0,
+                  "balance": np.zeros(len(BALANCE.names)), "lam": np.zeros(len(LAM.names)), "has_q_prev": 0.0,
                   "check_areas": float(self.schedule.by_displacement),
                   "wall_position": self.wall_vertices.faces() if walls else [],
                   "vertices": pg.vertex_positions(net, self.xz_built) if walls else np.zeros((0, 2)),  # corners: move_walls
@@ -98,13 +97,8 @@ class WaterModel(water_model.WaterModel):
 
     def _void_area(self, net, xz):
         """Void areas (Np,) [m^2] of ``net`` at xz (eq 29) by kernels.measure."""
-        n_p, n_l = net.n_pores, len(net.links)
-        void = np.empty(n_p)
-        kernels.measure(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), net.links, net.link_pores,
-                        net.link_vec0, net.link_turn_weight, net.sector_area0, self.eps_m, np.empty(n_p),
-                        np.empty(n_p), void, np.empty(n_l), np.empty(n_l, bool), np.empty((n_l, 2)),
-                        np.empty((n_p, 2)))
-        return void
+        return kernels.void_areas(pg.vertex_positions(net, xz), pg.vertex_radii(net, self.r), self.eps_m,
+                                  *kernels.link_geometry(net))
 
     def advance(self, h, xz, k=None):
         """As engines.model.water_model.WaterModel.advance, by kernels.water_step."""
@@ -141,12 +135,8 @@ class WaterModel(water_model.WaterModel):
             if n_sub < 0:
                 raise DarcyStabilityError(f"water area of pore {-1 - n_sub} would fall to <= 0 in a step of "
                                           f"{h / n:.3e} s; {limits.DRY_HINT}")
-            self.last_limit = limits.gershgorin_limit(lam[1])  # at the last sub-step, as PoreWater reports it
-        inflow, surface, side = self._balance.tolist()
-        b = w.balance
-        b.inflow += inflow
-        b.surface_outflow += surface
-        b.side_outflow += side
+            self.last_limit = limits.gershgorin_limit(lam[LAM.last])  # at the last sub-step, as PoreWater reports it
+        book_balance(w.balance, self._balance, add=True)
         self.report_watch(h)
 
     def report_watch(self, h):
@@ -164,7 +154,7 @@ class WaterModel(water_model.WaterModel):
         they hold and the Darcy limit of the last one."""
         if self.settings.smoothing:
             self.water.q_prev = self._args[kernels.WATER.q_prev]
-        self.last_limit = limits.gershgorin_limit(self._lam[0])
+        self.last_limit = limits.gershgorin_limit(self._lam[LAM.first])
 
     def _substeps(self, h):
         """The sub-steps a water step of h [s] needs (engines.model.limits.substeps: refused without

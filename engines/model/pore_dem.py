@@ -134,7 +134,7 @@ def water_model(settings, packing, cls=WaterModel, flat_walls=()):
         return None
     num = settings.numerics
     return cls(water, packing.r, packing.group, packing.xz, settings.contact.eps_m, settings.water.l_m,
-               num.dt, num.rebuild_interval, num.water_interval, rebuild_distance=num.rebuild_distance,
+               num.dt, Schedule(num.water_interval, num.rebuild_interval, num.rebuild_distance),
                flat_walls=flat_walls)
 
 

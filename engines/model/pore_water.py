@@ -117,6 +117,15 @@ def pressure(W, A, E_w):
     return E_w * (W - A) / W
 
 
+def permeability(contact, s):
+    """The permeability law [1/s] (eq 43, §5.1, §6.1): (k of each link of the states ``contact``
+    (bool array): k2 across a contact, k1 across a gap; k of a free-surface edge to the outside:
+    k1; k of a drained wall: k3), from the WaterSettings s. The flows' conductance is
+    g = k A_ij / E_w (eq 40, 41). Its twins: engines.compiled.kernels.darcy.permeability and
+    engines.reference.model.permeability (a new law replaces these three functions)."""
+    return np.where(contact, s.k2, s.k1), s.k1, s.k3
+
+
 def buoyancy(r, rho_w, g):
     """Upward force rho_w pi r^2 g [N per m thickness] on discs of radius r [m] in water (eq 34b:
     the buoyant weight is the weight less this)."""
@@ -195,13 +204,13 @@ class PoreWater:
         open_ = A > net.a_min
         i, j = net.throat_conns[:, 0], net.throat_conns[:, 1]
         both = open_[i] & open_[j]
-        k = np.where(link_contact[net.throat_link], s.k2, s.k1)  # eq 43
+        k, k_surface, k_drained = permeability(link_contact[net.throat_link], s)  # eq 43
         A_ij = W[i] * W[j] / np.where(both, A[i] + A[j], 1.0)  # eq 40 (the OCR's W' is W_i)
         g = np.where(both, k * A_ij / s.E_w, 0.0)
         q = g * (U[i] - U[j])  # eq 41 with i_ij = (U_i - U_j)/E_w (eq 39)
         surface, drained, _ = self._boundary_masks()
         per_k = open_ * W / s.E_w  # outside at U = 0: A_ij -> W_i
-        g_s, g_d = s.k1 * surface * per_k, s.k3 * drained * per_k
+        g_s, g_d = k_surface * surface * per_k, k_drained * drained * per_k
         q_s, q_d = g_s * U, g_d * U
         rate, weight = self.inflow
         q_in = rate * weight

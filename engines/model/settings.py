@@ -27,12 +27,14 @@ MATERIAL_FIELDS = {
     "rho_w": Field(float, 1000.0, (0.0, math.inf), "water density [kg/m^3]"),
     "g": Field(float, 9.81, (0.0, math.inf), "gravity [m/s^2], along -z"),
 }
+TIE_FIELDS = {  # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
+    "ks_wall": Field(float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
+    "eta_s_wall": Field(float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
+}
 CONTACT_TABLE = {  # the contact law's constants (CONTACT_FIELDS) and the engine's own choices
     **CONTACT_FIELDS,
     "law": Field(str, "paper", ("paper", "yade"), "paper: the paper's law as its own engine (engines.model.paper_law); yade: springs a/b mapped to YADE's ViscElMat law with its collider (no eq 18-24, docs/ENGINE.md)"),
-    # side-wall springs of the seismic box (Fig. 27; used when loading.side_walls = springs)
-    "ks_wall": Field(float, 1.5e5, (0.0, math.inf), "k'_s: tangential spring between vertical neighbours of a side-wall column, the lowest tied to the base [N/m]"),
-    "eta_s_wall": Field(float, 0.6, (0.0, math.inf), "eta'_s: tangential dashpot of the same ties [N s/m]"),
+    **TIE_FIELDS,
 }
 WATER_TABLE = {  # the water's constants (WATER_FIELDS) and the engine's own choices
     "enabled": Field(bool, True, None, "false: a dry scene, no water code runs"),

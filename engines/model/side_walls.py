@@ -58,13 +58,6 @@ class SideWallTies:
         self.rest = xz[self.upper, 0] - xz[self.lower, 0]
         self.moving = np.isin(np.arange(self.n), np.concatenate([c[1:] for c in self.columns.values()] or [[]]))
 
-    def kernel_args(self):
-        """The arguments of engines.compiled.kernels.tie_forces after (xz, du, dt) by name
-        (kernels.TIES): (lower, upper) pairs (M, 2), rest (M,), (k'_s, eta'_s) and the (2, N)
-        force buffer."""
-        return {"tie_pairs": np.stack([self.lower, self.upper], axis=1), "tie_rest": self.rest,
-                "tie_prm": np.array([self.ks, self.eta]), "T": np.zeros((2, self.n))}
-
     def tie_forces(self, x, vx):
         """Per tie the force f_u on the upper disc [N] (the lower disc gets -f_u)."""
         return -self.ks * ((x[self.upper] - x[self.lower]) - self.rest) - self.eta * (vx[self.upper] - vx[self.lower])

@@ -30,10 +30,10 @@ class WaterModel:
     r (N,) radii [m] (the true ones: pores use them even where a contact law enlarges them by
     eps_m/2); walls (N,) wall codes of engines.model.pores; xz (N, 2) initial centres [m], those
     of DEM step k0. ``F`` (N, 2) [N] holds the pressure forces of the last water step; ``schedule``
-    (engines.model.schedule.Schedule of water_interval, rebuild_interval, rebuild_distance, k0)
-    says when the water steps and the pores are rebuilt, ``xz_built`` the centres of the last build.
-    rebuild_distance [m]: > 0 also rebuilds when a disc has moved more than this since the last
-    build or a void area is out of range (0: off, the interval only). flat_walls:
+    (engines.model.schedule.Schedule of water_interval, rebuild_interval, rebuild_distance, k0;
+    default Schedule()) says when the water steps and the pores are rebuilt, ``xz_built`` the
+    centres of the last build. rebuild_distance [m]: > 0 also rebuilds when a disc has moved more
+    than this since the last build or a void area is out of range (0: off, the interval only). flat_walls:
     engines.model.flat_walls.FlatWall, ... (SPEC §2.6); ``F_walls`` (W,) [N/m] holds the pore
     water's normal force on each of them (pores.flat_wall_forces) of the last water step.
     """
@@ -48,8 +48,7 @@ class WaterModel:
         "watch": "set by the engine that steps the model (engines.model.limits.AccuracyWatch): it watches "
                  "again from the restored step"}
 
-    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, rebuild_interval=1000, water_interval=1,
-                 log=print, k0=0, rebuild_distance=0.0, flat_walls=()):
+    def __init__(self, settings, r, walls, xz, eps_m, l_m, dt, schedule=None, log=print, flat_walls=()):
         self.settings, self.eps_m, self.l_m = settings, float(eps_m), float(l_m)
         self.flat_walls = tuple(flat_walls)
         self.r = np.ascontiguousarray(r, float)
@@ -57,7 +56,7 @@ class WaterModel:
         self.wall_vertices = fw.WallVertices(self.flat_walls, len(self.r)) if self.flat_walls else None
         self.walls = np.asarray(walls, np.int64)
         self.dt = float(dt)
-        self.schedule = Schedule(water_interval, rebuild_interval, rebuild_distance, k0)
+        self.schedule = Schedule() if schedule is None else schedule
         self.log = log
         self.on_change = None  # called after each rebuild and change of dt: the stepping engine's limit checks
         self.watch = None  # limits.AccuracyWatch of the water steps made from Python, or None

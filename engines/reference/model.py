@@ -899,6 +899,13 @@ def pore_pressure(W, A, E_w):
     return E_w * (W - A) / W
 
 
+def permeability(contact, water):
+    """The permeability law [1/s] (eq 43; §5.1 the free surface, §6.1 drained walls): k2 across a
+    contact (``contact`` true), k1 across a gap, for each link; k1 to the outside across a free
+    surface; k3 through a drained wall. ``water`` holds k1, k2, k3 (in the run's dtype)."""
+    return np.where(contact, water.k2, water.k1), water.k1, water.k3
+
+
 class Water:
     """Water areas W (Np,) [m^2] of the pores and their cumulative budget [m^2]."""
 
@@ -927,21 +934,21 @@ class Water:
         open_ = A > pores.a_min                             # a pinched pore exchanges nothing
         p, q = pores.throats[:, 0], pores.throats[:, 1]
         both = open_[p] & open_[q]
-        k = np.where(contact[pores.throat_link], self.k2, self.k1)          # eq 43
+        k, k_surface, k_drained = permeability(contact[pores.throat_link], self)   # eq 43
         A_pq = W[p] * W[q] / np.where(both, A[p] + A[q], 1)                 # eq 40 (W_i W_j, not W' W_j)
         i_pq = (U[p] - U[q]) / E_w                                           # eq 39
         q_t = np.where(both, k * A_pq * i_pq, zero)                          # eq 41
         drained = pores.side if self.s.drained else np.zeros_like(pores.side)        # §6.1
         drained = drained | pores.wall_drained                                          # §2.6
-        q_surface = np.where(open_ & pores.surface, self.k1 * W * U / E_w, zero)   # outside at U = 0
-        q_side = np.where(open_ & drained, self.k3 * W * U / E_w, zero)            # §6.1: outside 0, k3
+        q_surface = np.where(open_ & pores.surface, k_surface * W * U / E_w, zero)   # outside at U = 0
+        q_side = np.where(open_ & drained, k_drained * W * U / E_w, zero)            # §6.1: outside 0, k3
         q_in = np.where(pores.bottom | pores.wall_inflow, self.q_w, zero)    # §5.1, §2.6
         # explicit stability (Gershgorin): dt <= 2 / max (2 sum g + g_b) / c, c = W^2 / (E_w A)
         g = np.where(both, k * A_pq / E_w, zero)
         g_sum = np.zeros(pores.n_pores, self.dtype)
         np.add.at(g_sum, p, g)
         np.add.at(g_sum, q, g)
-        g_b = np.where(open_ & pores.surface, self.k1 * W / E_w, zero) + np.where(open_ & drained, self.k3 * W / E_w, zero)
+        g_b = np.where(open_ & pores.surface, k_surface * W / E_w, zero) + np.where(open_ & drained, k_drained * W / E_w, zero)
         rate = np.where(open_, (2 * g_sum + g_b) * E_w * A / W**2, zero)
         limit = 2 / float(np.max(rate)) if pores.n_pores and np.max(rate) > 0 else np.inf
         return q_t, q_surface, q_side, q_in, limit

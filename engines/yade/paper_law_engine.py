@@ -147,14 +147,12 @@ class PaperLawEngine:
                 if not self._rebuild_pores():
                     return 0
                 continue
-            steps, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, args = drive
             made, stepped, stale, n_sub, rc, builds, *pairs = self._drive_dem(
-                steps, core.k, not self.hooks, water_in, water_interval, adjust, e, mass, skin, totals, motion,
-                record, self.walls, self._wall_vel, self.io, self._xz, self.forced, self._F_out, args,
-                self._reset_last)
+                core.k, not self.hooks, drive, self.walls, self._wall_vel, self.io, self._xz, self.forced,
+                self._F_out, self._reset_last)
             if builds:
                 core.law.contact.take_list(builds, *pairs)
-            core.finish_kernel_drive(made, totals, motion)
+            core.finish_kernel_drive(made, drive.totals, drive.motion)
             self._check(rc)
             if stepped < made:  # its water's books, hooks and O.step() here
                 if n_sub != 1:

@@ -34,10 +34,11 @@ import time
 
 import numpy as np
 
-from engines.compiled import kernels
+from engines.compiled import kernels, params
 from engines.compiled import water_model as compiled_water_model
 from engines.model import limits, pore_water
 from engines.model import pores as pg
+from engines.model.schedule import Schedule
 from engines.model.water_model import WaterModel
 from engines.yade import contract, scene_save
 from engines.yade.scene_save import RestoreError, call  # noqa: F401  (call: the runners' command, scene_save.RUNNER_MODULE)
@@ -134,8 +135,8 @@ class WaterEngine:
         model = compiled_water_model.WaterModel if compiled else WaterModel
         if rebuild_distance is None:
             rebuild_distance = REBUILD_FRACTION * l_m
-        self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt, rebuild_interval,
-                           water_interval, k0=O.iter, rebuild_distance=rebuild_distance, flat_walls=walls_xz)
+        self.model = model(settings, radii, code, self.io.positions(), eps_m, l_m, O.dt,
+                           Schedule(water_interval, rebuild_interval, rebuild_distance, O.iter), flat_walls=walls_xz)
         contract.check_pores(self.model.water.net, settings, len(ids), l_m)
         self._n_bodies = len(O.bodies)  # bodies added later are refused at the next rebuild
         dynamic = np.array([O.bodies[i].dynamic for i in ids.tolist()])
@@ -322,12 +323,12 @@ class WaterEngine:
         h = sch.water_interval * m.dt
         args = m.kernel_args(h)
         b = m.water.balance
-        totals = np.array([b.inflow, b.surface_outflow, b.side_outflow])
+        totals = params.balance_of(b)
         k = O.iter
         done, n_water, n_sub, rc = yade_io.drive_water(n, True, sch.steps_to_water(k), sch.water_interval, totals,
                                                        m.xz_built, sch.moved2, self.io, self._xz, self.forced,
                                                        self._F_out, self._forces_step_args(args))
-        b.inflow, b.surface_outflow, b.side_outflow = totals.tolist()
+        params.book_balance(b, totals)
         if n_water:
             self.k = sch.last_water(k + done - (1 if n_sub == 1 else 0))  # the last water step
             m.after_kernel_steps()

@@ -169,21 +169,23 @@ def drive_water(n, step_last, water_in, water_interval, totals, xz_built, moved2
                                        writer.ids, out, *args)
 
 
-def drive_dem(n, k, step_last, water_in, water_interval, adjust, e, mass, skin, totals, motion, record, walls,
-              wall_vel, reader, xz, writer, out, args, reset_last):
-    """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only): up to n steps from
-    step k (the last one's O.step() left to the caller unless ``step_last``; the water at step
-    water_in, then every water_interval; ``adjust``: the eq 18-24 adjustment is on, with
-    restitution e and the discs' masses mass (N,) [kg/m]; stale pair lists rebuilt with ``skin``
-    [m]), the positions read from ``reader`` and the forces out written to ``writer`` (Bodies;
-    held, or with ``reset_last`` added to the reset forces: ``Bodies.write_forces``), the
-    velocities of the driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base
-    motion ``motion`` and its record (t_s, a_s) (kernels.base_step), args those of
-    dem_drive_bulk_io after F_out. Returns its (steps made, of them stepped, list stale, water
-    answer, error code, pair lists built, pi, pj, state, lost)."""
-    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, n, k, step_last, water_in,
-                                     water_interval, adjust, e, mass, skin, totals, motion, record[0], record[1],
-                                     walls.ids, wall_vel, reader.ids, xz, writer.ids, out, *args)
+def drive_dem(k, step_last, drive, walls, wall_vel, reader, xz, writer, out, reset_last):
+    """kernels.dem_drive_bulk_io through the bridge (BACKEND "yadebulk" only) with the
+    engines.compiled.pore_dem.Drive ``drive``: up to drive.steps steps from step k (the last one's
+    O.step() left to the caller unless ``step_last``; the water at step drive.water_in, then every
+    drive.water_interval; drive.adjust: the eq 18-24 adjustment is on, with restitution drive.e and
+    the discs' masses drive.mass (N,) [kg/m]; stale pair lists rebuilt with drive.skin [m]), the
+    positions read from ``reader`` and the forces out written to ``writer`` (Bodies; held, or with
+    ``reset_last`` added to the reset forces: ``Bodies.write_forces``), the velocities of the
+    driven walls ``walls`` (Bodies; wall_vel (m, 2) scratch) set from the base motion drive.motion
+    and its record (t_s, a_s) (kernels.base_step), drive.args those of dem_drive_bulk_io after
+    F_out. Returns its (steps made, of them stepped, list stale, water answer, error code, pair
+    lists built, pi, pj, state, lost)."""
+    d = drive
+    t_s, a_s = d.record
+    return kernels.dem_drive_bulk_io(_BRIDGE_RESET_LAST if reset_last else _BRIDGE, d.steps, k, step_last, d.water_in,
+                                     d.water_interval, d.adjust, d.e, d.mass, d.skin, d.totals, d.motion, t_s, a_s,
+                                     walls.ids, wall_vel, reader.ids, xz, writer.ids, out, *d.args)
 
 
 def check(rc, ids=None):

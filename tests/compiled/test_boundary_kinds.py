@@ -16,6 +16,7 @@ from engines.model import groups
 from engines.model import water_model as wm
 from engines.model.flat_walls import FlatWall
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from tests.compiled.test_flat_walls import boxed_discs
 
 OPEN = groups.BoundaryKind("open", 0, True, "surface", ())  # a toy word: a face at U = 0 through k1, as the bed's top
@@ -27,7 +28,8 @@ def run_box(cls, right, k3, steps=20):
     xz0, r, walls = boxed_discs()
     walls = walls[:2] + (FlatWall(walls[2].axis, walls[2].position, walls[2].inward, right),) + walls[3:]
     s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=k3, q_w=0.02)
-    m = cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, rebuild_interval=10, flat_walls=walls)
+    m = cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, Schedule(rebuild_interval=10),
+            flat_walls=walls)
     drift = 0.1 * np.random.default_rng(0).standard_normal(xz0.shape)
     for k in range(steps):
         m.step(k, xz0 + k / steps * drift)

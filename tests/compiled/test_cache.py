@@ -46,7 +46,7 @@ def test_the_key_is_that_of_the_sources_not_of_the_folder(tmp_path):
     callee.write_text(callee.read_text().replace("self.vel += a_bar * dt", "self.vel += a_bar * dt * 1"))
     edited = cache.cache_key(str(eng))
     assert edited != cache.cache_key()
-    layout = eng / "compiled" / "kernels.py"
+    layout = eng / "compiled" / "kernels" / "base_motion.py"  # a module of a subfolder
     layout.write_text(layout.read_text().replace('"disp", "wall_velocity"))', '"disp", "wall_velocity", "spare"))'))
     assert cache.cache_key(str(eng)) not in (edited, cache.cache_key())
 

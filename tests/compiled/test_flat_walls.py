@@ -11,6 +11,7 @@ from engines.model import pores as pg
 from engines.model import water_model as wm
 from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from tests.compiled.test_pores import assert_same_network
 from tests.layouts import random_sequential
 
@@ -42,7 +43,7 @@ def test_the_compiled_water_model_with_flat_walls_is_the_numpy_one(smoothing):
     rules as the NumPy one; W, the disc forces and the walls' forces agree to round-off at every step."""
     xz0, r, walls = boxed_discs()
     s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=50.0, q_w=0.02, smoothing=smoothing, transfer="conserving")
-    models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, rebuild_interval=20,
+    models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, Schedule(rebuild_interval=20),
                   flat_walls=walls) for cls in (wm.WaterModel, cwm.WaterModel)]
     rng = np.random.default_rng(0)
     drift = 0.2 * rng.standard_normal(xz0.shape)  # [m] by the end: pores split and merge (rule b)
@@ -87,7 +88,7 @@ def test_the_compiled_water_model_follows_moving_walls_as_the_numpy_one():
     kernels' faces or corners left at the build, the compiled forces would part)."""
     xz0, r, walls = boxed_discs()
     s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=50.0, q_w=0.02, transfer="conserving")
-    models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, rebuild_interval=20,
+    models = [cls(s, r, np.zeros(len(r), np.int64), xz0, 0.0, 0.8 * r.mean(), 1e-4, Schedule(rebuild_interval=20),
                   flat_walls=walls) for cls in (wm.WaterModel, cwm.WaterModel)]
     pushes = []
     for k in range(60):

@@ -14,6 +14,7 @@ from engines.model import pores as pg
 from engines.model import water_model as model_water_model
 from engines.model.contact import ContactSettings
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from engines.model.side_walls import SideWallTies
 from engines.yade.deposition import wall_box
 from packing.layouts import hex_lattice, random_discs
@@ -138,11 +139,9 @@ def test_a_pair_exactly_at_the_lists_reach_is_listed(law):
 
 
 def _kernel_measure(net, xz, r):
-    n_p, n_l = net.n_pores, len(net.links)
-    out = (np.zeros(n_p), np.zeros(n_p), np.zeros(n_p), np.zeros(n_l), np.zeros(n_l, bool), np.zeros((n_l, 2)))
-    kernels.measure(xz, r, net.links, net.link_pores, net.link_vec0, net.link_turn_weight, net.sector_area0,
-                    net.eps_m, *out, np.zeros((n_p, 2)))
-    return out
+    out = kernels.new_measures(net.n_pores, len(net.links))
+    kernels.measure(xz, r, net.eps_m, kernels.link_geometry(net), out)
+    return out[:-1]
 
 
 @pytest.mark.parametrize("layout", ["random", "hex", "moved"])
@@ -234,7 +233,7 @@ def test_water_model_compiled_equals_numpy(case):
     pressure_forces over moving discs, rebuilds included; one pore pinched for a while."""
     xz, r, walls, rng = _column(n=250, gap=0.0)
     s = SETTINGS[case]
-    models = [model(s, r, walls, xz, 0.0, 0.3, 1e-4, rebuild_interval=7, log=lambda m: None)
+    models = [model(s, r, walls, xz, 0.0, 0.3, 1e-4, Schedule(rebuild_interval=7), log=lambda m: None)
               for model in (model_water_model.WaterModel, water_model.WaterModel)]
     pinched = int(np.flatnonzero(~models[0].water.net.pore_surface)[0])
     x = xz.copy()
@@ -270,7 +269,7 @@ def test_tie_forces_compiled_equals_numpy():
     ties = SideWallTies(xz, group, 1.5e5, 0.6)
     rng = np.random.default_rng(7)
     dt = 1e-6
-    args = kernels.TIES.values(**ties.kernel_args())
+    args = kernels.tie_args(ties)
     T = args[kernels.TIES.T]
     for _ in range(5):
         x = xz + 1e-5 * rng.standard_normal(xz.shape)

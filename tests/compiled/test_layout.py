@@ -3,7 +3,9 @@ of names shuffled, and every kernel that reads them compiled again, give the sam
 bit; a kernel passes its arrays on in the places of the callee's parameters of the same names; a
 layout refuses a tuple with a name missing or unknown."""
 import ast
+import importlib
 import inspect
+import pkgutil
 
 import numba
 import numpy as np
@@ -15,13 +17,29 @@ from engines.compiled.pore_dem import PoreDEM
 from engines.compiled.water_model import WaterModel
 from engines.model import pores as pg
 from engines.model.pore_water import WaterSettings
+from engines.model.schedule import Schedule
 from tests.model.test_pore_dem import R, fused_step, moving_positions, wet_box, wet_scene
 
 BUFFERS = ("WATER_INTS", "WATER_FLOATS")
 
 
+def modules():
+    """The package engines.compiled.kernels and its modules."""
+    return [kernels] + [importlib.import_module(f"{kernels.__name__}.{m.name}")
+                        for m in pkgutil.iter_modules(kernels.__path__)]
+
+
 def dispatchers():
-    return {n: f for n, f in vars(kernels).items() if isinstance(f, numba.core.registry.CPUDispatcher)}
+    """{name: kernel} of every numba kernel of engines.compiled.kernels (its modules' too)."""
+    return {n: f for m in modules() for n, f in vars(m).items() if isinstance(f, numba.core.registry.CPUDispatcher)}
+
+
+def set_everywhere(monkeypatch, name, value):
+    """The global ``name`` set to value in every module of the package that binds it (the kernels
+    read their globals from their own module)."""
+    for m in modules():
+        if name in vars(m):
+            monkeypatch.setattr(m, name, value)
 
 
 def readers(names):
@@ -44,11 +62,11 @@ def shuffle_buffers(monkeypatch, seed=1):
         names = getattr(kernels, name).names
         order = rng.permutation(len(names))
         assert np.any(order != np.arange(len(names)))
-        monkeypatch.setattr(kernels, name, Layout(name, [names[k] for k in order]))
+        set_everywhere(monkeypatch, name, Layout(name, [names[k] for k in order]))
     compiled_again = readers(BUFFERS)
     assert {"water_step", "dem_drive_bulk_io", "water_forces_step", "water_drive_bulk_io"} <= compiled_again
     for name in compiled_again:
-        monkeypatch.setattr(kernels, name, numba.njit(nogil=True)(getattr(kernels, name).py_func))
+        set_everywhere(monkeypatch, name, numba.njit(nogil=True)(dispatchers()[name].py_func))
 
 
 def wet_box_steps(n=12):
@@ -80,7 +98,7 @@ def water_engine_steps(n=10):
     rng = np.random.default_rng(4)
     pk = wet_box(jitter=0.05)
     m = WaterModel(WaterSettings(E_w=240.0, k1=2e6, k2=2e4, q_w=1e-4, smoothing=True, substep=True), pk.r, pk.group,
-                   pk.xz, 0.0, 0.1 * R, 1e-6, rebuild_interval=4, log=lambda message: None)
+                   pk.xz, 0.0, 0.1 * R, 1e-6, Schedule(rebuild_interval=4), log=lambda message: None)
     rows = np.flatnonzero(pk.mobile)
     held = rng.standard_normal((len(rows), 2))
     F_out, xz, out = np.zeros_like(held), pk.xz, []
@@ -132,7 +150,7 @@ def test_kernels_pass_their_arrays_on_under_the_callees_names():
     the variable is in that parameter's place: a spelled-out call cannot shift its arguments."""
     params = {n: list(inspect.signature(f.py_func).parameters) for n, f in dispatchers().items()}
     wrong, checked = [], 0
-    for fn in ast.parse(inspect.getsource(kernels)).body:
+    for fn in (f for m in modules() for f in ast.parse(inspect.getsource(m)).body):
         if not (isinstance(fn, ast.FunctionDef) and fn.name in params):
             continue
         for call in ast.walk(fn):

@@ -6,6 +6,7 @@ import pytest
 from engines.model import pores as pg
 from engines.model.flat_walls import FlatWall, WallVertices
 from engines.model.pore_water import PoreWater, WaterSettings, pressures_by_rule, rule_counts
+from engines.model.schedule import Schedule
 from engines.model.water_model import WaterModel
 from tests.layouts import random_sequential, square_lattice
 from tests.oracles import pore_polygon
@@ -240,7 +241,7 @@ def test_remeshing_counts_the_wall_as_one_vertex():
 def test_a_water_model_with_flat_walls_rebuilds_and_conserves_water():
     xz, r = lifted_row(0.0)
     s = WaterSettings(E_w=240.0, k1=200.0, k2=2.0, q_w=0.01, transfer="conserving")
-    model = WaterModel(s, r, np.zeros(6, np.int64), xz, 0.0, 0.1, 1e-4, rebuild_interval=5,
+    model = WaterModel(s, r, np.zeros(6, np.int64), xz, 0.0, 0.1, 1e-4, Schedule(rebuild_interval=5),
                        flat_walls=(bottom("inflow"),))
     for k in range(1, 5):
         model.step(k, xz)
