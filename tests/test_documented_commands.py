@@ -234,6 +234,9 @@ RULES = [
     Rule(r"^/usr/bin/python3 yade_scripts/biaxial_study\.py --out out/biaxial_hypotheses --parts hypotheses --analyse-only$",
          "as written, where the page ran no hypotheses job (the study is exempt above): it refuses in one line",
          lambda c: [c], refuses=True),
+    Rule(r"^/usr/bin/python3 yade_scripts/resistance\.py --out out/resistance --analyse-only$",
+         "as written, where the page ran no study (make resistance is exempt: hours; tests/run/test_resistance.py "
+         "runs it short): it refuses in one line", lambda c: [c], refuses=True),
     exempt(r"^nohup nice -n 10 /usr/bin/python3 yade_scripts/biaxial_study\.py",
            "the same study in the background (hours); its foreground line is in BIAXIAL.md's Commands"),
     # companions, cross-check, benchmarks, studies
@@ -478,6 +481,7 @@ EMPTY_INPUTS = [
     ["yade_scripts/tradeoffs.py", "study", "--out", "{empty}", "--analyse-only"],
     ["yade_scripts/liquefaction_reconstruction.py", "--out", "{empty}/study", "--baseline", "{empty}", "--analyse-only"],
     ["yade_scripts/stability.py", "--out", "{empty}", "--plot-only"],
+    ["yade_scripts/resistance.py", "--out", "{empty}", "--analyse-only"],
 ]
 
 

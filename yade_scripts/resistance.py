@@ -37,6 +37,9 @@ def main(argv):
     ap.add_argument("--scheduler", help="a Dask scheduler's address (tcp://HOST:PORT)")
     ap.add_argument("--analyse-only", action="store_true", help="the JSON and figure from the runs done, no runs")
     a = ap.parse_args(argv)
+    if a.analyse_only and not os.path.isdir(os.path.join(a.out, "runs")):
+        ap.error(f"--analyse-only: {os.path.join(a.out, 'runs')} holds no runs of the study (run it first, "
+                 "without --analyse-only: make resistance)")
     plan = short_plan() if a.short else Plan()
     plan = Plan(tuple(a.amplitudes or plan.amplitudes), a.starts or plan.starts, plan.duration, plan.deposit, a.pilot)
     doc = run_study(os.path.abspath(a.out), plan, a.workers, a.scheduler, a.analyse_only, a.docs)
