@@ -76,7 +76,7 @@ check: deps
 # The NumPy core alone (tests of engines/model, engines/compiled, engines/reference, packing/ and the
 # layering of the tree): no YADE needed, about 50 CPU s with a warm numba cache (README). Run `make deps` once first.
 test-fast:
-	$(PY) -m pytest -q tests/files tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
+	$(PY) -m pytest -q -m "not check" tests/files tests/model tests/compiled tests/reference tests/packing tests/test_layers.py
 
 # The reference in float32, float64 and longdouble on the quick-sand column (docs/CROSSCHECK.md):
 # $(OUT)/precision/precision.json; exits 1 when a precision misses its bound (PRECISION_BOUNDS).

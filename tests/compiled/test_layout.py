@@ -114,6 +114,7 @@ def water_engine_steps(n=10):
     return out + [m.water.W, m.water.q_prev, [m.last_limit, m.water.balance.inflow, m.water.balance.surface_outflow]]
 
 
+@pytest.mark.check  # the shuffled layouts compile the water kernels afresh (about a minute): make check
 @pytest.mark.parametrize("run", [wet_box_steps, water_engine_steps])
 def test_shuffled_buffer_layouts_give_the_same_steps(monkeypatch, run):
     before = run()
