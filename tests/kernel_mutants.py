@@ -13,30 +13,39 @@ decorator ``jit``/``njit``, ``nb.njit(...)``, or a module-level name bound to su
     unary   a unary minus dropped
 
 each one token changed, with a stable id ``file:function:line:col:kind`` (line 1-based, col the
-token's 0-based character column, e.g. ``engines/compiled/kernels.py:_beyond:89:15:cmp:Gt->GtE``).
+token's 0-based character column, e.g. ``engines/compiled/kernels/common.py:_beyond:19:15:cmp:Gt->GtE``).
 The ids are sorted and shuffled with the seed; the first N are the sample (so a larger N with the
 same seed extends a smaller one). Each mutant is applied to a copy of the project (OUT/work/slotK,
-the one file patched, then restored) with a fresh NUMBA_CACHE_DIR (OUT/cache/<hash>: the project's
-engines/compiled/cache.py keys its folder under the NUMBA_CACHE_DIR it is given; the key its parent
-marks in PORE_DEM_NUMBA_CACHE_DIR is dropped) and no bytecode written (a same-size edit within a
-second would otherwise run a stale .pyc). The killers, in order, each run only if the one before
-did not kill:
+the one file patched, then restored with its timestamp) and no bytecode written (a same-size edit
+within a second would otherwise run a stale .pyc). The killers, in order, each run only if the one
+before did not kill:
 
   1. pytest -x -m "not check" on tests/compiled/ and every test file that names the mutated kernel
      or one of the functions of engines/compiled/ that call it (directly or not; a grep of tests/);
   2. the cross-check, ``yade -n -x yade_scripts/crosscheck.py --out OUT/xc/<hash>`` (--xc-only CASE...
      runs a subset).
 
+The numba cache (NUMBA_CACHE_DIR = OUT/cache/<hash>; the project's engines/compiled/cache.py keys
+its folder under it, and the key its parent marks in PORE_DEM_NUMBA_CACHE_DIR is dropped) starts
+as the baseline's compiled kernels (OUT/cache/warm) without those a mutant can reach: every
+function of the mutated module, and every function naming the mutated one directly or through
+others (``callers``; numba's cache checks only the timestamp of a kernel's own file, and a caller's
+machine code holds its callees). Compiling only those costs seconds where a fresh cache costs a
+minute. Stale code could only make a mutant survive (the unmutated code would run), never kill it,
+so every survivor is run again with an empty cache (its row says ``"cache": "fresh"``) before it
+counts; ``--fresh`` gives every mutant an empty cache.
+
 A killer that fails, crashes (a numba typing error of the mutant counts: it cannot run) or passes
 its timeout (a hang) kills the mutant; the row says which and why. Before the sample, the killers
-run once on the unmutated sources ("baseline", all the test files the sample selects); a failing
-baseline stops the run. Each result is a line of OUT/results.jsonl (the whole file rewritten
-atomically after each mutant); a rerun skips the ids done on the same sources (a hash of
-engines/compiled/) and ignores rows of other sources. OUT/summary.json: the score killed / (total -
-equivalent), its 95 % Wilson interval, per module, the CPU seconds of the children (user + sys, from
-os.wait4), the date and the commit; OUT/survivors.txt: each survivor's diff. Mutants judged
-equivalent are listed in tests/equivalent_kernel_mutants.txt as ``id  reason`` (one a line); a
-listed one that was killed is reported stale.
+run once on the unmutated sources ("baseline", all the test files the sample selects, compiling
+OUT/cache/warm); a failing baseline stops the run. Each result is a line of OUT/results.jsonl (the
+whole file rewritten atomically after each mutant; the last row of an id counts); a rerun skips the
+ids done on the same sources (a hash of engines/compiled/) and ignores rows of other sources.
+OUT/summary.json: the score killed / (total - equivalent), its 95 % Wilson interval, per module, the
+CPU seconds of the children (user + sys, from os.wait4), the date and the commit;
+OUT/survivors.txt: each survivor's diff. Mutants judged equivalent are listed in
+tests/equivalent_kernel_mutants.txt as ``id  reason`` (one a line); a listed one that was killed is
+reported stale.
 """
 import argparse
 import ast
@@ -65,6 +74,7 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
 from engines import files  # noqa: E402
+from engines.compiled.cache import cache_key  # noqa: E402
 from tests.mutants import read_equivalent  # noqa: E402
 
 COMPILED = "engines/compiled"
@@ -371,6 +381,52 @@ def test_files(names, root=ROOT):
     return sorted(out)
 
 
+# ---- the numba cache a mutant starts from --------------------------------------------------------
+
+CACHE_FILE = re.compile(r"(?P<stem>[^.]+)\.(?P<qualname>.+)-\d+\.py\d+(\.\d+)?\.nb[ci]")  # numba's index and data files
+
+
+def numba_folder(source_dir):
+    """The subfolder of NUMBA_CACHE_DIR where numba caches the kernels of the .py files of ``source_dir``
+    (numba.core.caching._CacheLocator.get_suitable_cache_subpath: the folder's name, the SHA-1 of its path)."""
+    d = os.path.abspath(source_dir)
+    return f"{os.path.basename(d)}_{hashlib.sha1(d.encode()).hexdigest()}"
+
+
+def reach(m, refs, work):
+    """Which cached kernels of the work copy ``work`` can hold the mutant's code: a predicate of (numba
+    folder, cache file name), true for the files of the mutated module and of the functions naming the
+    mutated one directly or through others (any module: a name shared by two modules selects both), and
+    for a file not named as numba names them."""
+    own = (numba_folder(os.path.dirname(os.path.join(work, m.file))), os.path.basename(m.file)[:-3])
+    names = callers(m.function.split(".")[0], refs)
+
+    def stale(folder, name):
+        f = CACHE_FILE.fullmatch(name)
+        return f is None or (folder, f["stem"]) == own or f["qualname"].split(".")[0] in names
+    return stale
+
+
+def seed_cache(warm, warm_work, work, dest, stale):
+    """Copy the kernels numba compiled into ``warm`` (a keyed cache folder made in the work copy
+    ``warm_work``) to ``dest``, each numba folder renamed for the same source folder of the work copy
+    ``work``, the files ``stale(folder, file name)`` selects left out (folder: the new name). The
+    number of files copied."""
+    renamed = {}
+    for d, dirs, _ in os.walk(work):
+        dirs[:] = [x for x in dirs if x not in ("out", ".git", "__pycache__")]
+        renamed[numba_folder(os.path.join(warm_work, os.path.relpath(d, work)))] = numba_folder(d)
+    n = 0
+    for folder in os.listdir(warm):
+        new = renamed.get(folder, folder)
+        for name in os.listdir(os.path.join(warm, folder)):
+            if not stale(new, name):
+                os.makedirs(os.path.join(dest, new), exist_ok=True)
+                shutil.copy2(os.path.join(warm, folder, name), os.path.join(dest, new, name))
+                n += 1
+    return n
+
+
 # ---- results -------------------------------------------------------------------------------------
 
 def read_results(path, sources):
@@ -468,6 +524,8 @@ class Runner:
 
     def __init__(self, out, refs, xc_only, nice, timeout=None):
         self.out, self.refs, self.xc_only, self.nice = out, refs, xc_only, nice
+        self.warm = os.path.join(out, "cache", "warm")  # the baseline's numba cache (module docstring)
+        self.warm_info = os.path.join(out, "cache", "warm.json")  # where and on which sources it was made
         self.timeout = {"tests": TIMEOUT_NO_BASELINE, "crosscheck": TIMEOUT_NO_BASELINE, **(timeout or {})}
 
     def timeouts(self, given, baseline):
@@ -489,14 +547,42 @@ class Runner:
     def tests_for(self, m):
         return ["tests/compiled", *test_files(callers(m.function.split(".")[0], self.refs))]
 
-    def killers(self, work, tag, tests):
+    def warm_of(self, sources):
+        """The record of the warm cache ({work, key, sources}) if there is one for ``sources``, else None."""
+        try:
+            with open(self.warm_info, encoding="utf-8") as f:
+                info = json.load(f)
+        except (OSError, ValueError):
+            return None
+        return info if info.get("sources") == sources and os.path.isdir(os.path.join(self.warm, info["key"])) else None
+
+    def warm_start(self, work, m, sources):
+        """A function filling a mutant's (empty) numba cache folder from the warm cache, or None
+        when there is none for ``sources`` (the mutant then compiles everything)."""
+        info = self.warm_of(sources)
+        if info is None:
+            return None
+        key = cache_key(os.path.join(work, "engines"))  # the mutated sources' keyed folder
+        stale = reach(m, self.refs, work)
+        return lambda cache: seed_cache(os.path.join(self.warm, info["key"]), info["work"], work,
+                                        os.path.join(cache, key), stale)
+
+    def keep_warm(self, work, sources):
+        """Record the baseline's cache (made in the work copy ``work``) as the warm one of ``sources``."""
+        files.write_json(self.warm_info, {"work": work, "key": cache_key(os.path.join(work, "engines")),
+                                          "sources": sources})
+
+    def killers(self, work, tag, tests, start=None):
         """Run the tests, then the cross-check unless they killed: a row's fields (status, by, reason,
-        cpu_s and wall_s, and cost: {killer: [CPU s, wall s]})."""
-        cache = os.path.join(self.out, "cache", tag)
+        cpu_s and wall_s, and cost: {killer: [CPU s, wall s]}). The numba cache is OUT/cache/<tag>,
+        filled by ``start(folder)`` first if given and removed after; the baseline's is the warm one, kept."""
+        cache = self.warm if tag == "baseline" else os.path.join(self.out, "cache", tag)
         xc = os.path.join(self.out, "xc", tag)
         for d in (cache, xc):
             shutil.rmtree(d, ignore_errors=True)
         os.makedirs(cache)
+        if start:
+            start(cache)
         env = {k: v for k, v in os.environ.items() if k != "PORE_DEM_NUMBA_CACHE_DIR"}
         env.update(PYTHONPATH=work, MPLBACKEND="Agg", NUMBA_CACHE_DIR=cache, PYTHONDONTWRITEBYTECODE="1",
                    OMP_NUM_THREADS="1")
@@ -525,19 +611,23 @@ class Runner:
                                else f"crosscheck exit {rc}: {reason_of(text)}")
             return verdict("survived", None, "the tests and the cross-check passed")
         finally:
-            for d in (cache, xc):
+            for d in (cache, xc) if cache != self.warm else (xc,):
                 shutil.rmtree(d, ignore_errors=True)
 
-    def mutant(self, work, m, original):
-        """Apply ``m`` to the work copy, run the killers, restore the file: the result row."""
+    def mutant(self, work, m, original, sources, fresh=False):
+        """Apply ``m`` to the work copy, run the killers (from the warm cache unless ``fresh``), restore
+        the file and its timestamp (numba's cache of the work copy checks it): the result row."""
         path = os.path.join(work, m.file)
+        stamp = os.stat(path)
         files.write_text(path, apply(original, m))
         try:
             tests = self.tests_for(m)
-            row = self.killers(work, hashlib.sha1(m.id.encode()).hexdigest()[:12], tests)
+            start = None if fresh else self.warm_start(work, m, sources)
+            row = self.killers(work, hashlib.sha1(m.id.encode()).hexdigest()[:12], tests, start)
         finally:
             files.write_text(path, original)
-        return {"id": m.id, **row, "tests": tests}
+            os.utime(path, ns=(stamp.st_atime_ns, stamp.st_mtime_ns))
+        return {"id": m.id, **row, "tests": tests, "cache": "fresh" if start is None else "warm"}
 
 
 def _failed_cases(path):
@@ -564,7 +654,7 @@ def write_summary(out, chosen, rows, equivalent, args, sources, other_rows, time
     ids = [m.id for m in chosen]
     s = summarise(rows, ids, equivalent)
     done = [rows[i] for i in ids if i in rows]
-    cpu = sum(r["cpu_s"] for r in done)
+    cpu = sum(r["cpu_s"] + r.get("earlier_cpu_s", 0.0) for r in done)
     per_killer = {k: [r["cost"][k][0] for r in done if k in r.get("cost", {})] for k in ("tests", "crosscheck")}
     s.update(date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"), commit=commit(),
              sources=sources, seed=args.seed, n=args.n, done=len(done),
@@ -572,12 +662,15 @@ def write_summary(out, chosen, rows, equivalent, args, sources, other_rows, time
              cpu_seconds_per_run={k: {"runs": len(v), "mean": sum(v) / len(v) if v else None}
                                   for k, v in per_killer.items()},
              wall_seconds=sum(r["wall_s"] for r in done),
+             caches={c: sum(1 for r in done if r.get("cache", "fresh") == c) for c in ("warm", "fresh")},
              baseline=rows.get("baseline"), rows_of_other_sources=other_rows,
              equivalent_mutants={i: equivalent[i] for i in ids if i in equivalent},
              killed_by={k: sum(1 for r in done if r["status"] in KILLED and r["by"] == k) for k in ("tests", "crosscheck")},
              killers={"tests": "pytest -q -x -m 'not check' tests/compiled + the test files naming the kernel or its callers",
                       "crosscheck": "yade -n -x yade_scripts/crosscheck.py" + (f" --only {' '.join(args.xc_only)}" if args.xc_only else ""),
                       "timeout_s": timeout,
+                      "cache": "the baseline's compiled kernels without the mutated module's and its callers'; "
+                               "every survivor run again with an empty cache",
                       "timeout_note": "a killer past its timeout (a hang) counts as killing the mutant"})
     files.write_json(os.path.join(out, "summary.json"), s)
     by_id = {m.id: m for m in chosen}
@@ -606,7 +699,10 @@ def main(argv=None):
                     f"{TIMEOUT_FACTOR} x the baseline's, at least {TIMEOUT_MIN}")
     ap.add_argument("--timeout-xc", type=float, help="[s] the cross-check of one mutant, the same way")
     ap.add_argument("--xc-only", nargs="+", metavar="CASE", help="cross-check only these cases")
-    ap.add_argument("--no-baseline", action="store_true", help="skip the killers' run on the unmutated sources")
+    ap.add_argument("--no-baseline", action="store_true", help="skip the killers' run on the unmutated sources "
+                    "(and so the warm cache: every mutant compiles everything)")
+    ap.add_argument("--fresh", action="store_true", help="every mutant with an empty numba cache (slower; the "
+                    "default starts from the baseline's, module docstring)")
     ap.add_argument("--list", action="store_true", help="print the sample's ids and stop")
     ap.add_argument("--report-only", action="store_true", help="write the summary from OUT/results.jsonl and stop")
     args = ap.parse_args(argv)
@@ -640,7 +736,8 @@ def main(argv=None):
         slots = queue.Queue()
         for k in range(min(args.jobs, max(len(todo), 1))):
             slots.put((k, runner.prepare(k)))
-        if not args.no_baseline and "baseline" not in rows and todo:
+        cold = "baseline" not in rows or not (args.fresh or runner.warm_of(sources))
+        if not args.no_baseline and cold and todo:
             k, work = slots.get()
             tests = sorted({t for m in todo for t in runner.tests_for(m)})
             print(f"baseline: the killers on the unmutated sources ({len(tests)} test paths)", flush=True)
@@ -650,23 +747,32 @@ def main(argv=None):
             rows["baseline"] = row
             if row["status"] != "survived":
                 sys.exit(f"the killers fail on the unmutated sources ({row['by']}: {row['reason']}); fix that first")
+            runner.keep_warm(work, sources)
             runner.timeouts(given, row)
         print(f"timeouts: {runner.timeout} s", flush=True)
 
-        def one(m):
+        def one(m, fresh):
             k, work = slots.get()
             try:
-                row = {**runner.mutant(work, m, originals[m.file]), "sources": sources}
+                row = {**runner.mutant(work, m, originals[m.file], sources, fresh), "sources": sources}
             finally:
                 slots.put((k, work))
+            if m.id in rows:  # a survivor run again with an empty cache: the CPU of both runs counts
+                row["earlier_cpu_s"] = rows[m.id]["cpu_s"] + rows[m.id].get("earlier_cpu_s", 0.0)
             with lock:
                 append_result(results, row)
                 rows[m.id] = row
                 print(f"[{len(rows) - ('baseline' in rows)}/{len(chosen)}] {m.id}: {row['status']}"
-                      f"{' by ' + row['by'] if row['by'] else ''} ({row['cpu_s']:.0f} CPU s)", flush=True)
+                      f"{' by ' + row['by'] if row['by'] else ''} ({row['cpu_s']:.0f} CPU s, {row['cache']} cache)",
+                      flush=True)
 
         with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
-            for f in [pool.submit(one, m) for m in todo]:
+            for f in [pool.submit(one, m, args.fresh) for m in todo]:
+                f.result()
+            again = [m for m in chosen if rows[m.id]["status"] == "survived" and rows[m.id].get("cache") != "fresh"]
+            if again:
+                print(f"{len(again)} survivors run again with an empty numba cache", flush=True)
+            for f in [pool.submit(one, m, True) for m in again]:
                 f.result()
     s = write_summary(out, chosen, rows, equivalent, args, sources, other, runner.timeout)
     lo, hi = s["wilson95"]

@@ -151,11 +151,12 @@ def test_summary_counts_scores_stale_equivalents_and_errors():
 def test_a_rerun_skips_the_mutants_done_on_the_same_sources(tmp_path, monkeypatch):
     ran = []
 
-    def mutant(self, work, m, original):
+    def mutant(self, work, m, original, sources, fresh=False):
         assert km.apply(original, m) != original
-        ran.append(m.id)
-        return {"id": m.id, "status": "killed" if len(ran) % 2 else "survived", "by": "tests", "reason": "r",
-                "cpu_s": 2.0, "wall_s": 3.0, "tests": ["tests/compiled"]}
+        ran.append((m.id, fresh))
+        survived = fresh or len(ran) % 2 == 0   # every other mutant survives its warm run, and its fresh one
+        return {"id": m.id, "status": "survived" if survived else "killed", "by": "tests", "reason": "r",
+                "cpu_s": 2.0, "wall_s": 3.0, "tests": ["tests/compiled"], "cache": "fresh" if fresh else "warm"}
 
     monkeypatch.setattr(km.Runner, "prepare", lambda self, slot: str(tmp_path / "work"))
     monkeypatch.setattr(km.Runner, "mutant", mutant)
@@ -164,15 +165,17 @@ def test_a_rerun_skips_the_mutants_done_on_the_same_sources(tmp_path, monkeypatc
     (out / "results.jsonl").write_text(json.dumps({"id": "x", "sources": "older", "status": "killed"}) + "\n")
     args = ["--n", "3", "--seed", "4", "--out", str(out), "--no-baseline"]
     assert km.main(args) == 0
-    assert ran == [m.id for m in km.sample(km.enumerate_mutants(), 3, 4)]
-    assert km.main(args) == 0 and len(ran) == 3                # all done: nothing run again
+    first = [m.id for m in km.sample(km.enumerate_mutants(), 3, 4)]
+    assert ran == [(i, False) for i in first] + [(first[1], True)]   # the survivor again, with an empty cache
+    assert km.main(args) == 0 and len(ran) == 4                # all done: nothing run again
     assert km.main(args[:1] + ["5"] + args[2:]) == 0
-    assert ran == [m.id for m in km.sample(km.enumerate_mutants(), 5, 4)]   # only the two new ones
+    five = [m.id for m in km.sample(km.enumerate_mutants(), 5, 4)]
+    assert ran[4:] == [(five[3], False), (five[4], False), (five[4], True)]   # only the two new ones
     lines = (out / "results.jsonl").read_text().splitlines()
-    assert len(lines) == 6 and all(json.loads(ln)["sources"] == km.sources_hash() for ln in lines[1:])
+    assert len(lines) == 8 and all(json.loads(ln)["sources"] == km.sources_hash() for ln in lines[1:])
     s = json.loads((out / "summary.json").read_text())
     assert (s["done"], s["killed"], s["survived"], s["rows_of_other_sources"]) == (5, 3, 2, 1)
-    assert s["cpu_seconds"] == 10.0 and s["commit"] and s["date"]
+    assert s["cpu_seconds"] == 14.0 and s["caches"] == {"warm": 3, "fresh": 2} and s["commit"] and s["date"]
     assert (out / "survivors.txt").read_text().count("## ") == 2
 
 
@@ -224,3 +227,51 @@ def test_timeouts_are_given_or_a_multiple_of_the_baselines_wall_time():
     baseline = {"cost": {"tests": [100.0, 400.0], "crosscheck": [50.0, 100.0]}}
     assert runner.timeouts(none, baseline) == {"tests": km.TIMEOUT_FACTOR * 400.0, "crosscheck": km.TIMEOUT_MIN}
     assert runner.timeouts({"tests": 50.0, "crosscheck": None}, baseline)["tests"] == 50.0
+
+
+def test_the_cache_folders_are_named_as_numbas():
+    from numba.core.caching import _CacheLocator
+    for d in ("/tmp/a/engines/compiled/kernels", "/work/x y/engines"):
+        assert km.numba_folder(d) == _CacheLocator.get_suitable_cache_subpath(os.path.join(d, "m.py"))
+
+
+def test_a_mutant_starts_from_the_warm_cache_without_the_kernels_that_can_hold_it(tmp_path):
+    """The toy: c is mutated in engines/compiled/k.py; b calls c and a calls b (in other modules); d calls none."""
+    refs = {"a": {"b", "np"}, "b": {"c"}, "c": set(), "d": {"np"}}
+    old, new = tmp_path / "slot0", tmp_path / "slot1"
+    for w in (old, new):
+        (w / "engines" / "compiled" / "kernels").mkdir(parents=True)
+    m = km.Mutant("engines/compiled/k.py", "c", 3, 4, 5, "binop:Add->Sub", "+", "-")
+    warm = tmp_path / "warm"
+    top, sub = km.numba_folder(old / "engines" / "compiled"), km.numba_folder(old / "engines" / "compiled" / "kernels")
+    names = {top: ["k.c-3.py311.nbi", "k.c-3.py311.1.nbc", "k.e-9.py311.nbi", "x.b-1.py311.nbi", "x.d-4.py311.nbi"],
+             sub: ["y.a-2.py311.1.nbc", "y.Cls.d-7.py311.nbi", "stray.txt"], "elsewhere_0123": ["z.d-1.py311.nbi"]}
+    for folder, files in names.items():
+        (warm / folder).mkdir(parents=True)
+        for f in files:
+            (warm / folder / f).write_text(f)
+    dest = tmp_path / "cache" / "key"
+    n = km.seed_cache(str(warm), str(old), str(new), str(dest), km.reach(m, refs, str(new)))
+    kept = {str(p.relative_to(dest)) for p in dest.rglob("*") if p.is_file()}
+    top, sub = km.numba_folder(new / "engines" / "compiled"), km.numba_folder(new / "engines" / "compiled" / "kernels")
+    assert kept == {f"{top}/x.d-4.py311.nbi", f"{sub}/y.Cls.d-7.py311.nbi", "elsewhere_0123/z.d-1.py311.nbi"} and n == 3
+
+
+def test_a_mutant_restores_its_file_and_timestamp_and_says_which_cache(tmp_path, monkeypatch):
+    work = tmp_path / "work"
+    (work / "engines" / "compiled").mkdir(parents=True)
+    path = work / "engines" / "compiled" / "k.py"
+    path.write_text(SOURCE, encoding="utf-8")
+    os.utime(path, ns=(1_000_000_000, 2_000_000_000))
+    m = next(x for x in km.enumerate_mutants(str(work)) if x.function == "f")
+    seen = []
+    monkeypatch.setattr(km.Runner, "killers", lambda self, w, tag, tests, start=None: seen.append(
+        (path.read_text(encoding="utf-8"), start)) or {"status": "killed"})
+    runner = km.Runner(str(tmp_path / "out"), {}, None, 0)
+    monkeypatch.setattr(runner, "tests_for", lambda m: [])
+    assert runner.mutant(str(work), m, SOURCE, "s")["cache"] == "fresh"        # no warm cache yet
+    monkeypatch.setattr(runner, "warm_of", lambda sources: {"work": str(work), "key": "k0", "sources": sources})
+    assert runner.mutant(str(work), m, SOURCE, "s")["cache"] == "warm"
+    assert runner.mutant(str(work), m, SOURCE, "s", fresh=True)["cache"] == "fresh"
+    assert [t == km.apply(SOURCE, m) for t, _ in seen] == [True] * 3 and [s is None for _, s in seen] == [True, False, True]
+    assert path.read_text(encoding="utf-8") == SOURCE and os.stat(path).st_mtime_ns == 2_000_000_000

@@ -5,8 +5,10 @@ kernel and freezes the globals it reads (the layouts of engines.compiled.layout,
 engines.model) into the machine code: a kernel whose callee or layout lives in another module would
 run stale code after an edit there. So the cache folder (NUMBA_CACHE_DIR, set by
 engines/compiled/__init__.py before numba compiles anything) is keyed by ``cache_key``: a hash of
-every .py file of engines/model and engines/compiled (their paths and contents, sorted) and of
-numba's version. Any edit there, or another numba, compiles afresh into a new folder; going back to
+every .py file of engines/model and engines/compiled (their paths and contents, sorted), of
+numba's version and of the checkout's folder (numba names its own subfolders by the sources' path,
+so a second checkout of the same code finds nothing compiled for it: its own key makes its warm-up
+run and its first run say that it compiles). Any edit there, or another numba, compiles afresh into a new folder; going back to
 earlier sources finds their folder again while it is among the KEEP most recently used (older
 keyed folders are removed when a new one is made).
 
@@ -30,9 +32,9 @@ fresh = False  # use() found its keyed folder holding no compiled kernel: the ne
 
 
 def cache_key(engines=ENGINES):
-    """The hex key (16 digits) of the kernels' sources (those of the engines/ folder ``engines``)
-    and numba's version."""
-    h = hashlib.sha256(f"numba {importlib.metadata.version('numba')}\n".encode())
+    """The hex key (16 digits) of the kernels' sources (those of the engines/ folder ``engines``),
+    where they are, and numba's version."""
+    h = hashlib.sha256(f"numba {importlib.metadata.version('numba')}\n{os.path.abspath(engines)}\n".encode())
     for package in SOURCES:
         root = os.path.join(engines, package)
         for folder, dirs, files in os.walk(root):

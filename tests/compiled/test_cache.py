@@ -39,16 +39,21 @@ def engines_copy(tmp_path):
     return dst
 
 
-def test_the_key_is_that_of_the_sources_not_of_the_folder(tmp_path):
+def test_the_key_is_that_of_the_sources_and_their_folder(tmp_path):
     eng = engines_copy(tmp_path)
-    assert cache.cache_key(str(eng)) == cache.cache_key()
+    same = cache.cache_key(str(eng))
+    assert same != cache.cache_key()  # another checkout: numba's subfolders are named by the sources' path
+    assert cache.cache_key(str(eng)) == same
     callee = eng / "model" / "ground_motion.py"
     callee.write_text(callee.read_text().replace("self.vel += a_bar * dt", "self.vel += a_bar * dt * 1"))
     edited = cache.cache_key(str(eng))
-    assert edited != cache.cache_key()
+    assert edited != same
     layout = eng / "compiled" / "kernels" / "base_motion.py"  # a module of a subfolder
     layout.write_text(layout.read_text().replace('"disp", "wall_velocity"))', '"disp", "wall_velocity", "spare"))'))
-    assert cache.cache_key(str(eng)) not in (edited, cache.cache_key())
+    assert cache.cache_key(str(eng)) not in (edited, same)
+    shutil.copytree(eng.parent, tmp_path / "moved")
+    moved = cache.cache_key(str(tmp_path / "moved" / "engines"))
+    assert moved != cache.cache_key(str(eng))
 
 
 def test_the_folder_is_keyed_under_the_users_numba_cache_dir_once(tmp_path):
