@@ -251,6 +251,8 @@ RULES = [
            "one case of the cross-check (40 CPU s): make test runs the script with every case, this one included"),
     exempt(r"^yade -n -x benchmarks/", "a cost measurement: its length and an idle machine are its point "
            "(make bench, docs/PERFORMANCE.md)"),
+    exempt(r"^/usr/bin/python3 benchmarks/suite_times\.py ", "times make deps and make test in fresh clones: "
+           "minutes of an idle machine, and make test itself runs around this test"),
     exempt(r"^/usr/bin/python3 yade_scripts/tradeoffs\.py study ",
            "the trade study's runs (tens of CPU minutes through the sweep runner); make tradeoffs SHORT=1 runs "
            "its short form (MAKE_TARGETS)"),

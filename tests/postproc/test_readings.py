@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from postproc.readings import quicksand_ru, weight_carried
+from postproc.readings import quick_condition, quicksand_ru, weight_carried
 
 
 def _stats(mean, lo, hi):
@@ -32,6 +32,18 @@ def test_the_record_says_whether_the_interval_lies_within_0_8_to_1_2(tmp_path, r
                "parameters": {"material": {"rho": 2000.0, "rho_w": 1000.0, "g": 10.0}},
                "provenance": {"git_commit": "abc", "git_dirty": False}}, open(tmp_path / "start_0" / "summary.json", "w"))
     np.savez(tmp_path / "start_0" / "snapshot_000.00ms.npz", **_snapshot(0.01))
+    (tmp_path / "start_0" / "history.csv").write_text("t,sv_band1,ru_band1\n0,50,0\n0.001,6,0.9\n0.002,4,1.1\n")
     rec = quicksand_ru(str(tmp_path))
     assert rec["holds"] is holds and rec["band1"]["ru_at_heave"]["mean"] == ru[0]
     assert rec["band1"]["U_over_overburden_at_heave"] == pytest.approx(ru[0] * 0.5)
+    quick = rec["band1"]["quick_condition"]
+    assert (quick["t_s"]["n"], quick["t_s"]["mean"], quick["ru"]["mean"]) == (1, 0.002, 1.1)
+
+
+def test_the_quick_condition_is_the_first_row_below_a_tenth_of_the_start():
+    history = {"t": np.array([0.0, 1.0, 2.0, 3.0]), "sv_band1": np.array([50.0, 5.5, 4.9, 0.0]),
+               "ru_band1": np.array([0.0, 0.8, 0.95, 1.3]), "sv_band2": np.array([50.0, 40.0, 30.0, 20.0]),
+               "ru_band2": np.zeros(4)}
+    assert quick_condition(history) == (2.0, 0.95)
+    assert quick_condition(history, fraction=0.2) == (1.0, 0.8)
+    assert all(np.isnan(quick_condition(history, band=2)))
