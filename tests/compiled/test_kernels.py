@@ -200,6 +200,8 @@ SETTINGS = {
     "inflow_drained": WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=100.0, q_w=0.05, sides="drained"),
     "smoothing": WaterSettings(E_w=240.0, k1=200.0, k2=20.0, q_w=0.05, smoothing=True),
     "substep": WaterSettings(E_w=240.0, k1=2e5, k2=2e3, q_w=0.05, substep=True),
+    # sides 50 times as permeable as the throats: the drained pores set the Darcy limit (g_b in the bound)
+    "drained_limit": WaterSettings(E_w=240.0, k1=200.0, k2=2.0, k3=1e4, q_w=0.05, sides="drained", substep=True),
 }
 
 
