@@ -32,8 +32,9 @@ function of the mutated module, and every function naming the mutated one direct
 others (``callers``; numba's cache checks only the timestamp of a kernel's own file, and a caller's
 machine code holds its callees). Compiling only those costs seconds where a fresh cache costs a
 minute. Stale code could only make a mutant survive (the unmutated code would run), never kill it,
-so every survivor is run again with an empty cache (its row says ``"cache": "fresh"``) before it
-counts; ``--fresh`` gives every mutant an empty cache.
+so every survivor not judged equivalent is run again with an empty cache (its row says
+``"cache": "fresh"``) before it counts (``--retest`` first runs them again from the warm cache, after
+tests were added); ``--fresh`` gives every mutant an empty cache.
 
 A killer that fails, crashes (a numba typing error of the mutant counts: it cannot run) or passes
 its timeout (a hang) kills the mutant; the row says which and why. Before the sample, the killers
@@ -703,6 +704,8 @@ def main(argv=None):
                     "(and so the warm cache: every mutant compiles everything)")
     ap.add_argument("--fresh", action="store_true", help="every mutant with an empty numba cache (slower; the "
                     "default starts from the baseline's, module docstring)")
+    ap.add_argument("--retest", action="store_true", help="run the survivors not judged equivalent again "
+                    "first, from the warm cache (after tests were added)")
     ap.add_argument("--list", action="store_true", help="print the sample's ids and stop")
     ap.add_argument("--report-only", action="store_true", help="write the summary from OUT/results.jsonl and stop")
     args = ap.parse_args(argv)
@@ -732,7 +735,8 @@ def main(argv=None):
     lock = threading.Lock()
     if not args.report_only:
         originals = {m.file: open(os.path.join(ROOT, m.file), encoding="utf-8").read() for m in chosen}
-        todo = [m for m in chosen if m.id not in rows]
+        survivor = lambda m: rows[m.id]["status"] == "survived" and m.id not in equivalent  # noqa: E731
+        todo = [m for m in chosen if m.id not in rows or (args.retest and survivor(m))]
         slots = queue.Queue()
         for k in range(min(args.jobs, max(len(todo), 1))):
             slots.put((k, runner.prepare(k)))
@@ -769,7 +773,7 @@ def main(argv=None):
         with concurrent.futures.ThreadPoolExecutor(args.jobs) as pool:
             for f in [pool.submit(one, m, args.fresh) for m in todo]:
                 f.result()
-            again = [m for m in chosen if rows[m.id]["status"] == "survived" and rows[m.id].get("cache") != "fresh"]
+            again = [m for m in chosen if survivor(m) and rows[m.id].get("cache") != "fresh"]  # an equivalent one cannot be killed
             if again:
                 print(f"{len(again)} survivors run again with an empty numba cache", flush=True)
             for f in [pool.submit(one, m, True) for m in again]:

@@ -177,6 +177,9 @@ def test_a_rerun_skips_the_mutants_done_on_the_same_sources(tmp_path, monkeypatc
     assert (s["done"], s["killed"], s["survived"], s["rows_of_other_sources"]) == (5, 3, 2, 1)
     assert s["cpu_seconds"] == 14.0 and s["caches"] == {"warm": 3, "fresh": 2} and s["commit"] and s["date"]
     assert (out / "survivors.txt").read_text().count("## ") == 2
+    before = len(ran)
+    assert km.main(args[:1] + ["5"] + args[2:] + ["--retest"]) == 0   # the two survivors again, warm first
+    assert sorted(ran[before:before + 2]) == sorted([(first[1], False), (five[4], False)])
 
 
 def test_a_killer_past_its_timeout_is_killed_and_its_cpu_time_counted(tmp_path):

@@ -98,14 +98,16 @@ def test_paper_law_step_compiled_equals_numpy():
     assert laws[1].contact.list_builds == laws[0].contact.list_builds > 3 and n_fixes > 0
 
 
-@pytest.mark.parametrize("spread", [1.0, 40.0])
-def test_the_pair_list_compiled_equals_numpy(spread):
+@pytest.mark.parametrize("spread, shift", [(1.0, 0.0), (40.0, 0.0), (40.0, -3000.0)])
+def test_the_pair_list_compiled_equals_numpy(spread, shift):
     """ContactLaw._pairs_near by the grid kernel (kernels.near_pairs) against the
     k-d tree of the NumPy path: the same pairs in the same order, the state of the listed pairs
     carried over row by row, a new pair's zero, pairs of two fixed discs left out, and the pair
-    filter. spread: discs packed, or some scattered over 40 times the box (a sparse grid)."""
+    filter. spread: discs packed, or some scattered over 40 times the box (a sparse grid); shift:
+    the scene moved to negative coordinates, twice its width away from 0."""
     xz, r, walls, rng = _column(seed=9)
     xz[::7] *= spread
+    xz += shift
     mobile = walls == 0
     s = ContactSettings(spring="d", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, f_max=20.0, eps_m=0.01)
     laws = [law(s, r, mobile) for law in (model_contact.ContactLaw, contact.ContactLaw)]

@@ -15,7 +15,7 @@ from engines.compiled.pores.overlaps import _clip_area
 from engines.model import pores as pg
 from engines.model.pores import links, overlaps, triangulation
 from engines.model.flat_walls import FlatWall, WallVertices
-from engines.model.pore_water import PoreWater, WaterSettings, pressure, pressures_by_rule
+from engines.model.pore_water import PoreWater, WaterSettings, near_vertex_sets, pressure, pressures_by_rule
 from packing.layouts import hex_lattice, random_discs
 from packing.psd import sample_diameters
 from tests.layouts import random_sequential, square_lattice
@@ -223,6 +223,22 @@ def test_compiled_rules_give_the_same_pressures(seed, jitter, flat):
     assert set(np.unique(rule)) >= {1, 2, 3}
     if flat:  # rules (a) and (b) on vertex sets with a wall in them
         assert {1, 2} <= set(rule[new.pore_walls.any(axis=0)].tolist())
+
+
+@pytest.mark.parametrize("flat", [False, True])
+def test_rule_b_is_the_same_for_every_new_pore(flat):
+    """Rule (b) on both paths asked for every new pore (pressures_by_rule asks only for those rule (a)
+    left), and for each of the first pores alone (a pore's search marks the old pores it met by the
+    new pore's id: nothing is marked before the first)."""
+    old, new, _, _, rng = _moved(0, 0.02, flat)
+    U_old = rng.standard_normal(old.n_pores)
+    valid = np.ones(old.n_pores, bool)
+    todo = np.arange(new.n_pores)
+    want = near_vertex_sets(old, U_old, valid, new, todo)
+    assert np.isfinite(want[:4]).all()
+    assert_same(kp.REMESH.near_vertex_sets(old, U_old, valid, new, todo), want, "U by rule (b)")
+    for p in range(4):
+        assert_same(kp.REMESH.near_vertex_sets(old, U_old, valid, new, todo[p:p + 1]), want[p:p + 1], f"pore {p}")
 
 
 def test_spread_reaches_pores_far_from_any_known_one_in_rounds():
