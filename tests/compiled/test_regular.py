@@ -77,6 +77,23 @@ def test_ties_are_left_to_the_hull(name, answer):
     assert (got is None and want is None) or np.array_equal(got, want)
 
 
+def test_nested_discs_go_in_largest_first():
+    """Disc 6 inside the big disc 5 and disc 7 inside 6 (not inside 5): with 7 inserted before 6 the
+    insertion answers unsure (a flip 6 needs is not convex); the insertion order puts 6 first:
+    certain, the hull's triangles."""
+    xz = np.array([[0.0, 0.0], [5.0, 0.0], [2.5, 4.5], [0.0, 3.0], [5.0, 3.0], [2.0, 1.0], [3.2, 1.0], [3.55, 1.0]])
+    r = np.array([1.0, 1.0, 1.0, 1.0, 1.0, 1.5, 0.5, 0.2])
+    scale = np.ptp(xz, axis=0).max()  # as regular_triangles scales them
+    x, z, w = (xz[:, 0] - xz[:, 0].mean()) / scale, (xz[:, 1] - xz[:, 1].mean()) / scale, (r / scale) ** 2
+    order = regular._insertion_order(x, z, w)
+    assert order[-2:].tolist() == [6, 7]
+    assert regular._regular_from(x, z, w, order)[0] == regular.DONE
+    assert regular._regular_from(x, z, w, np.append(order[:-2], [7, 6]))[0] == regular.UNSURE
+    answer, tri = triangulate(xz, r)
+    assert answer == "done"
+    np.testing.assert_array_equal(tri, pg.regular_triangulation(xz, r))
+
+
 def test_a_disc_inside_another_power_cell_is_in_no_triangle():
     """A small disc near the centre of a large one in a packing: hidden, as in the lower hull."""
     xz, r = LAYOUTS["loose-0"]
