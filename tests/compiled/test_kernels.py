@@ -140,6 +140,18 @@ def test_a_pair_exactly_at_the_lists_reach_is_listed(law):
         assert len(c._pairs_near(np.array([[0.0, 0.0], [x, 0.0]]))[0]) == listed
 
 
+@pytest.mark.parametrize("law", [model_contact.ContactLaw, contact.ContactLaw])
+def test_a_pair_exactly_touching_feels_its_dashpot(law):
+    """delta = 0 exactly (R = r_i + r_j + eps_m), the discs approaching: e_n = kn u_n = 0 is no
+    tension (eq 6 cuts e_n < 0 only), so the dashpot's d_n = eta_n dun / dt pushes them apart."""
+    r = np.array([1e-3, 1.5e-3])
+    c = law(ContactSettings(spring="a", kn=1e3, eta_n=0.5, ks=4e2, eta_s=0.2, mu=0.4, eps_m=1e-4), r, np.ones(2, bool))
+    x = np.array([[0.0, 0.0], [r[0] + r[1] + 1e-4, 0.0]])
+    F, _, _ = c.forces(x, np.array([[1e-6, 0.0], [-1e-6, 0.0]]), np.zeros(2), 1e-3)
+    d_n = 0.5 * 2e-6 / 1e-3  # eq 4b: dun = 2e-6 m of approach in dt = 1e-3 s
+    np.testing.assert_allclose(F, [[-d_n, 0.0], [d_n, 0.0]], rtol=1e-12, atol=1e-18)
+
+
 def _kernel_measure(net, xz, r):
     out = kernels.new_measures(net.n_pores, len(net.links))
     kernels.measure(xz, r, net.eps_m, kernels.link_geometry(net), out)
