@@ -704,8 +704,8 @@ def main(argv=None):
                     "(and so the warm cache: every mutant compiles everything)")
     ap.add_argument("--fresh", action="store_true", help="every mutant with an empty numba cache (slower; the "
                     "default starts from the baseline's, module docstring)")
-    ap.add_argument("--retest", action="store_true", help="run the survivors not judged equivalent again "
-                    "first, from the warm cache (after tests were added)")
+    ap.add_argument("--retest", nargs="*", metavar="ID", help="run the survivors not judged equivalent (or "
+                    "those of these ids) again first, from the warm cache (after tests were added)")
     ap.add_argument("--list", action="store_true", help="print the sample's ids and stop")
     ap.add_argument("--report-only", action="store_true", help="write the summary from OUT/results.jsonl and stop")
     args = ap.parse_args(argv)
@@ -736,7 +736,8 @@ def main(argv=None):
     if not args.report_only:
         originals = {m.file: open(os.path.join(ROOT, m.file), encoding="utf-8").read() for m in chosen}
         survivor = lambda m: rows[m.id]["status"] == "survived" and m.id not in equivalent  # noqa: E731
-        todo = [m for m in chosen if m.id not in rows or (args.retest and survivor(m))]
+        retest = lambda m: args.retest is not None and survivor(m) and (not args.retest or m.id in args.retest)  # noqa: E731
+        todo = [m for m in chosen if m.id not in rows or retest(m)]
         slots = queue.Queue()
         for k in range(min(args.jobs, max(len(todo), 1))):
             slots.put((k, runner.prepare(k)))
