@@ -77,6 +77,13 @@ def test_ties_are_left_to_the_hull(name, answer):
     assert (got is None and want is None) or np.array_equal(got, want)
 
 
+def test_three_discs_make_one_triangle():
+    """The smallest packing with a triangle: the third disc in the insertion order is the first off
+    the line of the first two."""
+    answer, tri = triangulate(np.array([[0.0, 0.0], [1.0, 0.0], [0.2, 1.0]]), np.full(3, 0.1))
+    assert answer == "done" and tri.tolist() == [[0, 1, 2]]
+
+
 def test_nested_discs_go_in_largest_first():
     """Disc 6 inside the big disc 5 and disc 7 inside 6 (not inside 5): with 7 inserted before 6 the
     insertion answers unsure (a flip 6 needs is not convex); the insertion order puts 6 first:
