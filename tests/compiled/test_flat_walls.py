@@ -81,6 +81,24 @@ def test_compiled_flat_walls_keep_the_uniform_pressure_balance():
     np.testing.assert_allclose(m.F_walls, U * wetted, rtol=1e-12)
 
 
+@pytest.mark.parametrize("wall, xz", [(FlatWall(1, 0.0, +1), [[1.0, 1.0], [3.0, 1.0]]),
+                                      (FlatWall(1, 2.0, -1), [[1.0, 1.0], [3.0, 1.0]]),
+                                      (FlatWall(0, 0.0, +1), [[1.0, 1.0], [1.0, 3.0]]),
+                                      (FlatWall(0, 2.0, -1), [[1.0, 1.0], [1.0, 3.0]])])
+def test_the_one_pore_of_two_discs_on_each_wall_pushes_it(wall, xz):
+    """Two touching discs on a wall close one pore (pore 0, on the left or the right of the wall
+    edge as the wall faces): at pressure U the wall feels U x its wetted length, the gap between
+    the feet (the water step's flat_wall_forces)."""
+    xz, r = np.array(xz), np.ones(2)
+    s = WaterSettings(E_w=240.0, k1=0.0, k2=0.0, k3=0.0, q_w=0.0)
+    m = cwm.WaterModel(s, r, np.zeros(2, np.int64), xz, 0.0, 0.5, 1e-4, flat_walls=(wall,))
+    U = 30.0
+    m.water.W = pg.measure(m.water.net, xz, r).void_area * s.E_w / (s.E_w - U)  # eq 32 inverted
+    m.advance(1e-4, xz)
+    assert m.water.net.n_pores == 1
+    np.testing.assert_allclose(m.F_walls, [U * 2.0], rtol=1e-12)
+
+
 def test_the_compiled_water_model_follows_moving_walls_as_the_numpy_one():
     """Both classes with the box shaken around fixed discs (every wall translated by the same
     oscillating x, 0.3 m, move_walls at every step) and rebuilt every 20 steps: W, the disc and wall forces agree to

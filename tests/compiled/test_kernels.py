@@ -13,6 +13,7 @@ from engines.model import paper_law as model_paper_law
 from engines.model import pores as pg
 from engines.model import water_model as model_water_model
 from engines.model.contact import ContactSettings
+from engines.model.limits import DarcyStabilityError
 from engines.model.pore_water import WaterSettings
 from engines.model.schedule import Schedule
 from engines.model.side_walls import SideWallTies
@@ -296,8 +297,41 @@ def test_tie_forces_compiled_equals_numpy():
         assert np.count_nonzero(F) == np.count_nonzero(ties.moving) + 2  # the columns and their corners
 
 
+@pytest.mark.parametrize("model", [model_water_model.WaterModel, water_model.WaterModel])
+def test_a_water_step_that_would_empty_pore_0_is_refused_naming_it(model):
+    """Three discs, one surface pore (pore 0) at W = 3 A: a step just under its stability limit
+    would overshoot below zero (tests/model/test_pore_water.py): both paths refuse it naming
+    pore 0 and keep the water."""
+    xz, r = np.array([[0.0, 0.0], [3.0, 0.0], [1.5, 2.6]]), np.ones(3)
+    m = model(WaterSettings(E_w=240.0, k1=200.0, k2=2.0), r, np.zeros(3, np.int64), xz, 0.0, 2.0, 1e-3)
+    A = pg.measure(m.water.net, xz, r).void_area
+    assert m.water.net.n_pores == 1 and m.water.net.pore_surface[0]
+    m.water.W[:] = 3 * A
+    with pytest.raises(DarcyStabilityError, match="water area of pore 0 "):
+        m.advance(0.999 * m.water.darcy_limit(A, np.zeros(3, bool)), xz)
+    np.testing.assert_array_equal(m.water.W, 3 * A)
+
+
+def test_a_pore_at_the_degenerate_area_exactly_exchanges_nothing():
+    """A pore is closed at A <= a_min (eq 32-43 run over the open pores): with a_min set to the
+    void area the water step measured for the smallest inner pore, that pore's water stays, bit for
+    bit, while its neighbours exchange."""
+    xz, r, walls, rng = _column(n=120, gap=0.0)
+    m = water_model.WaterModel(WaterSettings(E_w=240.0, k1=200.0, k2=2.0), r, walls, xz, 0.0, 0.3, 1e-3)
+    net = m.water.net
+    m.water.W[:] = m.water.W * (1 + 0.01 * rng.random(net.n_pores))
+    m.advance(1e-6, xz)
+    void = m._part("void").copy()   # the water step's own measure (eq 29)
+    inner = np.flatnonzero(~net.pore_surface)
+    p = int(inner[np.argmin(void[inner])])   # the smallest: the others stay open
+    m._part("a_min")[:] = void[p]
+    W = m.water.W.copy()
+    m.advance(1e-6, xz)
+    others = np.setdiff1d(net.throat_conns[(net.throat_conns == p).any(axis=1)], [p])
+    assert m.water.W[p] == W[p] and np.all(m.water.W[others] != W[others])
+
+
 def test_refuses_a_water_step_above_the_darcy_limit():
-    from engines.model.limits import DarcyStabilityError
     xz, r, walls, _ = _column(n=120, gap=0.0)
     m = water_model.WaterModel(WaterSettings(E_w=240.0, k1=2e5, k2=2e3, substep=False), r, walls, xz, 0.0, 0.3, 1e-3)
     with pytest.raises(DarcyStabilityError, match="substep"):

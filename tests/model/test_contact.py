@@ -394,3 +394,27 @@ def test_touching_at_is_what_a_step_would_give_without_taking_it(law_class):
         sub = law.touching_at(x, du, dpsi, dt, keep=lambda i, j: np.minimum(i, j) < 8)
         for got, expected in zip(sub, (pairs[low], fn[low], es[low])):
             assert np.array_equal(got, expected)
+
+
+@pytest.mark.parametrize("law_class", [ContactLaw, compiled_contact.ContactLaw])
+def test_a_stored_pair_list_that_does_not_fit_is_refused(law_class):
+    """checkpoint_restored: the pair list of a few steps passes; a list position of another shape,
+    j or state not one row per pair, a disc index below 0 or at n are each refused in one line."""
+    rng = np.random.default_rng(2)
+    xz = np.column_stack([np.arange(6) * 1.9e-3, np.zeros(6)])
+    law = law_class(ContactSettings(spring="a", kn=1e6), np.full(6, 1e-3), np.ones(6, bool))
+    law.forces(xz, 1e-7 * rng.standard_normal(xz.shape), np.zeros(6), 1e-6)
+    assert len(law.i) and law.i.min() == 0 and law.j.max() == 5
+    law.checkpoint_restored()
+    good = {name: getattr(law, name).copy() for name in ("i", "j", "state", "xz_list")}
+    bad = [("xz_list", good["xz_list"][:-1], r"^pair list: xz_list has shape \(5, 2\), expected \(6, 2\)$"),
+           ("j", good["j"][:-1], r"^pair list: i .* do not fit$"), ("state", good["state"][:, :5], "do not fit"),
+           ("i", np.where(np.arange(len(good["i"])) == 0, -1, good["i"]), r"^pair list: disc indices outside \[0, 6\)$"),
+           ("j", np.where(np.arange(len(good["j"])) == 0, 6, good["j"]), r"outside \[0, 6\)")]
+    for name, value, message in bad:
+        setattr(law, name, value)
+        with pytest.raises(ValueError, match=message):
+            law.checkpoint_restored()
+        setattr(law, name, good[name])
+    law.xz_list = None   # no list built yet
+    law.checkpoint_restored()

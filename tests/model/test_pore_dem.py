@@ -596,3 +596,25 @@ def test_weight_carried_by_wall_discs_or_flat_walls(kind):
         assert weight_carried(sc.settings, pk, first) == pytest.approx(carried, abs=1e-9)
         assert weight_carried(sc.settings, pk, second) == 0.0
         assert weight_carried(sc.settings, pk) == pytest.approx(carried * f / (f + 1), abs=1e-9)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_new_dt_reaches_the_law_and_the_water_and_is_checked_as_at_the_start(compiled):
+    """set_dt (a script changing O.dt): the core, its law and its water step with the new dt; a dt
+    above eq 52's limit or above the side-wall ties' limit (tests/model/test_limits.py) is refused,
+    the old dt kept; with a ground motion, sampled at the scene's dt, any change is refused."""
+    pk = wet_box()
+    m_wall = disc_masses(scene().settings, pk)[0][pk.group == pg.WALL_LEFT].min()
+    ks = m_wall / 2e-7**2   # the ties' limit: 2e-7 s
+    core = PORE_DEM[compiled](scene(water={"enabled": True}, loading={"side_walls": "springs"}, contact={"ks_wall": ks},
+                                    numerics={"dt": 1e-7}).settings, pk)
+    core.set_dt(1.9e-7)
+    assert core.dt == core.law.dt == core.water_model.dt == 1.9e-7
+    for dt, limit in ((2.1e-7, "side-wall ties"), (1e-3, "eq 52")):
+        with pytest.raises(ValueError, match=limit):
+            core.set_dt(dt)
+        assert core.dt == core.law.dt == core.water_model.dt == 1.9e-7
+    shaken = PORE_DEM[compiled](scene(loading={"type": "cosine"}, numerics={"dt": 1e-7}).settings, pk)
+    with pytest.raises(ValueError, match=r"dt cannot change during a run with a ground motion .* set \[numerics\] dt"):
+        shaken.set_dt(0.5e-7)
+    assert shaken.dt == shaken.law.dt == 1e-7

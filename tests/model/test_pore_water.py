@@ -4,7 +4,7 @@ import pytest
 
 from engines.model import pores as pg
 from engines.model.limits import DarcyStabilityError
-from engines.model.pore_water import PoreWater, WaterSettings, pressure, pressures_by_rule, rule_counts
+from engines.model.pore_water import PoreWater, WaterSettings, buoyancy, pressure, pressures_by_rule, rule_counts
 from packing.layouts import random_discs
 
 
@@ -487,3 +487,10 @@ def test_initial_water_is_checked_and_the_state_starts_clean():
     w = PoreWater(net, A, WaterSettings(E_w=1.0, k1=4.0, k2=1.0), W=[1])      # integers are areas too
     assert w.W.dtype == float and w.remesh_counts == {}
     assert w.rule.dtype.kind == "i" and w.rule.shape == (1,) and w.rule[0] == 0
+
+
+def test_buoyancy_is_the_weight_of_the_displaced_water():
+    """Eq 34b: rho_w pi r^2 g per unit thickness [N/m], for one radius or an array of them."""
+    assert buoyancy(2e-3, 1000.0, 9.81) == pytest.approx(1000.0 * np.pi * 4e-6 * 9.81, rel=1e-15)
+    np.testing.assert_allclose(buoyancy([1e-3, 3e-3], 1000.0, 9.81), 1000.0 * np.pi * np.array([1e-6, 9e-6]) * 9.81,
+                               rtol=1e-15)

@@ -461,3 +461,62 @@ def test_crossed_edges_through_a_vertex_and_past_one_behind():
     assert ft.crossed_edges(k, F) is None
     edges = ft.crossed_edges(k, l)
     assert edges is not None and {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l)
+
+
+def test_the_link_range_is_checked_in_median_radii_and_holds_the_contact_range():
+    """check_lengths: l_m within LINK_RANGE x the median radius (both ends allowed), eps_m <= l_m;
+    each refusal names the caller's field. Radii of median 1 mm and mean 2 mm: the median counts."""
+    r = np.array([1e-3, 1e-3, 4e-3])
+    lo, hi = pg.LINK_RANGE
+    for l_m in (lo * 1e-3, hi * 1e-3):
+        pg.check_lengths(l_m, l_m, r)
+    for l_m in (0.99 * lo * 1e-3, 1.01 * hi * 1e-3):
+        with pytest.raises(ValueError, match=r"^link_range = .* x the median disc radius 0.001 m, outside"):
+            pg.check_lengths(l_m, 0.0, r, names=("link_range", "contact_range"))
+    with pytest.raises(ValueError, match=r"^contact_range = 0.000101 m exceeds link_range = 0.0001 m"):
+        pg.check_lengths(1e-4, 1.01e-4, r, names=("link_range", "contact_range"))
+    with pytest.raises(ValueError, match=r"^eps_m = .* exceeds l_m"):
+        pg.check_lengths(1e-4, 1.01e-4, r)
+
+
+@pytest.mark.parametrize("flat", [False, True])
+def test_a_stored_network_whose_arrays_do_not_fit_is_refused(flat):
+    """PoreNetwork.checkpoint_restored: a network as built passes; an array one row too long, an
+    index one past its range or one below it, a pore_touches of another length and pointers
+    that do not start each pore's vertices are each refused naming what is wrong (a kernel would
+    read out of bounds). With flat walls the indices run over the wall vertices too."""
+    from dataclasses import replace
+
+    from engines.model.flat_walls import FlatWall
+    from engines.model.pores.network import CHECKPOINT_SHAPES
+    rng = np.random.default_rng(4)
+    xz, r = random_discs(60, rng)
+    walls = (FlatWall(1, xz[:, 1].min() - r.max(), +1),) if flat else ()
+    net = pg.build_pores(xz, r, l_m=0.3 * r.mean(), walls=np.zeros(len(r), np.int64), flat_walls=walls)
+    net.checkpoint_restored()
+    n_vertices = net.wall_vertices.n_vertices if flat else len(r)
+    assert (net.pore_walls is not None) == flat and net.link_pores.min() == -1
+    sizes = {"P": net.n_pores, "L": len(net.links), "H": 2 * len(net.links), "K": len(net.corner_pore),
+             "T": len(net.throat_conns), "S": len(net.pore_vertex_idx), "V": n_vertices}
+    for name, (shape, lo, hi) in CHECKPOINT_SHAPES.items():
+        a = getattr(net, name)
+        if a is None:
+            continue
+        with pytest.raises(ValueError, match=r"^pore network: (\w+ has shape|pore_vertex_ptr is not)"):
+            replace(net, **{name: np.concatenate([a, a[:1]], axis=0)}).checkpoint_restored()
+        if lo is None:
+            continue
+        top = sizes[hi] + (name == "pore_vertex_ptr")
+        for value in (lo - 1, top):
+            bad = a.copy()
+            bad.flat[-1 if name == "pore_vertex_ptr" else 0] = value
+            with pytest.raises(ValueError, match=rf"^pore network: ({name} holds indices outside \[{lo}, {top}\)"
+                                                 r"|pore_vertex_ptr is not)"):
+                replace(net, **{name: bad}).checkpoint_restored()
+    with pytest.raises(ValueError, match=r"pore_touches\['bottom'\] has shape"):
+        replace(net, pore_touches={**net.pore_touches, "bottom": np.zeros(net.n_pores + 1, bool)}).checkpoint_restored()
+    ptr = net.pore_vertex_ptr.copy()
+    ptr[[1, 2]] = ptr[[2, 1]]
+    for bad in (ptr, np.append(net.pore_vertex_ptr[:-1], net.pore_vertex_ptr[-1] - 1)):
+        with pytest.raises(ValueError, match="pore_vertex_ptr is not the start of each pore's vertices"):
+            replace(net, pore_vertex_ptr=bad).checkpoint_restored()
