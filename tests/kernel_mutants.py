@@ -76,7 +76,7 @@ if ROOT not in sys.path:
 
 from engines import files  # noqa: E402
 from engines.compiled.cache import cache_key  # noqa: E402
-from tests.mutants import read_equivalent  # noqa: E402
+from tests.mutants import commit, read_equivalent  # noqa: E402
 
 COMPILED = "engines/compiled"
 EQUIVALENT = os.path.join(ROOT, "tests", "equivalent_kernel_mutants.txt")
@@ -640,14 +640,6 @@ def _failed_cases(path):
         return []
     return [c.get("name", "?") for group in ("cases", "feature_cases") for c in result.get(group, [])
             if isinstance(c, dict) and not c.get("passed", True)]
-
-
-def commit():
-    """The project's commit (with "+dirty" when its tracked files differ from it)."""
-    head = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
-    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True).stdout.strip()
-    return (head or "unknown") + ("+dirty" if dirty else "")
 
 
 def write_summary(out, chosen, rows, equivalent, args, sources, other_rows, timeout):

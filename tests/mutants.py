@@ -23,7 +23,7 @@ mutmut must run from a virtual environment over Debian's Python with --system-si
 that YADE's NumPy and SciPy are the ones the tests use (see the Makefile's mutants target).
 """
 import argparse
-import json
+import datetime
 import os
 import re
 import shutil
@@ -32,6 +32,10 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if ROOT not in sys.path:
+    sys.path.insert(0, ROOT)
+
+from engines import files  # noqa: E402
 PORES = [f"engines/model/pores/{m}.py" for m in ("build", "checks", "faces", "links", "measure", "network", "overlaps", "triangulation")]
 MODULES = ["engines/model/pore_water.py", *PORES, "engines/model/contact.py", "engines/model/pore_dem.py"]
 EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/model/flat_walls.py",
@@ -101,6 +105,14 @@ def results(work, mutmut):
         if sep and "__mutmut_" in name:
             status[name] = state.strip()
     return status
+
+
+def commit():
+    """The project's commit (with "+dirty" when its tracked files differ from it)."""
+    head = subprocess.run(["git", "-C", ROOT, "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
+                           capture_output=True, text=True).stdout.strip()
+    return (head or "unknown") + ("+dirty" if dirty else "")
 
 
 def module_of(name, modules):
@@ -179,19 +191,19 @@ def main(argv=None):
                     run_mutmut(work, mutmut, args.max_children, left[k:k + 400], log)
     status = results(work, mutmut)
     summary = summarise(status, args.modules, read_equivalent())
-    summary["seconds"] = time.time() - t0
-    summary["max_children"] = args.max_children
-    summary["tests"] = TESTS
-    with open(os.path.join(args.out, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    summary.update(seconds=time.time() - t0, max_children=args.max_children, tests=TESTS,
+                   judged=MODULES, date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                   commit=commit())
+    files.write_json(os.path.join(args.out, "summary.json"), summary)
     survivors = sorted(n for n, s in status.items() if s not in KILLED | {"not checked"} and n not in read_equivalent())
-    with open(os.path.join(args.out, "survivors.txt"), "w") as f:
-        for name in survivors:
-            if args.only and module_of(name, args.modules) not in args.only:
-                f.write(f"## {name}: {status[name]}\n")    # (a diff costs a mutmut call: only for --only)
-                continue
-            diff = subprocess.run([mutmut, "show", name], cwd=work, capture_output=True, text=True).stdout
-            f.write(f"## {name}: {status[name]}\n{diff}\n")
+    parts = []
+    for name in survivors:
+        if args.only and module_of(name, args.modules) not in args.only:
+            parts.append(f"## {name}: {status[name]}\n")    # (a diff costs a mutmut call: only for --only)
+            continue
+        diff = subprocess.run([mutmut, "show", name], cwd=work, capture_output=True, text=True).stdout
+        parts.append(f"## {name}: {status[name]}\n{diff}\n")
+    files.write_text(os.path.join(args.out, "survivors.txt"), "".join(parts))
     for m, row in summary["modules"].items():
         print(f"{m}: {row['killed']}/{row['total'] - row['equivalent']} killed ({row['equivalent']} equivalent), "
               f"score {row['score']:.3f}" if row["score"] is not None else f"{m}: no mutants")

@@ -348,12 +348,10 @@ def inflow_lengths(net, walls):
             on = (codes[links[:, 0]] == k.group) & (codes[links[:, 1]] == k.group)
             row |= on
             inward[on, k.face[0]] = k.face[1]
-    edge, wall = pg.wall_edges(net)
-    inflow = np.array([groups.kind(w.boundary).water == "inflow" for w in net.flat_walls], bool)
-    if len(edge):
-        edge, wall = edge[inflow[wall]], wall[inflow[wall]]
-        inward[edge] = [net.flat_walls[w].normal() for w in wall]
-        row[edge] = True
+    for e, w in zip(*pg.wall_edges(net)):  # an edge of an inflow flat wall; its inner side: the wall's normal
+        if groups.kind(net.flat_walls[w].boundary).water == "inflow":
+            inward[e] = net.flat_walls[w].normal()
+            row[e] = True
     # the pore on the left of i -> j lies along (-dz, dx)
     left = inward[:, 0] * -vec[:, 1] + inward[:, 1] * vec[:, 0] > 0
     pore = np.where(left, net.link_pores[:, 0], net.link_pores[:, 1])

@@ -314,21 +314,21 @@ def test_a_water_step_that_would_empty_pore_0_is_refused_naming_it(model):
 
 def test_a_pore_at_the_degenerate_area_exactly_exchanges_nothing():
     """A pore is closed at A <= a_min (eq 32-43 run over the open pores): with a_min set to the
-    void area the water step measured for the smallest inner pore, that pore's water stays, bit for
-    bit, while its neighbours exchange."""
+    void area the water step measured for the smallest surface pore, under pressure, that pore
+    keeps its water bit for bit (no throat, no outflow to the surface), while the others exchange."""
     xz, r, walls, rng = _column(n=120, gap=0.0)
     m = water_model.WaterModel(WaterSettings(E_w=240.0, k1=200.0, k2=2.0), r, walls, xz, 0.0, 0.3, 1e-3)
     net = m.water.net
     m.water.W[:] = m.water.W * (1 + 0.01 * rng.random(net.n_pores))
     m.advance(1e-6, xz)
     void = m._part("void").copy()   # the water step's own measure (eq 29)
-    inner = np.flatnonzero(~net.pore_surface)
-    p = int(inner[np.argmin(void[inner])])   # the smallest: the others stay open
+    surface = np.flatnonzero(net.pore_surface)
+    p = int(surface[np.argmin(void[surface])])
     m._part("a_min")[:] = void[p]
     W = m.water.W.copy()
+    assert W[p] != void[p]   # U != 0: it would flow out
     m.advance(1e-6, xz)
-    others = np.setdiff1d(net.throat_conns[(net.throat_conns == p).any(axis=1)], [p])
-    assert m.water.W[p] == W[p] and np.all(m.water.W[others] != W[others])
+    assert m.water.W[p] == W[p] and np.count_nonzero(m.water.W != W) > net.n_pores // 2
 
 
 def test_refuses_a_water_step_above_the_darcy_limit():

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from engines.compiled import water_model as compiled_water_model
+from engines.model import groups
 from engines.model import pores as pg
 from engines.model.flat_walls import FlatWall
 from engines.model.pore_water import PoreWater, WaterSettings, inflow_lengths
@@ -91,3 +92,54 @@ def test_compiled_twin_takes_in_the_same_water():
         got.append(m.water.balance.inflow)
     assert got[0] == pytest.approx(V * SPAN * 1e-6, rel=1e-12)
     assert got[1] == pytest.approx(got[0], rel=1e-12)
+
+
+def test_one_pore_and_no_pore_networks_have_their_inflow_lengths():
+    """Two touching discs of the bottom row and one on them: one pore, fed over the row's link 2 r;
+    a network without pores has no lengths."""
+    xz = np.array([[0.0, 0.0], [2e-3, 0.0], [1e-3, 1.7e-3]])
+    walls = np.array([pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0])
+    net = pg.build_pores(xz, np.full(3, 1e-3), l_m=0.3e-3, walls=walls)
+    np.testing.assert_allclose(inflow_lengths(net, walls), [2e-3], rtol=1e-12)
+    empty = pg.build_pores(xz[:2], np.full(2, 1e-3), l_m=0.3e-3, walls=walls[:2])
+    assert empty.n_pores == 0 and inflow_lengths(empty, walls[:2]).shape == (0,)
+
+
+def test_the_row_feeds_the_same_pores_whatever_the_discs_order():
+    """The bottom row's discs numbered last instead of first: each pore gets the same length."""
+    xz, r, walls = bed(1e-3)
+    order = np.argsort(walls == 0)[::-1]   # grains first
+    net, back = pg.build_pores(xz, r, l_m=0.3e-3, walls=walls), pg.build_pores(xz[order], r[order], l_m=0.3e-3,
+                                                                                walls=walls[order])
+    a, b = inflow_lengths(net, walls), inflow_lengths(back, walls[order])
+    key = lambda n: [tuple(sorted(order[n.vertices_of(p)] if n is back else n.vertices_of(p)))  # noqa: E731
+                     for p in range(n.n_pores)]
+    assert sorted(zip(key(net), a)) == sorted(zip(key(back), b)) and a.sum() > 0
+
+
+def test_an_inflow_group_facing_x_feeds_the_pores_on_its_inner_side(monkeypatch):
+    """The table read by kind (engines.model.groups): were the left disc group an inflow wall, the bed
+    mirrored across x = z (its row now a left column) would take in v x the same span, and a bed with
+    both rows takes in the sum of what each row feeds alone."""
+    xz, r, walls = bed(1e-3)
+    toy = tuple(k._replace(water="inflow") if k.name == "left" else k for k in groups.BOUNDARY_KINDS)
+    monkeypatch.setattr(groups, "BOUNDARY_KINDS", toy)
+    left = np.where(walls == pg.WALL_BOTTOM, pg.WALL_LEFT, 0)
+    total, _ = total_inflow(xz[:, ::-1], r, left, WaterSettings(inflow_velocity=V))
+    assert total == pytest.approx(V * SPAN, rel=1e-12)
+    column = np.column_stack([np.full(6, -2e-3), 2e-3 * np.arange(1, 7)])   # a left column beside the bed
+    both_xz, both_r = np.vstack([xz, column]), np.concatenate([r, np.full(6, 1e-3)])
+    both = np.concatenate([walls, np.full(6, pg.WALL_LEFT)])
+    net = pg.build_pores(both_xz, both_r, l_m=0.3e-3, walls=both)
+    rows = [inflow_lengths(net, np.where(both == g, g, 0)) for g in (pg.WALL_BOTTOM, pg.WALL_LEFT)]
+    assert rows[1].sum() > 0
+    np.testing.assert_allclose(inflow_lengths(net, both), rows[0] + rows[1], rtol=1e-15)
+
+
+def test_flat_walls_that_take_in_no_water_feed_no_pore():
+    """An undrained flat bottom under a bed without disc groups: its edges are no inflow row."""
+    xz, r, _ = bed(1e-3)
+    xz, r = xz[1:-1], r[1:-1]
+    net = pg.build_pores(xz, r, l_m=0.3e-3, walls=np.zeros(len(r), np.int64),
+                         flat_walls=(FlatWall(1, -1e-3, +1), FlatWall(0, -1e-3, +1, "drained")))
+    assert len(pg.wall_edges(net)[0]) and np.all(inflow_lengths(net, np.zeros(len(r), np.int64)) == 0)

@@ -470,10 +470,12 @@ def test_the_link_range_is_checked_in_median_radii_and_holds_the_contact_range()
     lo, hi = pg.LINK_RANGE
     for l_m in (lo * 1e-3, hi * 1e-3):
         pg.check_lengths(l_m, l_m, r)
-    for l_m in (0.99 * lo * 1e-3, 1.01 * hi * 1e-3):
-        with pytest.raises(ValueError, match=r"^link_range = .* x the median disc radius 0.001 m, outside"):
+    for l_m, ratio in ((0.99 * lo * 1e-3, f"{0.99 * lo:.3g}"), (1.01 * hi * 1e-3, f"{1.01 * hi:.3g}")):
+        with pytest.raises(ValueError, match=rf"^link_range = {l_m:.3g} m is {ratio} x the median disc radius 0.001 m, "
+                                             r"outside .* and of link_range \(both in m\)$"):
             pg.check_lengths(l_m, 0.0, r, names=("link_range", "contact_range"))
-    with pytest.raises(ValueError, match=r"^contact_range = 0.000101 m exceeds link_range = 0.0001 m"):
+    with pytest.raises(ValueError, match=r"^contact_range = 0.000101 m exceeds link_range = 0.0001 m: .* reduce "
+                                         r"contact_range or raise link_range$"):
         pg.check_lengths(1e-4, 1.01e-4, r, names=("link_range", "contact_range"))
     with pytest.raises(ValueError, match=r"^eps_m = .* exceeds l_m"):
         pg.check_lengths(1e-4, 1.01e-4, r)
