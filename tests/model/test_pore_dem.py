@@ -480,6 +480,8 @@ def test_flat_walls_of_a_scene_stand_at_the_wall_discs_inner_faces():
                      pg.WALL_RIGHT: FlatWall(0, float(np.min(pk.xz[right, 0] - R)), -1, "drained")}
     closed = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "q_w": 0.0}).settings, pk)
     assert [w.boundary for w in closed.values()] == ["undrained"] * 3
+    slow = pore_dem.scene_flat_walls(scene(**flat, water={"enabled": True, "inflow_velocity": 1e-3}).settings, pk)
+    assert slow[pg.WALL_BOTTOM].boundary == "inflow"  # a Darcy velocity of 1 mm/s
     assert pore_dem.scene_flat_walls(scene().settings, pk) == {}  # kind = "discs"
     faces = {code: w.position for code, w in walls.items()}
     window = pore_dem.porosity_window(scene(output={"porosity_window": [0.0, 0.5]}).settings, pk.particles(), faces)
@@ -497,6 +499,17 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
     pk = Packing(xz, [rw, rw, r], [pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0], np.ones(3))
     walls = pore_dem.scene_flat_walls(scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"}).settings, pk)
     assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0
+
+
+def test_the_flat_walls_that_follow_the_input_are_a_boolean_mask():
+    """moving_flat_walls: (W,) bool, none without a ground motion, the bottom face with moves =
+    "bottom", every wall with "box"; no walls, no entries."""
+    walls = (FlatWall(1, 0.0, +1), FlatWall(0, 0.0, +1), FlatWall(1, 1.0, -1))
+    for loading, want in (({}, [False] * 3), ({"type": "cosine"}, [True, False, False]),
+                          ({"type": "cosine", "moves": "box"}, [True] * 3)):
+        for w, expect in ((walls, want), ((), [])):
+            moving = pore_dem.moving_flat_walls(scene(loading=loading).settings, w)
+            assert moving.dtype == bool and moving.tolist() == expect
 
 
 SHAKEN = {"type": "cosine", "amplitude": 150.0, "frequency": 500.0}  # 15 um of base displacement in 400 steps

@@ -494,3 +494,17 @@ def test_buoyancy_is_the_weight_of_the_displaced_water():
     assert buoyancy(2e-3, 1000.0, 9.81) == pytest.approx(1000.0 * np.pi * 4e-6 * 9.81, rel=1e-15)
     np.testing.assert_allclose(buoyancy([1e-3, 3e-3], 1000.0, 9.81), 1000.0 * np.pi * np.array([1e-6, 9e-6]) * 9.81,
                                rtol=1e-15)
+
+
+def test_a_restored_network_gets_its_inflow_weights_again():
+    """checkpoint_restored: the inflow weights follow the network a checkpoint set (here one whose
+    pore sits on the bottom row, in place of a network without inflow)."""
+    xz, r = np.array([[0.0, 0.0], [3.0, 0.0], [1.5, 2.6]]), np.ones(3)
+    walls = np.array([pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0])
+    fed = pg.build_pores(xz, r, l_m=2.0, walls=walls)
+    A = pg.measure(fed, xz, r).void_area
+    w = PoreWater(pg.build_pores(xz, r, l_m=2.0), A, WaterSettings(q_w=1e-4), walls=np.zeros(3, np.int64))
+    assert w.inflow[1].tolist() == [0.0]
+    w.net, w.walls = fed, walls
+    w.checkpoint_restored()
+    assert w.inflow[0] == 1e-4 and w.inflow[1].tolist() == [1.0]

@@ -272,16 +272,17 @@ def test_conserving_shares_solve_the_matrix_scaling(monkeypatch):
 
 
 def test_conserving_transfer_refuses_a_new_pore_left_without_water(monkeypatch):
-    """Suction (W < A) handed on whole: old pore 1 (A = 1, W = 0.75) onto new pore 1 (A = 0.25)
-    leaves it exactly W = 0.25 - 0.25 = 0, no water: refused, naming new pore 1 (pore 0 is fine), the
-    cause (W/A = 0.75 handed into a quarter of the void) and the remedies."""
+    """Suction (W < A) handed on whole: old pore 1 (A = 2, W = 1.5) onto new pore 1 (A = 0.5)
+    leaves it exactly W = 0.5 - 0.5 = 0, no water: refused, naming new pore 1 (pore 0, at W/A = 0.6
+    into as much void, is fine), the cause (W/A = 0.75 over it handed into a quarter of the void)
+    and the remedies."""
     from engines.model import pore_water as pw
     monkeypatch.setattr(pw.pg, "pore_overlaps", lambda old, new, xz: (np.array([0, 1]), np.array([0, 1]), np.ones(2)))
-    a, b = np.array([1.0, 1.0]), np.array([1.0, 0.25])
+    a, b = np.array([1.0, 2.0]), np.array([1.0, 0.5])
     with pytest.raises(ValueError, match=r"new pore 1 would hold no water \(W = 0.000e\+00 m\^2\): .*W/A down to 0.75\b.*"
                                          r"their void is 4.00 x .* rebuild_interval= or rebuild_distance=.*"
                                          r"transfer='paper'"):
-        pw.conserving_water(_Pores(2), np.array([1.0, 0.75]), a, _Pores(2), b, np.zeros((0, 2)))
+        pw.conserving_water(_Pores(2), np.array([0.6, 1.5]), a, _Pores(2), b, np.zeros((0, 2)))
 
 
 def test_pore_overlaps_of_an_old_triangle_turned_over():
