@@ -161,6 +161,16 @@ def test_compiled_build_gives_the_same_network(name):
     assert_same_network(_build(name, steps=kp.BUILD), _build(name))
 
 
+@pytest.mark.parametrize("steps", [pg.NUMPY_BUILD, kp.BUILD], ids=["numpy", "compiled"])
+def test_a_face_of_exactly_a_min_is_closed(steps):
+    """A face is a pore when its void exceeds a_min (eq 29): one linked triangle of area 1/2 of discs
+    so small that their sectors vanish (void 1/2 exactly) is closed at a_min = 1/2 and a pore one
+    rounding step below it."""
+    xz, r, tri = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), np.full(3, 1e-200), np.array([[0, 1, 2]])
+    for a_min, pores, closed in ((0.5, 0, 1), (np.nextafter(0.5, 0.0), 1, 0)):
+        assert steps.faces(xz, r, tri, 2.0, a_min)[4:6] == (pores, closed)
+
+
 def test_the_packings_exercise_every_branch():
     """The cases above are not vacuous: flips, closed faces, rattlers, dangling links, walls occur."""
     nets = {name: _build(name) for name in PACKINGS}

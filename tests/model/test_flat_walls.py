@@ -127,6 +127,16 @@ def test_a_uniform_pressure_pushes_no_disc_and_each_wall_by_its_wetted_length():
                                    rtol=1e-13)
 
 
+def test_a_wall_beyond_the_discs_reach_feels_no_water():
+    """A lid far above an open bed has no edge: its force is 0, one entry per wall all the same."""
+    xz, r, walls = lattice_box(4, 3)
+    walls = walls[:3] + (FlatWall(1, 10 * walls[3].position, -1),)
+    net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+    m = pg.measure(net, xz, r)
+    F = pg.flat_wall_forces(net, np.full(net.n_pores, 7.0), m)
+    assert F.shape == (4,) and F[3] == 0.0 and np.all(F[:3] > 0)
+
+
 def test_pressure_forces_are_the_arcs_of_eq_33_with_walls():
     rng = np.random.default_rng(5)
     for xz, r, walls in [lattice_box(4, 3, gap=0.05), random_box(2)]:

@@ -55,8 +55,6 @@ def pressure_forces(net, r, U, meas):
     r = vertex_radii(net, r)
     n = len(r)
     F = np.zeros((n, 2))
-    if len(net.links) == 0:
-        return F[:net.n_discs]
     Uo = np.append(np.asarray(U, float), 0.0)  # index OUTER (-1) -> 0
     i, j = net.links[:, 0], net.links[:, 1]
     s = (Uo[net.link_pores[:, 1]] - Uo[net.link_pores[:, 0]]) / meas.link_length
