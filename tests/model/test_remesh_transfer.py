@@ -327,3 +327,29 @@ def test_pores_that_only_share_an_edge_do_not_overlap():
     assert len(p) == len(q) == len(o) == 0
     W_new, matched = conserving_water(old, np.array([0.2]), np.array([0.1]), new, np.array([0.3]), xz)
     assert not matched.any() and np.isnan(W_new).all()
+
+
+def test_the_books_of_the_excess_water_add_up_over_re_meshings():
+    """Two pores re-meshed onto themselves twice, the overlaps given: new pore 0 over old pore 0
+    only, the last pores of both overlapping nothing (rule (a) hands old pore 1's pressure to new
+    pore 1). Each re-meshing adds to remesh_excess_change the change of the excess W - A of all
+    pores and to remesh_excess_edge that of the pores outside the overlaps; both add up."""
+    from engines.model.pore_water import NUMPY_REMESH
+    xz = np.array([[-1.2, 0.0], [1.2, 0.0], [0.0, 1.0], [0.0, -1.0]])
+    r = np.full(4, 0.5)
+    net = pg.build_pores(xz, r, l_m=1.5, walls=np.full(4, pg.WALL_LEFT))
+    A = pg.measure(net, xz, r).void_area
+    w = PoreWater(net, A, WaterSettings(E_w=10.0, transfer="conserving"), W=A * [1.1, 1.3])
+    steps = NUMPY_REMESH._replace(pore_overlaps=lambda old, new, at: (np.array([0]), np.array([0]), np.array([0.4])))
+    change = edge = 0.0
+    for A_old, A_new in ((A, 0.9 * A), (0.9 * A, 0.8 * A)):
+        X_old = w.W - A_old
+        counts = w.remesh(net, A_new, A_old, xz=xz, steps=steps)
+        X_new = w.W - A_new
+        assert counts["unmatched"] == 1 and w.W[0] == pytest.approx(A_new[0] + X_old[0], rel=1e-14)
+        change, edge = change + X_new.sum() - X_old.sum(), edge + X_new[1] - X_old[1]
+        assert X_new[1] != X_old[1]
+    assert w.balance.remesh_excess_change == pytest.approx(change, rel=1e-14)
+    assert w.balance.remesh_excess_edge == pytest.approx(edge, rel=1e-14)
+    with pytest.raises(ValueError, match=r"^transfer = 'conserving' needs the positions xz at re-meshing$"):
+        w.remesh(net, A, A)
