@@ -353,3 +353,12 @@ def test_the_books_of_the_excess_water_add_up_over_re_meshings():
     assert w.balance.remesh_excess_edge == pytest.approx(edge, rel=1e-14)
     with pytest.raises(ValueError, match=r"^transfer = 'conserving' needs the positions xz at re-meshing$"):
         w.remesh(net, A, A)
+
+
+def test_slivers_are_judged_against_the_overlaps_of_their_pores_at_any_scale():
+    """without_slivers: at pores of 1e-8 m^2, an overlap of 1e-12 m^2 (1e-4 of its pores) is kept and
+    one of 1e-19 m^2 (1e-11) dropped, in either pore's column; the areas' own scale, not 1 m^2."""
+    p, q = np.array([0, 0, 1, 1]), np.array([0, 1, 1, 0])
+    area = np.array([1e-8, 1e-12, 1e-8, 1e-19])
+    kept = overlaps.without_slivers(p, q, area)
+    assert [a.tolist() for a in kept] == [[0, 0, 1], [0, 1, 1], [1e-8, 1e-12, 1e-8]]
