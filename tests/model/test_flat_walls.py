@@ -421,3 +421,21 @@ def test_the_tables_of_flat_walls_say_which_move():
     assert [w["moves"] for w in as_tables(walls)] == [False] * 4
     assert [w["moves"] for w in as_tables(walls, np.array([True, False, False, True]))] == [True, False, False, True]
     assert as_tables(walls)[2] == {"axis": "x", "position": 10.0, "inward": -1, "boundary": "undrained", "moves": False}
+
+
+def test_disc_groups_and_flat_walls_of_one_kind_add_their_pores():
+    """boundary_masks: a left column of drained wall discs ([water] sides = "drained") and a drained
+    flat right wall: the drained pores are those of both, and the open top's are the surface's."""
+    from engines.model.pore_water import boundary_masks
+    xz, r, walls = lattice_box(4, 3)
+    right = FlatWall(walls[2].axis, walls[2].position, walls[2].inward, "drained")
+    x0 = xz[:, 0].min()
+    column = np.column_stack([np.full(4, x0 - 2 * r.mean()), xz[:, 1].min() + 2 * r.mean() * np.arange(4)])
+    xz2, r2 = np.vstack([xz, column]), np.concatenate([r, np.full(4, r.mean())])
+    codes = np.concatenate([np.zeros(len(r), np.int64), np.full(4, pg.WALL_LEFT)])
+    net = pg.build_pores(xz2, r2, l_m=0.8 * r.mean(), walls=codes, flat_walls=(walls[0], right))
+    masks = boundary_masks(net, "drained")
+    by_disc, by_wall = net.pore_touches["left"], net.flat_wall_pores("drained")
+    assert by_disc.any() and by_wall.any() and (by_disc & ~by_wall).any() and (by_wall & ~by_disc).any()
+    np.testing.assert_array_equal(masks["drained"], by_disc | by_wall)
+    np.testing.assert_array_equal(masks["surface"], net.pore_surface)
