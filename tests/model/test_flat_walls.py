@@ -439,3 +439,25 @@ def test_disc_groups_and_flat_walls_of_one_kind_add_their_pores():
     assert by_disc.any() and by_wall.any() and (by_disc & ~by_wall).any() and (by_wall & ~by_disc).any()
     np.testing.assert_array_equal(masks["drained"], by_disc | by_wall)
     np.testing.assert_array_equal(masks["surface"], net.pore_surface)
+
+
+def test_discs_out_of_a_walls_reach_build_an_empty_network_that_keeps_its_lengths():
+    """Two discs far above a flat bottom: no pore, but the network keeps its discs, a_min, eps_m
+    and l_m, and answers for its walls with arrays of no pore."""
+    net = pg.build_pores(np.array([[0.0, 5.0], [3.0, 5.0]]), np.ones(2), l_m=0.5, eps_m=0.1,
+                         flat_walls=(FlatWall(1, 0.0, +1),))
+    assert (net.n_pores, net.n_discs, net.eps_m, net.l_m) == (0, 2, 0.1, 0.5)
+    assert net.a_min == pytest.approx(1e-4 * np.pi, rel=1e-15)   # the default degenerate_fraction x pi r^2
+    assert net.pore_walls.shape == (1, 0) and net.flat_wall_pores("inflow").shape == (0,)
+
+
+def test_the_signatures_of_a_network_with_walls_are_those_of_its_vertex_sets():
+    """Each pore's signature is the hash of its vertex set (a flat wall counted as one vertex), so
+    re-meshing (rule a) finds the same set in any other network; and a wall word no wall has
+    marks no pore, one entry per pore."""
+    from engines.model.pores.faces import _set_signatures
+    xz, r, walls = random_box(1)
+    net = pg.build_pores(xz, r, l_m=0.8 * r.mean(), flat_walls=walls)
+    assert net.n_pores > 10 and net.pore_walls.any()
+    np.testing.assert_array_equal(net.pore_signature, _set_signatures(net.pore_vertex_ptr, net.pore_vertex_idx))
+    assert net.flat_wall_pores("inflow").shape == (net.n_pores,) and not net.flat_wall_pores("inflow").any()
