@@ -41,6 +41,8 @@ def test_link_state_contact_versus_gap():
     state = {tuple(l): c for l, c in zip(net.links.tolist(), m.link_contact)}
     assert state[(0, 1)] and not state[(0, 2)] and not state[(1, 2)]
     assert net.n_pores == 1 and net.pore_surface.all()
+    xz[1, 0] = 2.0   # exactly touching: a contact (eq 43b: the centres within r_i + r_j + eps_m)
+    assert pg.measure(net, xz, r).link_contact[[tuple(l) for l in net.links.tolist()].index((0, 1))]
 
 
 def test_euler_formula_random_packing():
