@@ -9,7 +9,9 @@ collects which tests reach each function and runs, per mutant, only those, faste
 
     {"modules": {path: {"total": n, "killed": k, "survived": s, "equivalent": e, "score": ...,
                         "not_checked": u}},
-     "score": killed / (total - equivalent), "seconds": ..., "stale_equivalent": [...]}
+     "per_module": [{"name": dotted module name, "judged": bool, the same counts}, ...],
+     "score": killed / (total - equivalent) over the judged MODULES, "seconds": ...,
+     "stale_equivalent": [...], "date": ..., "commit": ...}
 
 and OUT/survivors.txt (each surviving mutant's diff, for review). A timed-out or crashed mutant
 counts as killed; a mutant no test reaches counts as survived; mutants an interrupted run did not
@@ -191,6 +193,8 @@ def main(argv=None):
                     run_mutmut(work, mutmut, args.max_children, left[k:k + 400], log)
     status = results(work, mutmut)
     summary = summarise(status, args.modules, read_equivalent())
+    summary["per_module"] = [{"name": m[:-3].replace("/", "."), "judged": m in MODULES, **row}   # for the docs' markers
+                             for m, row in summary["modules"].items()]
     summary.update(seconds=time.time() - t0, max_children=args.max_children, tests=TESTS,
                    judged=MODULES, date=datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
                    commit=commit())
