@@ -201,7 +201,7 @@ reconstruction: deps
 	   --baseline $(LIQ_BASELINE) --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER))
 
 # The liquefaction resistance curve (issue 42 item 3; engines/studies/resistance.py): seismic case 1's
-# box under its 50 Hz cosine at 5 amplitudes (1500 gal x sqrt(2)^k, k = 0..4), ensembles of
+# box under its 50 Hz cosine at 5 amplitudes (1500 gal x sqrt(2)^k, k = -2..2), ensembles of
 # RES_STARTS starts over 30 cycles, loose (the preset's) and dense (deposited with mu = 0) packings,
 # through the sweep runner (resumable: finished ensembles are kept; SCHEDULER as below) ->
 # $(OUT)/resistance/ and docs/resistance/{resistance.json,resistance.png}. SHORT=1: milliseconds

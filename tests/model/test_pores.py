@@ -465,6 +465,18 @@ def test_crossed_edges_through_a_vertex_and_past_one_behind():
     assert edges is not None and {tuple(sorted(e)) for e in edges} == _proper_crossings(xz, tri, k, l)
 
 
+def test_crossed_edges_through_a_vertex_further_along():
+    """Integer coordinates, disc 2 exactly on the segment 0 -> 1 but not joined to 0 (the edge 3-4
+    lies between): the walk reaches 2 and stops (None), while 0 -> 5 crosses 3-4 and 2-3."""
+    from scipy.spatial import Delaunay
+    xz = np.array([[0, 0], [4, 0], [2, 0], [1, 0.5], [1, -0.5], [3, 0.5], [3, -0.5], [2, 3], [2, -3]], float)
+    tri = triangulation._ccw(xz, Delaunay(xz).simplices)
+    assert not {(0, 1), (0, 2)} & _edges_of(tri)
+    ft = links._FlipTriangulation(xz, tri)
+    assert ft.crossed_edges(0, 1) is None
+    assert {tuple(sorted(e)) for e in ft.crossed_edges(0, 5)} == _proper_crossings(xz, tri, 0, 5) == {(3, 4), (2, 3)}
+
+
 def test_the_link_range_is_checked_in_median_radii_and_holds_the_contact_range():
     """check_lengths: l_m within LINK_RANGE x the median radius (both ends allowed), eps_m <= l_m;
     each refusal names the caller's field. Radii of median 1 mm and mean 2 mm: the median counts."""
@@ -524,3 +536,17 @@ def test_a_stored_network_whose_arrays_do_not_fit_is_refused(flat):
     for bad in (ptr, np.append(net.pore_vertex_ptr[:-1], net.pore_vertex_ptr[-1] - 1)):
         with pytest.raises(ValueError, match="pore_vertex_ptr is not the start of each pore's vertices"):
             replace(net, pore_vertex_ptr=bad).checkpoint_restored()
+
+
+def test_crossed_edges_from_every_vertex_of_the_hull():
+    """From each hull vertex (one of its edges has no triangle on its left) to every vertex it is
+    not joined to, the walk returns the edges the segment crosses."""
+    from scipy.spatial import ConvexHull, Delaunay
+    xz = np.random.default_rng(5).random((30, 2))
+    tri = triangulation._ccw(xz, Delaunay(xz).simplices)
+    ft, edges = links._FlipTriangulation(xz, tri), _edges_of(tri)
+    for k in ConvexHull(xz).vertices.tolist():
+        for m in range(len(xz)):
+            if m != k and tuple(sorted((k, m))) not in edges:
+                got = ft.crossed_edges(k, m)
+                assert got is not None and {tuple(sorted(e)) for e in got} == _proper_crossings(xz, tri, k, m)

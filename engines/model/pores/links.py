@@ -50,17 +50,12 @@ class _FlipTriangulation:
         """Edges (right, left) crossed by the segment k -> l in order, or None if it runs
         through another vertex."""
         p, o = self.p, _orient
-        for a in self._star(k):
-            b = self.third.get((k, a))
-            if b is None:
-                continue
-            oa, ob = o(p[k], p[a], p[l]), o(p[k], p[b], p[l])
-            if oa == 0 and (p[a][0] - p[k][0]) * (p[l][0] - p[k][0]) + (p[a][1] - p[k][1]) * (p[l][1] - p[k][1]) > 0:
-                return None  # a lies on the segment
-            if oa > 0 and ob < 0:
+        for a in self._star(k):  # the star holds the edges k -> a with a triangle (k, a, b) on their left
+            b = self.third[(k, a)]
+            if o(p[k], p[a], p[l]) > 0 and o(p[k], p[b], p[l]) < 0:  # a right of k -> l, b left
                 break
         else:
-            return None
+            return None  # no triangle at k straddles the segment: it runs through a neighbour of k
         right, left, edges = a, b, []
         while True:
             edges.append((right, left))
