@@ -215,8 +215,6 @@ def _link_half_edges(xz, links, link_pores):
     org = np.concatenate([links[:, 0], links[:, 1]])
     dst = np.concatenate([links[:, 1], links[:, 0]])
     left = np.concatenate([link_pores[:, 0], link_pores[:, 1]])
-    if len(org) == 0:
-        return org, dst, left, org.copy()
     d = xz[dst] - xz[org]
     ang = np.arctan2(d[:, 1], d[:, 0])
     order = np.lexsort((ang, org))
