@@ -550,3 +550,14 @@ def test_crossed_edges_from_every_vertex_of_the_hull():
             if m != k and tuple(sorted((k, m))) not in edges:
                 got = ft.crossed_edges(k, m)
                 assert got is not None and {tuple(sorted(e)) for e in got} == _proper_crossings(xz, tri, k, m)
+
+
+def test_eq28_pairs_count_the_range_at_any_radius_and_touching_pairs():
+    """Eq 28 pairs: discs of radius 2 exactly touching (reach 0) are a pair, one reach further
+    apart too, beyond it not; a single disc has none, as a (0, 2) int array."""
+    xz = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 4.3], [20.0, 0.0], [24.5, 0.0]])
+    pairs = links.eq28_pairs(xz, np.full(5, 2.0), 0.3)
+    assert sorted(map(tuple, pairs.tolist())) == [(0, 1), (0, 2)]
+    np.testing.assert_array_equal(links.eq28_pairs(xz[:2], np.full(2, 2.0), 0.0), [[0, 1]])
+    alone = links.eq28_pairs(xz[:1], np.full(1, 2.0), 0.3)
+    assert alone.shape == (0, 2) and alone.dtype == np.int64
