@@ -172,17 +172,19 @@ def wilson(k, n, confidence=CONFIDENCE):
 def group_reading(readings, cycles=CYCLES):
     """The entry of one amplitude and packing from its runs' ``run_reading``s: n_starts, N_L's
     median and interval (``median_interval``), the fraction liquefied with its Wilson interval,
-    each run's band and largest cycle-mean r_u, and CSR and the simplified CSR as {"mean", "ci95_low",
-    "ci95_high", "values"} over the starts."""
+    each run's band and largest cycle-mean r_u (and as "ru_peak" their mean, interval and largest), and
+    CSR and the simplified CSR as {"mean", "ci95_low", "ci95_high", "values"} over the starts."""
     n_l = [r["n_l"] for r in readings]
     k = sum(v is not None for v in n_l)
     out = {"n_starts": len(readings), "n_l": {**median_interval(n_l, cycles), "values": n_l},
            "liquefied": {"fraction": k / len(readings), **dict(zip(("low", "high"), wilson(k, len(readings))))},
            "bands": [r["band"] for r in readings], "ru_cycle_mean_max": [r["ru_cycle_mean_max"] for r in readings]}
-    for key in ("csr", "csr_simplified"):
-        s = statistics(np.array([r[key] for r in readings]))
+    for key in ("csr", "csr_simplified", "ru_peak"):
+        values = out["ru_cycle_mean_max"] if key == "ru_peak" else [r[key] for r in readings]
+        s = statistics(np.array(values))
         out[key] = {"mean": float(s["mean"]), "ci95_low": float(s["ci95_low"]), "ci95_high": float(s["ci95_high"]),
-                    "values": [r[key] for r in readings]}
+                    "values": values}
+    out["ru_peak"]["max"] = max(out["ru_cycle_mean_max"])
     return out
 
 

@@ -10,7 +10,7 @@ from engines import ROOT
 from engines.studies.resistance import read_rows
 from postproc import resistance
 
-PILOT = os.path.join(ROOT, "docs", "resistance", "pilot", "resistance.json")
+STUDY = os.path.join(ROOT, "docs", "resistance", "resistance.json")
 
 
 def drawn(doc, tmp_path, monkeypatch):
@@ -21,7 +21,7 @@ def drawn(doc, tmp_path, monkeypatch):
 
 
 def test_each_row_is_drawn_at_its_median_or_open_at_the_runs_end(tmp_path, monkeypatch):
-    doc = json.load(open(PILOT))
+    doc = json.load(open(STUDY))
     rows = [r for p in doc["packings"].values() for r in read_rows(p)]
     doc["packings"]["loose"]["rows"][0]["n_l"].update(median=7.0, low=5.0, high=9.0)  # one liquefied row
     ax = drawn(doc, tmp_path, monkeypatch)
