@@ -119,13 +119,15 @@ def test_the_row_feeds_the_same_pores_whatever_the_discs_order():
 
 def test_an_inflow_group_facing_x_feeds_the_pores_on_its_inner_side(monkeypatch):
     """The table read by kind (engines.model.groups): were the left disc group an inflow wall, the bed
-    mirrored across x = z (its row now a left column) would take in v x the same span, and a bed with
+    mirrored across x = z (its row now a left column, numbered top down so that each link i -> j
+    points down and its inner side is on its left) would take in v x the same span, and a bed with
     both rows takes in the sum of what each row feeds alone."""
     xz, r, walls = bed(1e-3)
     toy = tuple(k._replace(water="inflow") if k.name == "left" else k for k in groups.BOUNDARY_KINDS)
     monkeypatch.setattr(groups, "BOUNDARY_KINDS", toy)
     left = np.where(walls == pg.WALL_BOTTOM, pg.WALL_LEFT, 0)
-    total, _ = total_inflow(xz[:, ::-1], r, left, WaterSettings(inflow_velocity=V))
+    down = np.r_[np.flatnonzero(left)[::-1], np.flatnonzero(left == 0)]   # the column numbered top down
+    total, _ = total_inflow(xz[down, ::-1], r[down], left[down], WaterSettings(inflow_velocity=V))
     assert total == pytest.approx(V * SPAN, rel=1e-12)
     column = np.column_stack([np.full(6, -2e-3), 2e-3 * np.arange(1, 7)])   # a left column beside the bed
     both_xz, both_r = np.vstack([xz, column]), np.concatenate([r, np.full(6, 1e-3)])
