@@ -227,7 +227,60 @@ def test_degenerate_pore_is_closed():
     assert net.n_pores == 0 and net.n_closed == 1
 
 
-@pytest.mark.parametrize("kw,field", [
+@pytest.mark.parametrize("kw, message", [
+    (dict(xz=np.array([[0.0, 0.0], [0.0, np.nan]])), r"^xz: non-finite value nan at flat index 3$"),
+    (dict(r=np.array([1.0, np.inf])), r"^r: non-finite value inf at flat index 1$"),
+    (dict(r=np.array([1.0, -1.0])), r"^r must be > 0, got r\[1\] = -1.0$"),
+    (dict(r=np.array([1.0, 0.0])), r"^r must be > 0, got r\[1\] = 0.0$"),
+    (dict(r=np.array([1.0])), r"^r: expected shape \(2,\), got \(1,\)$"),
+    (dict(xz=np.zeros((2, 3))), r"^xz: expected shape \(None, 2\), got \(2, 3\)$"),
+    (dict(eps_m=-1e-3), r"^eps_m must be finite and >= 0, got -0.001$"),
+    (dict(l_m=-1e-3), r"^l_m must be finite and >= 0, got -0.001$"),
+    (dict(degenerate_fraction=-1.0), r"^degenerate_fraction must be finite and >= 0, got -1.0$"),
+    (dict(walls=np.zeros(3, np.int64)), r"^walls: expected shape \(2,\), got \(3,\)$"),
+])
+def test_bad_input_is_refused_in_one_line_naming_the_field(kw, message):
+    args = dict(xz=np.array([[0.0, 0.0], [3.0, 0.0]]), r=np.array([1.0, 1.0]), eps_m=0.0, l_m=0.0)
+    with pytest.raises(ValueError, match=message):
+        pg.build_pores(**{**args, **kw})
+
+
+def test_finite_arrays_come_back_as_floats():
+    a = pg.check_finite_array("n", [1, 2])
+    assert a.dtype == np.float64 and a.tolist() == [1.0, 2.0]
+
+
+@pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
+                                np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
+def test_degenerate_inputs_give_no_pores(xz):
+    r = np.full(len(xz), 0.5)
+    net = pg.build_pores(xz, r, l_m=0.1)
+    m = pg.measure(net, xz, r)
+    assert net.n_pores == 0 and m.void_area.size == 0
+    assert np.all(pg.pressure_forces(net, r, np.zeros(0), m) == 0)
+
+
+def test_rattler_without_links_is_subtracted_not_crashing():
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)], [1.0, 1 / np.sqrt(3)]])
+    r = np.array([1.0, 1.0, 1.0, 0.1])  # the small disc at the centroid is linked to nobody
+    net = pg.build_pores(xz, r, l_m=0.01)
+    m = pg.measure(net, xz, r)
+    assert net.n_pores == 1
+    assert not np.isin(3, net.links).any()
+    np.testing.assert_allclose(m.void_area[0], np.sqrt(3) - np.pi / 2 - np.pi * 0.01, rtol=1e-12)
+    F = pg.pressure_forces(net, r, [10.0], pg.measure(net, xz, r))
+    assert np.all(np.isfinite(F)) and np.all(F[3] == 0)
+
+
+def test_degenerate_pore_is_closed():
+    # three touching discs around a vanishing pore: void area ~ 0 -> closed, not a pore
+    r = np.ones(3)
+    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05]])  # almost collinear, heavily overlapping
+    net = pg.build_pores(xz, r, l_m=0.1)
+    assert net.n_pores == 0 and net.n_closed == 1
+
+
+@pytest.mark.parametrize("kw, field", [
     (dict(xz=np.array([[0.0, np.nan]])), "xz"),
     (dict(r=np.array([-1.0])), "r"),
     (dict(eps_m=-1e-3), "eps_m"),
@@ -561,3 +614,11 @@ def test_eq28_pairs_count_the_range_at_any_radius_and_touching_pairs():
     np.testing.assert_array_equal(links.eq28_pairs(xz[:2], np.full(2, 2.0), 0.0), [[0, 1]])
     alone = links.eq28_pairs(xz[:1], np.full(1, 2.0), 0.3)
     assert alone.shape == (0, 2) and alone.dtype == np.int64
+
+
+def test_a_network_keeps_its_lengths_and_counts_no_insertion_where_none_was_needed():
+    """A hexagonal lattice: every eq 28 pair is a Delaunay edge already (n_inserted = 0), and the
+    network holds the eps_m and l_m it was built with."""
+    xz = hex_lattice(6, 5, 2.1)
+    net = pg.build_pores(xz, np.ones(len(xz)), eps_m=0.02, l_m=0.2)
+    assert (net.n_inserted, net.eps_m, net.l_m) == (0, 0.02, 0.2) and net.n_pores > 20
