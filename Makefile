@@ -83,7 +83,7 @@ test-fast:
 precision: deps
 	$(YADE) -n -x yade_scripts/crosscheck.py --precision --out $(OUT)/precision
 
-# Mutation testing of the core modules (mutmut in a venv over Debian's Python; ~3,770 mutants, one to several hours
+# Mutation testing of the NumPy modules (mutmut in a venv over Debian's Python; about 6,700 mutants, a couple of hours
 # on a shared machine): out/mutants/summary.json, survivors in out/mutants/survivors.txt. Not part of `make test`.
 # Continue an interrupted run with `$(MUTANT_VENV)/bin/python tests/mutants.py --again [--only engines/X.py ...]`.
 MUTANT_VENV := $(OUT)/venv-mutants
