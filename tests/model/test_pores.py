@@ -252,52 +252,6 @@ def test_finite_arrays_come_back_as_floats():
 
 @pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
                                 np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
-def test_degenerate_inputs_give_no_pores(xz):
-    r = np.full(len(xz), 0.5)
-    net = pg.build_pores(xz, r, l_m=0.1)
-    m = pg.measure(net, xz, r)
-    assert net.n_pores == 0 and m.void_area.size == 0
-    assert np.all(pg.pressure_forces(net, r, np.zeros(0), m) == 0)
-
-
-def test_rattler_without_links_is_subtracted_not_crashing():
-    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, np.sqrt(3)], [1.0, 1 / np.sqrt(3)]])
-    r = np.array([1.0, 1.0, 1.0, 0.1])  # the small disc at the centroid is linked to nobody
-    net = pg.build_pores(xz, r, l_m=0.01)
-    m = pg.measure(net, xz, r)
-    assert net.n_pores == 1
-    assert not np.isin(3, net.links).any()
-    np.testing.assert_allclose(m.void_area[0], np.sqrt(3) - np.pi / 2 - np.pi * 0.01, rtol=1e-12)
-    F = pg.pressure_forces(net, r, [10.0], pg.measure(net, xz, r))
-    assert np.all(np.isfinite(F)) and np.all(F[3] == 0)
-
-
-def test_degenerate_pore_is_closed():
-    # three touching discs around a vanishing pore: void area ~ 0 -> closed, not a pore
-    r = np.ones(3)
-    xz = np.array([[0.0, 0.0], [2.0, 0.0], [1.0, 0.05]])  # almost collinear, heavily overlapping
-    net = pg.build_pores(xz, r, l_m=0.1)
-    assert net.n_pores == 0 and net.n_closed == 1
-
-
-@pytest.mark.parametrize("kw, field", [
-    (dict(xz=np.array([[0.0, np.nan]])), "xz"),
-    (dict(r=np.array([-1.0])), "r"),
-    (dict(eps_m=-1e-3), "eps_m"),
-    (dict(l_m=-1e-3), "l_m"),
-    (dict(xz=np.zeros((2, 3))), "xz"),
-])
-def test_bad_input_names_the_field(kw, field):
-    args = dict(xz=np.array([[0.0, 0.0]]), r=np.array([1.0]), eps_m=0.0, l_m=0.0)
-    args.update(kw)
-    if "xz" in kw and len(args["xz"]) != len(args["r"]):
-        args["r"] = np.ones(len(args["xz"]))
-    with pytest.raises(ValueError, match=field):
-        pg.build_pores(**args)
-
-
-@pytest.mark.parametrize("xz", [np.zeros((0, 2)), np.array([[0.0, 0.0], [1.0, 0.0]]),
-                                np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]])])
 def test_a_network_without_pores_is_well_formed_and_usable(xz):
     """Degenerate inputs give a network with every array empty and correctly shaped, the scene's
     eps_m, l_m and the closure area a_min = 1e-4 mean(pi r^2), on which the water and force code
