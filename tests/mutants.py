@@ -43,7 +43,7 @@ MODULES = ["engines/model/pore_water.py", *PORES, "engines/model/contact.py", "e
 EXTRA = ["engines/model/water_model.py", "engines/model/paper_law.py", "engines/model/flat_walls.py",
          "engines/model/limits.py", "engines/model/fields.py", "engines/compiled/contact.py",
          "engines/compiled/paper_law.py", "engines/compiled/water_model.py", "engines/compiled/pore_dem.py"]
-# the tests without YADE, but those that run a copy of the project in another process (mutmut's
+# the tests without YADE, except those that run a copy of the project in another process (mutmut's
 # trampolines do not work there)
 TESTS = ["tests/model", "tests/compiled", "tests/reference", "tests/run/test_scene.py",
          "--ignore=tests/compiled/test_boundary_kinds.py", "--ignore=tests/compiled/test_cache.py"]
