@@ -184,7 +184,7 @@ def group_reading(readings, cycles=CYCLES):
         s = statistics(np.array(values))
         out[key] = {"mean": float(s["mean"]), "ci95_low": float(s["ci95_low"]), "ci95_high": float(s["ci95_high"]),
                     "values": values}
-    out["ru_peak"]["max"] = max(out["ru_cycle_mean_max"])
+    out["ru_peak"]["max"] = max((v for v in out["ru_cycle_mean_max"] if v is not None), default=None)  # None: < 1 cycle
     return out
 
 

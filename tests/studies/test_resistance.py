@@ -104,3 +104,13 @@ def test_statements_decide_only_where_rows_separate_in_both():
     assert s["loose_below_dense"]["15 m/s^2"] == "undecided with these intervals"
     one = {"rows": [_row(15.0, 0.2, 5.0), _row(30.0, 0.201, 3.0)]}  # CSR intervals overlap
     assert rs.statements({"loose": one})["csr_falls_with_n_l"]["loose"].startswith("undecided")
+
+
+def test_each_rows_peak_ru_is_summed_up_over_the_starts_that_ran_a_cycle():
+    """ru_peak: the mean, Student's interval and largest of the starts' largest cycle-mean r_u,
+    a start shorter than a cycle (None) left out; none at all: no largest."""
+    runs = [{"n_l": None, "band": 1, "ru_cycle_mean_max": v, "csr": 0.3, "csr_simplified": 1.0} for v in (0.4, 0.6, None)]
+    peak = rs.group_reading(runs)["ru_peak"]
+    assert peak["mean"] == pytest.approx(0.5) and peak["max"] == 0.6 and peak["values"] == [0.4, 0.6, None]
+    assert peak["ci95_low"] < 0.4 and peak["ci95_high"] > 0.6
+    assert rs.group_reading(runs[2:])["ru_peak"]["max"] is None
