@@ -179,13 +179,18 @@ def group_reading(readings, cycles=CYCLES):
     out = {"n_starts": len(readings), "n_l": {**median_interval(n_l, cycles), "values": n_l},
            "liquefied": {"fraction": k / len(readings), **dict(zip(("low", "high"), wilson(k, len(readings))))},
            "bands": [r["band"] for r in readings], "ru_cycle_mean_max": [r["ru_cycle_mean_max"] for r in readings]}
-    for key in ("csr", "csr_simplified", "ru_peak"):
-        values = out["ru_cycle_mean_max"] if key == "ru_peak" else [r[key] for r in readings]
-        s = statistics(np.array(values))
-        out[key] = {"mean": float(s["mean"]), "ci95_low": float(s["ci95_low"]), "ci95_high": float(s["ci95_high"]),
-                    "values": values}
-    out["ru_peak"]["max"] = max((v for v in out["ru_cycle_mean_max"] if v is not None), default=None)  # None: < 1 cycle
+    for key in ("csr", "csr_simplified"):
+        out[key] = _mean_interval([r[key] for r in readings])
+    peaks = out["ru_cycle_mean_max"]
+    out["ru_peak"] = {**_mean_interval(peaks), "max": max((v for v in peaks if v is not None), default=None)}  # None: < 1 cycle
     return out
+
+
+def _mean_interval(values):
+    """{"mean", "ci95_low", "ci95_high", "values"} of ``values`` over the starts (None left out)."""
+    s = statistics(np.array(values, float))
+    return {"mean": float(s["mean"]), "ci95_low": float(s["ci95_low"]), "ci95_high": float(s["ci95_high"]),
+            "values": values}
 
 
 def void_ratio(porosity):
