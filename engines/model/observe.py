@@ -20,10 +20,16 @@ import numpy as np
 from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 
 
+def _clip(x, lo, hi):
+    """np.clip(x, lo, hi) (lo <= hi), the same values without np.clip's checks (about 8 µs a call,
+    most of a history row's porosity)."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
 def _chord_primitive(x, r):
     """G(x) = integral from -r to x of sqrt(r^2 - s^2) ds for x clipped to [-r, r]."""
-    x = np.clip(x, -r, r)
-    return 0.5 * (x * np.sqrt(np.maximum(r * r - x * x, 0.0)) + r * r * np.arcsin(np.clip(x / r, -1.0, 1.0))) \
+    x = _clip(x, -r, r)
+    return 0.5 * (x * np.sqrt(np.maximum(r * r - x * x, 0.0)) + r * r * np.arcsin(_clip(x / r, -1.0, 1.0))) \
         + 0.25 * np.pi * r * r
 
 
@@ -36,7 +42,7 @@ def quadrant_area(X, Z, r):
     """
     X, Z, r = np.broadcast_arrays(np.asarray(X, float), np.asarray(Z, float), np.asarray(r, float))
     w = np.sqrt(np.maximum(r * r - Z * Z, 0.0))
-    b1, b2, b3 = np.clip(X, -r, -w), np.clip(X, -w, w), np.clip(X, w, r)
+    b1, b2, b3 = _clip(X, -r, -w), _clip(X, -w, w), _clip(X, w, r)
     G = _chord_primitive
     strip = G(b2, r) - G(-w, r) + Z * (b2 + w)
     whole = 2 * (G(b1, r) - G(-r, r)) + 2 * (G(b3, r) - G(w, r))

@@ -258,18 +258,19 @@ class WaterEngine:
     def drive(self, n, stop=None):
         """Instead of the runner and O.run(n): n O.step() calls, this engine's work before each of
         them that is a water step (the same work: nothing moves the bodies between NewtonIntegrator
-        and the next step's PyRunner). ``stop()`` true, or an error kept by an engine callback
-        (yade_io.ERRORS), ends early. Without ``stop`` and without a PyRunner among O.engines, with
-        the bulk bridge, the steps between two rebuilds run in compiled calls of about CHUNK_SECONDS
-        (``_drive_compiled``, which stops before a water step due for a rebuild by displacement: that
-        step is made here): the same run without Python per step."""
+        and the next step's PyRunner). ``stop()`` true (asked after each step made from Python and
+        after each compiled call), or an error kept by an engine callback (yade_io.ERRORS), ends
+        early. Without a PyRunner among O.engines, with the bulk bridge, the steps between two
+        rebuilds run in compiled calls of about CHUNK_SECONDS (``_drive_compiled``, which stops
+        before a water step due for a rebuild by displacement: that step is made here): the same
+        run without Python per step."""
         from yade import O
         from yade.wrapper import PyRunner
 
         from engines.yade import yade_io
         self.check_same_scene(self.io.positions())
         n, done = int(n), 0
-        alone = stop is None and not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
+        alone = not any(isinstance(e, PyRunner) for e in O.engines) and not self._walls_may_move()
         fast = alone and water_path(self.compiled, yade_io.BACKEND == "yadebulk") == "drive"
         due, errors = self.due, yade_io.ERRORS
         while done < n:
@@ -283,6 +284,8 @@ class WaterEngine:
                 done += got
                 if got == m == self._chunk:
                     self._chunk = int(min(max(m * CHUNK_SECONDS / max(time.perf_counter() - t0, 1e-6), 10), 1e6))
+                if stop is not None and stop():
+                    break
                 if got == m or done >= n:
                     continue
             if due(O.iter):

@@ -176,14 +176,12 @@ def test_dry_yade_law_scene_runs_no_python_engine(packing):
                                             "numerics": {"water_interval": 10}})
     cp = YadeCoupling(wet, packing)  # the water engine is called before O.step on its steps
     assert not any(isinstance(e, PyRunner) for e in O.engines)
-    calls = []
-    model = cp.water_engine.model
-    water_step = model.kernel_args  # called once per water step on the Python path (a stop function)
-    model.kernel_args = lambda h: (calls.append(O.iter), water_step(h))[1]
-    cp.run(35, stop=lambda: False)
-    assert calls == [0, 10, 20, 30]
+    asked = []
+    assert cp.run(35, stop=lambda: asked.append(O.iter) and False)  # a stop is asked between compiled calls
+    assert cp.water_engine.k == 30 and O.iter == 35 and asked and asked[-1] <= 35
     cp.run(35)  # compiled between rebuilds with the bridge: the same water steps
     assert cp.water_engine.k == 60 and O.iter == 70
+    assert not cp.run(5000, stop=lambda: O.iter > 70) and 70 < O.iter < 5070  # and ends the run early
 
 
 def test_yade_law_refuses_springs_c_and_d():
