@@ -14,7 +14,7 @@ SHORT_RUN = $(if $(SHORT),--duration $(SHORT_S))
 export PYTHONPATH := $(CURDIR)
 export MPLBACKEND := Agg
 
-.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels resistance liquefaction-bands clean
+.PHONY: deps ext install warmup demo demo-numbers readings test check test-fast precision bench bench-seismic bench-scaling bench-ground bench-before-after ground packings biaxial liquefaction reconstruction tradeoffs validation stability remesh-transfer mutants mutants-kernels resistance resistance-ground liquefaction-bands clean
 
 # Install what is missing (needs root; apt-get update first as Debian requires).
 deps:
@@ -210,6 +210,16 @@ RES_STARTS ?= 8
 resistance: deps
 	nice -n 10 $(PY) yade_scripts/resistance.py --workers $(LIQ_JOBS) $(if $(SCHEDULER),--scheduler $(SCHEDULER)) \
 	   $(if $(SHORT),--short --out $(OUT)/resistance-short,--starts $(RES_STARTS) --out $(OUT)/resistance --docs docs/resistance)
+
+# The 10,000-disc ground (yade_scripts/scenes/ground_10000.toml) under case 1's cosine for the curve's 30
+# cycles, one run (about an hour of one core; a re-run resumes it), read beside the resistance curve
+# as an illustration: needs make resistance's runs; -> $(OUT)/resistance-ground, docs/resistance/.
+resistance-ground: deps
+	@d=$(OUT)/resistance-ground; if grep -qs '"status": "completed"' $$d/summary.json; then echo "$$d: completed"; \
+	 elif [ -f $$d/checkpoint.npz ]; then $(LIQ_RUN) --resume $$d; \
+	 else $(LIQ_RUN) --scene yade_scripts/scenes/ground_10000.toml --duration 0.6 --out $$d; fi
+	nice -n 10 $(PY) yade_scripts/resistance.py --out $(OUT)/resistance --analyse-only --ground $(OUT)/resistance-ground \
+	   --docs docs/resistance
 
 # Speed against accuracy (docs/TRADEOFFS.md): every numerical knob of quick-sand case 1
 # and the seismic box (liquefaction cases 1, 4) from 5 perturbed starts (20 for the seismic rows

@@ -204,10 +204,14 @@ def figure(doc, case, path):
 def validate(out, jobs, meta, log=print):
     """The validation (module docstring) of the runs in OUT/runs; ``meta``: job name -> (case, knob,
     value) of the validation's cases. Writes OUT/validation.json and OUT/validation.md; returns the
-    validation.json dict."""
+    validation.json dict. The jobs of one setting (the study's and those that ran more of its starts,
+    engines.studies.tradeoffs.more_starts_name) are read as one ensemble."""
     log = log or (lambda *a: None)
-    results = {j.name: load(os.path.join(out, "runs", j.name, "result.json")) for j in jobs}
-    doc = validation(results, meta, log)
+    parts = {}
+    for j in jobs:
+        parts.setdefault(tr.job_name(*meta[j.name]), []).append(os.path.join(out, "runs", j.name, "result.json"))
+    results = {name: load(*paths) for name, paths in parts.items()}
+    doc = validation(results, {name: meta[name] for name in parts}, log)
     files.write_json(os.path.join(out, "validation.json"), doc, indent=1, default=float)
     files.write_text(os.path.join(out, "validation.md"), validation_table(doc))
     return doc
@@ -232,7 +236,8 @@ def validation_table(doc):
             continue
         cells = [f"{100 * e['metrics'][m]['systematic']:.1f} ± {100 * e['metrics'][m]['sigma']:.1f}"
                  if m in e["metrics"] else "–" for m in metrics]
+        need = f" (n = {e['starts_needed']} would decide it)" if "starts_needed" in e else ""
         lines.append(f"| {label} | {e['starts']['paper']}/{e['starts']['fast']} | {e['dt_fast']:.3g} | "
                      f"{e['cpu_s']['paper']:.1f} / {e['cpu_s']['fast']:.2f} | {e['speedup']:.1f} | "
-                     + " | ".join(cells) + f" | {e['verdict']} |")
+                     + " | ".join(cells) + f" | {e['verdict']}{need} |")
     return "\n".join(lines) + "\n"

@@ -287,6 +287,8 @@ EXEMPT_TARGETS = {
     "mutants": "mutation testing, hours",
     "liquefaction-bands": "56 seismic runs (about 20 CPU minutes), rewrites the tracked docs/liquefaction/bands.json; tests/postproc/test_liquefaction_bands.py tests the table and tests/studies its verdicts",
     "resistance": "SHORT=1 runs in tests/run/test_resistance.py (twice: it checks the resume); the full curve is 80 runs, about 2 CPU hours",
+    "resistance-ground": "one run of 10,000 discs for 0.6 s (about an hour of one core) and make resistance's runs; "
+                         "tests/run/test_resistance.py tests its reading and refusals",
     "remesh-transfer": "the transfer study, 64 runs (about an hour of CPU), rewrites the tracked docs/engine/remesh_transfer.json; tests/studies/test_remesh_transfer_rule.py tests its rule",
     "mutants-kernels": "mutation testing of the numba kernels (CPU hours); tests/test_kernel_mutants.py tests the driver",
     "readings": "rewrites the tracked docs/readings/quicksand_ru.json from 8 starts; tests/postproc/test_readings.py",
@@ -300,7 +302,8 @@ EXEMPT_TARGETS = {
     "tradeoffs": "no short form: each knob's error is against a reference over the study's whole window from "
                  "5-20 starts (60 CPU minutes); tests/studies test its analysis, tradeoffs.py study --analyse-only's "
                  "refusal runs below",
-    "validation": "no short form: the validation is whole runs of every preset by its definition (90 CPU minutes)",
+    "validation": "no short form: the validation is whole runs of every preset by its definition (30 CPU minutes, "
+                  "more for the scenes it gives more starts)",
 }
 MAKE_ENV = {"SHORT": "1"}
 

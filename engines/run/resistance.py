@@ -8,6 +8,10 @@ from its finished starts), then OUT/resistance.json and OUT/resistance.png.
     OUT/runs/dense_packing/packing.csv               the dense deposit
     OUT/runs/<packing>_<gal>gal/ensemble/            an ensemble: start_<k>/, ensemble.json
 
+``ground``: the folder of one run of the 10,000-disc ground (make resistance-ground: case 1's cosine
+for CYCLES cycles), read the same way and kept beside the curve as an illustration (one run, not
+an ensemble: no statement uses it).
+
 SHORT (``short=True``): a few milliseconds of two amplitudes, two starts, a dense deposit settled
 for milliseconds: the pipeline end to end (its runs are all censored at their 0.1 cycle).
 """
@@ -153,10 +157,32 @@ def analyse(root, plan):
     return doc
 
 
-def run_study(out, plan, workers=1, scheduler=None, analyse_only=False, docs=None):
+def ground_reading(run, cycles):
+    """The reading (engines.studies.resistance.run_reading) of one completed run in the folder
+    ``run`` at its own cosine's amplitude, with its discs, porosity and void ratio; ValueError (one
+    line: the status and the command that finishes it) for a run not completed."""
+    s = read_summary(run)
+    if s.get("status") != "completed":
+        raise ValueError(f"{run}: the ground run is {str(s.get('status') or 'not started').splitlines()[0]!r}, not "
+                         "completed: make resistance-ground runs or resumes it")
+    h = read_history(os.path.join(run, "history.csv"))
+    load = s["parameters"]["loading"]
+    if load["type"] != "cosine":
+        raise ValueError(f"{run}: [loading] type = {load['type']!r}; the resistance curve reads cosine inputs only")
+    a = float(load["amplitude"]) * float(load["amplitude_scale"])
+    n = float(h["porosity"][0])
+    return {"run": os.path.basename(os.path.normpath(run)), "scene": s["scene"], "n_particles": s["n_particles"],
+            "amplitude_m_s2": a, "a_max_g": a / s["parameters"]["material"]["g"], "porosity": n,
+            "void_ratio": rs.void_ratio(n), "cpu_seconds": s["cpu_seconds"],
+            "note": "one run: an illustration beside the curve, not an ensemble", **rs.run_reading(h, s, float(load["frequency"]), a, cycles)}
+
+
+def run_study(out, plan, workers=1, scheduler=None, analyse_only=False, docs=None, ground=None):
     """The deposit, then the ensembles, through the sweep runner (none with ``analyse_only``),
-    then OUT/resistance.json and OUT/resistance.png (copied to ``docs``, a folder, if given);
-    returns the document."""
+    then OUT/resistance.json and OUT/resistance.png (copied to ``docs``, a folder, if given), with
+    the reading of the run in the folder ``ground`` (``ground_reading``) if given; returns the
+    document."""
+    reading = ground_reading(ground, plan.cycles) if ground else None  # refused before any run
     root = os.path.join(out, "runs")
     if not analyse_only:
         from engines.run.sweep import run_sweep
@@ -169,6 +195,8 @@ def run_study(out, plan, workers=1, scheduler=None, analyse_only=False, docs=Non
                           "resistance.json lists them under each row's \"failed\"")
     from postproc.resistance import resistance_figure
     doc = analyse(root, plan)
+    if reading:
+        doc["ground"] = reading
     for folder in [out] + ([docs] if docs else []):
         os.makedirs(folder, exist_ok=True)
         files.write_json(os.path.join(folder, "resistance.json"), doc)

@@ -14,7 +14,7 @@ import numpy as np
 
 from engines import files
 from engines import ROOT
-from engines.studies.ensemble import perturbed
+from engines.studies.ensemble import MAX_STARTS, perturbed
 from engines.studies.tradeoffs import (
     CASES,
     PERTURBATION,
@@ -23,6 +23,7 @@ from engines.studies.tradeoffs import (
     VALIDATION_CASES,
     dt_settings,
     job_name,
+    more_starts_name,
     named_value,
     nested,
     perturbation_of,
@@ -69,9 +70,10 @@ def window_of(case):
     return scenes.preset(spec.get("preset", case)).numerics.duration
 
 
-def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None):
-    """Run one setting from n_starts starts perturbed by ``perturbation`` [m] (default
-    PERTURBATION); returns the result dict (yade_scripts/tradeoffs.py, ``run``, lists its fields)."""
+def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation=None, first=0):
+    """Run one setting from n_starts starts (seeds first, first + 1, ...) perturbed by
+    ``perturbation`` [m] (default PERTURBATION); returns the result dict (yade_scripts/tradeoffs.py,
+    ``run``, lists its fields)."""
     from engines.model.start import Start
     from engines.run import scene as scenes
     from engines.run.preflight import announce_dt, timed
@@ -80,15 +82,15 @@ def run_setting(case, overrides, window, record, n_starts, out_dir, perturbation
 
     sc = scenes.preset(case, overrides)
     packing = scene_packing(sc)
-    first = Start(sc.settings, packing)
-    announce_dt(first)
-    sc = timed(sc, first)
+    prepared = Start(sc.settings, packing)
+    announce_dt(prepared)
+    sc = timed(sc, prepared)
     dt = sc.numerics.dt
     every = max(1, int(round(record / dt)))
     n_steps = int(round(window / dt))
     YadeCoupling(sc, packing).run(10)  # loads the compiled kernels (numba's cache) outside the timing
     starts, cpu, wall = [], 0.0, 0.0
-    for s in range(n_starts):
+    for s in range(first, first + n_starts):
         rec = _run_start(sc, perturbed(packing, s, PERTURBATION if perturbation is None else perturbation), s,
                          out_dir, every, n_steps)
         if "cpu_s" in rec:  # it ran (ok, or nan)
@@ -156,15 +158,15 @@ def _recorded(cp, rec, mob, dt, every, n_steps):
         k += min(every, n_steps - k)
 
 
-def run_point(case, sets, window, record, n_starts, out_dir, perturbation):
+def run_point(case, sets, window, record, n_starts, out_dir, perturbation, first=0):
     """``tradeoffs.py run``: run_setting of the preset ``case`` with the scene settings ``sets``
-    [(table, field, value)] for ``window`` seconds; writes OUT/result.json; returns (the
-    overrides, the result)."""
+    [(table, field, value)] for ``window`` seconds from starts first .. first + n_starts - 1;
+    writes OUT/result.json; returns (the overrides, the result)."""
     over = {}
     for table, field, value in sets:
         over.setdefault(table, {})[field] = value
     over.setdefault("numerics", {})["duration"] = window
-    result = run_setting(case, over, window, record, n_starts, out_dir, perturbation)
+    result = run_setting(case, over, window, record, n_starts, out_dir, perturbation, first)
     os.makedirs(out_dir, exist_ok=True)
     files.write_json(os.path.join(out_dir, "result.json"), result, indent=None)
     return over, result
@@ -216,17 +218,57 @@ def study_jobs(cases=None, yade_args=("-n", "-j", "1"), knobs=None):
     return jobs, meta
 
 
+def more_starts_jobs(doc, jobs, meta):
+    """The jobs that give each scene of the validation ``doc`` whose row (the fast setting's or a
+    candidate's) is not resolved the starts its ``starts_needed`` asks, capped at MAX_STARTS, for
+    every setting of the scene (the paper's too): one job per setting from the starts it has (the
+    ``--starts`` of its jobs) on, named by ``more_starts_name`` (added to ``meta``). None left: []."""
+    from engines.run.sweep import Job
+    have = {}
+    for job in jobs:
+        base = job_name(*meta[job.name])
+        have[base] = have.get(base, 0) + int(job.argv[job.argv.index("--starts") + 1])
+    out = []
+    for entry in doc["scenes"].values():
+        rows = [entry, *entry.get("candidates", {}).values()]
+        need = min(max([r.get("starts_needed") or 0 for r in rows]), MAX_STARTS)
+        for job in jobs:
+            case, knob, value = meta[job.name]
+            base = job_name(case, knob, value)
+            if case != entry["case"] or job.name != base or have[base] >= need:
+                continue
+            argv = list(job.argv)
+            argv[argv.index("--starts") + 1] = str(need - have[base])
+            argv[argv.index("--out"):argv.index("--out")] = ["--first-start", str(have[base])]
+            out.append(Job(more_starts_name(base, have[base], need - have[base]), tuple(argv), job.env))
+            meta[out[-1].name] = meta[job.name]
+    return out
+
+
 def run_study(out, workers=1, scheduler=None, cases=None, knobs=None, analyse_only=False, validation=False):
     """``tradeoffs.py study``: the study's jobs (of ``cases`` and ``knobs`` only, when given) through
     the sweep runner (none with ``analyse_only``), then postproc.tradeoffs.analyse: OUT/tradeoffs.json,
     table.md and the figures; returns the tradeoffs.json dict. With ``validation``: the validation's
     cases (of ``cases`` only, when given), then postproc.tradeoffs.validate: OUT/validation.json and
-    validation.md; returns the validation.json dict."""
+    validation.md, and again with the starts that rows not resolved ask (``more_starts_jobs``;
+    with ``analyse_only``, those that ran); returns the validation.json dict."""
+    from engines.run.sweep import run_sweep
+    from postproc.tradeoffs import analyse, validate
     if validation:
         cases = [c for c in VALIDATION_CASES if not cases or c in cases]
     jobs, meta = study_jobs(cases, knobs=knobs)
+    runs = os.path.join(out, "runs")
     if not analyse_only:
-        from engines.run.sweep import run_sweep
-        run_sweep(jobs, os.path.join(out, "runs"), workers=workers, scheduler=scheduler)
-    from postproc.tradeoffs import analyse, validate
-    return validate(out, jobs, meta) if validation else analyse(out, jobs, meta)
+        run_sweep(jobs, runs, workers=workers, scheduler=scheduler)
+    if not validation:
+        return analyse(out, jobs, meta)
+    while True:
+        doc = validate(out, jobs, meta)
+        more = more_starts_jobs(doc, jobs, meta)
+        if analyse_only:
+            more = [j for j in more if os.path.exists(os.path.join(runs, j.name, "result.json"))]
+        if not more:
+            return doc
+        jobs += more
+        if not analyse_only:
+            run_sweep(more, runs, workers=workers, scheduler=scheduler)

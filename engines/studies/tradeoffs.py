@@ -332,6 +332,12 @@ def job_name(case, knob, value):
     return f"{case}.{knob}={safe}"[:120]
 
 
+def more_starts_name(name, first, count):
+    """The job that runs starts first .. first + count - 1 of the job ``name``'s setting (a
+    validation row given more starts, engines.run.tradeoffs.run_study)."""
+    return f"{name}.starts{first}-{first + count - 1}"
+
+
 def nested(flat):
     """{"table.field": v} -> {table: {field: v}}."""
     out = {}

@@ -22,6 +22,7 @@ import json
 
 import numpy as np
 
+from engines.studies import ensemble
 from engines.studies import tradeoffs as tr
 
 METRICS = ("pressure_rms", "porosity_change", "settlement")  # judged; pressure_rms_below_surface: a diagnostic
@@ -32,14 +33,24 @@ NOTES = ("error: ensemble means over the starts against the reference's (engines
          "speedup: CPU seconds per start at the paper's settings of the case over the run's")
 
 
-def load(path):
+def load(path, *more):
     """A result.json as arrays over its ok starts: t, U (starts, times, blocks), porosity, height,
-    kinetic_energy (starts, times); None when no start ran to the end."""
-    try:
-        with open(path) as f:
-            res = json.load(f)
-    except (OSError, ValueError):
-        return None
+    kinetic_energy (starts, times); None when no start ran to the end. ``more``: the result.json of
+    jobs that ran further starts of the same setting, their starts appended in order (cpu_s and
+    wall_s the means per ok start over them all); None when one of them is missing."""
+    parts = []
+    for one in (path, *more):
+        try:
+            with open(one) as f:
+                parts.append(json.load(f))
+        except (OSError, ValueError):
+            return None
+    res = parts[0]
+    if more:
+        n_ok = [sum(s["status"] == "ok" for s in p["starts"]) for p in parts]
+        for key in ("cpu_s", "wall_s"):
+            res[key] = sum(p[key] * n for p, n in zip(parts, n_ok)) / max(sum(n_ok), 1)
+        res["starts"] = [s for p in parts for s in p["starts"]]
     ok = [s for s in res["starts"] if s["status"] == "ok"]
     res["n_ok"] = len(ok)
     rec = [s["cpu_record_s"] for s in ok if "cpu_record_s" in s]
@@ -172,6 +183,17 @@ def verdict(systematic):
     return "fail" if any(m["systematic"] > TARGET for m in judged) else "not resolved"
 
 
+def starts_needed(systematic, n):
+    """The starts per setting that would decide a "not resolved" row of n starts: per judged metric
+    whose estimate is below TARGET but not its estimate + 2 sigma, with sigma ~ 1/sqrt(starts)
+    (engines.studies.ensemble.starts_needed, not capped), the largest; None for a decided row (and
+    for one whose estimate is exactly TARGET: no number of starts decides it)."""
+    need = [ensemble.starts_needed(n, 2 * m["sigma"], TARGET - m["systematic"], cap=np.inf)
+            for m in (systematic[k] for k in judged_metrics(systematic))
+            if m["systematic"] < TARGET < m["systematic"] + 2 * m["sigma"]]
+    return max(need) if need and verdict(systematic) == "not resolved" else None
+
+
 def validated(ref, run):
     """The validation of one setting's run against the paper's (results of ``load``): its cost,
     metrics (``systematic`` with the blocks) and verdict."""
@@ -180,8 +202,10 @@ def validated(ref, run):
     if ref["data"] is None or run["data"] is None:
         return {**row, "verdict": "failed"}
     sys_ = tr.systematic(run["data"], ref["data"], blocks=True)
-    return {**row, "speedup": ref["cpu_s"] / run["cpu_s"], "floor": tr.floors(ref["data"]), "metrics": sys_,
-            "judged": judged_metrics(sys_), "verdict": verdict(sys_)}
+    row = {**row, "speedup": ref["cpu_s"] / run["cpu_s"], "floor": tr.floors(ref["data"]), "metrics": sys_,
+           "judged": judged_metrics(sys_), "verdict": verdict(sys_)}
+    need = starts_needed(sys_, min(ref["n_ok"], run["n_ok"]))
+    return {**row, "starts_needed": need} if need else row
 
 
 def validation(results, meta, log=None):

@@ -34,3 +34,15 @@ def test_each_row_is_drawn_at_its_median_or_open_at_the_runs_end(tmp_path, monke
     assert filled == [x == 7.0 for x in xs], "censored rows open, liquefied ones filled"
     ys = sorted(float(m.get_ydata()[0]) for m in marks)
     assert np.allclose(ys, sorted(r["csr"]["mean"] for r in rows)), "each row at its mean CSR"
+
+
+def test_the_ground_run_is_a_star_at_its_n_l_and_csr_without_bars(tmp_path, monkeypatch):
+    doc = json.load(open(STUDY))
+    doc["ground"] = {"n_particles": 10000, "void_ratio": 0.25, "censored": False, "n_l": 12.0, "csr": 0.07}
+    ax = drawn(doc, tmp_path, monkeypatch)
+    stars = [ln for ln in ax.lines if ln.get_marker() == "*"]
+    assert len(stars) == 1 and list(stars[0].get_xydata()[0]) == [12.0, 0.07]
+    assert "10,000-disc ground, one run (e = 0.250)" in [t.get_text() for t in ax.get_legend().get_texts()]
+    doc["ground"].update(censored=True, n_l=None)
+    star, = [ln for ln in drawn(doc, tmp_path, monkeypatch).lines if ln.get_marker() == "*"]
+    assert star.get_xdata()[0] == doc["cycles"] and star.get_markerfacecolor() == "white"

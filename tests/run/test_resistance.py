@@ -39,3 +39,34 @@ def test_make_resistance_short_writes_the_curve_and_resumes_without_redoing_runs
     assert again.returncode == 0, again.stderr[-2000:]
     assert "1 jobs, 1 already ok, 0 to run" in again.stdout  # the deposit kept; no ensemble left to run
     assert {d: os.path.getmtime(runs / d / "ensemble" / "ensemble.json") for d in stamp} == stamp
+
+
+def _ground_run(folder, status="completed", ru=0.95):
+    """A run folder like one of make resistance-ground: the synthetic history of
+    tests/studies/test_resistance.py, band 3 at a constant cycle-mean r_u of ``ru``."""
+    import numpy as np
+
+    from tests.studies.test_resistance import F, history, summary
+    h = history(lambda k, t: np.full(len(t), ru if k == 2 else 0.2))
+    h["porosity"] = np.full(len(h["t"]), 0.2)
+    os.makedirs(folder)
+    with open(os.path.join(folder, "history.csv"), "w") as f:
+        f.write(",".join(h) + "\n" + "\n".join(",".join(repr(float(h[k][i])) for k in h) for i in range(len(h["t"]))))
+    s = summary()
+    s["parameters"]["loading"] = {"type": "cosine", "amplitude": 7.5, "amplitude_scale": 2.0, "frequency": F}
+    s.update(status=status, scene="ground-10000", n_particles=10000, cpu_seconds=3600.0)
+    with open(os.path.join(folder, "summary.json"), "w") as f:
+        json.dump(s, f)
+    return folder
+
+
+def test_the_ground_run_is_read_like_a_start_at_its_own_amplitude_and_a_run_not_completed_is_refused(tmp_path):
+    from engines.run.resistance import ground_reading
+    from engines.studies.resistance import void_ratio
+    g = ground_reading(_ground_run(str(tmp_path / "ground")), 30)
+    assert g["amplitude_m_s2"] == 15.0 and g["a_max_g"] == pytest.approx(15.0 / 9.81)  # amplitude x its scale
+    assert g["n_l"] == pytest.approx(1.0, abs=0.01) and g["band"] == 3 and not g["censored"]  # 0.95 from the first cycle
+    assert g["void_ratio"] == pytest.approx(void_ratio(0.2)) and g["n_particles"] == 10000
+    assert ground_reading(_ground_run(str(tmp_path / "low"), ru=0.5), 30)["censored"]
+    with pytest.raises(ValueError, match=r"^\S+: the ground run is 'running', not completed: make resistance-ground"):
+        ground_reading(_ground_run(str(tmp_path / "stopped"), status="running"), 30)

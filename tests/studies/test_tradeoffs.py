@@ -300,6 +300,66 @@ def test_validate_writes_every_metric_and_the_verdict(tmp_path):
     assert f"| liquefaction_case1, {candidate} | 20/20 |" in table
 
 
+def test_a_row_not_resolved_states_the_starts_that_would_decide_it():
+    from engines.studies.tradeoffs_judged import starts_needed
+    m = lambda est, sigma: {"systematic": est, "sigma": sigma}  # noqa: E731
+    # 3 % +- 1.5 %: 2 sigma = 3 % against 2 % left below 5 %: 20 (3/2)^2 = 45 starts
+    assert starts_needed({"settlement": m(0.03, 0.015), "porosity_change": m(0.0, 0.01)}, 20) == 45
+    assert starts_needed({"settlement": m(0.03, 0.015), "porosity_change": m(0.04, 0.01)}, 20) == 80  # 20 (2/1)^2
+    assert starts_needed({"settlement": m(0.01, 0.01)}, 20) is None  # pass
+    assert starts_needed({"settlement": m(0.06, 0.001), "porosity_change": m(0.03, 0.015)}, 20) is None  # fail
+    assert starts_needed({"settlement": m(0.03, 0.015), "pressure_rms_below_surface": m(0.049, 0.1)}, 20) == 45  # judged only
+
+
+def test_the_validation_gives_a_row_not_resolved_more_starts_and_reads_them_as_one_ensemble(tmp_path):
+    from engines.run import tradeoffs as study
+    from engines.studies.ensemble import MAX_STARTS
+    from postproc.tradeoffs import validate
+    rng = np.random.default_rng(5)
+    case = "liquefaction_case7_full"  # dry: porosity change and settlement judged
+    jobs, meta = study.study_jobs([case])
+    assert [meta[j.name][1] for j in jobs] == ["reference", "defaults", "candidate"]
+    for j in jobs:
+        _fake_validation(str(tmp_path / "runs" / j.name), 1.0, 2.0, rng, wet=False)
+    doc = {"scenes": {"liquefaction_case7": {"case": case, "verdict": "not resolved", "starts_needed": 45,
+                                             "candidates": {"x": {"verdict": "pass"}}}}}
+    more = study.more_starts_jobs(doc, jobs, meta)
+    assert [j.name for j in more] == [f"{j.name}.starts20-44" for j in jobs]
+    for j, base in zip(more, jobs):
+        argv = list(j.argv)
+        assert argv[argv.index("--starts") + 1] == "25" and argv[argv.index("--first-start") + 1] == "20"
+        assert argv[argv.index("--out") - 2] == "--first-start" and meta[j.name] == meta[base.name]
+        assert [a for a in argv if a not in ("--first-start", "20", "25")] == \
+            [a for a in base.argv if a != "20"], "only the starts change"
+    assert study.more_starts_jobs(doc, jobs + more, meta) == []  # they have the starts asked
+    doc["scenes"]["liquefaction_case7"]["candidates"]["x"]["starts_needed"] = 500  # capped
+    assert [j.name for j in study.more_starts_jobs(doc, jobs + more, meta)] == \
+        [f"{j.name}.starts45-{MAX_STARTS - 1}" for j in jobs]
+    # the more starts, 0.5 % off in every setting, read with the first 20 as one ensemble of 45
+    for j in more:
+        _fake_validation(str(tmp_path / "runs" / j.name), 1.0, 2.0, rng, wet=False, n=25)
+    out = validate(str(tmp_path), jobs + more, meta, log=None)["scenes"]["liquefaction_case7"]
+    assert out["starts"] == {"paper": 45, "fast": 45}
+    assert out["cpu_s"]["paper"] == pytest.approx(10.0)  # the mean per start over both jobs
+    assert validate(str(tmp_path), jobs, meta, log=None)["scenes"]["liquefaction_case7"]["starts"]["paper"] == 20
+    (tmp_path / "runs" / more[0].name / "result.json").unlink()  # a missing part: that setting not read
+    assert validate(str(tmp_path), jobs + more, meta, log=None)["scenes"]["liquefaction_case7"]["verdict"] == "not run"
+
+
+def test_a_setting_runs_its_starts_from_the_first_asked(monkeypatch, tmp_path):
+    from engines.run import tradeoffs as study
+    seen = []
+    monkeypatch.setattr(study, "_run_start", lambda sc, pk, seed, *a: seen.append((seed, pk.xz.copy())) or
+                        {"seed": seed, "status": "ok", "cpu_s": 1.0, "wall_s": 1.0})
+    res = study.run_setting("quicksand_case1", {"numerics": {"duration": 1e-4}}, 1e-4, 5e-5, 2, str(tmp_path),
+                            1e-8, first=20)
+    assert [s["seed"] for s in res["starts"]] == [20, 21]
+    from engines.yade.deposition import scene_packing
+    base = scene_packing(scenes.preset("quicksand_case1"))
+    for seed, xz in seen:
+        assert np.array_equal(xz, ens.perturbed(base, seed, 1e-8).xz)
+
+
 def _numerics(setting):
     return {k.split(".", 1)[1]: v for k, v in setting.items() if k.startswith("numerics.")}
 
