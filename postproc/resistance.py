@@ -6,7 +6,7 @@ mean CSR with its 95 % interval (vertical bar), filled; a censored median (more 
 starts not liquefied within the runs' cycles) open at the runs' end with an arrow to the right;
 the simplified CSR (0.65 a_max/g sigma_v/sigma'_v0) of the same row as a small grey mark at the same
 N_L. Loose: circles; dense: squares. The 10,000-disc ground's one run, when the document has it:
-a star, open when censored, without bars (one run has no interval). The key sits below the axes.
+a star, open with an arrow when censored, without bars (one run has no interval). The key sits below the axes.
 """
 import numpy as np
 
@@ -44,6 +44,8 @@ def resistance_figure(doc, path):
         ax.plot([x], [g["csr"]], "*", color="C2", ms=13, mfc="white" if g["censored"] else "C2",
                 label=f"{g['n_particles']:,}-disc ground, one run (e = {g['void_ratio']:.3f})"
                       + (" censored" if g["censored"] else ""))
+        if g["censored"]:
+            ax.annotate("", xy=(x * 1.6, g["csr"]), xytext=(x, g["csr"]), arrowprops=dict(arrowstyle="->", color="C2"))
     ax.set_xscale("log")
     ax.set_xlim(0.8, 3 * cycles)
     ax.axvline(cycles, color="0.7", lw=0.8, ls=":")
