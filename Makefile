@@ -55,11 +55,15 @@ demo: deps
 demo-numbers: deps
 	$(PY) yade_scripts/demo_numbers.py --out $(OUT)/demo-numbers
 
-# The effective-stress reading judged on the quick sand (docs/READINGS.md E1-E7): the bottom band's r_u at
-# the heave from 8 perturbed starts of case 1 (a few minutes) -> docs/readings/quicksand_ru.json.
+# The effective-stress reading judged on the quick sand (docs/READINGS.md E8): the bottom band's r_u at
+# the heave from 8 perturbed starts of case 1, and again with every contact frictionless (a minute)
+# -> docs/readings/quicksand_ru.json, quicksand_ru_mu0.json.
 readings: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --out $(OUT)/readings-quicksand
 	$(PY) -m postproc.readings $(OUT)/readings-quicksand docs/readings/quicksand_ru.json
+	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --set contact.mu=0 \
+	   --out $(OUT)/readings-quicksand-mu0
+	$(PY) -m postproc.readings $(OUT)/readings-quicksand-mu0 docs/readings/quicksand_ru_mu0.json
 
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
 # batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests

@@ -5,7 +5,8 @@ beside it, and the check r_u in [0.8, 1.2]); the same band at its quick conditio
 row where its contacts carry less than QUICK of their start's σ'_v (``quick_condition``: the grains
 carry nothing there, whatever holds the bed above); and how much of the bed's buoyant weight the walls
 carry at t = 0 (``weight_carried``: 1 when the bed starts at rest). ``make readings`` runs the ensemble and writes
-docs/readings/quicksand_ru.json:
+docs/readings/quicksand_ru.json, and again with every contact frictionless ([contact] mu = 0, the
+scene's friction; the record's ``mu``) -> docs/readings/quicksand_ru_mu0.json:
 
     /usr/bin/python3 -m postproc.readings ENSEMBLE_DIR OUT.json
 """
@@ -59,13 +60,15 @@ def quicksand_ru(ensemble_dir):
     return {
         "date": time.strftime("%Y-%m-%d"), "commit": prov.get("git_commit"), "dirty": prov.get("git_dirty"),
         "scene": doc["scene"], "n_starts": doc["n_starts"], "perturbation_m": doc["perturbation_m"],
+        "mu": first["parameters"]["contact"]["mu"],
         "weight_carried_at_start": weight_carried(snap0, mat["rho"], mat["rho_w"], mat["g"]),
         "interval": doc["interval"], "heave_time_s": stats(res["heave_time_s"]),
         "band1": {"z_m": first["band_bounds_m"][0], "sigma_v0_Pa": sv0, "overburden_Pa": ob,
                   "ru_at_heave": stats(ru), "ru_max": stats(res["bands.band1.ru_max"]),
                   "U_over_overburden_at_heave": ru["mean"] * sv0 / ob,
                   "quick_condition": {"definition": f"the first output row where the band's sigma'_v < {QUICK} x its "
-                                                    "first row's", "t_s": quick_stats[0], "ru": quick_stats[1]}},
+                                                    "first row's", "t_s": quick_stats[0], "ru": quick_stats[1],
+                                      "U_over_overburden": quick_stats[1]["mean"] * sv0 / ob}},
         "criterion": f"the bottom band's r_u at the heave lies in [{RU_HEAVE[0]}, {RU_HEAVE[1]}] (its 95 % interval)",
         "holds": bool(RU_HEAVE[0] <= ru["ci95_low"] and ru["ci95_high"] <= RU_HEAVE[1]),
     }

@@ -29,7 +29,7 @@ def test_the_record_says_whether_the_interval_lies_within_0_8_to_1_2(tmp_path, r
                "results": {"bands.band1.ru_at_heave": _stats(*ru), "bands.band1.ru_max": _stats(4.0, 3.8, 4.2),
                            "heave_time_s": _stats(0.01, 0.009, 0.011)}}, open(tmp_path / "ensemble.json", "w"))
     json.dump({"band_sigma_v0_Pa": [50.0], "band_overburden_Pa": [100.0], "band_bounds_m": [[0.0, 1e-3]],
-               "parameters": {"material": {"rho": 2000.0, "rho_w": 1000.0, "g": 10.0}},
+               "parameters": {"material": {"rho": 2000.0, "rho_w": 1000.0, "g": 10.0}, "contact": {"mu": 0.0}},
                "provenance": {"git_commit": "abc", "git_dirty": False}}, open(tmp_path / "start_0" / "summary.json", "w"))
     np.savez(tmp_path / "start_0" / "snapshot_000.00ms.npz", **_snapshot(0.01))
     (tmp_path / "start_0" / "history.csv").write_text("t,sv_band1,ru_band1\n0,50,0\n0.001,6,0.9\n0.002,4,1.1\n")
@@ -38,6 +38,7 @@ def test_the_record_says_whether_the_interval_lies_within_0_8_to_1_2(tmp_path, r
     assert rec["band1"]["U_over_overburden_at_heave"] == pytest.approx(ru[0] * 0.5)
     quick = rec["band1"]["quick_condition"]
     assert (quick["t_s"]["n"], quick["t_s"]["mean"], quick["ru"]["mean"]) == (1, 0.002, 1.1)
+    assert quick["U_over_overburden"] == pytest.approx(1.1 * 0.5) and rec["mu"] == 0.0
 
 
 def test_the_quick_condition_is_the_first_row_below_a_tenth_of_the_start():
