@@ -56,14 +56,18 @@ demo-numbers: deps
 	$(PY) yade_scripts/demo_numbers.py --out $(OUT)/demo-numbers
 
 # The effective-stress reading judged on the quick sand (docs/READINGS.md E8): the bottom band's r_u at
-# the heave from 8 perturbed starts of case 1, and again with every contact frictionless (a minute)
-# -> docs/readings/quicksand_ru.json, quicksand_ru_mu0.json.
+# the heave's onset and at the surface's heave from 8 perturbed starts of case 1, again with every
+# contact frictionless, and on the bed settled in its water (about two minutes)
+# -> docs/readings/quicksand_ru.json, quicksand_ru_mu0.json, quicksand_ru_submerged.json.
 readings: deps
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --out $(OUT)/readings-quicksand
 	$(PY) -m postproc.readings $(OUT)/readings-quicksand docs/readings/quicksand_ru.json
 	$(YADE) -n -x yade_scripts/quicksand.py --case 1 --starts 8 --quiet --overwrite --set contact.mu=0 \
 	   --out $(OUT)/readings-quicksand-mu0
 	$(PY) -m postproc.readings $(OUT)/readings-quicksand-mu0 docs/readings/quicksand_ru_mu0.json
+	$(YADE) -n -x yade_scripts/quicksand.py --scene quicksand_case1_submerged --starts 8 --quiet --overwrite \
+	   --out $(OUT)/readings-quicksand-submerged
+	$(PY) -m postproc.readings $(OUT)/readings-quicksand-submerged docs/readings/quicksand_ru_submerged.json
 
 # The YADE <-> reference cross-check (exits non-zero on a failed case), then the tests but the
 # batteries of `make check` (YADEBULK_REQUIRED: a missing or failing bulk-I/O bridge fails its tests
@@ -153,6 +157,7 @@ packings: deps
 	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1 --out $(OUT)/packings/quicksand-case1.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene yade_scripts/scenes/quicksand_case1_flat.toml \
 	  --from $(OUT)/packings/quicksand-case1.csv --out $(OUT)/packings/quicksand-case1-flat.csv
+	$(YADE) -n -x yade_scripts/deposit.py --scene quicksand_case1_submerged --out $(OUT)/packings/quicksand-case1-submerged.csv
 	$(YADE) -n -x yade_scripts/deposit.py --scene liquefaction_case1 --out $(OUT)/packings/liquefaction-case1.csv
 	$(if $(SHORT),,$(YADE) -n -x yade_scripts/deposit.py --scene deposit_1089 --out $(OUT)/deposit_1089/packing.csv)
 

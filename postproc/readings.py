@@ -1,10 +1,11 @@
-"""The effective-stress readings judged on a preset (SPEC §2.8; docs/READINGS.md, E1-E7), from an
-ensemble's files: ``quicksand_ru(ENSEMBLE_DIR)`` the quick-sand bed's bottom band at the heave
-(r_u with its 95 % interval over the starts, sigma'_v0 from the contacts and the buoyant overburden
-beside it, and the check r_u in [0.8, 1.2]); the same band at its quick condition, the first output
-row where its contacts carry less than QUICK of their start's σ'_v (``quick_condition``: the grains
-carry nothing there, whatever holds the bed above); and how much of the bed's buoyant weight the walls
-carry at t = 0 (``weight_carried``: 1 when the bed starts at rest). ``make readings`` runs the ensemble and writes
+"""The effective-stress readings judged on a preset (SPEC §2.8; docs/READINGS.md, E1-E8), from an
+ensemble's files: ``quicksand_ru(ENSEMBLE_DIR)`` the quick-sand bed's bottom band at the heave's
+onset, the first output row where its contacts carry less than postproc.run_files.QUICK of their
+start's σ'_v (the base lifted by its water, Terzaghi's heave; summary.json's ``t_quick_s``): r_u there
+with its 95 % interval over the starts, and the check r_u in [0.8, 1.2]; beside it σ'_v0 from the
+contacts and the buoyant overburden, r_u when the surface has risen by [output] heave_rise
+(``heave_time_s``), and how much of the bed's buoyant weight the walls carry at t = 0
+(``weight_carried``: 1 when the bed starts at rest). ``make readings`` runs the ensemble and writes
 docs/readings/quicksand_ru.json, and again with every contact frictionless ([contact] mu = 0, the
 scene's friction; the record's ``mu``) -> docs/readings/quicksand_ru_mu0.json:
 
@@ -19,19 +20,9 @@ import numpy as np
 
 from engines import files
 from engines.model.effective_stress import pair_contacts
-from engines.studies.ensemble import statistics
-from postproc.run_files import read_history, read_snapshot, read_summary, run_folders, snapshot_files
+from postproc.run_files import QUICK, read_snapshot, read_summary, run_folders, snapshot_files
 
-RU_HEAVE = (0.8, 1.2)  # the bottom band's r_u expected at the heave (issue 42)
-QUICK = 0.1  # [-] the fraction of its start's sigma'_v below which a band's contacts count as carrying nothing
-
-
-def quick_condition(history, band=1, fraction=QUICK):
-    """(t [s], r_u) at the first row of ``history`` (read_history) where band ``band``'s sigma'_v
-    falls below ``fraction`` of its first row's; (nan, nan) if it never does."""
-    sv, ru = history[f"sv_band{band}"], history[f"ru_band{band}"]
-    hit = np.flatnonzero(sv < fraction * sv[0])
-    return (float(history["t"][hit[0]]), float(ru[hit[0]])) if len(hit) else (np.nan, np.nan)
+RU_HEAVE = (0.8, 1.2)  # the bottom band's r_u expected at the heave's onset (issue 42)
 
 
 def weight_carried(snap, rho, rho_w, g):
@@ -53,24 +44,26 @@ def quicksand_ru(ensemble_dir):
     snap0 = read_snapshot(snapshot_files(run_folders(ensemble_dir)[0])[0])
     prov = first.get("provenance") or {}
     sv0, ob = first["band_sigma_v0_Pa"][0], first["band_overburden_Pa"][0]
-    ru = res["bands.band1.ru_at_heave"]
-    stats = lambda r: {k: r[k] for k in ("n", "mean", "ci95_low", "ci95_high")}  # noqa: E731
-    quick = np.array([quick_condition(read_history(os.path.join(d, "history.csv"))) for d in run_folders(ensemble_dir)])
-    quick_stats = [{k: float(v) for k, v in stats(statistics(quick[:, c])).items()} for c in (0, 1)]
+    stats = lambda key: {k: res[key][k] for k in ("n", "mean", "ci95_low", "ci95_high")}  # noqa: E731
+    onset, surface = stats("bands.band1.ru_at_quick"), stats("bands.band1.ru_at_heave")
     return {
         "date": time.strftime("%Y-%m-%d"), "commit": prov.get("git_commit"), "dirty": prov.get("git_dirty"),
         "scene": doc["scene"], "n_starts": doc["n_starts"], "perturbation_m": doc["perturbation_m"],
         "mu": first["parameters"]["contact"]["mu"],
         "weight_carried_at_start": weight_carried(snap0, mat["rho"], mat["rho_w"], mat["g"]),
-        "interval": doc["interval"], "heave_time_s": stats(res["heave_time_s"]),
+        "interval": doc["interval"],
         "band1": {"z_m": first["band_bounds_m"][0], "sigma_v0_Pa": sv0, "overburden_Pa": ob,
-                  "ru_at_heave": stats(ru), "ru_max": stats(res["bands.band1.ru_max"]),
-                  "U_over_overburden_at_heave": ru["mean"] * sv0 / ob,
-                  "quick_condition": {"definition": f"the first output row where the band's sigma'_v < {QUICK} x its "
-                                                    "first row's", "t_s": quick_stats[0], "ru": quick_stats[1],
-                                      "U_over_overburden": quick_stats[1]["mean"] * sv0 / ob}},
-        "criterion": f"the bottom band's r_u at the heave lies in [{RU_HEAVE[0]}, {RU_HEAVE[1]}] (its 95 % interval)",
-        "holds": bool(RU_HEAVE[0] <= ru["ci95_low"] and ru["ci95_high"] <= RU_HEAVE[1]),
+                  "heave_onset": {"definition": f"the first output row where the band's sigma'_v < {QUICK} x its "
+                                                "first row's (its contacts let go)",
+                                  "t_s": stats("bands.band1.t_quick_s"), "ru": onset,
+                                  "U_over_overburden": onset["mean"] * sv0 / ob},
+                  "surface_heave": {"definition": f"the first output row where the bed top has risen by "
+                                                  f"{first['results']['heave_rise_m']} m",
+                                    "t_s": stats("heave_time_s"), "ru": surface,
+                                    "U_over_overburden": surface["mean"] * sv0 / ob},
+                  "ru_max": stats("bands.band1.ru_max")},
+        "criterion": f"the bottom band's r_u at the heave's onset lies in [{RU_HEAVE[0]}, {RU_HEAVE[1]}] (its 95 % interval)",
+        "holds": bool(RU_HEAVE[0] <= onset["ci95_low"] and onset["ci95_high"] <= RU_HEAVE[1]),
     }
 
 
@@ -82,11 +75,11 @@ def main(argv=None):
     record = quicksand_ru(a.ensemble)
     files.write_json(a.out, record)
     b = record["band1"]
-    print(f"{a.out}: bottom band r_u at the heave {b['ru_at_heave']['mean']:.3g} (95 % interval "
-          f"{b['ru_at_heave']['ci95_low']:.3g} to {b['ru_at_heave']['ci95_high']:.3g}, {record['n_starts']} starts); "
-          f"sigma'_v0 {b['sigma_v0_Pa']:.3g} Pa, overburden {b['overburden_Pa']:.3g} Pa; holds: {record['holds']}; "
-          f"at its quick condition ({b['quick_condition']['t_s']['mean'] * 1e3:.3g} ms) r_u {b['quick_condition']['ru']['mean']:.3g} "
-          f"({b['quick_condition']['ru']['ci95_low']:.3g} to {b['quick_condition']['ru']['ci95_high']:.3g})")
+    interval = lambda r: f"{r['mean']:.3g} (95 % interval {r['ci95_low']:.3g} to {r['ci95_high']:.3g})"  # noqa: E731
+    print(f"{a.out}: bottom band r_u at the heave's onset ({b['heave_onset']['t_s']['mean'] * 1e3:.3g} ms) "
+          f"{interval(b['heave_onset']['ru'])}, {record['n_starts']} starts; holds: {record['holds']}; "
+          f"sigma'_v0 {b['sigma_v0_Pa']:.3g} Pa, overburden {b['overburden_Pa']:.3g} Pa; at the surface's heave "
+          f"({b['surface_heave']['t_s']['mean'] * 1e3:.3g} ms) r_u {interval(b['surface_heave']['ru'])}")
 
 
 if __name__ == "__main__":

@@ -99,26 +99,33 @@ def headline_results(history, heave_rise):
 
 
 RU_LIQUEFIED = 0.9  # r_u at which a band counts as liquefied (the first time it is reached)
+QUICK = 0.1  # a band's contacts let go when its sigma'_v falls below this fraction of its first row's
 
 
 def band_results(history, heave_row=None):
     """Per band of the bed (history.csv's sv_band*, p_band*, ru_band* columns; engines.model.effective_stress)
-    {band<k>: results}: the least p'/p'_0 over the run (p'_0 the first row's; None where p'_0 <= 0)
-    and, with water, the largest r_u, the first time r_u >= RU_LIQUEFIED (None if never) and r_u at
-    the heave's row ``heave_row`` (the quick sand); {} without the columns."""
+    {band<k>: results}: the least p'/p'_0 over the run (p'_0 the first row's; None where p'_0 <= 0);
+    the first time its contacts let go, sigma'_v < QUICK sigma'_v0 (``t_quick_s``, None if never: the
+    bottom band's is the quick sand's heave onset, the base lifted by its water); with water, the
+    largest r_u, the first time r_u >= RU_LIQUEFIED (None if never), r_u where the contacts let go
+    and at the heave's row ``heave_row`` (the quick sand's surface risen); {} without the columns."""
     t = history["t"]
     out = {}
     for k in range(1, 1 + sum(c.startswith("p_band") for c in history)):
-        p = history[f"p_band{k}"]
-        res = {"p_ratio_min": float(np.nanmin(p / p[0])) if p[0] > 0 and np.isfinite(p).any() else None}
+        p, sv = history[f"p_band{k}"], history[f"sv_band{k}"]
+        quick = np.flatnonzero(sv < QUICK * sv[0]) if sv[0] > 0 else []
+        q = quick[0] if len(quick) else None
+        res = {"p_ratio_min": float(np.nanmin(p / p[0])) if p[0] > 0 and np.isfinite(p).any() else None,
+               "t_quick_s": None if q is None else float(t[q])}
         ru = history.get(f"ru_band{k}")
         if ru is not None:
             ok = np.isfinite(ru)
             hit = np.flatnonzero(ok & (ru >= RU_LIQUEFIED))
+            at = lambda row: float(ru[row]) if row is not None and ok[row] else None  # noqa: E731
             res.update(ru_max=float(np.max(ru[ok])) if ok.any() else None,
-                       t_ru_0p9_s=float(t[hit[0]]) if len(hit) else None)
+                       t_ru_0p9_s=float(t[hit[0]]) if len(hit) else None, ru_at_quick=at(q))
             if heave_row is not None:
-                res["ru_at_heave"] = float(ru[heave_row]) if ok[heave_row] else None
+                res["ru_at_heave"] = at(heave_row)
         out[f"band{k}"] = res
     return out
 

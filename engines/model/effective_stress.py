@@ -35,7 +35,6 @@ import numpy as np
 from engines.model.observe import disc_rectangle_area
 from engines.model.pores import WALL_BOTTOM, WALL_LEFT, WALL_RIGHT
 
-N_BANDS = 8  # horizontal bands of the bed (history.csv's *_band columns)
 SURFACE_DIAMETERS = 2.0  # a band whose top is closer to the bed's top [mean diameters] has too little
 #                         overburden for its r_u and p'/p'_0 to be read (sigma'_v0 -> 0)
 
@@ -120,7 +119,7 @@ def counted_bands(bounds, bed_top, mean_diameter):
     return [k for k, (_, z1) in enumerate(bounds) if z1 <= bed_top - SURFACE_DIAMETERS * mean_diameter]
 
 
-def bands(bottom, top, n=N_BANDS):
+def bands(bottom, top, n):
     """[(z0, z1)] of n equal bands between the bed's bottom and top [m] (bottom first)."""
     if not (top > bottom and n >= 1):
         raise ValueError(f"bands: need top > bottom and n >= 1, got bottom {bottom}, top {top}, n {n}")
@@ -165,7 +164,7 @@ def overburden(xz, r, unit_weight, x0, x1, bounds, samples=32):
     return out
 
 
-def bed_bands(packing, faces, n=N_BANDS):
+def bed_bands(packing, faces, n):
     """(bands, areas (n,) [m^2]) of the bed of ``packing`` at the start: n equal bands from the
     bottom face (``faces``: {wall code: position [m]}, Start.faces; else Packing.bed_bottom) to the
     particles' top (Packing.bed_top), as wide as the box between the side faces (else the

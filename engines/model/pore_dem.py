@@ -108,22 +108,32 @@ def moving_flat_walls(settings, flat_walls):
 def scene_flat_walls(settings, packing):
     """{wall code: FlatWall} of [walls] kind = "flat", {} for kind = "discs": each wall-disc group of
     the packing replaced by a flat wall at its inner face (Packing.inner_faces), moved back to the
-    outermost particle where one reaches past it (a particle resting in the dip between two wall
-    discs would start overlapping the face); the bottom is an inflow wall when [water] q_w or
-    inflow_velocity is > 0, the sides
+    outermost particle where one reaches past it by more than ``rest_overlap`` (a particle resting in
+    the dip between two wall discs would start overlapping the face; one pressed into the face by
+    the bed's weight rests on it: deposition.settle_on_flat_walls leaves its packing so); the bottom
+    is an inflow wall when [water] q_w or inflow_velocity is > 0, the sides
     drain when [water] sides = "drained", else undrained."""
     if settings.walls.kind != "flat":
         return {}
     w = settings.water
     inflow = w.q_w > 0 or w.inflow_velocity > 0
     m = packing.mobile
+    tolerance = rest_overlap(settings, packing)
     walls = {}
     for code, face in sorted(packing.inner_faces().items()):
         name = pg.WALL_NAMES[code]  # its face and its word: engines.model.groups
         (axis, inward), boundary = groups.kind(name).face, groups.flat_word(name, w.sides, inflow)
         reach = float(np.min(inward * packing.xz[m, axis] - packing.r[m]))  # the outermost particle, inward * its edge
-        walls[code] = FlatWall(axis, inward * min(inward * face, reach), inward, boundary)
+        at = inward * face if reach > inward * face - tolerance else reach
+        walls[code] = FlatWall(axis, inward * at, inward, boundary)
     return walls
+
+
+def rest_overlap(settings, packing):
+    """The overlap [m] of a contact carrying the whole weight of the packing's particles, W / kn: no
+    contact at rest overlaps a wall more."""
+    weight = float(disc_masses(settings, packing)[0][packing.mobile].sum()) * settings.material.g
+    return weight / settings.contact.kn
 
 
 def water_model(settings, packing, cls=WaterModel, flat_walls=()):

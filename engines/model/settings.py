@@ -69,6 +69,7 @@ OUTPUT_FIELDS = {
     "snapshot_times": Field(list, [0.02, 0.04, 0.06], None, "times of the snapshot figures [s]"),
     "block_z": Field(list, [[0.0, 0.34], [0.66, 10.0]], None, "pressure blocks as [z0, z1] fractions of the initial bed height above the bottom wall (block1 bottom, block2 surface)"),
     "progress_seconds": Field(float, 10.0, POS, "wall seconds between progress lines"),
+    "n_bands": Field(int, 8, (1, 64), "horizontal bands of equal height from the bottom wall to the bed's top for the effective stress and r_u (history.csv's *_band<k>, band 1 at the bottom; SPEC §2.8): each band at least a grain tall to hold both its contacts and its pores"),
     "porosity_window": Field(list, [0.0, 0.8], None, "[z0, z1] fractions of the initial bed height above the bottom wall; x between the side walls' inner faces: porosity = void fraction of this rectangle from exact disc-rectangle areas (engines.model.observe)"),
     # ParaView, checkpoints, headline results
     "vtk": Field(bool, False, None, "write a ParaView time series to DIR/vtk/ during the run (postproc.vtk: discs, contact forces, pores)"),

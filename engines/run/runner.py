@@ -99,7 +99,7 @@ class Recorder:
         self.snapshot_times = out.snapshot_times
         self.progress_seconds = out.progress_seconds
         self.n_blocks = len(cp.block_bounds)
-        self.bands, self.band_areas = es.bed_bands(cp.packing, box_faces(cp))
+        self.bands, self.band_areas = es.bed_bands(cp.packing, box_faces(cp), out.n_bands)
         self.sigma_v0 = None  # sigma'_v of each band at the first loaded row [Pa]: r_u's reference (stress_row)
         self.columns = history_columns(cp)
         self.rows, self.last_row, self.last_vtk = 0, -1, -1
@@ -258,7 +258,7 @@ def history_columns(cp):
     r_u; units: engines.run.history.UNITS)."""
     water = cp.water is not None
     ties = cp.core is not None and cp.core.ties is not None
-    bands = range(1, es.N_BANDS + 1)
+    bands = range(1, cp.scene.output.n_bands + 1)
     return (["t"] + ([f"U_block{b + 1}" for b in range(len(cp.block_bounds))] if water else []) +
             ["porosity", "kinetic_energy"] + (["water_balance_error", "total_water", "n_pores"] if water else []) +
             ["fn_bottom_mean", "bed_top"] + (["base_acc", "base_vel", "base_disp"] if cp.base is not None else []) +

@@ -58,6 +58,7 @@ SCHEMA = {
         "settle_ks": (float, 0.0, (0.0, math.inf), "tangential stiffness during deposition [N/m] (§4.2: 0; §6: 3.5e4)"),
         "guard_walls": (bool, False, None, "deposition only: side walls raised above the highest particle (removed afterwards) so that no particle bounces out of the box"),
         "settle_loaded": (float, 0.0, (0.0, math.inf), "deposition only: after the dense top is marked, settle again this long [s] with its masses, so that the run starts at rest under its own weight (seismic: 0.15; 0 = not)"),
+        "settle_submerged": (bool, False, None, "deposition only: the settle_loaded stage under the buoyant weight (rho f - rho_w) pi r^2 g, so that a saturated bed starts at rest in its water (quick sand); false: under the dry weight"),
     },
     **{table: cls.FIELDS for table, cls in TABLES.items()},  # the model's tables (engines.model.settings)
 }

@@ -145,17 +145,40 @@ def deposit(scene):
                       cut.group[:p.n_particles + n_box], cut.density_factor[:p.n_particles + n_box])
     cut = _mark(scene, cut)
     if p.settle_loaded > 0:  # the dense top was settled at density 1: let the bed take its weight
-        cut = settle(scene, cut, duration=p.settle_loaded, walls=walls_kind)
+        loaded = submerged(scene, cut) if p.settle_submerged else cut
+        cut = Packing(settle(scene, loaded, duration=p.settle_loaded, walls=walls_kind).xz, cut.r, cut.group,
+                      cut.density_factor)
         check_inside_box(cut, f"deposit of seed {p.seed} under the dense top")
     return cut
 
 
+def submerged(scene, packing):
+    """``packing`` with the density factors (rho f - rho_w) / rho of its particles: settled dry, it
+    comes to rest under their buoyant weight (eq 34b), as a saturated bed does in its water."""
+    rho, rho_w = scene.material.rho, scene.material.rho_w
+    f = np.where(packing.mobile, (rho * packing.density_factor - rho_w) / rho, packing.density_factor)
+    if (f[packing.mobile] <= 0).any():
+        raise ValueError(f"[packing] settle_submerged: a particle no denser than the water (rho f <= rho_w = {rho_w} kg/m^3) "
+                         f"does not settle in it")
+    return Packing(packing.xz, packing.r, packing.group, f)
+
+
 def settle_on_flat_walls(scene, packing):
     """The particles of ``packing`` settled again, with their masses, against the flat walls that
-    replace its wall discs ([walls] kind = "flat"), for settle_loaded or else half of settle_time:
-    a run on the flat walls then starts at rest."""
+    replace its wall discs ([walls] kind = "flat"), for settle_loaded or else half of settle_time
+    (under their buoyant weight with settle_submerged); each group of wall discs is then moved so that
+    its inner face is where its flat wall stood (engines.model.pore_dem.scene_flat_walls keeps a
+    wall there that the particles rest on): a run on the flat walls starts at rest."""
+    from engines.model.pore_dem import scene_flat_walls
+
     p = scene.packing
-    out = settle(scene, packing, duration=p.settle_loaded or 0.5 * p.settle_time, walls="flat")
+    walls = scene_flat_walls(scene.with_overrides({"walls": {"kind": "flat"}}).settings, packing)
+    loaded = submerged(scene, packing) if p.settle_submerged else packing
+    xz = settle(scene, loaded, duration=p.settle_loaded or 0.5 * p.settle_time, walls="flat").xz
+    faces = packing.inner_faces()
+    for code, wall in walls.items():
+        xz[packing.group == code, wall.axis] += wall.position - faces[code]
+    out = Packing(xz, packing.r, packing.group, packing.density_factor)
     check_inside_box(out, "packing settled on the flat walls")
     return out
 

@@ -68,9 +68,9 @@ def test_disc_stress_is_over_the_disc_area_by_solid_fraction():
 
 
 def test_bands_areas_and_the_pressure_ratio():
-    assert es.bands(0.0, 8.0) == [(float(k), float(k + 1)) for k in range(8)]
+    assert es.bands(0.0, 8.0, 8) == [(float(k), float(k + 1)) for k in range(8)]
     with pytest.raises(ValueError, match="top > bottom"):
-        es.bands(1.0, 1.0)
+        es.bands(1.0, 1.0, 8)
     assert list(es.region_areas(0.0, 2.0, [(0.0, 1.0), (1.0, 10.0)], 1.5)) == [2.0, 1.0]
     U = es.region_pressure(np.array([0.5, 0.6, 1.5]), np.array([1.0, 3.0, 1.0]), np.array([4.0, 8.0, 2.0]),
                            [(0.0, 1.0), (1.0, 2.0), (2.0, 3.0)])
@@ -135,7 +135,7 @@ def test_settled_column_carries_its_buoyant_overburden(unit_weight):
     width = x1 - x0
     c = law.stress_contacts(xz)
     top = float(np.max(xz[:, 1] + r))
-    bounds = es.bands(0.0, top)
+    bounds = es.bands(0.0, top, 8)
     s = es.region_stress(xz, c, x0, x1, bounds, es.region_areas(x0, x1, bounds, top))
     sv = es.invariants(s)[0]
     expected = es.overburden(xz, r, unit_weight, x0, x1, bounds)
@@ -163,7 +163,7 @@ def test_a_uniform_pore_pressure_changes_no_effective_stress():
     U = 500.0  # [N/m], about the bottom band's sigma'_v x 1 m
     F_water = pg.pressure_forces(net, r, np.full(net.n_pores, U), pg.measure(net, xz, r))
     assert np.abs(F_water).max() < 1e-9 * U * R
-    bounds = es.bands(0.0, top)
+    bounds = es.bands(0.0, top, 8)
     areas = es.region_areas(x0, x1, bounds, top)
     load = np.zeros_like(xz)
     load[:, 1] = -RHO * G * np.pi * r ** 2

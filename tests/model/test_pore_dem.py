@@ -501,6 +501,22 @@ def test_a_flat_wall_moves_back_to_a_particle_that_reaches_past_the_inner_face()
     assert dz - r < rw and walls == {pg.WALL_BOTTOM: FlatWall(1, dz - r, 1, "undrained")}  # dry: q_w = 0
 
 
+@pytest.mark.parametrize("pressed", [0.0, 0.5, 0.99, 1.01])
+def test_a_flat_wall_stays_at_its_face_under_a_particle_pressed_into_it_at_rest(pressed):
+    """A particle past the face by less than rest_overlap (the whole weight over kn: one at rest on
+    the wall, settled on it) leaves the wall at the face, so that the contact starts loaded; past it
+    by more, the wall moves back to the particle (the dip's rule above)."""
+    rw, r = R, 0.6 * R
+    sc = scene(walls={"kind": "flat"}, contact={"law": "yade", "spring": "a"})
+    pk = Packing(np.array([[0.0, 0.0], [2 * rw, 0.0], [rw, rw + r]]), [rw, rw, r], [pg.WALL_BOTTOM, pg.WALL_BOTTOM, 0],
+                 np.ones(3))
+    tol = pore_dem.rest_overlap(sc.settings, pk)
+    assert tol == pytest.approx(sc.material.rho * np.pi * r**2 * sc.material.g / sc.contact.kn)
+    pk.xz[2, 1] -= pressed * tol
+    bottom = pore_dem.scene_flat_walls(sc.settings, pk)[pg.WALL_BOTTOM].position
+    assert bottom == pytest.approx(rw if pressed < 1 else rw - pressed * tol, rel=1e-12, abs=0)
+
+
 def test_the_flat_walls_that_follow_the_input_are_a_boolean_mask():
     """moving_flat_walls: (W,) bool, none without a ground motion, the bottom face with moves =
     "bottom", every wall with "box"; no walls, no entries."""

@@ -124,9 +124,35 @@ def test_a_sweep_ends_with_the_results_of_the_jobs_that_wrote_a_summary(tmp_path
     assert len(lines) == 7 and "results" not in format_summary(records)
 
 
+def test_n_bands_sets_the_band_columns_and_their_sigma_v0(tmp_path):
+    """[output] n_bands = 3: three equal bands from the bottom wall to the bed's top, each with its columns."""
+    r, summary = run("quicksand_case1", tmp_path, {"output": {"snapshot_times": [0.0], "n_bands": 3}})
+    h = read_history(str(tmp_path / "history.csv"))
+    assert [c for c in h if c.startswith("sv_band")] == ["sv_band1", "sv_band2", "sv_band3"] and "ru_band3" in h
+    (z0, _), (_, z1) = summary["band_bounds_m"][0], summary["band_bounds_m"][-1]
+    assert len(summary["band_bounds_m"]) == len(summary["band_sigma_v0_Pa"]) == 3 and list(summary["results"]["bands"]) == \
+        ["band1", "band2", "band3"]
+    assert z1 == pytest.approx(r.cp.packing.bed_top) and z0 < z1
+
+
 def test_the_results_give_the_porosity_change():
     from postproc.run_files import headline_results
     h = {"t": np.array([0.0, 0.01]), "porosity": np.array([0.47, 0.45]), "bed_top": np.array([0.01, 0.01]),
          "U_block1": np.array([0.0, 5.0])}
     res = headline_results(h, 4.5e-4)
     assert res["porosity_change"] == pytest.approx(-0.02) and "porosity_change -0.02" in talk.result_lines(res)
+
+
+def test_each_band_says_when_its_contacts_let_go_and_its_r_u_there():
+    """t_quick_s: the first row whose sigma'_v < QUICK x the first row's; r_u at it and at the heave's row."""
+    from postproc.run_files import QUICK, band_results
+    t = np.array([0.0, 1.0, 2.0, 3.0])
+    h = {"t": t, "sv_band1": np.array([50.0, 50 * QUICK, 50 * QUICK - 1e-9, 0.0]), "p_band1": np.array([40.0, 20.0, 10.0, 5.0]),
+         "ru_band1": np.array([0.0, 0.8, 0.95, 1.3]), "sv_band2": np.array([50.0, 40.0, 30.0, 20.0]),
+         "p_band2": np.array([40.0, 30.0, 20.0, 10.0]), "ru_band2": np.array([0.0, 0.1, 0.2, 0.3])}
+    b = band_results(h, heave_row=3)
+    assert (b["band1"]["t_quick_s"], b["band1"]["ru_at_quick"], b["band1"]["ru_at_heave"]) == (2.0, 0.95, 1.3)
+    assert b["band2"]["t_quick_s"] is None and b["band2"]["ru_at_quick"] is None
+    assert b["band1"]["p_ratio_min"] == 0.125 and b["band1"]["t_ru_0p9_s"] == 2.0
+    dry = {k: v for k, v in h.items() if not k.startswith("ru_")}
+    assert band_results(dry)["band1"] == {"p_ratio_min": 0.125, "t_quick_s": 2.0}
