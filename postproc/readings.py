@@ -4,10 +4,12 @@ onset, the first output row where its contacts carry less than postproc.run_file
 start's σ'_v (the base lifted by its water, Terzaghi's heave; summary.json's ``t_quick_s``): r_u there
 with its 95 % interval over the starts, and the check r_u in [0.8, 1.2]; beside it σ'_v0 from the
 contacts and the buoyant overburden, r_u when the surface has risen by [output] heave_rise
-(``heave_time_s``), and how much of the bed's buoyant weight the walls carry at t = 0
-(``weight_carried``: 1 when the bed starts at rest). ``make readings`` runs the ensemble and writes
-docs/readings/quicksand_ru.json, and again with every contact frictionless ([contact] mu = 0, the
-scene's friction; the record's ``mu``) -> docs/readings/quicksand_ru_mu0.json:
+(``heave_time_s``), the bottom block's peak U beside the bound E_w that eq 32 sets, and how much of
+the bed's buoyant weight the walls carry at t = 0 (``weight_carried``: 1 when the bed starts at rest
+in its water, the dry over the buoyant weight when it rests under its dry weight). ``make readings``
+runs the ensemble of case 1 -> docs/readings/quicksand_ru.json, again with every contact
+frictionless ([contact] mu = 0; the record's ``mu``) -> quicksand_ru_mu0.json, and on the bed
+settled in its water (quicksand_case1_submerged) -> quicksand_ru_submerged.json:
 
     /usr/bin/python3 -m postproc.readings ENSEMBLE_DIR OUT.json
 """
@@ -62,6 +64,8 @@ def quicksand_ru(ensemble_dir):
                                     "t_s": stats("heave_time_s"), "ru": surface,
                                     "U_over_overburden": surface["mean"] * sv0 / ob},
                   "ru_max": stats("bands.band1.ru_max")},
+        "block1_U_max_N_per_m": stats("peak_block_pressures.U_block1.U_max_N_per_m"),
+        "E_w_N_per_m": first["parameters"]["water"]["E_w"],
         "criterion": f"the bottom band's r_u at the heave's onset lies in [{RU_HEAVE[0]}, {RU_HEAVE[1]}] (its 95 % interval)",
         "holds": bool(RU_HEAVE[0] <= onset["ci95_low"] and onset["ci95_high"] <= RU_HEAVE[1]),
     }

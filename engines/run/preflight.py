@@ -143,7 +143,9 @@ def check_packing(scene, packing):
     try:
         packing.check_fit(max_overlap(scene.contact), "[contact] f_max / kn", scene.walls.kind != "flat")
     except ValueError as e:
-        raise InputError(str(e)) from None
+        remedy = ("raise [contact] f_max (the force cap cannot hold the packing where it rests) or redeposit the packing "
+                  "with these constants" if "overlaps" in str(e) else "move the particle inside or the walls out")
+        raise InputError(f"{e}; {remedy}") from None
 
 
 def check_duration(scene):

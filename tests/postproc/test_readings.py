@@ -29,10 +29,13 @@ def test_the_record_says_whether_the_interval_at_the_onset_lies_within_0_8_to_1_
     json.dump({"scene": "qs", "n_starts": 8, "perturbation_m": 1e-8, "interval": "95 %", "seeds": [0],
                "results": {"bands.band1.ru_at_quick": _stats(*ru), "bands.band1.t_quick_s": _stats(0.001, 0.0009, 0.0011),
                            "bands.band1.ru_at_heave": _stats(2.0, 1.9, 2.1), "bands.band1.ru_max": _stats(4.0, 3.8, 4.2),
-                           "heave_time_s": _stats(0.01, 0.009, 0.011)}}, open(tmp_path / "ensemble.json", "w"))
+                           "heave_time_s": _stats(0.01, 0.009, 0.011),
+                           "peak_block_pressures.U_block1.U_max_N_per_m": _stats(230.0, 220.0, 240.0)}},
+              open(tmp_path / "ensemble.json", "w"))
     json.dump({"band_sigma_v0_Pa": [50.0], "band_overburden_Pa": [100.0], "band_bounds_m": [[0.0, 1e-3]],
                "results": {"heave_rise_m": 4.5e-4},
-               "parameters": {"material": {"rho": 2000.0, "rho_w": 1000.0, "g": 10.0}, "contact": {"mu": 0.0}},
+               "parameters": {"material": {"rho": 2000.0, "rho_w": 1000.0, "g": 10.0}, "contact": {"mu": 0.0},
+                              "water": {"E_w": 240.0}},
                "provenance": {"git_commit": "abc", "git_dirty": False}}, open(tmp_path / "start_0" / "summary.json", "w"))
     np.savez(tmp_path / "start_0" / "snapshot_000.00ms.npz", **_snapshot(0.01))
     rec = quicksand_ru(str(tmp_path))
@@ -41,4 +44,5 @@ def test_the_record_says_whether_the_interval_at_the_onset_lies_within_0_8_to_1_
     assert onset["U_over_overburden"] == pytest.approx(ru[0] * 0.5) and rec["mu"] == 0.0
     assert surface["ru"]["mean"] == 2.0 and surface["U_over_overburden"] == pytest.approx(1.0)
     assert surface["t_s"]["mean"] == 0.01 and "0.00045 m" in surface["definition"]
+    assert rec["block1_U_max_N_per_m"]["mean"] == 230.0 and rec["E_w_N_per_m"] == 240.0
     assert rec["weight_carried_at_start"] == pytest.approx(0.01 / ((2000.0 - 1000.0) * 10.0 * np.pi * 25e-8))

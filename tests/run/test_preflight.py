@@ -230,7 +230,7 @@ def test_the_overlap_tolerance_is_the_contact_laws_f_max_over_kn(packing):
     check_packing(sc, _moved_towards_neighbour(packing, 0.99 * tol)[0])
     deep, j = _moved_towards_neighbour(packing, 1.01 * tol)
     with pytest.raises(InputError, match=rf"^packing file p.csv, line 2: overlaps line {j + 2} by .* deeper than "
-                                         rf"\[contact\] f_max / kn = 1.79e-06 m$"):
+                                         rf"\[contact\] f_max / kn = 1.79e-06 m; raise \[contact\] f_max .* or redeposit the packing"):
         check_packing(sc, deep)
     check_packing(sc.with_overrides({"contact": {"f_max": 5.0}}), deep)  # a law that holds twice the force
 
