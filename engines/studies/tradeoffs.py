@@ -270,7 +270,7 @@ VALIDATION_CASES = tuple(f"{scene}_full" for scene in VALIDATION)
 # (dt = 1e-6 s, rebuilds every 1000 steps) on every judged statistic over the whole run (docs/TRADEOFFS.md,
 # "Validation"; tests/studies/test_tradeoffs.py ties them to docs/tradeoffs/validation.json).
 VALIDATED_FACTOR = DT_AUTO_FACTOR  # the default of [numerics] dt_auto_factor
-VALIDATED_ON = {0.36: ("liquefaction_case2", "liquefaction_case3", "liquefaction_case7"),
+VALIDATED_ON = {0.36: ("quicksand_case2", "liquefaction_case2", "liquefaction_case3", "liquefaction_case7"),
                 0.18: ("liquefaction_case1", "liquefaction_case2", "liquefaction_case3", "liquefaction_case5",
                        "liquefaction_case7")}
 SHORT_WINDOW_EVIDENCE = {0.36: "within 5 % over the first 0.04 s of liquefaction_case1 only (the trade study)"}
