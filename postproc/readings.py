@@ -46,8 +46,10 @@ def quicksand_ru(ensemble_dir):
     snap0 = read_snapshot(snapshot_files(run_folders(ensemble_dir)[0])[0])
     prov = first.get("provenance") or {}
     sv0, ob = first["band_sigma_v0_Pa"][0], first["band_overburden_Pa"][0]
-    stats = lambda key: {k: res[key][k] for k in ("n", "mean", "ci95_low", "ci95_high")}  # noqa: E731
+    none = {"n": 0, "mean": None, "ci95_low": None, "ci95_high": None}  # a run too short for the surface's heave
+    stats = lambda key: {k: res[key][k] for k in none} if key in res else none  # noqa: E731
     onset, surface = stats("bands.band1.ru_at_quick"), stats("bands.band1.ru_at_heave")
+    over = lambda ru: None if ru["mean"] is None else ru["mean"] * sv0 / ob  # noqa: E731
     return {
         "date": time.strftime("%Y-%m-%d"), "commit": prov.get("git_commit"), "dirty": prov.get("git_dirty"),
         "scene": doc["scene"], "n_starts": doc["n_starts"], "perturbation_m": doc["perturbation_m"],
@@ -58,16 +60,16 @@ def quicksand_ru(ensemble_dir):
                   "heave_onset": {"definition": f"the first output row where the band's sigma'_v < {QUICK} x its "
                                                 "first row's (its contacts let go)",
                                   "t_s": stats("bands.band1.t_quick_s"), "ru": onset,
-                                  "U_over_overburden": onset["mean"] * sv0 / ob},
+                                  "U_over_overburden": over(onset)},
                   "surface_heave": {"definition": f"the first output row where the bed top has risen by "
                                                   f"{first['results']['heave_rise_m']} m",
                                     "t_s": stats("heave_time_s"), "ru": surface,
-                                    "U_over_overburden": surface["mean"] * sv0 / ob},
+                                    "U_over_overburden": over(surface)},
                   "ru_max": stats("bands.band1.ru_max")},
         "block1_U_max_N_per_m": stats("peak_block_pressures.U_block1.U_max_N_per_m"),
         "E_w_N_per_m": first["parameters"]["water"]["E_w"],
         "criterion": f"the bottom band's r_u at the heave's onset lies in [{RU_HEAVE[0]}, {RU_HEAVE[1]}] (its 95 % interval)",
-        "holds": bool(RU_HEAVE[0] <= onset["ci95_low"] and onset["ci95_high"] <= RU_HEAVE[1]),
+        "holds": onset["n"] > 1 and bool(RU_HEAVE[0] <= onset["ci95_low"] and onset["ci95_high"] <= RU_HEAVE[1]),
     }
 
 
@@ -79,11 +81,13 @@ def main(argv=None):
     record = quicksand_ru(a.ensemble)
     files.write_json(a.out, record)
     b = record["band1"]
-    interval = lambda r: f"{r['mean']:.3g} (95 % interval {r['ci95_low']:.3g} to {r['ci95_high']:.3g})"  # noqa: E731
-    print(f"{a.out}: bottom band r_u at the heave's onset ({b['heave_onset']['t_s']['mean'] * 1e3:.3g} ms) "
+    interval = lambda r: ("none" if r["mean"] is None else  # noqa: E731
+                          f"{r['mean']:.3g} (95 % interval {r['ci95_low']:.3g} to {r['ci95_high']:.3g})")
+    ms = lambda t: "none" if t["mean"] is None else f"{t['mean'] * 1e3:.3g} ms"  # noqa: E731
+    print(f"{a.out}: bottom band r_u at the heave's onset ({ms(b['heave_onset']['t_s'])}) "
           f"{interval(b['heave_onset']['ru'])}, {record['n_starts']} starts; holds: {record['holds']}; "
           f"sigma'_v0 {b['sigma_v0_Pa']:.3g} Pa, overburden {b['overburden_Pa']:.3g} Pa; at the surface's heave "
-          f"({b['surface_heave']['t_s']['mean'] * 1e3:.3g} ms) r_u {interval(b['surface_heave']['ru'])}")
+          f"({ms(b['surface_heave']['t_s'])}) r_u {interval(b['surface_heave']['ru'])}")
 
 
 if __name__ == "__main__":

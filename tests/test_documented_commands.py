@@ -291,8 +291,8 @@ EXEMPT_TARGETS = {
                          "tests/run/test_resistance.py tests its reading and refusals",
     "remesh-transfer": "the transfer study, 64 runs (about an hour of CPU), rewrites the tracked docs/engine/remesh_transfer.json; tests/studies/test_remesh_transfer_rule.py tests its rule",
     "mutants-kernels": "mutation testing of the numba kernels (CPU hours); tests/test_kernel_mutants.py tests the driver",
-    "readings": "rewrites the tracked docs/readings/quicksand_ru.json and quicksand_ru_mu0.json from 8 starts each; "
-                "tests/postproc/test_readings.py",
+    "readings": "rewrites the tracked docs/readings/quicksand_ru.json, quicksand_ru_mu0.json and quicksand_ru_submerged.json "
+                "from 8 starts each; tests/postproc/test_readings.py, and tests/run/test_quicksand_reading.py judges a fresh ensemble",
     "bench": "cost measurements (tens of minutes, an idle machine)",
     "bench-seismic": "a cost measurement", "bench-scaling": "a cost measurement",
     "bench-ground": "a cost measurement", "bench-before-after": "a cost measurement of an older checkout",
