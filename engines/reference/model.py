@@ -1115,12 +1115,14 @@ def tie_forces(x, V, lower, upper, rest, ks, eta):
 # ------------------------------------------------------------------------------------------------
 # The model
 # ------------------------------------------------------------------------------------------------
-def block_bounds(xz, r, group, block_z):
-    """Absolute [z0, z1) of the output blocks given as fractions of the bed height: from the top of
-    the bottom-wall discs (or the lowest particle bottom without them) to the highest particle top."""
+def block_bounds(xz, r, group, block_z, flat_walls=()):
+    """Absolute [z0, z1) of the output blocks given as fractions of the bed height: from the bottom
+    wall (the top of its discs, or the face of a flat bottom wall; the lowest particle bottom
+    without either) to the highest particle top."""
     xz, r, group = np.asarray(xz, float), np.asarray(r, float), np.asarray(group)
     bottom = group == BOTTOM
-    z_bed = np.max(xz[bottom, 1] + r[bottom]) if bottom.any() else np.min(xz[:, 1] - r)
+    floor = [w.position for w in flat_walls if w.axis == 1 and w.inward == 1]
+    z_bed = (np.max(xz[bottom, 1] + r[bottom]) if bottom.any() else floor[0] if floor else np.min(xz[:, 1] - r))
     mob = group == PARTICLE
     h = np.max(xz[mob, 1] + r[mob]) - z_bed
     return [(z_bed + a * h, z_bed + b * h) for a, b in block_z]
@@ -1186,7 +1188,7 @@ class ReferenceModel:
         self.walls = None if accel is None else WallMotion(accel, s.dt, dt_)
         moving = {"bottom": (BOTTOM,), "box": (BOTTOM, LEFT, RIGHT)}[s.loading["moves"]]
         self.moving = np.isin(self.group, moving) & (accel is not None)
-        self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z)
+        self.bounds = block_bounds(packing.xz, packing.r, self.group, s.block_z, self.flat)
         self.counts = {"rebuilds": 0, "remesh": dict.fromkeys("abcd", 0), "separation": dict.fromkeys("abcd", 0),
                        "history": []}   # history: (step, rule counts) of every rebuild
         self.pores = self.water = None

@@ -505,3 +505,14 @@ def test_a_column_shifted_rigidly_with_its_corner_feels_no_tie():
     m.step()
     one_tie = scene.contact.ks_wall * 3e-5 / m.mass.min() * m.dt   # the speed one stretched tie would give
     assert 0 < one_tie and np.abs(m.v).max() < 1e-9 * one_tie
+
+
+def test_the_blocks_stand_on_a_flat_bottom_wall_under_a_particle_pressed_into_it():
+    """Without bottom wall discs the blocks start at a flat bottom wall's face, not at the lowest
+    particle's bottom (a particle at rest on the wall overlaps it by its weight's overlap)."""
+    from engines.reference.model import FlatWall, block_bounds
+    xz, r, group = np.array([[0.0, 0.9999e-3], [0.0, 3e-3]]), np.array([1e-3, 1e-3]), np.zeros(2, int)
+    floor = (FlatWall(0, -2e-3, 1, "undrained"), FlatWall(1, 0.0, 1, "inflow"))
+    (z0, z1), = block_bounds(xz, r, group, [[0.0, 1.0]], floor)
+    assert (z0, z1) == (0.0, 4e-3)
+    assert block_bounds(xz, r, group, [[0.0, 1.0]])[0][0] == pytest.approx(-1e-7)  # no wall: the lowest bottom
