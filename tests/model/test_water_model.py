@@ -114,17 +114,21 @@ def test_areas_are_in_range_between_zero_and_the_polygon_area():
 
 
 def test_a_void_area_out_of_range_rebuilds_at_that_step_with_a_rebuild_distance_only():
-    """One disc pushed half its radius into its neighbours (a void area below 0, eq 32 would give
-    U > E_w), far less than d = 1 m: with d > 0 both classes rebuild at that step, to the same water,
-    and after it every area is in range; with d = 0 (the paper's schedule) nothing is rebuilt and U
-    exceeds E_w."""
+    """One disc pushed half its radius into its nearest neighbour (a void area below 0, eq 32 would
+    give U > E_w), far less than d = 1 m: with d > 0 both classes rebuild at that step, to the same
+    water, and after it every area is in range; with d = 0 (the paper's schedule) nothing is rebuilt
+    and U exceeds E_w."""
     from engines.compiled.water_model import WaterModel as CompiledWaterModel
     W = []
     for cls in (WaterModel, CompiledWaterModel):
         for d in (1.0, 0.0):
             wm, pk, a = moved_model(cls, d, interval=1000)
+            gap = np.linalg.norm(pk.xz - pk.xz[a], axis=1) - pk.r - pk.r[a]
+            gap[a] = np.inf
+            b = int(np.argmin(gap))
             pushed = pk.xz.copy()
-            pushed[a, 0] += 0.5 * pk.r[a]
+            toward = (pk.xz[b] - pk.xz[a]) / np.linalg.norm(pk.xz[b] - pk.xz[a])
+            pushed[a] += (gap[b] + 0.5 * pk.r[a]) * toward
             assert not areas_in_range(wm.void_area(pushed), pg.measure(wm.water.net, pushed, wm.r).polygon_area)
             for k in range(3):
                 wm.step(k, pk.xz if k < 2 else pushed)
