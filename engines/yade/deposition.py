@@ -172,7 +172,7 @@ def settle_on_flat_walls(scene, packing):
     from engines.model.pore_dem import scene_flat_walls
 
     p = scene.packing
-    walls = scene_flat_walls(scene.with_overrides({"walls": {"kind": "flat"}}).settings, packing)
+    walls = scene_flat_walls(scene.settings, packing)
     loaded = submerged(scene, packing) if p.settle_submerged else packing
     xz = settle(scene, loaded, duration=p.settle_loaded or 0.5 * p.settle_time, walls="flat").xz
     faces = packing.inner_faces()
